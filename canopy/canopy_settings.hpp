@@ -1,0 +1,43 @@
+// What the configuration says about the vegetation (names of the seed's Table 1).
+// Filled by pipeline/config, read by the canopy library.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace glaswave {
+
+enum class LeafAngleDistribution {
+  spherical,
+  planophile,
+  erectophile,
+  plagiophile,
+  extremophile,
+  uniform,
+  ellipsoidal,  // Campbell's, with a mean leaf inclination
+};
+
+enum class CrownShape { ellipsoid, cone, layer };
+
+struct CanopySettings {
+  double pai = 3.0;  // one-sided plant area (leaves and bark) per unit ground area of the scene
+  LeafAngleDistribution lad = LeafAngleDistribution::spherical;
+  double lad_mean_deg = 57.3;  // mean inclination, for `ellipsoidal` only
+  double cover = 0.7;          // crown fractional cover
+  double green_fraction = 0.8;
+  double bark_fraction = 0.2;
+  CrownShape crown_shape = CrownShape::ellipsoid;
+  double crown_radius_m = 8.0;
+  double crown_half_height_m = 8.0;
+  std::array<double, 2> crown_base_m = {15.0, 20.0};  // min, max height of the crown base
+  double leaf_size_m = 0.05;
+  double dbh_m = 0.1;
+  std::vector<double> leaf_reflectance;    // one value per sensor band
+  std::vector<double> leaf_transmittance;  // one value per sensor band
+  std::vector<double> bark_reflectance;    // one value per sensor band
+  std::string crowns_file;                 // optional CSV of explicit crowns
+  std::string stands;                      // optional GeoJSON of stands
+};
+
+}  // namespace glaswave

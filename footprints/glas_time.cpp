@@ -1,0 +1,139 @@
+// ISO 8601 UTC text <-> seconds since the GLAS epoch (2000-01-01T12:00:00Z), leap seconds
+// ignored, with the proleptic Gregorian calendar arithmetic of H. Hinnant's days_from_civil.
+#include "footprints/glas_time.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <stdexcept>
+
+namespace glaswave {
+
+namespace {
+
+// Days from 1970-01-01 to the given date (proleptic Gregorian).
+std::int64_t days_from_civil(std::int64_t y, int m, int d) {
+  y -= m <= 2;
+  const std::int64_t era = (y >= 0 ? y : y - 399) / 400;
+  const std::int64_t yoe = y - era * 400;
+  const std::int64_t doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+  const std::int64_t doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return era * 146097 + doe - 719468;
+}
+
+// The inverse of days_from_civil.
+void civil_from_days(std::int64_t z, std::int64_t& y, int& m, int& d) {
+  z += 719468;
+  const std::int64_t era = (z >= 0 ? z : z - 146096) / 146097;
+  const std::int64_t doe = z - era * 146097;
+  const std::int64_t yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
+  const std::int64_t doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+  const std::int64_t mp = (5 * doy + 2) / 153;
+  d = static_cast<int>(doy - (153 * mp + 2) / 5 + 1);
+  m = static_cast<int>(mp < 10 ? mp + 3 : mp - 9);
+  y = yoe + era * 400 + (m <= 2);
+}
+
+bool is_leap(std::int64_t y) { return (y % 4 == 0 && y % 100 != 0) || y % 400 == 0; }
+
+int days_in_month(std::int64_t y, int m) {
+  static const int days[] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  return m == 2 && is_leap(y) ? 29 : days[m - 1];
+}
+
+// 2000-01-01T12:00:00Z in seconds since 1970-01-01T00:00:00Z, leap seconds ignored.
+const std::int64_t glas_epoch_unix_s = days_from_civil(2000, 1, 1) * 86400 + 12 * 3600;
+
+[[noreturn]] void bad(const std::string& text, const std::string& why) {
+  throw std::invalid_argument("not an ISO 8601 UTC time (YYYY-MM-DDTHH:MM:SSZ): \"" + text +
+                              "\": " + why);
+}
+
+}  // namespace
+
+double parse_iso8601_utc(const std::string& text) {
+  std::size_t pos = 0;
+  auto digits = [&](std::size_t count, const char* what) {
+    int value = 0;
+    for (std::size_t i = 0; i < count; ++i, ++pos) {
+      if (pos >= text.size() || text[pos] < '0' || text[pos] > '9')
+        bad(text, std::string("expected ") + std::to_string(count) + " digits of the " + what);
+      value = value * 10 + (text[pos] - '0');
+    }
+    return value;
+  };
+  auto expect = [&](char c) {
+    if (pos >= text.size() || text[pos] != c) bad(text, std::string("expected '") + c + "'");
+    ++pos;
+  };
+
+  const int year = digits(4, "year");
+  expect('-');
+  const int month = digits(2, "month");
+  expect('-');
+  const int day = digits(2, "day");
+  expect('T');
+  const int hour = digits(2, "hour");
+  expect(':');
+  const int minute = digits(2, "minute");
+  expect(':');
+  const int second = digits(2, "second");
+  double fraction = 0.0;
+  if (pos < text.size() && text[pos] == '.') {
+    ++pos;
+    const std::size_t first = pos;
+    while (pos < text.size() && text[pos] >= '0' && text[pos] <= '9') ++pos;
+    if (pos == first) bad(text, "expected digits after '.'");
+    // from_chars rounds correctly and, unlike strtod, never looks at the locale.
+    const std::string digits_text = "0." + text.substr(first, pos - first);
+    std::from_chars(digits_text.data(), digits_text.data() + digits_text.size(), fraction);
+  }
+  const std::string zone = text.substr(pos);
+  // Only UTC: a time without a zone, or in another zone, would be a guess about the user's intent.
+  if (zone != "Z" && zone != "+00:00") bad(text, "expected the zone 'Z' or '+00:00'");
+
+  if (month < 1 || month > 12) bad(text, "month out of range");
+  if (day < 1 || day > days_in_month(year, month)) bad(text, "day out of range");
+  if (hour > 23) bad(text, "hour out of range");
+  if (minute > 59) bad(text, "minute out of range");
+  // Leap seconds are not counted, so 23:59:60 has no place on this time scale.
+  if (second > 59) bad(text, "second out of range");
+
+  const std::int64_t unix_s =
+      days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second;
+  return static_cast<double>(unix_s - glas_epoch_unix_s) + fraction;
+}
+
+std::string format_iso8601_utc(double seconds_since_glas_epoch) {
+  if (!std::isfinite(seconds_since_glas_epoch))
+    throw std::invalid_argument("cannot write a non-finite time as ISO 8601");
+  // Work in whole microseconds so that rounding never produces ":60" or ".1000000".
+  const double micro_total = std::round(seconds_since_glas_epoch * 1e6);
+  if (std::fabs(micro_total) > 4.0e17)  // about ±12700 years: outside 0..9999 anyway
+    throw std::invalid_argument("time out of range for ISO 8601");
+  std::int64_t micro = static_cast<std::int64_t>(micro_total) + glas_epoch_unix_s * 1000000;
+  std::int64_t seconds = micro >= 0 ? micro / 1000000 : -((-micro + 999999) / 1000000);
+  const std::int64_t micro_part = micro - seconds * 1000000;
+  std::int64_t days = seconds >= 0 ? seconds / 86400 : -((-seconds + 86399) / 86400);
+  const std::int64_t second_of_day = seconds - days * 86400;
+  std::int64_t year = 0;
+  int month = 0, day = 0;
+  civil_from_days(days, year, month, day);
+  if (year < 0 || year > 9999) throw std::invalid_argument("time out of range for ISO 8601");
+
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d", static_cast<int>(year),
+                month, day, static_cast<int>(second_of_day / 3600),
+                static_cast<int>(second_of_day / 60 % 60), static_cast<int>(second_of_day % 60));
+  std::string out = buffer;
+  if (micro_part != 0) {
+    std::snprintf(buffer, sizeof buffer, ".%06d", static_cast<int>(micro_part));
+    std::string fraction = buffer;
+    while (fraction.back() == '0') fraction.pop_back();
+    out += fraction;
+  }
+  return out + "Z";
+}
+
+}  // namespace glaswave

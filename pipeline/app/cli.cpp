@@ -1,0 +1,173 @@
+// Command line: run, check, --help, --version.
+#include "pipeline/app/cli.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+
+#include "footprints/track.hpp"
+#include "pipeline/app/run.hpp"
+#include "terrain/error.hpp"
+#include "terrain/terrain.hpp"
+
+namespace glaswave {
+namespace {
+
+struct Arguments {
+  std::string config_file;
+  std::string out_dir;
+  std::vector<std::string> overrides;
+  int threads = 0;
+  std::string shots;
+  std::optional<std::uint64_t> seed;
+  bool resume = false;
+  bool quiet = false;
+};
+
+// "A:B" -> [A, B); either side may be empty.
+void parse_shot_range(const std::string& text, RunRequest& request) {
+  const auto colon = text.find(':');
+  auto number = [&](const std::string& part) -> std::optional<std::int64_t> {
+    if (part.empty()) return std::nullopt;
+    std::size_t used = 0;
+    std::int64_t value = -1;
+    try {
+      value = std::stoll(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != part.size() || value < 0) throw config_error("--shots", "expected A:B with shot numbers, got \"" + text + "\"");
+    return value;
+  };
+  if (colon == std::string::npos) throw config_error("--shots", "expected A:B, got \"" + text + "\"");
+  request.first_shot = number(text.substr(0, colon));
+  request.last_shot = number(text.substr(colon + 1));
+}
+
+Config load(const Arguments& arguments) {
+  std::vector<std::string> overrides = arguments.overrides;
+  if (arguments.seed) overrides.push_back("seed=" + std::to_string(*arguments.seed));
+  return load_config(arguments.config_file, overrides);
+}
+
+std::string joined(int argc, char** argv) {
+  std::ostringstream line;
+  for (int i = 0; i < argc; ++i) line << (i ? " " : "") << argv[i];
+  return line.str();
+}
+
+// A progress bar on a terminal: shots done, shots/s, time left.
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool enabled) : enabled_(enabled && isatty(STDERR_FILENO)), started_(now()) {}
+  ~ProgressBar() {
+    if (drawn_) std::fprintf(stderr, "\n");
+  }
+  void operator()(std::int64_t done, std::int64_t total) {
+    if (!enabled_) return;
+    const double elapsed_s = now() - started_;
+    const double rate = elapsed_s > 0.0 ? done / elapsed_s : 0.0;
+    const double left_s = rate > 0.0 ? (total - done) / rate : 0.0;
+    constexpr int width = 30;
+    const int filled = static_cast<int>(width * done / std::max<std::int64_t>(total, 1));
+    std::fprintf(stderr, "\r[%s%s] %lld/%lld shots  %.1f shots/s  %.0f s left ", std::string(filled, '#').c_str(),
+                 std::string(width - filled, '.').c_str(), static_cast<long long>(done),
+                 static_cast<long long>(total), rate, left_s);
+    std::fflush(stderr);
+    drawn_ = true;
+  }
+
+ private:
+  static double now() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  }
+  bool enabled_;
+  bool drawn_ = false;
+  double started_;
+};
+
+int run(const Arguments& arguments, const std::string& command_line) {
+  if (arguments.resume) throw config_error("--resume", "resuming a run is not available in this version yet");
+  const Config config = load(arguments);
+  RunRequest request;
+  request.threads = arguments.threads;
+  request.command_line = command_line;
+  request.out_dir = arguments.out_dir.empty()
+                        ? std::filesystem::path("out") / std::filesystem::path(arguments.config_file).stem()
+                        : std::filesystem::path(arguments.out_dir);
+  if (!arguments.shots.empty()) parse_shot_range(arguments.shots, request);
+
+  RunSummary summary;
+  {
+    ProgressBar bar(!arguments.quiet);
+    summary = run_simulation(config, request, std::ref(bar));
+  }
+  const double wall_s = std::max(summary.wall_s, 1e-9);
+  std::printf("glaswave: %lld shots in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; products in %s\n",
+              static_cast<long long>(summary.shots), summary.wall_s, summary.shots / wall_s,
+              summary.ray_queries / wall_s, static_cast<long long>(summary.shots_flagged),
+              request.out_dir.string().c_str());
+  return 0;
+}
+
+int check(const Arguments& arguments) {
+  const Config config = load(arguments);
+  if (config.canopy)
+    throw config_error("/canopy", "vegetation is not available in this version yet; set \"canopy\": null");
+  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
+  const std::vector<Footprint> footprints = plan_track(config.track, *terrain, 0, track_length(config.track));
+  std::int64_t off_terrain = 0;
+  for (const Footprint& footprint : footprints) off_terrain += footprint.on_terrain ? 0 : 1;
+  std::printf("glaswave: %s is valid: %zu shots, %lld off the terrain\n", arguments.config_file.c_str(),
+              footprints.size(), static_cast<long long>(off_terrain));
+  return 0;
+}
+
+}  // namespace
+
+int run_command_line(int argc, char** argv) {
+  CLI::App app{"glaswave: Monte Carlo simulation of satellite waveform lidar over vegetation and terrain"};
+  app.set_version_flag("--version", std::string("glaswave ") + GLASWAVE_VERSION);
+  app.require_subcommand(1);
+  Arguments arguments;
+
+  CLI::App* run_command = app.add_subcommand("run", "simulate the track's shots and write the products");
+  run_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
+  run_command->add_option("--out", arguments.out_dir, "output directory (default out/<config name>)");
+  run_command->add_option("--set", arguments.overrides, "override a configuration key: KEY=VALUE (dotted KEY)");
+  run_command->add_option("--threads", arguments.threads, "threads (0: every core)")->check(CLI::NonNegativeNumber);
+  run_command->add_option("--shots", arguments.shots, "simulate shot numbers A to B-1 only (A:B)");
+  run_command->add_option("--seed", arguments.seed, "random seed (overrides the configuration's)");
+  run_command->add_flag("--resume", arguments.resume, "finish an interrupted run");
+  run_command->add_flag("--quiet", arguments.quiet, "no progress bar");
+
+  CLI::App* check_command = app.add_subcommand("check", "validate the configuration and its inputs, run nothing");
+  check_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
+  check_command->add_option("--set", arguments.overrides, "override a configuration key: KEY=VALUE");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::fprintf(stderr, "glaswave: error: %s (see glaswave --help)\n", e.what());
+    return 2;
+  }
+
+  try {
+    if (*run_command) return run(arguments, joined(argc, argv));
+    return check(arguments);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "glaswave: error: %s\n", e.what());
+    return e.exit_status();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "glaswave: error: %s\n", e.what());
+    return static_cast<int>(ErrorKind::run);
+  }
+}
+
+}  // namespace glaswave

@@ -1,0 +1,93 @@
+// The run: shots simulated in batches on a thread pool, written in shot order.
+#include "pipeline/app/run.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "footprints/track.hpp"
+#include "pipeline/app/shot_simulation.hpp"
+#include "pipeline/products/geojson_writer.hpp"
+#include "pipeline/products/netcdf_writer.hpp"
+#include "terrain/error.hpp"
+
+namespace glaswave {
+
+RunSummary run_simulation(const Config& config, const RunRequest& request, const ProgressCallback& progress) {
+  const auto started = std::chrono::steady_clock::now();
+  namespace fs = std::filesystem;
+  if (config.canopy)
+    throw config_error("/canopy", "vegetation is not available in this version yet; set \"canopy\": null");
+
+  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
+  const std::int64_t length = track_length(config.track);
+  const std::int64_t first = request.first_shot.value_or(0);
+  const std::int64_t last = std::min(request.last_shot.value_or(length), length);
+  if (first < 0 || first >= last)
+    throw config_error("--shots", "selects no shot of the track's " + std::to_string(length));
+
+  std::error_code exists_error;
+  if (fs::exists(request.out_dir, exists_error))
+    throw config_error(request.out_dir.string(), "output directory exists; remove it or choose another --out");
+  fs::create_directories(request.out_dir);
+  // A run that fails leaves no empty output directory behind (the writers remove their parts).
+  struct RemoveIfEmpty {
+    fs::path dir;
+    bool keep = false;
+    ~RemoveIfEmpty() {
+      std::error_code ignored;
+      if (!keep && fs::is_empty(dir, ignored)) fs::remove(dir, ignored);
+    }
+  } cleanup{request.out_dir};
+
+  const ShotSimulator simulator(config, *terrain);
+  const RunInfo info = simulator.run_info(last - first, request.command_line);
+  std::unique_ptr<NetcdfWriter> netcdf;
+  std::unique_ptr<GeojsonWriter> geojson;
+  if (config.output.netcdf) netcdf = std::make_unique<NetcdfWriter>(request.out_dir / "shots.nc", info);
+  if (config.output.geojson) geojson = std::make_unique<GeojsonWriter>(request.out_dir / "footprints.geojson", info);
+
+  const int threads = request.threads > 0 ? request.threads : tbb::this_task_arena::max_concurrency();
+  tbb::task_arena arena(threads);
+  // Batches keep memory bounded on long tracks and let records be written in shot order.
+  const std::int64_t batch_size = std::max<std::int64_t>(8, 4 * threads);
+  RunSummary summary;
+  std::atomic<std::int64_t> ray_queries{0};
+  for (std::int64_t batch_first = first; batch_first < last; batch_first += batch_size) {
+    const std::int64_t batch_last = std::min(batch_first + batch_size, last);
+    const std::vector<Footprint> footprints = plan_track(config.track, *terrain, batch_first, batch_last);
+    std::vector<ShotRecord> records(footprints.size());
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t{0}, footprints.size(), [&](std::size_t i) {
+        std::int64_t queries = 0;
+        records[i] = simulator.simulate(footprints[i], &queries);
+        ray_queries += queries;
+      });
+    });
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      const std::int64_t index = batch_first - first + static_cast<std::int64_t>(i);
+      if (netcdf) netcdf->write(index, records[i]);
+      if (geojson) geojson->write(index, records[i]);
+      if (records[i].quality_flag != quality_good) ++summary.shots_flagged;
+    }
+    if (progress) progress(batch_last - first, last - first);
+  }
+
+  summary.shots = last - first;
+  summary.ray_queries = ray_queries;
+  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  RunStats stats;
+  stats.ray_queries = summary.ray_queries;
+  stats.wall_s = summary.wall_s;
+  stats.shots_flagged = summary.shots_flagged;
+  if (netcdf) netcdf->finish(stats);
+  if (geojson) geojson->finish(stats);
+  cleanup.keep = true;
+  return summary;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,167 @@
+// Simulation of one footprint into a product record.
+#include "pipeline/app/shot_simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "pipeline/transport/shot_transport.hpp"
+#include "terrain/ground_mesh.hpp"
+
+namespace glaswave {
+namespace {
+
+constexpr double fill = std::numeric_limits<double>::quiet_NaN();
+constexpr int outline_vertices = 36;
+
+// Half-width of the ground patch that every sampled ray lands on: the widest ray of the beam
+// traced to the terrain in a few directions, with a margin.
+double patch_half_size_m(const Terrain& terrain, const LidarModel& lidar, const Footprint& footprint,
+                         const LocalFrame& frame) {
+  const BeamSampler beam(lidar, footprint.beam_ecef);
+  double reach_m = footprint.range_m * lidar.max_angle_rad();
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 direction = beam.direction_at(lidar.max_angle_rad(), k * std::numbers::pi / 4.0);
+    if (const auto hit = intersect_terrain(terrain, footprint.spacecraft_ecef, direction)) {
+      const Vec3 local = frame.local_from_ecef(*hit);
+      reach_m = std::max(reach_m, std::hypot(local[0], local[1]));
+    }
+  }
+  return 1.2 * reach_m + 2.0;
+}
+
+// The beam's 1/e^2 contour (2 sigma from the axis) traced on the scene, counter-clockwise
+// in longitude and latitude, closed.
+std::vector<std::array<double, 2>> beam_outline(const Scene& scene, const LidarModel& lidar,
+                                                const ShotGeometry& geometry, const LocalFrame& frame) {
+  const BeamSampler beam(lidar, geometry.axis);
+  const double angle_rad = std::min(2.0 * lidar.beam_sigma_rad(), 0.5 * lidar.sensor().ifov_rad);
+  const double start_height_m = scene.top_m() + 1.0;
+  std::vector<std::array<double, 2>> ring;
+  for (int k = 0; k < outline_vertices; ++k) {
+    const Vec3 direction = beam.direction_at(angle_rad, 2.0 * std::numbers::pi * k / outline_vertices);
+    const double start_m = (geometry.sensor_m[2] - start_height_m) / -direction[2];
+    const Vec3 origin = geometry.sensor_m + start_m * direction;
+    const SurfaceHit hit = scene.intersect(origin, direction, 1.0e5);
+    if (hit.kind == SurfaceKind::none) continue;
+    const Geodetic point = frame.to_geodetic(origin + hit.distance_m * direction);
+    ring.push_back({point.lon_deg, point.lat_deg});
+  }
+  if (ring.size() < 3) return {};
+  double twice_area = 0.0;
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const auto& a = ring[i];
+    const auto& b = ring[(i + 1) % ring.size()];
+    twice_area += a[0] * b[1] - b[0] * a[1];
+  }
+  if (twice_area < 0.0) std::reverse(ring.begin(), ring.end());
+  ring.push_back(ring.front());
+  return ring;
+}
+
+}  // namespace
+
+ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
+    : config_(config), terrain_(terrain), lidar_(config.sensor) {}
+
+ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray_queries) const {
+  const std::size_t bands = lidar_.band_count();
+  ShotRecord record;
+  record.shot_number = footprint.shot_number;
+  record.time_s = footprint.time_s;
+  record.sc_lat_deg = footprint.spacecraft.lat_deg;
+  record.sc_lon_deg = footprint.spacecraft.lon_deg;
+  record.sc_alt_m = footprint.spacecraft.h_m;
+  record.off_nadir_deg = footprint.off_nadir_deg;
+
+  if (!footprint.on_terrain) {
+    record.quality_flag = quality_no_terrain;
+    record.lat_deg = record.lon_deg = record.elev_m = fill;
+    record.range_m = record.slope_deg = record.aspect_deg = fill;
+    record.elev_bin0_m = record.elev_lastbin_m = fill;
+    const std::vector<double> fill_bins(lidar_.bins(), fill);
+    record.rx_waveform_W.assign(bands, fill_bins);
+    record.rx_waveform_canopy_W.assign(bands, fill_bins);
+    record.rx_waveform_ground_W.assign(bands, fill_bins);
+    if (config_.output.per_order)
+      record.rx_waveform_order_W.assign(bands, std::vector<std::vector<double>>(config_.simulation.max_order, fill_bins));
+    record.rx_energy_J.assign(bands, fill);
+    record.rx_energy_canopy_J.assign(bands, fill);
+    record.rx_energy_ground_J.assign(bands, fill);
+    record.reflectance.assign(bands, fill);
+    return record;
+  }
+
+  record.lat_deg = footprint.ground.lat_deg;
+  record.lon_deg = footprint.ground.lon_deg;
+  record.elev_m = footprint.ground.h_m;
+  record.range_m = footprint.range_m;
+
+  const LocalFrame frame(footprint.ground);
+  ShotGeometry geometry;
+  geometry.sensor_m = frame.local_from_ecef(footprint.spacecraft_ecef);
+  geometry.axis = frame.local_direction(footprint.beam_ecef);
+  geometry.range_m = footprint.range_m;
+
+  const double half_size_m = patch_half_size_m(terrain_, lidar_, footprint, frame);
+  const GroundMesh ground = build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m());
+  const Scene scene(device_, ground);
+
+  const double beam_sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
+  const SurfaceOrientation orientation = fit_surface_orientation(terrain_, frame, beam_sigma_m);
+  record.slope_deg = orientation.slope_deg;
+  record.aspect_deg = orientation.aspect_deg;
+
+  // Bin elevations along the beam axis, from the footprint centre.
+  const std::vector<double> bin_time_ns = lidar_.bin_time_ns();
+  auto elevation_at = [&](double time_ns) {
+    const double along_m = 0.5 * speed_of_light_m_s * time_ns * 1e-9;
+    return frame.to_geodetic(along_m * geometry.axis).h_m;
+  };
+  record.elev_bin0_m = elevation_at(bin_time_ns.front());
+  record.elev_lastbin_m = elevation_at(bin_time_ns.back());
+
+  TransportOptions options;
+  options.rays = config_.simulation.rays_per_shot;
+  options.max_order = config_.simulation.max_order;
+  options.per_order = config_.output.per_order;
+  options.seed = config_.seed;
+  SceneOptics optics;
+  optics.soil_reflectance = config_.terrain.soil_reflectance;
+  ShotWaveforms waveforms = simulate_shot(scene, lidar_, geometry, optics, options, footprint.shot_number);
+  if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;
+
+  record.rx_waveform_W = std::move(waveforms.total_W);
+  record.rx_waveform_canopy_W = std::move(waveforms.canopy_W);
+  record.rx_waveform_ground_W = std::move(waveforms.ground_W);
+  record.rx_waveform_order_W = std::move(waveforms.order_W);
+  record.rx_energy_J = waveforms.energy_J;
+  record.rx_energy_canopy_J = waveforms.canopy_energy_J;
+  record.rx_energy_ground_J = waveforms.ground_energy_J;
+  for (std::size_t band = 0; band < bands; ++band) {
+    // The seed's eq. (1): rho = pi E_rec R^2 / (E_t A_T T).
+    const Band& b = config_.sensor.bands[band];
+    record.reflectance.push_back(std::numbers::pi * record.rx_energy_J[band] * footprint.range_m * footprint.range_m /
+                                 (b.pulse_energy_mJ * 1e-3 * config_.sensor.telescope_area_m2 *
+                                  b.atmos_transmission_roundtrip));
+  }
+  record.footprint_lonlat = beam_outline(scene, lidar_, geometry, frame);
+  return record;
+}
+
+RunInfo ShotSimulator::run_info(std::int64_t shots, const std::string& command_line) const {
+  RunInfo info;
+  info.command_line = command_line;
+  info.config_json = config_.resolved.dump();
+  info.seed = config_.seed;
+  info.shots = shots;
+  info.bands = config_.sensor.bands;
+  info.bin_time_ns = lidar_.bin_time_ns();
+  info.tx_time_ns = lidar_.tx_time_ns();
+  for (std::size_t band = 0; band < lidar_.band_count(); ++band) info.tx_waveform_W.push_back(lidar_.tx_waveform_W(band));
+  info.orders = config_.output.per_order ? config_.simulation.max_order : 0;
+  return info;
+}
+
+}  // namespace glaswave

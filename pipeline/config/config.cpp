@@ -1,0 +1,654 @@
+// The configuration parser: JSON document -> typed settings, each key read with its default and
+// range next to the member it sets (PDAL style), presets expanded, every error at its JSON path.
+#include "pipeline/config/config.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "footprints/glas_time.hpp"
+#include "pipeline/config/json_reader.hpp"
+#include "pipeline/config/presets.hpp"
+#include "terrain/error.hpp"
+
+namespace glaswave {
+
+using nlohmann::json;
+
+namespace {
+
+constexpr std::int64_t int_max = std::numeric_limits<int>::max();
+constexpr double wgs84_equatorial_radius_m = 6378137.0;
+constexpr const char* default_preset = "north2010";
+constexpr const char* glas_epoch_text = "2000-01-01T12:00:00Z";
+
+// ---- numbers nlohmann-json refuses ---------------------------------------------------------
+
+// Where a number token sits in JSON text: line, column and the JSON pointer of its value.
+struct TokenPlace {
+  bool found = false;
+  std::size_t line = 0;
+  std::size_t column = 0;
+  std::string pointer;
+};
+
+// nlohmann-json stops at a number that overflows a double (1e999) with an error that names the
+// token but not where it is. The text before that token is valid JSON, so a small scan that
+// follows objects and arrays finds the token's line, column and key path.
+TokenPlace locate_number(const std::string& text, const std::string& token) {
+  struct Frame {
+    bool object;
+    std::string key;
+    std::size_t index;
+  };
+  std::vector<Frame> stack;
+  bool expect_key = false;
+  std::size_t line = 1, line_start = 0;
+  auto pointer = [&] {
+    std::string p;
+    for (const Frame& f : stack)
+      p = f.object ? json_pointer_child(p, f.key) : p + "/" + std::to_string(f.index);
+    return p;
+  };
+  for (std::size_t i = 0; i < text.size();) {
+    const char c = text[i];
+    if (c == '"') {
+      std::size_t j = i + 1;
+      while (j < text.size() && text[j] != '"') j += text[j] == '\\' ? 2 : 1;
+      if (!stack.empty() && stack.back().object && expect_key) {
+        try {
+          stack.back().key = json::parse(text.substr(i, j - i + 1)).get<std::string>();
+        } catch (const json::exception&) {
+          stack.back().key = text.substr(i + 1, j - i - 1);
+        }
+      }
+      i = j + 1;
+      continue;
+    }
+    if (c == '-' || (c >= '0' && c <= '9')) {
+      std::size_t j = i;
+      while (j < text.size() &&
+             std::string_view("0123456789+-.eE").find(text[j]) != std::string_view::npos)
+        ++j;
+      if (text.compare(i, j - i, token) == 0) return {true, line, i - line_start + 1, pointer()};
+      i = j;
+      continue;
+    }
+    switch (c) {
+      case '{':
+        stack.push_back({true, "", 0});
+        expect_key = true;
+        break;
+      case '[':
+        stack.push_back({false, "", 0});
+        break;
+      case '}':
+      case ']':
+        if (!stack.empty()) stack.pop_back();
+        break;
+      case ',':
+        if (!stack.empty()) {
+          if (stack.back().object)
+            expect_key = true;
+          else
+            ++stack.back().index;
+        }
+        break;
+      case ':':
+        expect_key = false;
+        break;
+      case '\n':
+        ++line;
+        line_start = i + 1;
+        break;
+      default:
+        break;
+    }
+    ++i;
+  }
+  return {};
+}
+
+// The token of nlohmann-json's "number overflow parsing '1e999'" message.
+std::string overflow_token(const std::string& what) {
+  const std::string marker = "number overflow parsing '";
+  const auto begin = what.find(marker);
+  if (begin == std::string::npos) return "";
+  const auto end = what.find('\'', begin + marker.size());
+  return what.substr(begin + marker.size(), end - begin - marker.size());
+}
+
+// The dotted key of an override as a JSON pointer ("canopy.pai" -> "/canopy/pai").
+std::string dotted_to_pointer(const std::vector<std::string>& parts) {
+  std::string p;
+  for (const std::string& part : parts) p = json_pointer_child(p, part);
+  return p;
+}
+
+// ---- spectral properties --------------------------------------------------------------------
+
+std::string band_list(const std::vector<Band>& bands) {
+  std::string list;
+  for (std::size_t i = 0; i < bands.size(); ++i) list += (i ? ", " : "") + bands[i].name;
+  return list;
+}
+
+// A per-band optical property: one number for every band, or an object keyed by band name that
+// gives every band its own value. Resolved in band order; written to `resolved` as given.
+std::vector<double> spectral(JsonReader& reader, const std::string& key, double fallback,
+                             const Range& range, const std::vector<Band>& bands) {
+  const json& value = reader.raw(key);
+  const std::string place = reader.place(key);
+  if (value.is_null()) {
+    reader.resolved()[key] = fallback;
+    return std::vector<double>(bands.size(), fallback);
+  }
+  if (value.is_number()) {
+    const double x = read_number(place, value, range);
+    reader.resolved()[key] = value;
+    return std::vector<double>(bands.size(), x);
+  }
+  if (!value.is_object()) {
+    throw config_error(place, "must be a number or an object keyed by band name (" +
+                                  band_list(bands) + "), got " + describe(value));
+  }
+  for (const auto& [name, v] : value.items()) {
+    bool known = false;
+    for (const Band& band : bands) known = known || band.name == name;
+    if (!known) {
+      throw config_error(json_pointer_child(place, name),
+                         "unknown band \"" + name + "\"; the bands are " + band_list(bands));
+    }
+  }
+  std::vector<double> values;
+  for (const Band& band : bands) {
+    const auto it = value.find(band.name);
+    if (it == value.end()) {
+      throw config_error(place, "missing band \"" + band.name +
+                                    "\": give a value for every band, or one number for all");
+    }
+    values.push_back(read_number(json_pointer_child(place, band.name), *it, range));
+  }
+  reader.resolved()[key] = value;
+  return values;
+}
+
+// A path that must name something when given.
+std::string non_empty_path(JsonReader& reader, const std::string& key) {
+  const std::optional<std::string> path = reader.optional_string(key);
+  if (path && path->empty()) reader.fail(key, "must not be empty");
+  return path.value_or("");
+}
+
+// An ISO 8601 time of the configuration, as seconds since the GLAS epoch.
+double time_s(JsonReader& reader, const std::string& key, const std::string& text) {
+  try {
+    return parse_iso8601_utc(text);
+  } catch (const std::invalid_argument& e) {
+    reader.fail(key, e.what());
+  }
+}
+
+// ---- sections -------------------------------------------------------------------------------
+
+SensorSettings read_sensor(JsonReader& root) {
+  const json& given = root.raw("sensor");
+  if (!given.is_null() && !given.is_object())
+    root.fail("sensor", "must be an object, got " + describe(given));
+
+  SensorSettings s;
+  // A preset is the base; keys given beside it replace the preset's ("bands" as a whole).
+  std::string preset = default_preset;
+  if (given.is_object() && given.contains("preset") && !given["preset"].is_null()) {
+    const json& name = given["preset"];
+    if (!name.is_string())
+      throw config_error("/sensor/preset", "must be a string, got " + describe(name));
+    preset = name.get<std::string>();
+    if (!sensor_presets().count(preset)) {
+      std::string known;
+      for (const auto& [preset_name, text] : sensor_presets())
+        known += (known.empty() ? "" : ", ") + preset_name;
+      throw config_error("/sensor/preset",
+                         "unknown preset \"" + preset + "\"; the presets are " + known);
+    }
+  }
+  const auto preset_text = sensor_presets().find(preset);
+  json merged =
+      preset_text != sensor_presets().end() ? json::parse(preset_text->second) : json::object();
+  if (given.is_object())
+    for (const auto& [key, value] : given.items()) merged[key] = value;
+
+  JsonReader r(merged, "/sensor", root.resolved()["sensor"]);
+  s.preset = r.optional_string("preset").value_or("");
+  s.pulse_sigma_ns = r.number("pulse_sigma_ns", s.pulse_sigma_ns, above(0));
+  s.divergence_sigma_rad = r.number("divergence_sigma_rad", s.divergence_sigma_rad, above(0));
+  s.ifov_rad = r.number("ifov_rad", s.ifov_rad, above(0));
+  s.telescope_area_m2 = r.number("telescope_area_m2", s.telescope_area_m2, above(0));
+  s.bin_ns = r.number("bin_ns", s.bin_ns, above(0));
+  s.bins = static_cast<int>(r.integer("bins", s.bins, 1, int_max));
+  for (JsonReader& b : r.object_array("bands", true, true)) {
+    Band band;
+    for (const char* key :
+         {"name", "wavelength_nm", "pulse_energy_mJ", "atmos_transmission_roundtrip"})
+      b.require(key);
+    band.name = b.string("name", "");
+    if (band.name.empty()) b.fail("name", "must not be empty");
+    for (const Band& other : s.bands)
+      if (other.name == band.name) b.fail("name", "duplicate band name \"" + band.name + "\"");
+    band.wavelength_nm = b.number("wavelength_nm", 0.0, above(0));
+    band.pulse_energy_mJ = b.number("pulse_energy_mJ", 0.0, above(0));
+    band.atmos_transmission_roundtrip =
+        b.number("atmos_transmission_roundtrip", 1.0, open_closed(0, 1));
+    b.finish();
+    s.bands.push_back(band);
+  }
+  r.finish();
+  return s;
+}
+
+SimulationSettings read_simulation(JsonReader& root) {
+  SimulationSettings s;
+  JsonReader r = root.object("simulation");
+  s.rays_per_shot = r.integer("rays_per_shot", s.rays_per_shot, 1);
+  s.max_order = static_cast<int>(r.integer("max_order", s.max_order, 1, int_max));
+  r.finish();
+  return s;
+}
+
+TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
+  if (!root.has("terrain")) root.fail("terrain", "is required: give \"dem\" or \"plane\"");
+  TerrainSettings t;
+  JsonReader r = root.object("terrain");
+  const std::optional<std::string> dem = r.optional_string("dem");
+  const bool has_plane = r.has("plane");
+  if (dem && has_plane)
+    throw config_error(r.path(), "give exactly one of \"dem\" and \"plane\", not both");
+  if (!dem && !has_plane) throw config_error(r.path(), "give exactly one of \"dem\" and \"plane\"");
+  if (dem) {
+    if (dem->empty()) r.fail("dem", "must not be empty");
+    t.dem = *dem;
+  } else {
+    PlaneSettings plane;
+    JsonReader p = r.object("plane");
+    plane.origin_lat_deg = p.number("origin_lat_deg", plane.origin_lat_deg, closed(-90, 90));
+    plane.origin_lon_deg = p.number("origin_lon_deg", plane.origin_lon_deg, closed(-180, 360));
+    plane.elevation_m = p.number("elevation_m", plane.elevation_m, any_finite());
+    plane.slope_deg = p.number("slope_deg", plane.slope_deg, closed(0, 89));
+    plane.aspect_deg = p.number("aspect_deg", plane.aspect_deg, any_finite());
+    p.finish();
+    t.plane = plane;
+  }
+  JsonReader g = r.object("roughness");
+  t.roughness.rms_m = g.number("rms_m", t.roughness.rms_m, at_least(0));
+  t.roughness.correlation_m = g.number("correlation_m", t.roughness.correlation_m, above(0));
+  g.finish();
+  t.soil_reflectance = spectral(r, "soil_reflectance", 0.15, closed(0, 1), bands);
+  r.finish();
+  return t;
+}
+
+void read_lad(JsonReader& r, CanopySettings& c) {
+  static const std::vector<std::pair<std::string, LeafAngleDistribution>> names = {
+      {"spherical", LeafAngleDistribution::spherical},
+      {"planophile", LeafAngleDistribution::planophile},
+      {"erectophile", LeafAngleDistribution::erectophile},
+      {"plagiophile", LeafAngleDistribution::plagiophile},
+      {"extremophile", LeafAngleDistribution::extremophile},
+      {"uniform", LeafAngleDistribution::uniform}};
+  const json& value = r.raw("lad");
+  if (value.is_object()) {
+    JsonReader e(value, r.place("lad"), r.resolved()["lad"]);
+    e.require("ellipsoidal_mean_deg");
+    c.lad = LeafAngleDistribution::ellipsoidal;
+    c.lad_mean_deg = e.number("ellipsoidal_mean_deg", c.lad_mean_deg, open(0, 90));
+    e.finish();
+    return;
+  }
+  if (!value.is_null() && !value.is_string()) {
+    r.fail("lad", "must be a name or {\"ellipsoidal_mean_deg\": X}, got " + describe(value));
+  }
+  const std::string name = value.is_string() ? value.get<std::string>() : "spherical";
+  for (const auto& [known, lad] : names) {
+    if (known == name) {
+      c.lad = lad;
+      r.resolved()["lad"] = name;
+      return;
+    }
+  }
+  std::string list;
+  std::vector<std::string> known_names;
+  for (const auto& [known, lad] : names) {
+    list += known + ", ";
+    known_names.push_back(known);
+  }
+  std::string message =
+      "must be one of " + list + "or {\"ellipsoidal_mean_deg\": X}, got " + describe(value);
+  if (const auto suggestion = nearest_name(name, known_names))
+    message += "; did you mean \"" + *suggestion + "\"?";
+  r.fail("lad", message);
+}
+
+// A fraction that is the complement of a value the user gave: rounded to 12 decimals so that
+// 1 - 0.8 reads 0.2 in the resolved configuration, not 0.19999999999999996.
+double complement(double x) { return std::round((1.0 - x) * 1e12) / 1e12; }
+
+std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Band>& bands) {
+  if (!root.has("canopy")) {
+    root.resolved()["canopy"] = nullptr;  // bare ground
+    return std::nullopt;
+  }
+  CanopySettings c;
+  JsonReader r = root.object("canopy");
+  c.pai = r.number("pai", c.pai, at_least(0));
+  read_lad(r, c);
+  c.cover = r.number("cover", c.cover, closed(0, 1));
+  // Giving one fraction implies the other; giving both asks that they add up.
+  if (r.has("bark_fraction") && !r.has("green_fraction")) {
+    c.bark_fraction = r.number("bark_fraction", c.bark_fraction, closed(0, 1));
+    c.green_fraction = r.number("green_fraction", complement(c.bark_fraction), closed(0, 1));
+  } else {
+    const bool green_given = r.has("green_fraction");
+    c.green_fraction = r.number("green_fraction", c.green_fraction, closed(0, 1));
+    c.bark_fraction =
+        r.number("bark_fraction", green_given ? complement(c.green_fraction) : c.bark_fraction,
+                 closed(0, 1));
+  }
+  const double fraction_sum = c.green_fraction + c.bark_fraction;
+  if (std::fabs(fraction_sum - 1.0) > 1e-9)
+    r.fail("bark_fraction",
+           "green_fraction + bark_fraction must be 1, got " + format_number(fraction_sum));
+  c.crown_shape = r.choice<CrownShape>("crown_shape", c.crown_shape,
+                                       {{"ellipsoid", CrownShape::ellipsoid},
+                                        {"cone", CrownShape::cone},
+                                        {"layer", CrownShape::layer}});
+  c.crown_radius_m = r.number("crown_radius_m", c.crown_radius_m, above(0));
+  c.crown_half_height_m = r.number("crown_half_height_m", c.crown_half_height_m, above(0));
+  const json& base = r.raw("crown_base_m");
+  if (!base.is_null()) {
+    if (!base.is_array() || base.size() != 2)
+      r.fail("crown_base_m", "must be an array of 2 numbers [min, max], got " + describe(base));
+    for (std::size_t i = 0; i < 2; ++i)
+      c.crown_base_m[i] =
+          read_number(r.place("crown_base_m") + "/" + std::to_string(i), base[i], at_least(0));
+    if (c.crown_base_m[0] > c.crown_base_m[1])
+      r.fail("crown_base_m", "min must be <= max, got " + describe(base));
+  }
+  r.resolved()["crown_base_m"] = base.is_null() ? json(c.crown_base_m) : base;
+  c.leaf_size_m = r.number("leaf_size_m", c.leaf_size_m, at_least(0));
+  c.dbh_m = r.number("dbh_m", c.dbh_m, at_least(0));
+  c.leaf_reflectance = spectral(r, "leaf_reflectance", 0.4, closed(0, 1), bands);
+  c.leaf_transmittance = spectral(r, "leaf_transmittance", 0.4, closed(0, 1), bands);
+  // Energy conservation of a bi-Lambertian leaf: what is not reflected or transmitted is absorbed.
+  for (std::size_t i = 0; i < bands.size(); ++i) {
+    const double sum = c.leaf_reflectance[i] + c.leaf_transmittance[i];
+    if (sum > 1.0 + 1e-12) {
+      r.fail("leaf_transmittance", "leaf_reflectance + leaf_transmittance must be <= 1 in band " +
+                                       bands[i].name + ", got " + format_number(sum));
+    }
+  }
+  c.bark_reflectance = spectral(r, "bark_reflectance", 0.3, closed(0, 1), bands);
+  c.crowns_file = non_empty_path(r, "crowns_file");
+  c.stands = non_empty_path(r, "stands");
+  r.finish();
+  return c;
+}
+
+TrackSettings read_track(JsonReader& root) {
+  TrackSettings t;
+  JsonReader r = root.object("track");
+  t.type = r.choice<TrackType>("type", t.type,
+                               {{"pass", TrackType::pass},
+                                {"points", TrackType::points},
+                                {"orbit", TrackType::orbit},
+                                {"ephemeris", TrackType::ephemeris}});
+  t.start_lat_deg = r.number("start_lat_deg", t.start_lat_deg, closed(-90, 90));
+  t.start_lon_deg = r.number("start_lon_deg", t.start_lon_deg, closed(-180, 360));
+  t.heading_deg = r.number("heading_deg", t.heading_deg, any_finite());
+  const bool shots_given = r.has("shots");
+  t.shots = r.integer("shots", t.shots, 1);
+  t.rate_hz = r.number("rate_hz", t.rate_hz, above(0));
+  t.spacing_m = r.optional_number("spacing_m", above(0));
+  t.altitude_m = r.number("altitude_m", t.altitude_m, above(0));
+  const std::string start_time = r.string("start_time", glas_epoch_text);
+  t.start_time_s = time_s(r, "start_time", start_time);
+  t.off_nadir_deg = r.number("off_nadir_deg", t.off_nadir_deg, half_open(0, 45));
+  t.pointing_azimuth_deg = r.number("pointing_azimuth_deg", t.pointing_azimuth_deg, any_finite());
+
+  const bool points_type = t.type == TrackType::points;
+  for (JsonReader& p : r.object_array("points", points_type, points_type)) {
+    GroundPoint point;
+    p.require("lat_deg");
+    p.require("lon_deg");
+    point.lat_deg = p.number("lat_deg", 0.0, closed(-90, 90));
+    point.lon_deg = p.number("lon_deg", 0.0, closed(-180, 360));
+    p.finish();
+    t.points.push_back(point);
+  }
+  if (points_type) {
+    const auto count = static_cast<std::int64_t>(t.points.size());
+    if (shots_given && t.shots != count) {
+      r.fail("shots", "must equal the number of points (" + std::to_string(count) +
+                          ") when type is \"points\", got " + std::to_string(t.shots));
+    }
+    t.shots = count;
+    r.resolved()["shots"] = count;
+  }
+
+  // Keplerian elements sit flat in `track`, as the product contract lists them.
+  OrbitElements& o = t.orbit;
+  o.semi_major_axis_m =
+      r.number("semi_major_axis_m", o.semi_major_axis_m, above(wgs84_equatorial_radius_m));
+  o.eccentricity = r.number("eccentricity", o.eccentricity, half_open(0, 1));
+  o.inclination_deg = r.number("inclination_deg", o.inclination_deg, closed(0, 180));
+  o.raan_deg = r.number("raan_deg", o.raan_deg, any_finite());
+  o.arg_perigee_deg = r.number("arg_perigee_deg", o.arg_perigee_deg, any_finite());
+  o.mean_anomaly_deg = r.number("mean_anomaly_deg", o.mean_anomaly_deg, any_finite());
+  // Elements without an epoch are taken to hold at the first shot.
+  const std::string epoch = r.string("epoch", start_time);
+  o.epoch_s = time_s(r, "epoch", epoch);
+  if (t.type == TrackType::orbit) {
+    const double perigee_m = o.semi_major_axis_m * (1.0 - o.eccentricity);
+    if (perigee_m <= wgs84_equatorial_radius_m) {
+      r.fail("eccentricity", "puts the perigee (" + format_number(perigee_m) +
+                                 " m from the Earth's centre) inside the Earth");
+    }
+  }
+
+  t.ephemeris = non_empty_path(r, "ephemeris");
+  if (t.type == TrackType::ephemeris && t.ephemeris.empty())
+    r.fail("ephemeris", "is required when type is \"ephemeris\"");
+  r.finish();
+  return t;
+}
+
+OutputSettings read_output(JsonReader& root) {
+  OutputSettings o;
+  JsonReader r = root.object("output");
+  o.netcdf = r.boolean("netcdf", o.netcdf);
+  o.geojson = r.boolean("geojson", o.geojson);
+  o.plots = r.boolean("plots", o.plots);
+  o.per_order = r.boolean("per_order", o.per_order);
+  r.finish();
+  return o;
+}
+
+BrfSettings read_brf(JsonReader& root) {
+  BrfSettings b;
+  JsonReader r = root.object("brf");
+  b.sun_zenith_deg = r.number("sun_zenith_deg", b.sun_zenith_deg, half_open(0, 90));
+  b.sun_azimuth_deg = r.number("sun_azimuth_deg", b.sun_azimuth_deg, any_finite());
+  std::vector<JsonReader> views = r.object_array("views", false, true);
+  if (views.empty()) {
+    json& out = r.resolved()["views"] = json::array();
+    for (const BrfView& view : b.views)
+      out.push_back({{"zenith_deg", view.zenith_deg}, {"azimuth_deg", view.azimuth_deg}});
+  } else {
+    b.views.clear();
+    for (JsonReader& v : views) {
+      BrfView view;
+      view.zenith_deg = v.number("zenith_deg", view.zenith_deg, half_open(0, 90));
+      view.azimuth_deg = v.number("azimuth_deg", view.azimuth_deg, any_finite());
+      v.finish();
+      b.views.push_back(view);
+    }
+  }
+  b.photons = r.integer("photons", b.photons, 1);
+  b.image_resolution_m = r.number("image_resolution_m", b.image_resolution_m, above(0));
+  r.finish();
+  return b;
+}
+
+// A relative path of the configuration is taken relative to the configuration file's folder, so
+// that a configuration runs the same from any working directory.
+void resolve_path(std::string& path, json& resolved_section, const char* key,
+                  const std::filesystem::path& folder) {
+  if (path.empty() || std::filesystem::path(path).is_absolute()) return;
+  path = std::filesystem::absolute(folder / path).lexically_normal().string();
+  resolved_section[key] = path;
+}
+
+}  // namespace
+
+json read_json_file(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw config_error(file.string(), "cannot read: it is a directory");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    throw config_error(file.string(),
+                       "cannot read: " + std::generic_category().message(errno ? errno : ENOENT));
+  }
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw config_error(file.string(), "cannot read: input/output error");
+  const std::string text = buffer.str();
+  try {
+    return json::parse(text);
+  } catch (const json::parse_error& e) {
+    // nlohmann-json's own "line 3, column 0" goes astray when the bad token ends a line, so the
+    // place is counted here from the byte offset, which is exact: the last byte it read.
+    const std::size_t offset = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
+    const std::size_t newline = offset == 0 ? std::string::npos : text.rfind('\n', offset - 1);
+    const std::size_t line_start = newline == std::string::npos ? 0 : newline + 1;
+    const auto line = 1 + std::count(text.begin(), text.begin() + offset, '\n');
+    const std::size_t column = offset - line_start + 1;
+    // The cause, without "[json.exception.parse_error.101] parse error at line 3, column 0: ".
+    std::string cause = e.what();
+    const auto at = cause.find("parse error");
+    const auto colon = cause.find(": ", at == std::string::npos ? 0 : at);
+    if (colon != std::string::npos) cause = cause.substr(colon + 2);
+    for (char& c : cause)
+      if (c == '\n' || c == '\r') c = ' ';
+    throw config_error(file.string(), "malformed JSON at line " + std::to_string(line) +
+                                          ", column " + std::to_string(column) + ": " + cause);
+  } catch (const json::out_of_range& e) {
+    const std::string token = overflow_token(e.what());
+    const TokenPlace place = locate_number(text, token);
+    if (token.empty() || !place.found) throw config_error(file.string(), e.what());
+    throw config_error(place.pointer.empty() ? file.string() : place.pointer,
+                       "must be a finite number, got " + token + " (" + file.string() + ", line " +
+                           std::to_string(place.line) + ", column " + std::to_string(place.column) +
+                           ")");
+  }
+}
+
+void apply_override(json& document, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos)
+    throw config_error("--set", "expected KEY=VALUE, got \"" + assignment + "\"");
+  const std::string key = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  if (key.empty()) throw config_error("--set", "empty key in \"" + assignment + "\"");
+  std::vector<std::string> parts;
+  for (std::size_t begin = 0;;) {
+    const auto dot = key.find('.', begin);
+    parts.push_back(key.substr(begin, dot - begin));
+    if (parts.back().empty())
+      throw config_error("--set",
+                         "empty part in the key \"" + key + "\" of \"" + assignment + "\"");
+    if (dot == std::string::npos) break;
+    begin = dot + 1;
+  }
+
+  json value;
+  try {
+    value = json::parse(text);
+  } catch (const json::parse_error&) {
+    value = text;  // not JSON: a bare string such as a path or a name
+  } catch (const json::out_of_range&) {
+    throw config_error(dotted_to_pointer(parts),
+                       "must be a finite number, got " + text + " (from --set " + assignment + ")");
+  }
+
+  if (document.is_null()) document = json::object();
+  json* node = &document;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const std::string& part = parts[i];
+    const bool last = i + 1 == parts.size();
+    if (node->is_array()) {
+      // Array elements by index, as in "sensor.bands.1.pulse_energy_mJ".
+      std::size_t index = 0;
+      bool numeric = !part.empty();
+      for (char c : part) numeric = numeric && c >= '0' && c <= '9';
+      if (numeric) index = std::stoul(part);
+      if (!numeric || index >= node->size()) {
+        throw config_error("--set", "cannot set \"" + key + "\": \"" + part +
+                                        "\" is not an index of an array of " +
+                                        std::to_string(node->size()));
+      }
+      node = &(*node)[index];
+    } else if (node->is_object()) {
+      node = &(*node)[part];
+    } else {
+      throw config_error("--set", "cannot set \"" + key + "\": the value above \"" + part +
+                                      "\" is " + describe(*node) + ", not an object");
+    }
+    if (last) {
+      *node = value;
+    } else if (node->is_null()) {
+      *node = json::object();  // create intermediate objects, also in place of a null
+    }
+  }
+}
+
+Config parse_config(const json& document) {
+  if (!document.is_object())
+    throw config_error("", "the configuration must be a JSON object, got " + describe(document));
+  Config c;
+  c.resolved = json::object();
+  JsonReader root(document, "", c.resolved);
+  root.optional_string("$schema");  // lets an editor find the schema; not a setting
+  c.seed = root.unsigned_integer("seed", c.seed);
+  // The sensor first: its bands give the per-band optical properties their length.
+  c.sensor = read_sensor(root);
+  c.simulation = read_simulation(root);
+  c.terrain = read_terrain(root, c.sensor.bands);
+  c.canopy = read_canopy(root, c.sensor.bands);
+  c.track = read_track(root);
+  c.output = read_output(root);
+  c.brf = read_brf(root);
+  root.finish();
+  c.resolved.erase("$schema");
+  return c;
+}
+
+Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+  json document = read_json_file(file);
+  for (const std::string& assignment : overrides) apply_override(document, assignment);
+  Config c = parse_config(document);
+  const std::filesystem::path folder = file.parent_path();
+  json& r = c.resolved;
+  resolve_path(c.terrain.dem, r["terrain"], "dem", folder);
+  if (c.canopy) {
+    resolve_path(c.canopy->crowns_file, r["canopy"], "crowns_file", folder);
+    resolve_path(c.canopy->stands, r["canopy"], "stands", folder);
+  }
+  resolve_path(c.track.ephemeris, r["track"], "ephemeris", folder);
+  return c;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,91 @@
+// The configuration of a run, parsed once from JSON into typed settings with defaults and
+// ranges checked. Every error names its JSON path; the transport never sees JSON.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "canopy/canopy_settings.hpp"
+#include "footprints/track_settings.hpp"
+#include "terrain/terrain_settings.hpp"
+
+namespace glaswave {
+
+struct Band {
+  std::string name;
+  double wavelength_nm = 0.0;
+  double pulse_energy_mJ = 0.0;
+  double atmos_transmission_roundtrip = 1.0;
+};
+
+// The lidar (the seed's Table 2). Defaults are the `north2010` preset.
+struct SensorSettings {
+  std::string preset;  // "north2010", "glas" or empty
+  double pulse_sigma_ns = 5.0;
+  double divergence_sigma_rad = 0.00011;  // beam angular RMS width per axis
+  double ifov_rad = 0.0004;               // detector full field of view (top-hat cone)
+  double telescope_area_m2 = 0.709;
+  double bin_ns = 1.0;
+  int bins = 544;
+  std::vector<Band> bands;
+};
+
+struct SimulationSettings {
+  std::int64_t rays_per_shot = 10000;
+  int max_order = 8;
+};
+
+struct OutputSettings {
+  bool netcdf = true;
+  bool geojson = true;
+  bool plots = false;
+  bool per_order = false;
+};
+
+struct BrfView {
+  double zenith_deg = 0.0;
+  double azimuth_deg = 0.0;
+};
+
+// Settings of `glaswave brf` (FLIGHT's solar mode).
+struct BrfSettings {
+  double sun_zenith_deg = 30.0;
+  double sun_azimuth_deg = 0.0;
+  std::vector<BrfView> views = {BrfView{}};
+  std::int64_t photons = 1000000;
+  double image_resolution_m = 1.0;
+};
+
+struct Config {
+  std::uint64_t seed = 1;
+  SensorSettings sensor;
+  SimulationSettings simulation;
+  TerrainSettings terrain;
+  std::optional<CanopySettings> canopy;  // empty: bare ground
+  TrackSettings track;
+  OutputSettings output;
+  BrfSettings brf;
+  // The configuration as used, presets expanded and defaults filled in; written into products.
+  nlohmann::json resolved;
+};
+
+// Reads a JSON file; malformed JSON is an error naming the file, line and column.
+nlohmann::json read_json_file(const std::filesystem::path& file);
+
+// Applies one `--set KEY=VALUE` override: KEY is a dotted path ("canopy.pai"); VALUE is parsed
+// as JSON when it parses, else taken as a string.
+void apply_override(nlohmann::json& document, const std::string& assignment);
+
+// Turns a configuration document into settings: presets expanded, defaults filled in, every
+// value checked. Unknown keys are errors that suggest the nearest known key.
+Config parse_config(const nlohmann::json& document);
+
+// read_json_file + apply_override for each + parse_config.
+Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides);
+
+}  // namespace glaswave

@@ -1,0 +1,323 @@
+// The path-aware JSON reader of the configuration: type and range checks, error messages that
+// name the JSON pointer of the offending key, and unknown-key rejection with a suggestion.
+#include "pipeline/config/json_reader.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "terrain/error.hpp"
+
+namespace glaswave {
+
+using nlohmann::json;
+
+bool Range::contains(double x) const {
+  if (low && (low_open ? !(x > *low) : !(x >= *low))) return false;
+  if (high && (high_open ? !(x < *high) : !(x <= *high))) return false;
+  return true;
+}
+
+std::string Range::requirement() const {
+  if (low && high) {
+    return "must be in " + std::string(low_open ? "(" : "[") + format_number(*low) + ", " +
+           format_number(*high) + (high_open ? ")" : "]");
+  }
+  if (low) return std::string("must be ") + (low_open ? "> " : ">= ") + format_number(*low);
+  if (high) return std::string("must be ") + (high_open ? "< " : "<= ") + format_number(*high);
+  return "";
+}
+
+Range any_finite() { return Range{}; }
+Range at_least(double low) { return Range{low, std::nullopt, false, false}; }
+Range above(double low) { return Range{low, std::nullopt, true, false}; }
+Range closed(double low, double high) { return Range{low, high, false, false}; }
+Range half_open(double low, double high) { return Range{low, high, false, true}; }
+Range open_closed(double low, double high) { return Range{low, high, true, false}; }
+Range open(double low, double high) { return Range{low, high, true, true}; }
+
+std::string json_pointer_child(const std::string& path, const std::string& key) {
+  std::string escaped;
+  for (char c : key) {
+    if (c == '~')
+      escaped += "~0";
+    else if (c == '/')
+      escaped += "~1";
+    else
+      escaped += c;
+  }
+  return path + "/" + escaped;
+}
+
+std::string describe(const json& value) {
+  // nlohmann-json writes non-finite numbers as null, which would hide the cause.
+  if (value.is_number_float() && !std::isfinite(value.get<double>())) {
+    const double x = value.get<double>();
+    return std::isnan(x) ? "nan" : x > 0 ? "inf" : "-inf";
+  }
+  // Replace invalid UTF-8 rather than throw while building an error message.
+  std::string text = value.dump(-1, ' ', false, json::error_handler_t::replace);
+  constexpr std::size_t max_length = 60;
+  if (text.size() > max_length) text = text.substr(0, max_length - 3) + "...";
+  return text;
+}
+
+std::string format_number(double x) {
+  // 12 significant digits hide the noise of sums such as 0.7 + 0.5 while keeping every value a
+  // user is likely to type.
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.12g", x);
+  return buffer;
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> previous(b.size() + 1), current(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) previous[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    current[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t substitution = previous[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+      current[j] = std::min({previous[j] + 1, current[j - 1] + 1, substitution});
+    }
+    std::swap(previous, current);
+  }
+  return previous[b.size()];
+}
+
+std::optional<std::string> nearest_name(const std::string& name,
+                                        const std::vector<std::string>& known) {
+  auto lower = [](std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const std::string name_lower = lower(name);
+  // A key without its unit ("slope" for "slope_deg") is a typo of the one key it begins.
+  std::optional<std::string> completion;
+  int completions = 0;
+  for (const std::string& candidate : known) {
+    if (lower(candidate).rfind(name_lower + "_", 0) == 0) {
+      completion = candidate;
+      ++completions;
+    }
+  }
+  if (completions == 1) return completion;
+  const std::string* best = nullptr;
+  std::size_t best_distance = std::numeric_limits<std::size_t>::max();
+  for (const std::string& candidate : known) {
+    const std::size_t d = edit_distance(name_lower, lower(candidate));
+    if (d < best_distance) {
+      best_distance = d;
+      best = &candidate;
+    }
+  }
+  if (!best) return std::nullopt;
+  // Two edits catch swapped letters ("pia" for "pai"); a third of the length allows for longer
+  // misspellings. Beyond that a suggestion is a guess.
+  const std::size_t longest = std::max(name.size(), best->size());
+  if (best_distance <= std::max<std::size_t>(2, longest / 3) && best_distance < longest)
+    return *best;
+  return std::nullopt;
+}
+
+std::string unknown_key_message(const std::string& key, const std::vector<std::string>& known) {
+  std::string message = "unknown key \"" + key + "\"";
+  if (const auto suggestion = nearest_name(key, known))
+    return message + "; did you mean \"" + *suggestion + "\"?";
+  if (known.empty()) return message + "; this object takes no keys";
+  std::vector<std::string> sorted = known;
+  std::sort(sorted.begin(), sorted.end());
+  message += "; known keys: ";
+  for (std::size_t i = 0; i < sorted.size(); ++i) message += (i ? ", " : "") + sorted[i];
+  return message;
+}
+
+double read_number(const std::string& place, const json& value, const Range& range) {
+  if (!value.is_number()) throw config_error(place, "must be a number, got " + describe(value));
+  const double x = value.get<double>();
+  // nlohmann-json reads 1e999 as infinity; no setting of the model means that.
+  if (!std::isfinite(x))
+    throw config_error(place, "must be a finite number, got " + describe(value));
+  if (!range.contains(x))
+    throw config_error(place, range.requirement() + ", got " + describe(value));
+  return x;
+}
+
+std::int64_t read_integer(const std::string& place, const json& value, std::int64_t min,
+                          std::int64_t max) {
+  std::int64_t n = 0;
+  if (value.is_number_integer() && !value.is_number_unsigned()) {
+    n = value.get<std::int64_t>();
+  } else if (value.is_number_unsigned()) {
+    const std::uint64_t u = value.get<std::uint64_t>();
+    if (u > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
+      throw config_error(place, "must be <= " + std::to_string(max) + ", got " + describe(value));
+    n = static_cast<std::int64_t>(u);
+  } else if (value.is_number_float()) {
+    // 1e4 is an integer written in exponent form; 2.5 is not.
+    const double x = value.get<double>();
+    if (!std::isfinite(x))
+      throw config_error(place, "must be a finite number, got " + describe(value));
+    if (x != std::floor(x) || std::fabs(x) > 9.0e15)
+      throw config_error(place, "must be an integer, got " + describe(value));
+    n = static_cast<std::int64_t>(x);
+  } else {
+    throw config_error(place, "must be an integer, got " + describe(value));
+  }
+  if (n < min)
+    throw config_error(place, "must be >= " + std::to_string(min) + ", got " + describe(value));
+  if (n > max)
+    throw config_error(place, "must be <= " + std::to_string(max) + ", got " + describe(value));
+  return n;
+}
+
+JsonReader::JsonReader(const json& object, std::string path, json& resolved)
+    : object_(object.is_null() ? nullptr : &object), path_(std::move(path)), resolved_(resolved) {
+  if (object_ && !object_->is_object())
+    throw config_error(path_, "must be an object, got " + describe(*object_));
+  if (!resolved_.is_object()) resolved_ = json::object();
+}
+
+const json* JsonReader::find(const std::string& key) {
+  if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.push_back(key);
+  if (!object_) return nullptr;
+  auto it = object_->find(key);
+  if (it == object_->end()) return nullptr;
+  return &*it;
+}
+
+bool JsonReader::has(const std::string& key) {
+  const json* value = find(key);
+  return value && !value->is_null();
+}
+
+void JsonReader::require(const std::string& key) {
+  if (!has(key)) fail(key, "is required");
+}
+
+const json& JsonReader::raw(const std::string& key) {
+  static const json null_value;
+  const json* value = find(key);
+  return value ? *value : null_value;
+}
+
+double JsonReader::number(const std::string& key, double fallback, const Range& range) {
+  const json* value = find(key);
+  const double x = value ? read_number(place(key), *value, range) : fallback;
+  resolved_[key] = value ? *value : json(x);
+  return x;
+}
+
+std::optional<double> JsonReader::optional_number(const std::string& key, const Range& range) {
+  const json* value = find(key);
+  if (!value || value->is_null()) return std::nullopt;
+  const double x = read_number(place(key), *value, range);
+  resolved_[key] = *value;
+  return x;
+}
+
+std::int64_t JsonReader::integer(const std::string& key, std::int64_t fallback, std::int64_t min,
+                                 std::int64_t max) {
+  const json* value = find(key);
+  const std::int64_t n = value ? read_integer(place(key), *value, min, max) : fallback;
+  resolved_[key] = n;
+  return n;
+}
+
+std::uint64_t JsonReader::unsigned_integer(const std::string& key, std::uint64_t fallback) {
+  const json* value = find(key);
+  if (!value) {
+    resolved_[key] = fallback;
+    return fallback;
+  }
+  // Unsigned values beyond the signed range are legal here (a 64-bit seed).
+  const std::uint64_t n =
+      value->is_number_unsigned()
+          ? value->get<std::uint64_t>()
+          : static_cast<std::uint64_t>(
+                read_integer(place(key), *value, 0, std::numeric_limits<std::int64_t>::max()));
+  resolved_[key] = n;
+  return n;
+}
+
+bool JsonReader::boolean(const std::string& key, bool fallback) {
+  const json* value = find(key);
+  if (value && !value->is_boolean())
+    fail(key, "must be a boolean (true or false), got " + describe(*value));
+  const bool b = value ? value->get<bool>() : fallback;
+  resolved_[key] = b;
+  return b;
+}
+
+std::string JsonReader::string(const std::string& key, const std::string& fallback) {
+  const json* value = find(key);
+  if (value && !value->is_string()) fail(key, "must be a string, got " + describe(*value));
+  std::string s = value ? value->get<std::string>() : fallback;
+  resolved_[key] = s;
+  return s;
+}
+
+std::optional<std::string> JsonReader::optional_string(const std::string& key) {
+  const json* value = find(key);
+  if (!value || value->is_null()) return std::nullopt;
+  if (!value->is_string()) fail(key, "must be a string, got " + describe(*value));
+  resolved_[key] = *value;
+  return value->get<std::string>();
+}
+
+JsonReader JsonReader::object(const std::string& key) {
+  const json& value = raw(key);
+  if (!value.is_null() && !value.is_object())
+    fail(key, "must be an object, got " + describe(value));
+  return JsonReader(value, place(key), resolved_[key]);
+}
+
+std::vector<JsonReader> JsonReader::object_array(const std::string& key, bool required,
+                                                 bool non_empty) {
+  const json& value = raw(key);
+  if (value.is_null()) {
+    if (required) fail(key, "is required");
+    return {};
+  }
+  if (!value.is_array()) fail(key, "must be an array, got " + describe(value));
+  if (non_empty && value.empty()) fail(key, "must not be empty");
+  // Size the resolved array first: readers keep references to its elements.
+  json& out = resolved_[key];
+  out = json::array();
+  for (std::size_t i = 0; i < value.size(); ++i) out.push_back(json::object());
+  std::vector<JsonReader> readers;
+  readers.reserve(value.size());
+  const std::string array_place = place(key);
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const std::string element_place = array_place + "/" + std::to_string(i);
+    if (!value[i].is_object())
+      throw config_error(element_place, "must be an object, got " + describe(value[i]));
+    readers.emplace_back(value[i], element_place, out[i]);
+  }
+  return readers;
+}
+
+void JsonReader::finish() const {
+  if (!object_) return;
+  for (const auto& [key, value] : object_->items()) {
+    if (std::find(known_.begin(), known_.end(), key) == known_.end())
+      throw config_error(json_pointer_child(path_, key), unknown_key_message(key, known_));
+  }
+}
+
+void JsonReader::fail(const std::string& key, const std::string& message) const {
+  throw config_error(place(key), message);
+}
+
+void JsonReader::throw_not_one_of(const std::string& key, const std::string& got,
+                                  const std::vector<std::string>& names) const {
+  std::string list;
+  for (std::size_t i = 0; i < names.size(); ++i) list += (i ? ", " : "") + names[i];
+  std::string message = "must be one of " + list + ", got \"" + got + "\"";
+  if (const auto suggestion = nearest_name(got, names))
+    message += "; did you mean \"" + *suggestion + "\"?";
+  fail(key, message);
+}
+
+}  // namespace glaswave

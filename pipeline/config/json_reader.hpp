@@ -1,0 +1,137 @@
+// A path-aware reader of one JSON object of the configuration: each key is read with its type,
+// default and range where the settings member is assigned, the value used is recorded into the
+// resolved configuration, and keys nobody asked for are rejected at the end.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace glaswave {
+
+// The allowed interval of a number; open or closed at each end, either end optional.
+struct Range {
+  std::optional<double> low;
+  std::optional<double> high;
+  bool low_open = false;
+  bool high_open = false;
+
+  bool contains(double x) const;
+  // "must be >= 0", "must be in (0, 1]", or empty when anything finite goes.
+  std::string requirement() const;
+};
+
+Range any_finite();
+Range at_least(double low);                  // [low, inf)
+Range above(double low);                     // (low, inf)
+Range closed(double low, double high);       // [low, high]
+Range half_open(double low, double high);    // [low, high)
+Range open_closed(double low, double high);  // (low, high]
+Range open(double low, double high);         // (low, high)
+
+// The JSON pointer of `key` inside the object at `path` ("/canopy" + "pai" -> "/canopy/pai"),
+// with '~' and '/' escaped as RFC 6901 asks.
+std::string json_pointer_child(const std::string& path, const std::string& key);
+
+// A value for an error message: compact JSON, cut short when long.
+std::string describe(const nlohmann::json& value);
+
+// A number for an error message: no trailing zeros, no binary noise ("1.2", not
+// "1.2000000000000002").
+std::string format_number(double x);
+
+// Levenshtein edit distance between two strings.
+std::size_t edit_distance(const std::string& a, const std::string& b);
+
+// The known name that `name` is most likely a typo of, if any is close enough to say so.
+std::optional<std::string> nearest_name(const std::string& name,
+                                        const std::vector<std::string>& known);
+
+// The message for an unknown key: the nearest known key when it is close enough to be a typo,
+// else the list of known keys.
+std::string unknown_key_message(const std::string& key, const std::vector<std::string>& known);
+
+class JsonReader {
+ public:
+  // `object` is the JSON at `path` (null stands for an absent object: every key takes its
+  // default); `resolved` receives the values as used. Throws when `object` is neither an object
+  // nor null.
+  JsonReader(const nlohmann::json& object, std::string path, nlohmann::json& resolved);
+
+  const std::string& path() const { return path_; }
+  std::string place(const std::string& key) const { return json_pointer_child(path_, key); }
+
+  // Whether the key is present and not null. Declares the key as known.
+  bool has(const std::string& key);
+
+  // Throws "is required" at the key when it is absent or null.
+  void require(const std::string& key);
+
+  // The raw value of a key (null when absent), for keys with a shape of their own. Declares the
+  // key as known; the caller writes what it used into resolved().
+  const nlohmann::json& raw(const std::string& key);
+
+  double number(const std::string& key, double fallback, const Range& range);
+  std::optional<double> optional_number(const std::string& key, const Range& range);
+  std::int64_t integer(const std::string& key, std::int64_t fallback, std::int64_t min,
+                       std::int64_t max = std::numeric_limits<std::int64_t>::max());
+  std::uint64_t unsigned_integer(const std::string& key, std::uint64_t fallback);
+  bool boolean(const std::string& key, bool fallback);
+  std::string string(const std::string& key, const std::string& fallback);
+  std::optional<std::string> optional_string(const std::string& key);
+
+  // A string that names one of `choices`.
+  template <typename T>
+  T choice(const std::string& key, T fallback,
+           const std::vector<std::pair<std::string, T>>& choices) {
+    std::vector<std::string> names;
+    std::string fallback_name;
+    for (const auto& [name, value] : choices) {
+      names.push_back(name);
+      if (value == fallback) fallback_name = name;
+    }
+    const std::string name = string(key, fallback_name);
+    for (const auto& [choice_name, value] : choices)
+      if (choice_name == name) return value;
+    throw_not_one_of(key, name, names);
+  }
+
+  // A nested object (absent or null reads as empty, so its keys take their defaults).
+  JsonReader object(const std::string& key);
+
+  // An array of objects; `required` makes an absent key an error. Each element gets its own
+  // reader, whose finish() the caller calls.
+  std::vector<JsonReader> object_array(const std::string& key, bool required, bool non_empty);
+
+  // Values as used at this level.
+  nlohmann::json& resolved() { return resolved_; }
+
+  // Rejects every key of the object that was never asked for.
+  void finish() const;
+
+  // An error at `key` inside this object.
+  [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+
+ private:
+  const nlohmann::json* find(const std::string& key);
+  [[noreturn]] void throw_not_one_of(const std::string& key, const std::string& got,
+                                     const std::vector<std::string>& names) const;
+
+  const nlohmann::json* object_;  // null when the object is absent
+  std::string path_;
+  nlohmann::json& resolved_;
+  std::vector<std::string> known_;
+};
+
+// Checks a number found at `place`: a finite JSON number within `range`.
+double read_number(const std::string& place, const nlohmann::json& value, const Range& range);
+
+// Checks an integer found at `place`: integral, within [min, max].
+std::int64_t read_integer(const std::string& place, const nlohmann::json& value, std::int64_t min,
+                          std::int64_t max);
+
+}  // namespace glaswave

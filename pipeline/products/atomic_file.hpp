@@ -1,0 +1,55 @@
+// A product under construction: written to FINAL.part and renamed to FINAL only when
+// complete, so that no half-written product ever lies under its final name (PRODUCT.md,
+// section 2). Shared by every product writer so the rule lives in one place.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <system_error>
+
+#include "terrain/error.hpp"
+
+namespace glaswave {
+
+class AtomicFile {
+ public:
+  explicit AtomicFile(std::filesystem::path final_path)
+      : final_path_(std::move(final_path)), part_path_(final_path_) {
+    part_path_ += ".part";
+  }
+
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  // An abandoned product (an exception, a writer never finished) must not survive as a
+  // .part that a later reader might mistake for output; a failure here has nowhere to go.
+  ~AtomicFile() {
+    if (!committed_) {
+      std::error_code ignored;
+      std::filesystem::remove(part_path_, ignored);
+    }
+  }
+
+  const std::filesystem::path& final_path() const { return final_path_; }
+  const std::filesystem::path& part_path() const { return part_path_; }
+  bool committed() const { return committed_; }
+
+  // Renames the completed .part to the final name (atomic within one file system). The
+  // caller must have closed the file first.
+  void commit() {
+    std::error_code error;
+    std::filesystem::rename(part_path_, final_path_, error);
+    if (error) {
+      throw run_error(final_path_.string(), "cannot rename " + part_path_.string() +
+                                                " to the final name: " + error.message());
+    }
+    committed_ = true;
+  }
+
+ private:
+  std::filesystem::path final_path_;
+  std::filesystem::path part_path_;
+  bool committed_ = false;
+};
+
+}  // namespace glaswave

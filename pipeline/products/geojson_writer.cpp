@@ -1,0 +1,204 @@
+// footprints.geojson, written by hand rather than through OGR: the format is small, and
+// writing it directly keeps full control of what RFC 7946 and ogrinfo care about (no `crs`
+// member, ring orientation kept as given, no NaN, coordinates to 1e-8 degree).
+#include "pipeline/products/geojson_writer.hpp"
+
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "pipeline/products/atomic_file.hpp"
+#include "terrain/error.hpp"
+
+namespace glaswave {
+namespace {
+
+// 1e-8 degree is about a millimetre on the ground: finer than any footprint position means.
+constexpr int kCoordinateDecimals = 8;
+
+struct FileCloser {
+  void operator()(std::FILE* file) const { std::fclose(file); }
+};
+using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
+
+// A coordinate with a fixed number of decimals, trailing zeros dropped.
+void append_coordinate(std::string& out, double value) {
+  std::array<char, 64> buffer{};
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value,
+                                    std::chars_format::fixed, kCoordinateDecimals);
+  std::string_view text(buffer.data(), result.ptr);
+  while (text.ends_with('0')) text.remove_suffix(1);
+  if (text.ends_with('.')) text.remove_suffix(1);
+  if (text == "-0") text = "0";
+  out += text;
+}
+
+// A JSON number that reads back to the same double, or null: JSON has no NaN. It always
+// carries a '.' or an exponent so that OGR types the property as Real even when every shot
+// has an integral value (a flat plane's slope).
+void append_real(std::string& out, double value) {
+  if (!std::isfinite(value)) {
+    out += "null";
+    return;
+  }
+  std::array<char, 64> buffer{};
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  const std::string_view text(buffer.data(), result.ptr);
+  out += text;
+  if (text.find_first_of(".e") == std::string_view::npos) out += ".0";
+}
+
+void append_first_band(std::string& out, const std::vector<double>& values) {
+  append_real(out, values.empty() ? std::nan("") : values.front());
+}
+
+}  // namespace
+
+struct GeojsonWriter::Impl {
+  explicit Impl(std::filesystem::path final_path) : file(std::move(final_path)) {}
+
+  // Declared before the stream so that it is destroyed after it: the file is closed before
+  // an unfinished .part is removed.
+  AtomicFile file;
+  FilePtr out;
+  std::int64_t shots = 0;
+  std::int64_t next = 0;                        // the next record to go to the file
+  std::map<std::int64_t, std::string> pending;  // records that came before their turn
+  bool finished = false;
+
+  [[noreturn]] void fail(const std::string& message) const {
+    throw run_error(file.final_path().string(), message);
+  }
+
+  void put(const std::string& text) {
+    if (std::fwrite(text.data(), 1, text.size(), out.get()) != text.size()) {
+      fail(std::string("cannot write ") + file.part_path().string() + ": " + std::strerror(errno));
+    }
+  }
+
+  std::string feature(std::int64_t index, const ShotRecord& shot) const {
+    std::string text = R"({"type":"Feature","geometry":)";
+    const auto& ring = shot.footprint_lonlat;
+    if (ring.empty()) {
+      text += "null";
+    } else {
+      const std::string place = "footprint ring of record " + std::to_string(index) + " (shot " +
+                                std::to_string(shot.shot_number) + ")";
+      if (ring.size() < 4 || ring.front() != ring.back()) {
+        fail(place + ": a Polygon ring must be closed with at least 4 positions, got " +
+             std::to_string(ring.size()));
+      }
+      text += R"({"type":"Polygon","coordinates":[[)";
+      for (std::size_t i = 0; i < ring.size(); ++i) {
+        const auto [lon, lat] = ring[i];
+        if (!std::isfinite(lon) || !std::isfinite(lat))
+          fail(place + ": position " + std::to_string(i) + " is not finite");
+        text += i == 0 ? "[" : ",[";
+        append_coordinate(text, lon);
+        text += ',';
+        append_coordinate(text, lat);
+        text += ']';
+      }
+      text += "]]}";
+    }
+
+    // Names as in shots.nc: per-band metrics without their unit suffix.
+    const auto real = [&text](const char* name, double value) {
+      text += ",\"";
+      text += name;
+      text += "\":";
+      append_real(text, value);
+    };
+    const auto first_band = [&text](const char* name, const std::vector<double>& values) {
+      text += ",\"";
+      text += name;
+      text += "\":";
+      append_first_band(text, values);
+    };
+    text += R"(,"properties":{"shot_number":)" + std::to_string(shot.shot_number);
+    real("time", shot.time_s);
+    real("lat", shot.lat_deg);
+    real("lon", shot.lon_deg);
+    real("elev", shot.elev_m);
+    real("sc_lat", shot.sc_lat_deg);
+    real("sc_lon", shot.sc_lon_deg);
+    real("sc_alt", shot.sc_alt_m);
+    real("off_nadir_deg", shot.off_nadir_deg);
+    real("range_m", shot.range_m);
+    real("slope_deg", shot.slope_deg);
+    real("aspect_deg", shot.aspect_deg);
+    real("elev_bin0", shot.elev_bin0_m);
+    real("elev_lastbin", shot.elev_lastbin_m);
+    text += ",\"quality_flag\":" + std::to_string(static_cast<int>(shot.quality_flag));
+    first_band("rx_energy", shot.rx_energy_J);
+    first_band("rx_energy_canopy", shot.rx_energy_canopy_J);
+    first_band("rx_energy_ground", shot.rx_energy_ground_J);
+    first_band("reflectance", shot.reflectance);
+    text += "}}";
+    return text;
+  }
+
+  void emit(const std::string& feature_text) {
+    put(next == 0 ? feature_text : ",\n" + feature_text);
+    ++next;
+  }
+};
+
+GeojsonWriter::GeojsonWriter(std::filesystem::path final_path, const RunInfo& info)
+    : impl_(std::make_unique<Impl>(std::move(final_path))) {
+  Impl& impl = *impl_;
+  if (info.shots < 1)
+    impl.fail("a product needs at least one shot, got " + std::to_string(info.shots));
+  impl.shots = info.shots;
+  impl.out.reset(std::fopen(impl.file.part_path().c_str(), "wb"));
+  if (!impl.out)
+    impl.fail("cannot create " + impl.file.part_path().string() + ": " + std::strerror(errno));
+  impl.put("{\"type\":\"FeatureCollection\",\"features\":[\n");
+}
+
+GeojsonWriter::~GeojsonWriter() = default;
+
+void GeojsonWriter::write(std::int64_t index, const ShotRecord& shot) {
+  Impl& impl = *impl_;
+  if (impl.finished) impl.fail("write after finish");
+  if (index < 0 || index >= impl.shots) {
+    impl.fail("record index " + std::to_string(index) + " outside [0, " +
+              std::to_string(impl.shots) + ")");
+  }
+  if (index < impl.next || impl.pending.contains(index))
+    impl.fail("record " + std::to_string(index) + " written twice");
+  std::string text = impl.feature(index, shot);
+  if (index != impl.next) {
+    impl.pending.emplace(index, std::move(text));
+    return;
+  }
+  impl.emit(text);
+  for (auto it = impl.pending.begin(); it != impl.pending.end() && it->first == impl.next;) {
+    impl.emit(it->second);
+    it = impl.pending.erase(it);
+  }
+}
+
+void GeojsonWriter::finish(const RunStats& /*stats*/) {
+  Impl& impl = *impl_;
+  if (impl.finished) impl.fail("finished twice");
+  if (impl.next != impl.shots)
+    impl.fail("record " + std::to_string(impl.next) + " was never written");
+  impl.put("\n]}\n");
+  // fclose flushes: a full disk shows up here, not in fwrite.
+  const int status = std::fclose(impl.out.release());
+  if (status != 0)
+    impl.fail("cannot write " + impl.file.part_path().string() + ": " + std::strerror(errno));
+  impl.file.commit();
+  impl.finished = true;
+}
+
+}  // namespace glaswave

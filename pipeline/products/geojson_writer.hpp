@@ -1,0 +1,42 @@
+// footprints.geojson: one RFC 7946 Feature per shot, the footprint's 1/e^2 contour on the
+// terrain as a Polygon with the shot's scalars and its first band's metrics as properties
+// (PRODUCT.md section 4). Shots may come in any order; Features come out in record order.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+
+#include "pipeline/products/shot_record.hpp"
+
+namespace glaswave {
+
+class GeojsonWriter {
+ public:
+  // Creates final_path + ".part". Throws Error (run) when it cannot be created.
+  GeojsonWriter(std::filesystem::path final_path, const RunInfo& info);
+
+  // An unfinished writer closes and removes its .part file.
+  ~GeojsonWriter();
+
+  GeojsonWriter(const GeojsonWriter&) = delete;
+  GeojsonWriter& operator=(const GeojsonWriter&) = delete;
+
+  // Adds record `index` (0 <= index < info.shots), each index exactly once, in any order.
+  // Not thread-safe: calls must come one at a time. Records are streamed to the file as soon
+  // as all those before them have come, so only shots that arrive early are held in memory.
+  // An empty footprint ring (a flagged shot) gives a null geometry; a non-empty one must be
+  // closed, with at least 4 positions, all finite.
+  void write(std::int64_t index, const ShotRecord& shot);
+
+  // Closes the collection and renames the file to its final name. Throws Error (run) if a
+  // record was never written or the file cannot be completed. The statistics are not part
+  // of this product; the parameter keeps the writers interchangeable.
+  void finish(const RunStats& stats);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace glaswave

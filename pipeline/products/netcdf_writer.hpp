@@ -1,0 +1,42 @@
+// shots.nc: the waveform product as NetCDF-4, CF-1.10 with featureType "trajectory" (one
+// record per shot; PRODUCT.md section 4). Records may be written in any order; the file
+// appears under its final name only when finish() succeeds.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+
+#include "pipeline/products/shot_record.hpp"
+
+namespace glaswave {
+
+class NetcdfWriter {
+ public:
+  // Creates final_path + ".part" with every dimension and variable defined and the
+  // shot-independent variables (bands, bin times, transmitted pulse) written.
+  // Throws Error (run) when the file cannot be created or `info` is inconsistent.
+  NetcdfWriter(std::filesystem::path final_path, const RunInfo& info);
+
+  // An unfinished writer closes and removes its .part file.
+  ~NetcdfWriter();
+
+  NetcdfWriter(const NetcdfWriter&) = delete;
+  NetcdfWriter& operator=(const NetcdfWriter&) = delete;
+
+  // Writes record `index` (0 <= index < info.shots), each index exactly once, in any order.
+  // Not thread-safe: calls must come one at a time. Per-band arrays must match the run's
+  // bands and bins; a flagged shot (quality_flag != good) may leave them empty, which
+  // leaves fill (NaN) in the file.
+  void write(std::int64_t index, const ShotRecord& shot);
+
+  // Writes the run statistics attributes, closes the file and renames it to the final
+  // name. Throws Error (run) if a record was never written or the file cannot be completed.
+  void finish(const RunStats& stats);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace glaswave

@@ -1,0 +1,65 @@
+// What a simulated shot hands to the product writers: geolocation, waveforms per band, and
+// the metrics derived from them. Arrays are [band][bin], bins in time order (bin 0 nearest
+// the spacecraft).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pipeline/config/config.hpp"
+
+namespace glaswave {
+
+// quality_flag values (flag_values / flag_meanings in shots.nc).
+enum QualityFlag : std::uint8_t {
+  quality_good = 0,
+  quality_no_terrain = 1,  // the laser ray never met the terrain (off the DEM, over nodata)
+};
+
+struct ShotRecord {
+  std::int64_t shot_number = 0;
+  double time_s = 0.0;  // seconds since 2000-01-01T12:00:00Z
+  double lat_deg = 0.0, lon_deg = 0.0, elev_m = 0.0;            // footprint centre
+  double sc_lat_deg = 0.0, sc_lon_deg = 0.0, sc_alt_m = 0.0;    // spacecraft
+  double off_nadir_deg = 0.0, range_m = 0.0;
+  double slope_deg = 0.0, aspect_deg = 0.0;
+  double elev_bin0_m = 0.0, elev_lastbin_m = 0.0;
+  std::uint8_t quality_flag = quality_good;
+
+  // [band][bin], W. Fill (NaN) when quality_flag is not good.
+  std::vector<std::vector<double>> rx_waveform_W;
+  std::vector<std::vector<double>> rx_waveform_canopy_W;  // last scattering on vegetation
+  std::vector<std::vector<double>> rx_waveform_ground_W;  // last scattering on the ground
+  // [band][order-1][bin], W; empty unless output.per_order.
+  std::vector<std::vector<std::vector<double>>> rx_waveform_order_W;
+
+  // [band]
+  std::vector<double> rx_energy_J, rx_energy_canopy_J, rx_energy_ground_J;
+  std::vector<double> reflectance;  // seed eq. (1)
+
+  // The beam's 1/e^2 contour on the terrain: closed ring of (lon, lat), counter-clockwise.
+  std::vector<std::array<double, 2>> footprint_lonlat;
+};
+
+// What every shot of a run shares.
+struct RunInfo {
+  std::string command_line;  // the `history` attribute
+  std::string config_json;   // resolved configuration
+  std::uint64_t seed = 0;
+  std::int64_t shots = 0;  // records the products will hold
+  std::vector<Band> bands;
+  std::vector<double> bin_time_ns;                    // [bin] centre, after the return from range_m
+  std::vector<double> tx_time_ns;                     // [tx_bin] centre, about the pulse peak
+  std::vector<std::vector<double>> tx_waveform_W;     // [band][tx_bin]
+  int orders = 0;  // per-order output: orders 1..orders; 0 when off
+};
+
+struct RunStats {
+  std::int64_t ray_queries = 0;
+  double wall_s = 0.0;
+  std::int64_t shots_flagged = 0;
+};
+
+}  // namespace glaswave

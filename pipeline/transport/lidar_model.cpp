@@ -1,0 +1,92 @@
+// Beam, field of view, time bins and pulse of the lidar.
+#include "pipeline/transport/lidar_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace glaswave {
+
+LidarModel::LidarModel(const SensorSettings& sensor) : sensor_(sensor) {
+  const double sigma = sensor.divergence_sigma_rad;
+  const double half_fov = 0.5 * sensor.ifov_rad;
+  fov_fraction_ = -std::expm1(-half_fov * half_fov / (2.0 * sigma * sigma));
+  max_angle_rad_ = std::min(half_fov, 6.0 * sigma);
+  // The reference return sits at the centre of a bin two thirds into the window: canopy comes
+  // before the ground, and a level surface's return is not shifted by half a bin.
+  lead_ns_ = std::floor(2.0 * sensor.bins / 3.0) * sensor.bin_ns;
+  margin_bins_ = static_cast<int>(std::ceil(6.0 * sensor.pulse_sigma_ns / sensor.bin_ns));
+  double sum = 0.0;
+  for (int k = -margin_bins_; k <= margin_bins_; ++k) {
+    const double t = k * sensor.bin_ns / sensor.pulse_sigma_ns;
+    kernel_.push_back(std::exp(-0.5 * t * t));
+    sum += kernel_.back();
+  }
+  for (double& weight : kernel_) weight /= sum;
+}
+
+std::vector<double> LidarModel::bin_time_ns() const {
+  std::vector<double> times(sensor_.bins);
+  for (int i = 0; i < sensor_.bins; ++i) times[i] = i * sensor_.bin_ns - lead_ns_;
+  return times;
+}
+
+int LidarModel::tally_index(double time_ns) const {
+  const double position = (time_ns + lead_ns_) / sensor_.bin_ns + 0.5 + margin_bins_;
+  if (!(position >= 0.0) || position >= tally_size()) return -1;
+  return static_cast<int>(position);
+}
+
+std::vector<double> LidarModel::power_W(const std::vector<double>& tally_J) const {
+  std::vector<double> power(sensor_.bins, 0.0);
+  const double bin_s = sensor_.bin_ns * 1e-9;
+  const int width = static_cast<int>(kernel_.size());
+  for (int i = 0; i < sensor_.bins; ++i) {
+    // Window bin i is tally bin i + margin; the kernel reaches margin bins either side.
+    double energy_J = 0.0;
+    for (int k = 0; k < width; ++k) energy_J += kernel_[k] * tally_J[i + width - 1 - k];
+    power[i] = energy_J / bin_s;
+  }
+  return power;
+}
+
+std::vector<double> LidarModel::tx_time_ns() const {
+  std::vector<double> times;
+  for (int k = -margin_bins_; k <= margin_bins_; ++k) times.push_back(k * sensor_.bin_ns);
+  return times;
+}
+
+std::vector<double> LidarModel::tx_waveform_W(std::size_t band) const {
+  const double energy_J = sensor_.bands[band].pulse_energy_mJ * 1e-3;
+  const double sigma_s = sensor_.pulse_sigma_ns * 1e-9;
+  std::vector<double> power;
+  for (double t_ns : tx_time_ns()) {
+    const double t = t_ns / sensor_.pulse_sigma_ns;
+    power.push_back(energy_J * std::exp(-0.5 * t * t) / (std::sqrt(2.0 * std::numbers::pi) * sigma_s));
+  }
+  return power;
+}
+
+BeamSampler::BeamSampler(const LidarModel& lidar, const Vec3& axis)
+    : axis_(normalized(axis)),
+      two_sigma_sq_(2.0 * lidar.beam_sigma_rad() * lidar.beam_sigma_rad()),
+      fov_fraction_(lidar.fov_fraction()) {
+  // Any two unit vectors across the axis will do; this pair is stable for a nadir axis.
+  const Vec3 helper = std::abs(axis_[2]) < 0.9 ? Vec3{0.0, 0.0, 1.0} : Vec3{0.0, 1.0, 0.0};
+  across_ = normalized(cross(helper, axis_));
+  along_ = cross(axis_, across_);
+}
+
+Vec3 BeamSampler::direction(double u1, double u2) const {
+  // Radial density of a 2-D Gaussian truncated at the field of view, inverted.
+  const double angle_rad = std::sqrt(-two_sigma_sq_ * std::log1p(-u1 * fov_fraction_));
+  return direction_at(angle_rad, 2.0 * std::numbers::pi * u2);
+}
+
+Vec3 BeamSampler::direction_at(double angle_rad, double azimuth_rad) const {
+  const double s = std::sin(angle_rad);
+  return std::cos(angle_rad) * axis_ + (s * std::cos(azimuth_rad)) * across_ +
+         (s * std::sin(azimuth_rad)) * along_;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,68 @@
+// The lidar as the transport sees it (the seed's section 2.2): a Gaussian beam inside a top-hat
+// field of view, time bins about the reference return, and the Gaussian pulse.
+#pragma once
+
+#include <vector>
+
+#include "pipeline/config/config.hpp"
+#include "terrain/local_frame.hpp"
+
+namespace glaswave {
+
+constexpr double speed_of_light_m_s = 299792458.0;
+
+class LidarModel {
+ public:
+  explicit LidarModel(const SensorSettings& sensor);
+
+  const SensorSettings& sensor() const { return sensor_; }
+  std::size_t band_count() const { return sensor_.bands.size(); }
+
+  // Part of the beam's energy inside the field of view: 1 - exp(-ifov^2 / (8 sigma^2)).
+  double fov_fraction() const { return fov_fraction_; }
+  double beam_sigma_rad() const { return sensor_.divergence_sigma_rad; }
+  // Largest angle from the axis at which a ray is sampled.
+  double max_angle_rad() const { return max_angle_rad_; }
+
+  // Time bins: bin i is centred at bin_time_ns()[i] after the return from the reference range.
+  int bins() const { return sensor_.bins; }
+  std::vector<double> bin_time_ns() const;
+
+  // Tallies cover the bins plus a margin of pulse width on each side, so that light just
+  // outside the window still spreads into it. Index for a two-way time after the reference
+  // return, or -1 outside the tally.
+  int tally_size() const { return sensor_.bins + 2 * margin_bins_; }
+  int tally_index(double time_ns) const;
+  // An energy tally (J per bin) convolved with the pulse: power (W) in each window bin.
+  std::vector<double> power_W(const std::vector<double>& tally_J) const;
+
+  // The transmitted pulse of a band: power (W) at tx_time_ns about its peak.
+  std::vector<double> tx_time_ns() const;
+  std::vector<double> tx_waveform_W(std::size_t band) const;
+
+ private:
+  SensorSettings sensor_;
+  double fov_fraction_;
+  double max_angle_rad_;
+  double lead_ns_;          // time from the centre of bin 0 to the reference return
+  int margin_bins_;         // half-width of the pulse kernel
+  std::vector<double> kernel_;  // pulse sampled at the bin spacing, sums to 1
+};
+
+// Samples ray directions about a beam axis in proportion to the beam's irradiance, within
+// the field of view (importance sampling: a wide field of view costs nothing).
+class BeamSampler {
+ public:
+  BeamSampler(const LidarModel& lidar, const Vec3& axis);
+  // Direction for two uniform numbers in [0, 1).
+  Vec3 direction(double u1, double u2) const;
+  // Direction at angle `angle_rad` from the axis, toward `azimuth_rad` about it.
+  Vec3 direction_at(double angle_rad, double azimuth_rad) const;
+
+ private:
+  Vec3 axis_, across_, along_;
+  double two_sigma_sq_;
+  double fov_fraction_;
+};
+
+}  // namespace glaswave

@@ -1,0 +1,49 @@
+// The seed's backward Monte Carlo for one shot (section 2.3): rays sampled over the field of
+// view, each ray's first surface, its return toward the detector scored with its two-way path
+// length, binned in time, converted to power and convolved with the pulse. All bands in one
+// pass, one weight per band.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "pipeline/config/config.hpp"
+#include "pipeline/scene/scene.hpp"
+#include "pipeline/transport/lidar_model.hpp"
+
+namespace glaswave {
+
+// One shot in its local frame (the footprint's east-north-up frame), double precision.
+struct ShotGeometry {
+  Vec3 sensor_m{};  // spacecraft position
+  Vec3 axis{};      // beam axis, unit, spacecraft -> ground
+  double range_m = 0.0;  // to the footprint centre: times are relative to 2 * range_m / c
+};
+
+// Optical properties of the scene's surfaces, one value per band.
+struct SceneOptics {
+  std::vector<double> soil_reflectance;
+};
+
+// The received signal of one shot: [band][bin] power (W) and [band] energy (J).
+struct ShotWaveforms {
+  std::vector<std::vector<double>> total_W, canopy_W, ground_W;
+  std::vector<std::vector<std::vector<double>>> order_W;  // [band][order - 1][bin] when asked for
+  std::vector<double> energy_J, canopy_energy_J, ground_energy_J;
+  std::int64_t ray_queries = 0;
+};
+
+struct TransportOptions {
+  std::int64_t rays = 10000;
+  int max_order = 8;
+  bool per_order = false;
+  std::uint64_t seed = 1;
+};
+
+// Simulates shot `shot_number`. The result depends only on the inputs, never on how many
+// threads run it: rays are tallied in fixed chunks that are summed in order.
+ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar, const ShotGeometry& geometry,
+                            const SceneOptics& optics, const TransportOptions& options,
+                            std::int64_t shot_number);
+
+}  // namespace glaswave

@@ -1,0 +1,34 @@
+// What the configuration says about the ground: a DEM file or a synthetic plane, its roughness
+// and its reflectance. Filled by pipeline/config, read by the terrain library.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace glaswave {
+
+// A synthetic tilted plane, anchored at the origin: heights above the WGS84 ellipsoid fall by
+// tan(slope) per metre toward `aspect_deg` (the azimuth the slope faces, clockwise from north).
+struct PlaneSettings {
+  double origin_lat_deg = 0.0;
+  double origin_lon_deg = 0.0;
+  double elevation_m = 0.0;
+  double slope_deg = 0.0;
+  double aspect_deg = 0.0;
+};
+
+// Random sub-grid relief added to the ground mesh.
+struct RoughnessSettings {
+  double rms_m = 0.0;
+  double correlation_m = 2.0;
+};
+
+struct TerrainSettings {
+  std::string dem;                     // raster path; empty when `plane` is set
+  std::optional<PlaneSettings> plane;  // exactly one of dem and plane
+  RoughnessSettings roughness;
+  std::vector<double> soil_reflectance;  // Lambertian, one value per sensor band
+};
+
+}  // namespace glaswave

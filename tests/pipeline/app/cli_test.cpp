@@ -1,0 +1,222 @@
+// End to end: the built glaswave command run as a user runs it, its products read back
+// with netCDF-C and GDAL's OGR, and its errors checked against PRODUCT.md sections 2 and 5.
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gdal_priv.h>
+#include <netcdf.h>
+#include <ogrsf_frmts.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int status;
+  std::string output;  // stdout and stderr together
+};
+
+Outcome glaswave(const std::string& arguments) {
+  const std::string command = std::string(GLASWAVE_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("glaswave_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // A short pass over a sloped plane.
+  std::string write_config(const nlohmann::json& changes = nlohmann::json::object()) {
+    nlohmann::json config = {
+        {"seed", 3},
+        {"sensor", {{"preset", "glas"}}},
+        {"simulation", {{"rays_per_shot", 3000}}},
+        {"terrain",
+         {{"plane", {{"origin_lat_deg", 46.0}, {"origin_lon_deg", 8.0}, {"elevation_m", 900.0}, {"slope_deg", 8.0},
+                     {"aspect_deg", 200.0}}}}},
+        {"canopy", nullptr},
+        {"track",
+         {{"type", "pass"}, {"start_lat_deg", 46.0}, {"start_lon_deg", 8.0}, {"heading_deg", 350.0}, {"shots", 5},
+          {"spacing_m", 172.0}}},
+    };
+    config.merge_patch(changes);
+    const fs::path file = dir_ / "track.json";
+    std::ofstream(file) << config.dump(2);
+    return file.string();
+  }
+
+  fs::path dir_;
+};
+
+// rx_waveform of shots.nc, flattened.
+std::vector<float> read_waveforms(const fs::path& file, std::size_t* shots = nullptr) {
+  int nc = -1, var = -1, dims[3];
+  EXPECT_EQ(nc_open(file.c_str(), NC_NOWRITE, &nc), NC_NOERR) << file;
+  EXPECT_EQ(nc_inq_varid(nc, "rx_waveform", &var), NC_NOERR);
+  EXPECT_EQ(nc_inq_vardimid(nc, var, dims), NC_NOERR);
+  std::size_t size = 1, length = 0;
+  for (int dim : dims) {
+    nc_inq_dimlen(nc, dim, &length);
+    size *= length;
+  }
+  if (shots) nc_inq_dimlen(nc, dims[0], shots);
+  std::vector<float> values(size);
+  EXPECT_EQ(nc_get_var_float(nc, var, values.data()), NC_NOERR);
+  nc_close(nc);
+  return values;
+}
+
+TEST_F(Cli, RunWritesProductsThatReadBack) {
+  const std::string config = write_config();
+  const Outcome run = glaswave("run " + config + " --out " + (dir_ / "out").string() + " --quiet");
+  ASSERT_EQ(run.status, 0) << run.output;
+  // The summary line: shots, seconds, shots/s, ray queries/s.
+  EXPECT_NE(run.output.find("5 shots in"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("shots/s"), std::string::npos);
+  EXPECT_NE(run.output.find("ray queries/s"), std::string::npos);
+
+  std::size_t shots = 0;
+  const std::vector<float> waveforms = read_waveforms(dir_ / "out" / "shots.nc", &shots);
+  EXPECT_EQ(shots, 5u);
+  float peak = 0;
+  for (float value : waveforms) peak = std::max(peak, value);
+  EXPECT_GT(peak, 0.0f);
+
+  int nc = -1, var = -1;
+  ASSERT_EQ(nc_open((dir_ / "out" / "shots.nc").c_str(), NC_NOWRITE, &nc), NC_NOERR);
+  char feature_type[64] = {};
+  EXPECT_EQ(nc_get_att_text(nc, NC_GLOBAL, "featureType", feature_type), NC_NOERR);
+  EXPECT_STREQ(feature_type, "trajectory");
+  std::size_t history_length = 0;
+  EXPECT_EQ(nc_inq_attlen(nc, NC_GLOBAL, "history", &history_length), NC_NOERR);
+  std::string history(history_length, '\0');
+  nc_get_att_text(nc, NC_GLOBAL, "history", history.data());
+  EXPECT_NE(history.find("run " + config), std::string::npos) << history;
+  // The slope of the plane and the reflectance of eq. (1): rho_s cos(S) f_fov, f_fov ~ 1 here.
+  double slope[5], reflectance[10];
+  ASSERT_EQ(nc_inq_varid(nc, "slope_deg", &var), NC_NOERR);
+  nc_get_var_double(nc, var, slope);
+  ASSERT_EQ(nc_inq_varid(nc, "reflectance", &var), NC_NOERR);
+  nc_get_var_double(nc, var, reflectance);
+  nc_close(nc);
+  const double f_fov = 1.0 - std::exp(-0.0004 * 0.0004 / (8.0 * 0.0000292 * 0.0000292));
+  for (int shot = 0; shot < 5; ++shot) {
+    EXPECT_NEAR(slope[shot], 8.0, 0.01);
+    EXPECT_NEAR(reflectance[2 * shot] / (0.15 * std::cos(8.0 * M_PI / 180.0) * f_fov), 1.0, 0.01);
+  }
+
+  GDALAllRegister();
+  GDALDataset* geojson = static_cast<GDALDataset*>(
+      GDALOpenEx((dir_ / "out" / "footprints.geojson").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  ASSERT_NE(geojson, nullptr);
+  OGRLayer* layer = geojson->GetLayer(0);
+  EXPECT_EQ(layer->GetFeatureCount(), 5);
+  OGRFeature* feature = layer->GetNextFeature();
+  ASSERT_NE(feature, nullptr);
+  EXPECT_EQ(wkbFlatten(feature->GetGeometryRef()->getGeometryType()), wkbPolygon);
+  // The footprint polygon is about 70 m across (glas preset): its area is near pi 35^2 m^2.
+  OGRFeature::DestroyFeature(feature);
+  GDALClose(geojson);
+}
+
+TEST_F(Cli, ResultsDoNotDependOnThreadsOrShotSplits) {
+  const std::string config = write_config();
+  ASSERT_EQ(glaswave("run " + config + " --quiet --threads 1 --out " + (dir_ / "one").string()).status, 0);
+  ASSERT_EQ(glaswave("run " + config + " --quiet --threads 2 --out " + (dir_ / "two").string()).status, 0);
+  ASSERT_EQ(glaswave("run " + config + " --quiet --shots 0:2 --out " + (dir_ / "a").string()).status, 0);
+  ASSERT_EQ(glaswave("run " + config + " --quiet --shots 2:5 --out " + (dir_ / "b").string()).status, 0);
+  const std::vector<float> one = read_waveforms(dir_ / "one" / "shots.nc");
+  EXPECT_EQ(one, read_waveforms(dir_ / "two" / "shots.nc"));
+  std::vector<float> split = read_waveforms(dir_ / "a" / "shots.nc");
+  const std::vector<float> rest = read_waveforms(dir_ / "b" / "shots.nc");
+  split.insert(split.end(), rest.begin(), rest.end());
+  EXPECT_EQ(one, split);
+  // Another seed is another sample.
+  ASSERT_EQ(glaswave("run " + config + " --quiet --seed 4 --out " + (dir_ / "seed4").string()).status, 0);
+  EXPECT_NE(one, read_waveforms(dir_ / "seed4" / "shots.nc"));
+}
+
+// Each bad configuration: exit status 2, one line starting "glaswave: error:" naming the place,
+// and no product.
+TEST_F(Cli, BadConfigurationsFailWithOneLineNamingThePlace) {
+  struct Case {
+    std::string arguments, expected;
+  };
+  const std::string config = write_config();
+  const std::vector<Case> cases = {
+      {"--set canopy.pai=-1", "/canopy/pai: must be >= 0, got -1"},
+      {"--set canopy.pia=2", "did you mean \"pai\""},
+      {"--set simulation.rays_per_shot=0", "/simulation/rays_per_shot"},
+      {"--set canopy.cover=1.5", "/canopy/cover"},
+      {"--set canopy.leaf_reflectance=0.7 --set canopy.leaf_transmittance=0.5", "/canopy/leaf_transmittance"},
+      {"--set seed=\\\"x\\\"", "/seed"},
+      {"--set simulation.rays_per_shot=1e999", "/simulation/rays_per_shot"},
+      {"--shots 9:12", "--shots"},
+  };
+  for (const Case& c : cases) {
+    const Outcome run = glaswave("run " + config + " --quiet --out " + (dir_ / "out").string() + " " + c.arguments);
+    EXPECT_EQ(run.status, 2) << c.arguments << ": " << run.output;
+    EXPECT_EQ(run.output.rfind("glaswave: error: ", 0), 0u) << run.output;
+    EXPECT_NE(run.output.find(c.expected), std::string::npos) << c.arguments << ": " << run.output;
+    EXPECT_EQ(std::count(run.output.begin(), run.output.end(), '\n'), 1) << run.output;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << c.arguments;
+  }
+}
+
+TEST_F(Cli, MalformedJsonNamesLineAndColumn) {
+  const fs::path file = dir_ / "broken.json";
+  std::ofstream(file) << "{\n  \"seed\": 1,\n  \"sensor\": {\"preset\": \"glas\",}\n}\n";
+  const Outcome run = glaswave("check " + file.string());
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.output.find("line 3"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("column"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find(file.string()), std::string::npos) << run.output;
+}
+
+TEST_F(Cli, ExistingOutputDirectoryIsRefusedAndKept) {
+  const std::string config = write_config();
+  fs::create_directories(dir_ / "out");
+  std::ofstream(dir_ / "out" / "mine.txt") << "a user's file";
+  const Outcome run = glaswave("run " + config + " --quiet --out " + (dir_ / "out").string());
+  EXPECT_EQ(run.status, 2);
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "mine.txt"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "shots.nc"));
+}
+
+TEST_F(Cli, CheckHelpAndVersion) {
+  const Outcome check = glaswave("check " + write_config());
+  EXPECT_EQ(check.status, 0) << check.output;
+  EXPECT_NE(check.output.find("5 shots"), std::string::npos) << check.output;
+  const Outcome help = glaswave("--help");
+  EXPECT_EQ(help.status, 0);
+  EXPECT_NE(help.output.find("run"), std::string::npos);
+  EXPECT_NE(help.output.find("check"), std::string::npos);
+  const Outcome version = glaswave("--version");
+  EXPECT_EQ(version.status, 0);
+  EXPECT_NE(version.output.find("glaswave " GLASWAVE_VERSION), std::string::npos) << version.output;
+  const Outcome bad = glaswave("fly");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_EQ(bad.output.rfind("glaswave: error: ", 0), 0u) << bad.output;
+}
+
+}  // namespace
+}  // namespace glaswave

@@ -1,0 +1,809 @@
+// Tests of the configuration parser: presets and defaults against the seed's Tables 1 and 2,
+// spectral values, every configuration error of PRODUCT.md §5 with its JSON path, overrides,
+// the resolved configuration, and the ISO 8601 time stamps of the GLAS epoch.
+#include "pipeline/config/config.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+#include "footprints/glas_time.hpp"
+#include "pipeline/config/presets.hpp"
+#include "terrain/error.hpp"
+
+namespace glaswave {
+namespace {
+
+using nlohmann::json;
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+// A configuration document from JSON text; a flat plane is added when the text has no terrain,
+// since the terrain is the one section without a default.
+json doc(const std::string& text) {
+  json d = json::parse(text);
+  if (!d.contains("terrain")) d["terrain"] = {{"plane", json::object()}};
+  return d;
+}
+
+// The message of the error parse_config throws, or "" when it throws none.
+std::string error_of(const json& document) {
+  try {
+    parse_config(document);
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::config);
+    EXPECT_EQ(e.exit_status(), 2);
+    return e.what();
+  }
+  return "";
+}
+
+std::string place_of(const json& document) {
+  try {
+    parse_config(document);
+  } catch (const Error& e) {
+    return e.place();
+  }
+  return "(no error)";
+}
+
+// A fresh folder under the system's temporary directory, removed at the end of the test.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = std::filesystem::temp_directory_path() /
+            ("glaswave_config_test_" + std::to_string(::getpid()) + "_" + info->name());
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  std::filesystem::path write(const std::string& name, const std::string& text) const {
+    const auto file = path_ / name;
+    std::filesystem::create_directories(file.parent_path());
+    std::ofstream(file) << text;
+    return file;
+  }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// ---- sensor presets (the seed's Table 2) ----------------------------------------------------
+
+void expect_table2_bands(const SensorSettings& s) {
+  ASSERT_EQ(s.bands.size(), 2u);
+  EXPECT_EQ(s.bands[0].name, "532");
+  EXPECT_EQ(s.bands[0].wavelength_nm, 532.0);
+  EXPECT_EQ(s.bands[0].pulse_energy_mJ, 32.0);
+  EXPECT_EQ(s.bands[0].atmos_transmission_roundtrip, 0.8);
+  EXPECT_EQ(s.bands[1].name, "1064");
+  EXPECT_EQ(s.bands[1].wavelength_nm, 1064.0);
+  EXPECT_EQ(s.bands[1].pulse_energy_mJ, 72.0);
+  EXPECT_EQ(s.bands[1].atmos_transmission_roundtrip, 0.9);
+}
+
+TEST(SensorPreset, North2010IsTable2Exactly) {
+  const Config c = parse_config(doc(R"({"sensor": {"preset": "north2010"}})"));
+  EXPECT_EQ(c.sensor.preset, "north2010");
+  EXPECT_EQ(c.sensor.pulse_sigma_ns, 5.0);
+  EXPECT_EQ(c.sensor.divergence_sigma_rad, 0.00011);
+  EXPECT_EQ(c.sensor.ifov_rad, 0.0004);
+  EXPECT_EQ(c.sensor.telescope_area_m2, 0.709);
+  EXPECT_EQ(c.sensor.bin_ns, 1.0);
+  EXPECT_EQ(c.sensor.bins, 544);
+  expect_table2_bands(c.sensor);
+}
+
+TEST(SensorPreset, NoPresetMeansNorth2010Values) {
+  const Config c = parse_config(doc("{}"));
+  EXPECT_EQ(c.sensor.preset, "");
+  EXPECT_EQ(c.sensor.pulse_sigma_ns, 5.0);
+  EXPECT_EQ(c.sensor.divergence_sigma_rad, 0.00011);
+  EXPECT_EQ(c.sensor.ifov_rad, 0.0004);
+  EXPECT_EQ(c.sensor.telescope_area_m2, 0.709);
+  expect_table2_bands(c.sensor);
+  EXPECT_FALSE(c.resolved["sensor"].contains("preset"));
+}
+
+TEST(SensorPreset, GlasFootprintIsAbout70m) {
+  const Config c = parse_config(doc(R"({"sensor": {"preset": "glas"}})"));
+  // A Gaussian beam of angular RMS width σθ per axis has intensity exp(-θ²/(2σθ²)); it falls to
+  // 1/e² at θ = 2σθ, so the 1/e² diameter from altitude H at nadir is 4·σθ·H. GLAS's footprint
+  // was about 70 m; 1 m of tolerance covers the rounding of the preset's σθ.
+  const double diameter_m = 4.0 * c.sensor.divergence_sigma_rad * 600000.0;
+  EXPECT_NEAR(diameter_m, 70.0, 1.0);
+  // Everything else is the seed's Table 2.
+  EXPECT_EQ(c.sensor.pulse_sigma_ns, 5.0);
+  EXPECT_EQ(c.sensor.ifov_rad, 0.0004);
+  EXPECT_EQ(c.sensor.telescope_area_m2, 0.709);
+  EXPECT_EQ(c.sensor.bin_ns, 1.0);
+  expect_table2_bands(c.sensor);
+}
+
+TEST(SensorPreset, KeysBesidePresetOverrideIt) {
+  const Config c = parse_config(doc(R"({"sensor": {"preset": "glas", "pulse_sigma_ns": 3.5,
+      "bins": 200, "bands": [{"name": "1064", "wavelength_nm": 1064, "pulse_energy_mJ": 75,
+      "atmos_transmission_roundtrip": 0.95}]}})"));
+  EXPECT_EQ(c.sensor.preset, "glas");
+  EXPECT_EQ(c.sensor.pulse_sigma_ns, 3.5);
+  EXPECT_EQ(c.sensor.bins, 200);
+  EXPECT_NEAR(4.0 * c.sensor.divergence_sigma_rad * 600000.0, 70.0, 1.0);  // still glas
+  // `bands` replaces the preset's bands as a whole.
+  ASSERT_EQ(c.sensor.bands.size(), 1u);
+  EXPECT_EQ(c.sensor.bands[0].name, "1064");
+  EXPECT_EQ(c.sensor.bands[0].pulse_energy_mJ, 75.0);
+  EXPECT_EQ(c.resolved["sensor"]["pulse_sigma_ns"], 3.5);
+  EXPECT_EQ(c.resolved["sensor"]["preset"], "glas");
+}
+
+TEST(SensorPreset, UnknownPresetListsKnownOnes) {
+  const std::string what = error_of(doc(R"({"sensor": {"preset": "gedi"}})"));
+  EXPECT_THAT(what, StartsWith("/sensor/preset: unknown preset \"gedi\""));
+  EXPECT_THAT(what, HasSubstr("glas"));
+  EXPECT_THAT(what, HasSubstr("north2010"));
+  EXPECT_EQ(error_of(doc(R"({"sensor": {"preset": 1}})")),
+            "/sensor/preset: must be a string, got 1");
+}
+
+TEST(SensorPreset, CompiledPresetsParse) {
+  ASSERT_TRUE(sensor_presets().count("north2010"));
+  ASSERT_TRUE(sensor_presets().count("glas"));
+  for (const auto& [name, text] : sensor_presets())
+    EXPECT_TRUE(json::parse(text).is_object()) << name;
+}
+
+TEST(Sensor, BandErrors) {
+  EXPECT_EQ(error_of(doc(R"({"sensor": {"bands": [{"name": "532", "wavelength_nm": 532,
+      "pulse_energy_mJ": 32, "atmos_transmission_roundtrip": 0.8}, {"name": "1064",
+      "wavelength_nm": 1064, "atmos_transmission_roundtrip": 0.9}]}})")),
+            "/sensor/bands/1/pulse_energy_mJ: is required");
+  EXPECT_EQ(error_of(doc(R"({"sensor": {"bands": [{"name": "532", "wavelength_nm": 532,
+      "pulse_energy_mJ": 32, "atmos_transmission_roundtrip": 0.8}, {"name": "532",
+      "wavelength_nm": 1064, "pulse_energy_mJ": 1, "atmos_transmission_roundtrip": 0.9}]}})")),
+            "/sensor/bands/1/name: duplicate band name \"532\"");
+  EXPECT_EQ(error_of(doc(R"({"sensor": {"bands": [{"name": "", "wavelength_nm": 532,
+      "pulse_energy_mJ": 32, "atmos_transmission_roundtrip": 0.8}]}})")),
+            "/sensor/bands/0/name: must not be empty");
+  EXPECT_EQ(error_of(doc(R"({"sensor": {"bands": [{"name": "532", "wavelength_nm": 532,
+      "pulse_energy_mJ": 32, "atmos_transmission_roundtrip": 0}]}})")),
+            "/sensor/bands/0/atmos_transmission_roundtrip: must be in (0, 1], got 0");
+  EXPECT_EQ(error_of(doc(R"({"sensor": {"bands": []}})")), "/sensor/bands: must not be empty");
+  EXPECT_EQ(
+      error_of(doc(R"({"sensor": {"bands": [{"name": "532", "wavelength_nm": 532,
+      "pulse_energy_mJ": 32, "atmos_transmission_roundtrip": 0.8, "colour": "green"}]}})")),
+      "/sensor/bands/0/colour: unknown key \"colour\"; known keys: atmos_transmission_roundtrip, "
+      "name, pulse_energy_mJ, wavelength_nm");
+  EXPECT_EQ(error_of(doc(R"({"sensor": {"pulse_sigma_ns": 0}})")),
+            "/sensor/pulse_sigma_ns: must be > 0, got 0");
+  EXPECT_EQ(error_of(doc(R"({"sensor": {"bins": 0}})")), "/sensor/bins: must be >= 1, got 0");
+}
+
+// ---- defaults (the seed's Table 1 and the product contract) ---------------------------------
+
+TEST(Defaults, CanopyIsTable1) {
+  const Config c = parse_config(doc(R"({"canopy": {}})"));
+  ASSERT_TRUE(c.canopy.has_value());
+  const CanopySettings& k = *c.canopy;
+  EXPECT_EQ(k.pai, 3.0);
+  EXPECT_EQ(k.lad, LeafAngleDistribution::spherical);
+  EXPECT_EQ(k.cover, 0.7);
+  EXPECT_EQ(k.green_fraction, 0.8);
+  EXPECT_EQ(k.bark_fraction, 0.2);
+  EXPECT_EQ(k.crown_shape, CrownShape::ellipsoid);
+  EXPECT_EQ(k.crown_radius_m, 8.0);
+  EXPECT_EQ(k.crown_half_height_m, 8.0);
+  EXPECT_EQ(k.crown_base_m[0], 15.0);
+  EXPECT_EQ(k.crown_base_m[1], 20.0);
+  EXPECT_EQ(k.leaf_size_m, 0.05);
+  EXPECT_EQ(k.dbh_m, 0.1);
+  EXPECT_EQ(k.leaf_reflectance, (std::vector<double>{0.4, 0.4}));
+  EXPECT_EQ(k.leaf_transmittance, (std::vector<double>{0.4, 0.4}));
+  EXPECT_EQ(k.bark_reflectance, (std::vector<double>{0.3, 0.3}));
+  EXPECT_EQ(k.crowns_file, "");
+  EXPECT_EQ(k.stands, "");
+  // Table 1's soil: smooth, flat, reflectance 0.15.
+  EXPECT_EQ(c.terrain.roughness.rms_m, 0.0);
+  EXPECT_EQ(c.terrain.roughness.correlation_m, 2.0);
+  ASSERT_TRUE(c.terrain.plane.has_value());
+  EXPECT_EQ(c.terrain.plane->slope_deg, 0.0);
+  EXPECT_EQ(c.terrain.soil_reflectance, (std::vector<double>{0.15, 0.15}));
+}
+
+TEST(Defaults, EverythingElse) {
+  const Config c = parse_config(doc("{}"));
+  EXPECT_EQ(c.seed, 1u);
+  EXPECT_FALSE(c.canopy.has_value());  // bare ground
+  EXPECT_EQ(c.simulation.rays_per_shot, 10000);
+  EXPECT_EQ(c.simulation.max_order, 8);
+  EXPECT_EQ(c.track.type, TrackType::pass);
+  EXPECT_EQ(c.track.shots, 1);
+  EXPECT_EQ(c.track.rate_hz, 40.0);
+  EXPECT_FALSE(c.track.spacing_m.has_value());
+  EXPECT_EQ(c.track.altitude_m, 600000.0);
+  EXPECT_EQ(c.track.start_time_s, 0.0);
+  EXPECT_EQ(c.track.orbit.epoch_s, 0.0);
+  EXPECT_TRUE(c.output.netcdf);
+  EXPECT_TRUE(c.output.geojson);
+  EXPECT_FALSE(c.output.plots);
+  EXPECT_FALSE(c.output.per_order);
+  EXPECT_EQ(c.brf.sun_zenith_deg, 30.0);
+  EXPECT_EQ(c.brf.sun_azimuth_deg, 0.0);
+  ASSERT_EQ(c.brf.views.size(), 1u);
+  EXPECT_EQ(c.brf.views[0].zenith_deg, 0.0);
+  EXPECT_EQ(c.brf.photons, 1000000);
+  EXPECT_EQ(c.brf.image_resolution_m, 1.0);
+}
+
+TEST(Defaults, CanopyNullIsBareGround) {
+  json d = doc("{}");
+  d["canopy"] = nullptr;
+  const Config c = parse_config(d);
+  EXPECT_FALSE(c.canopy.has_value());
+  EXPECT_TRUE(c.resolved["canopy"].is_null());
+}
+
+// ---- the resolved configuration -------------------------------------------------------------
+
+TEST(Resolved, ContainsPresetAndDefaults) {
+  const Config c = parse_config(doc(R"({"sensor": {"preset": "glas"}, "canopy": {"leaf_reflectance":
+      {"532": 0.1, "1064": 0.45}}, "track": {"start_time": "2005-10-21T12:00:00Z"}})"));
+  const json& r = c.resolved;
+  EXPECT_EQ(r["seed"], 1);
+  EXPECT_EQ(r["sensor"]["preset"], "glas");
+  EXPECT_EQ(r["sensor"]["ifov_rad"], 0.0004);
+  EXPECT_EQ(r["sensor"]["bands"].size(), 2u);
+  EXPECT_EQ(r["sensor"]["bands"][1]["pulse_energy_mJ"], 72);
+  EXPECT_EQ(r["simulation"]["rays_per_shot"], 10000);
+  EXPECT_EQ(r["simulation"]["max_order"], 8);
+  EXPECT_EQ(r["terrain"]["plane"]["slope_deg"], 0.0);
+  EXPECT_EQ(r["terrain"]["roughness"]["correlation_m"], 2.0);
+  EXPECT_EQ(r["terrain"]["soil_reflectance"], 0.15);
+  EXPECT_FALSE(r["terrain"].contains("dem"));
+  EXPECT_EQ(r["canopy"]["pai"], 3.0);
+  EXPECT_EQ(r["canopy"]["lad"], "spherical");
+  EXPECT_EQ(r["canopy"]["crown_shape"], "ellipsoid");
+  EXPECT_EQ(r["canopy"]["crown_base_m"], json::array({15.0, 20.0}));
+  // Spectral values as given: the per-band object stays an object, a default stays a scalar.
+  EXPECT_EQ(r["canopy"]["leaf_reflectance"], json({{"532", 0.1}, {"1064", 0.45}}));
+  EXPECT_EQ(r["canopy"]["leaf_transmittance"], 0.4);
+  EXPECT_EQ(r["track"]["type"], "pass");
+  EXPECT_EQ(r["track"]["start_time"], "2005-10-21T12:00:00Z");
+  EXPECT_EQ(r["track"]["epoch"], "2005-10-21T12:00:00Z");  // elements at the first shot
+  EXPECT_FALSE(r["track"].contains("spacing_m"));          // unset: has no value
+  EXPECT_EQ(r["output"]["netcdf"], true);
+  EXPECT_EQ(r["output"]["per_order"], false);
+  EXPECT_EQ(r["brf"]["views"], json::parse(R"([{"zenith_deg": 0.0, "azimuth_deg": 0.0}])"));
+  EXPECT_EQ(r["brf"]["photons"], 1000000);
+}
+
+TEST(Resolved, ParsesBackToTheSameConfiguration) {
+  const Config c = parse_config(doc(R"({"seed": 7, "sensor": {"preset": "glas"},
+      "canopy": {"pai": 2, "lad": {"ellipsoidal_mean_deg": 30}, "bark_fraction": 0.1},
+      "track": {"type": "points", "points": [{"lat_deg": 1, "lon_deg": 2}]}})"));
+  const Config again = parse_config(c.resolved);
+  EXPECT_EQ(again.resolved, c.resolved);
+  EXPECT_EQ(again.seed, 7u);
+  ASSERT_TRUE(again.canopy.has_value());
+  EXPECT_EQ(again.canopy->lad, LeafAngleDistribution::ellipsoidal);
+  EXPECT_EQ(again.canopy->lad_mean_deg, 30.0);
+  EXPECT_EQ(again.track.shots, 1);
+}
+
+// ---- spectral properties --------------------------------------------------------------------
+
+TEST(Spectral, ScalarAppliesToEveryBand) {
+  const Config c = parse_config(doc(R"({"canopy": {"bark_reflectance": 0.25},
+      "terrain": {"plane": {}, "soil_reflectance": 0.2}})"));
+  EXPECT_EQ(c.canopy->bark_reflectance, (std::vector<double>{0.25, 0.25}));
+  EXPECT_EQ(c.terrain.soil_reflectance, (std::vector<double>{0.2, 0.2}));
+}
+
+TEST(Spectral, ObjectGivesOneValuePerBandInBandOrder) {
+  // The object's keys come in another order than the bands: values follow the bands.
+  const Config c = parse_config(doc(R"({"canopy": {"leaf_reflectance": {"1064": 0.45, "532": 0.05},
+      "leaf_transmittance": {"532": 0.03, "1064": 0.5}},
+      "terrain": {"plane": {}, "soil_reflectance": {"532": 0.1, "1064": 0.4}}})"));
+  EXPECT_EQ(c.canopy->leaf_reflectance, (std::vector<double>{0.05, 0.45}));
+  EXPECT_EQ(c.canopy->leaf_transmittance, (std::vector<double>{0.03, 0.5}));
+  EXPECT_EQ(c.terrain.soil_reflectance, (std::vector<double>{0.1, 0.4}));
+}
+
+TEST(Spectral, FollowsTheSensorsBands) {
+  const Config c = parse_config(doc(R"({"sensor": {"bands": [
+      {"name": "green", "wavelength_nm": 532, "pulse_energy_mJ": 1, "atmos_transmission_roundtrip": 1},
+      {"name": "red", "wavelength_nm": 660, "pulse_energy_mJ": 1, "atmos_transmission_roundtrip": 1},
+      {"name": "nir", "wavelength_nm": 1064, "pulse_energy_mJ": 1, "atmos_transmission_roundtrip": 1}]},
+      "canopy": {"leaf_reflectance": {"green": 0.1, "red": 0.05, "nir": 0.45}}})"));
+  EXPECT_EQ(c.canopy->leaf_reflectance, (std::vector<double>{0.1, 0.05, 0.45}));
+  EXPECT_EQ(c.canopy->leaf_transmittance, (std::vector<double>{0.4, 0.4, 0.4}));
+}
+
+TEST(Spectral, Errors) {
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"leaf_reflectance": {"532": 0.1}}})")),
+            "/canopy/leaf_reflectance: missing band \"1064\": give a value for every band, or one "
+            "number for all");
+  EXPECT_EQ(
+      error_of(doc(R"({"canopy": {"leaf_reflectance": {"532": 0.1, "1064": 0.4, "700": 0.2}}})")),
+      "/canopy/leaf_reflectance/700: unknown band \"700\"; the bands are 532, 1064");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"leaf_reflectance": {"532": 1.5, "1064": 0.4}}})")),
+            "/canopy/leaf_reflectance/532: must be in [0, 1], got 1.5");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"plane": {}, "soil_reflectance": -0.1}})")),
+            "/terrain/soil_reflectance: must be in [0, 1], got -0.1");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"bark_reflectance": "dark"}})")),
+            "/canopy/bark_reflectance: must be a number or an object keyed by band name (532, "
+            "1064), got \"dark\"");
+}
+
+// ---- the configuration errors of PRODUCT.md §5 ----------------------------------------------
+
+TEST(Errors, MalformedJsonNamesFileLineAndColumn) {
+  TempDir dir;
+  const auto file = dir.write("config.json", "{\n  \"seed\": 1,\n  \"canopy\" 2\n}\n");
+  try {
+    read_json_file(file);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::config);
+    EXPECT_EQ(e.place(), file.string());
+    const std::string what = e.what();
+    EXPECT_THAT(what, StartsWith(file.string() + ": malformed JSON at line 3, column 12: "));
+    EXPECT_THAT(what, HasSubstr("syntax error"));
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+    EXPECT_EQ(what.find("json.exception"), std::string::npos);
+  }
+  // Column counted on the bad token's line, also when the token is not last on its line.
+  const auto inline_error = dir.write("inline.json", "{\"a\": 1,\n \"b\": tru, \"c\": 2}");
+  try {
+    read_json_file(inline_error);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("malformed JSON at line 2, column "));
+  }
+  const auto empty = dir.write("empty.json", "");
+  try {
+    read_json_file(empty);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("malformed JSON at line 1, column 1: "));
+  }
+}
+
+TEST(Errors, MissingFile) {
+  TempDir dir;
+  const auto file = dir.path() / "absent.json";
+  try {
+    load_config(file, {});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.place(), file.string());
+    EXPECT_THAT(e.what(), HasSubstr("cannot read"));
+    EXPECT_EQ(e.exit_status(), 2);
+  }
+  try {
+    read_json_file(dir.path());
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("cannot read"));
+  }
+}
+
+TEST(Errors, UnknownKeySuggestsTheNearest) {
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"pia": 2}})")),
+            "/canopy/pia: unknown key \"pia\"; did you mean \"pai\"?");
+  EXPECT_EQ(error_of(doc(R"({"simulaton": {}})")),
+            "/simulaton: unknown key \"simulaton\"; did you mean \"simulation\"?");
+  EXPECT_EQ(error_of(doc(R"({"track": {"rate_Hz": 40}})")),
+            "/track/rate_Hz: unknown key \"rate_Hz\"; did you mean \"rate_hz\"?");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"plane": {"slope": 3}}})")),
+            "/terrain/plane/slope: unknown key \"slope\"; did you mean \"slope_deg\"?");
+  EXPECT_EQ(error_of(doc(R"({"brf": {"views": [{}, {"zenith": 10}]}})")),
+            "/brf/views/1/zenith: unknown key \"zenith\"; did you mean \"zenith_deg\"?");
+  // Nothing close: the known keys are listed instead of a guess.
+  EXPECT_EQ(error_of(doc(R"({"output": {"xyz": true}})")),
+            "/output/xyz: unknown key \"xyz\"; known keys: geojson, netcdf, per_order, plots");
+}
+
+TEST(Errors, WrongTypes) {
+  EXPECT_EQ(error_of(doc(R"({"simulation": {"rays_per_shot": "many"}})")),
+            "/simulation/rays_per_shot: must be an integer, got \"many\"");
+  EXPECT_EQ(error_of(doc(R"({"simulation": {"rays_per_shot": 2.5}})")),
+            "/simulation/rays_per_shot: must be an integer, got 2.5");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"pai": "3"}})")),
+            "/canopy/pai: must be a number, got \"3\"");
+  EXPECT_EQ(error_of(doc(R"({"output": {"plots": 1}})")),
+            "/output/plots: must be a boolean (true or false), got 1");
+  EXPECT_EQ(error_of(doc(R"({"output": {"plots": "yes"}})")),
+            "/output/plots: must be a boolean (true or false), got \"yes\"");
+  EXPECT_EQ(error_of(doc(R"({"canopy": 3})")), "/canopy: must be an object, got 3");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"dem": 5}})")), "/terrain/dem: must be a string, got 5");
+  EXPECT_EQ(error_of(doc(R"({"seed": -1})")), "/seed: must be >= 0, got -1");
+  EXPECT_EQ(error_of(json::array()), "the configuration must be a JSON object, got []");
+  // An integral number written as a float is an integer.
+  EXPECT_EQ(parse_config(doc(R"({"simulation": {"rays_per_shot": 1e4}})")).simulation.rays_per_shot,
+            10000);
+  EXPECT_EQ(parse_config(doc(R"({"seed": 18446744073709551615})")).seed,
+            std::numeric_limits<std::uint64_t>::max());
+}
+
+TEST(Errors, OutOfRange) {
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"pai": -1}})")), "/canopy/pai: must be >= 0, got -1");
+  EXPECT_EQ(
+      error_of(doc(R"({"canopy": {"leaf_reflectance": 0.6, "leaf_transmittance": 0.6}})")),
+      "/canopy/leaf_transmittance: leaf_reflectance + leaf_transmittance must be <= 1 in band "
+      "532, got 1.2");
+  EXPECT_EQ(
+      error_of(doc(R"({"canopy": {"leaf_reflectance": {"532": 0.1, "1064": 0.7},
+      "leaf_transmittance": 0.35}})")),
+      "/canopy/leaf_transmittance: leaf_reflectance + leaf_transmittance must be <= 1 in band "
+      "1064, got 1.05");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"cover": 1.5}})")),
+            "/canopy/cover: must be in [0, 1], got 1.5");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"cover": -0.1}})")),
+            "/canopy/cover: must be in [0, 1], got -0.1");
+  EXPECT_EQ(error_of(doc(R"({"simulation": {"rays_per_shot": 0}})")),
+            "/simulation/rays_per_shot: must be >= 1, got 0");
+  EXPECT_EQ(error_of(doc(R"({"simulation": {"max_order": 0}})")),
+            "/simulation/max_order: must be >= 1, got 0");
+  EXPECT_EQ(error_of(doc(R"({"track": {"off_nadir_deg": 45}})")),
+            "/track/off_nadir_deg: must be in [0, 45), got 45");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"plane": {"slope_deg": 90}}})")),
+            "/terrain/plane/slope_deg: must be in [0, 89], got 90");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"plane": {"origin_lat_deg": 91}}})")),
+            "/terrain/plane/origin_lat_deg: must be in [-90, 90], got 91");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"plane": {}, "roughness": {"correlation_m": 0}}})")),
+            "/terrain/roughness/correlation_m: must be > 0, got 0");
+  EXPECT_EQ(error_of(doc(R"({"brf": {"sun_zenith_deg": 90}})")),
+            "/brf/sun_zenith_deg: must be in [0, 90), got 90");
+  EXPECT_EQ(error_of(doc(R"({"brf": {"photons": 0}})")), "/brf/photons: must be >= 1, got 0");
+  EXPECT_EQ(error_of(doc(R"({"track": {"semi_major_axis_m": 6000000}})")),
+            "/track/semi_major_axis_m: must be > 6378137, got 6000000");
+  EXPECT_EQ(error_of(doc(R"({"track": {"eccentricity": 1}})")),
+            "/track/eccentricity: must be in [0, 1), got 1");
+}
+
+TEST(Errors, NonFiniteNumbers) {
+  // nlohmann-json refuses 1e999 while parsing; the error still names the key, line and column.
+  TempDir dir;
+  const auto file =
+      dir.write("config.json", "{\"terrain\": {\"plane\": {}},\n \"canopy\": {\"pai\": 1e999}}\n");
+  try {
+    load_config(file, {});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.place(), "/canopy/pai");
+    EXPECT_EQ(std::string(e.what()), "/canopy/pai: must be a finite number, got 1e999 (" +
+                                         file.string() + ", line 2, column 20)");
+  }
+  const auto in_array = dir.write("array.json", "{\"canopy\": {\"crown_base_m\": [1, -1e400]}}");
+  try {
+    read_json_file(in_array);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.place(), "/canopy/crown_base_m/1");
+  }
+  // A document built in code can hold infinities and NaN; they are refused too.
+  json d = doc("{}");
+  d["canopy"]["pai"] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(error_of(d), "/canopy/pai: must be a finite number, got inf");
+  d["canopy"]["pai"] = std::nan("");
+  EXPECT_THAT(error_of(d), StartsWith("/canopy/pai: must be a finite number"));
+  d = doc("{}");
+  d["simulation"]["rays_per_shot"] = std::numeric_limits<double>::infinity();
+  EXPECT_THAT(error_of(d), StartsWith("/simulation/rays_per_shot: must be a finite number"));
+  d = doc("{}");
+  d["canopy"]["leaf_reflectance"]["532"] = std::numeric_limits<double>::infinity();
+  d["canopy"]["leaf_reflectance"]["1064"] = 0.4;
+  EXPECT_THAT(error_of(d), StartsWith("/canopy/leaf_reflectance/532: must be a finite number"));
+}
+
+TEST(Errors, TerrainNeedsExactlyOneOfDemAndPlane) {
+  EXPECT_EQ(error_of(doc(R"({"terrain": {}})")),
+            "/terrain: give exactly one of \"dem\" and \"plane\"");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"dem": "a.tif", "plane": {}}})")),
+            "/terrain: give exactly one of \"dem\" and \"plane\", not both");
+  EXPECT_EQ(error_of(json::object()), "/terrain: is required: give \"dem\" or \"plane\"");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"dem": ""}})")), "/terrain/dem: must not be empty");
+  const Config c = parse_config(doc(R"({"terrain": {"dem": "/data/dem.tif"}})"));
+  EXPECT_EQ(c.terrain.dem, "/data/dem.tif");
+  EXPECT_FALSE(c.terrain.plane.has_value());
+}
+
+// ---- canopy shapes --------------------------------------------------------------------------
+
+TEST(Canopy, Fractions) {
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"green_fraction": 0.7, "bark_fraction": 0.2}})")),
+            "/canopy/bark_fraction: green_fraction + bark_fraction must be 1, got 0.9");
+  // One fraction given implies the other.
+  Config c = parse_config(doc(R"({"canopy": {"bark_fraction": 0.1}})"));
+  EXPECT_EQ(c.canopy->green_fraction, 0.9);
+  c = parse_config(doc(R"({"canopy": {"green_fraction": 1}})"));
+  EXPECT_EQ(c.canopy->bark_fraction, 0.0);
+  EXPECT_EQ(c.resolved["canopy"]["bark_fraction"], 0.0);
+}
+
+TEST(Canopy, LeafAngleDistribution) {
+  const std::vector<std::pair<std::string, LeafAngleDistribution>> names = {
+      {"spherical", LeafAngleDistribution::spherical},
+      {"planophile", LeafAngleDistribution::planophile},
+      {"erectophile", LeafAngleDistribution::erectophile},
+      {"plagiophile", LeafAngleDistribution::plagiophile},
+      {"extremophile", LeafAngleDistribution::extremophile},
+      {"uniform", LeafAngleDistribution::uniform}};
+  for (const auto& [name, lad] : names) {
+    json d = doc(R"({"canopy": {}})");
+    d["canopy"]["lad"] = name;
+    EXPECT_EQ(parse_config(d).canopy->lad, lad) << name;
+  }
+  const Config c = parse_config(doc(R"({"canopy": {"lad": {"ellipsoidal_mean_deg": 20}}})"));
+  EXPECT_EQ(c.canopy->lad, LeafAngleDistribution::ellipsoidal);
+  EXPECT_EQ(c.canopy->lad_mean_deg, 20.0);
+  EXPECT_EQ(c.resolved["canopy"]["lad"], json({{"ellipsoidal_mean_deg", 20}}));
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"lad": {"ellipsoidal_mean_deg": 90}}})")),
+            "/canopy/lad/ellipsoidal_mean_deg: must be in (0, 90), got 90");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"lad": {}}})")),
+            "/canopy/lad/ellipsoidal_mean_deg: is required");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"lad": "sphercal"}})")),
+            "/canopy/lad: must be one of spherical, planophile, erectophile, plagiophile, "
+            "extremophile, uniform, or {\"ellipsoidal_mean_deg\": X}, got \"sphercal\"; did you "
+            "mean \"spherical\"?");
+  EXPECT_THAT(error_of(doc(R"({"canopy": {"lad": 3}})")),
+              StartsWith("/canopy/lad: must be a name"));
+}
+
+TEST(Canopy, CrownsAndPaths) {
+  const Config c = parse_config(doc(R"({"canopy": {"crown_shape": "layer", "crown_base_m": [2, 2],
+      "crowns_file": "crowns.csv"}})"));
+  EXPECT_EQ(c.canopy->crown_shape, CrownShape::layer);
+  EXPECT_EQ(c.canopy->crown_base_m[0], 2.0);
+  EXPECT_EQ(c.canopy->crowns_file, "crowns.csv");
+  EXPECT_EQ(c.resolved["canopy"]["crowns_file"], "crowns.csv");
+  EXPECT_FALSE(c.resolved["canopy"].contains("stands"));
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"crown_base_m": [20, 15]}})")),
+            "/canopy/crown_base_m: min must be <= max, got [20,15]");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"crown_base_m": [-1, 15]}})")),
+            "/canopy/crown_base_m/0: must be >= 0, got -1");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"crown_base_m": [15]}})")),
+            "/canopy/crown_base_m: must be an array of 2 numbers [min, max], got [15]");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"crown_shape": "box"}})")),
+            "/canopy/crown_shape: must be one of ellipsoid, cone, layer, got \"box\"");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"crown_shape": "ellipse"}})")),
+            "/canopy/crown_shape: must be one of ellipsoid, cone, layer, got \"ellipse\"; did you "
+            "mean \"ellipsoid\"?");
+  EXPECT_EQ(error_of(doc(R"({"canopy": {"crown_radius_m": 0}})")),
+            "/canopy/crown_radius_m: must be > 0, got 0");
+}
+
+// ---- track ----------------------------------------------------------------------------------
+
+TEST(Track, Pass) {
+  const Config c = parse_config(doc(R"({"track": {"start_lat_deg": 34.3, "start_lon_deg": -118.2,
+      "heading_deg": 10, "shots": 100, "spacing_m": 172, "start_time": "2005-10-21T12:00:00Z"}})"));
+  EXPECT_EQ(c.track.type, TrackType::pass);
+  EXPECT_EQ(c.track.start_lat_deg, 34.3);
+  EXPECT_EQ(c.track.start_lon_deg, -118.2);
+  EXPECT_EQ(c.track.shots, 100);
+  EXPECT_EQ(c.track.spacing_m, 172.0);
+  EXPECT_EQ(c.track.start_time_s, 183168000.0);
+  EXPECT_EQ(
+      error_of(doc(R"({"track": {"start_time": "21/10/2005"}})")).rfind("/track/start_time: ", 0),
+      0u);
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "spiral"}})")),
+            "/track/type: must be one of pass, points, orbit, ephemeris, got \"spiral\"");
+}
+
+TEST(Track, PointsSetTheNumberOfShots) {
+  const Config c = parse_config(doc(R"({"track": {"type": "points", "points": [
+      {"lat_deg": 10, "lon_deg": 20}, {"lat_deg": -10.5, "lon_deg": 200}]}})"));
+  ASSERT_EQ(c.track.points.size(), 2u);
+  EXPECT_EQ(c.track.points[1].lat_deg, -10.5);
+  EXPECT_EQ(c.track.points[1].lon_deg, 200.0);
+  EXPECT_EQ(c.track.shots, 2);
+  EXPECT_EQ(c.resolved["track"]["shots"], 2);
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "points", "shots": 3, "points": [
+      {"lat_deg": 10, "lon_deg": 20}]}})")),
+            "/track/shots: must equal the number of points (1) when type is \"points\", got 3");
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "points"}})")), "/track/points: is required");
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "points", "points": []}})")),
+            "/track/points: must not be empty");
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "points", "points": [{"lat_deg": 1}]}})")),
+            "/track/points/0/lon_deg: is required");
+  EXPECT_EQ(
+      error_of(doc(R"({"track": {"type": "points", "points": [{"lat_deg": 100, "lon_deg": 0}]}})")),
+      "/track/points/0/lat_deg: must be in [-90, 90], got 100");
+}
+
+TEST(Track, OrbitAndEphemeris) {
+  const Config c = parse_config(doc(R"({"track": {"type": "orbit", "semi_major_axis_m": 6970000,
+      "eccentricity": 0.0013, "inclination_deg": 94, "raan_deg": 12, "arg_perigee_deg": 90,
+      "mean_anomaly_deg": 45, "epoch": "2000-01-02T12:00:00Z"}})"));
+  EXPECT_EQ(c.track.type, TrackType::orbit);
+  EXPECT_EQ(c.track.orbit.semi_major_axis_m, 6970000.0);
+  EXPECT_EQ(c.track.orbit.eccentricity, 0.0013);
+  EXPECT_EQ(c.track.orbit.inclination_deg, 94.0);
+  EXPECT_EQ(c.track.orbit.raan_deg, 12.0);
+  EXPECT_EQ(c.track.orbit.arg_perigee_deg, 90.0);
+  EXPECT_EQ(c.track.orbit.mean_anomaly_deg, 45.0);
+  EXPECT_EQ(c.track.orbit.epoch_s, 86400.0);
+  EXPECT_THAT(error_of(doc(R"({"track": {"type": "orbit", "semi_major_axis_m": 7000000,
+      "eccentricity": 0.5}})")),
+              StartsWith("/track/eccentricity: puts the perigee"));
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "ephemeris"}})")),
+            "/track/ephemeris: is required when type is \"ephemeris\"");
+  EXPECT_EQ(parse_config(doc(R"({"track": {"type": "ephemeris", "ephemeris": "/e.csv"}})"))
+                .track.ephemeris,
+            "/e.csv");
+}
+
+// ---- overrides ------------------------------------------------------------------------------
+
+TEST(Override, ValuesParseAsJsonElseString) {
+  json d = doc(R"({"canopy": {"pai": 3}})");
+  apply_override(d, "canopy.pai=2");
+  EXPECT_EQ(d["canopy"]["pai"], 2);
+  apply_override(d, "canopy.lad={\"ellipsoidal_mean_deg\": 30}");
+  EXPECT_EQ(d["canopy"]["lad"], json({{"ellipsoidal_mean_deg", 30}}));
+  apply_override(d, "canopy.crown_base_m=[1, 2]");
+  EXPECT_EQ(d["canopy"]["crown_base_m"], json::array({1, 2}));
+  apply_override(d, "output.plots=true");  // creates `output`
+  EXPECT_EQ(d["output"]["plots"], true);
+  apply_override(d, "terrain.dem=dems/site 1.tif");  // not JSON: a string
+  EXPECT_EQ(d["terrain"]["dem"], "dems/site 1.tif");
+  apply_override(d, "track.start_time=2005-10-21T12:00:00Z");
+  EXPECT_EQ(d["track"]["start_time"], "2005-10-21T12:00:00Z");
+  apply_override(d, "sensor.preset=\"glas\"");  // a JSON string
+  EXPECT_EQ(d["sensor"]["preset"], "glas");
+  apply_override(d, "a.b=x=y");  // only the first '=' separates
+  EXPECT_EQ(d["a"]["b"], "x=y");
+  apply_override(d, "a.empty=");
+  EXPECT_EQ(d["a"]["empty"], "");
+}
+
+TEST(Override, CreatesNestedObjects) {
+  json d = json::object();
+  apply_override(d, "terrain.plane.slope_deg=20");
+  EXPECT_EQ(d, json::parse(R"({"terrain": {"plane": {"slope_deg": 20}}})"));
+  json empty;  // null document
+  apply_override(empty, "x.y.z=1");
+  EXPECT_EQ(empty, json::parse(R"({"x": {"y": {"z": 1}}})"));
+}
+
+TEST(Override, NullAndObjectsInPlaceOfNull) {
+  json d = doc(R"({"canopy": {"pai": 3}})");
+  apply_override(d, "canopy=null");
+  EXPECT_TRUE(d["canopy"].is_null());
+  EXPECT_FALSE(parse_config(d).canopy.has_value());
+  apply_override(d, "canopy.pai=1.5");  // a null canopy becomes a canopy again
+  const Config c = parse_config(d);
+  ASSERT_TRUE(c.canopy.has_value());
+  EXPECT_EQ(c.canopy->pai, 1.5);
+}
+
+TEST(Override, ArrayElementsByIndex) {
+  json d = doc(R"({"sensor": {"bands": [
+      {"name": "532", "wavelength_nm": 532, "pulse_energy_mJ": 32, "atmos_transmission_roundtrip": 0.8},
+      {"name": "1064", "wavelength_nm": 1064, "pulse_energy_mJ": 72, "atmos_transmission_roundtrip": 0.9}]}})");
+  apply_override(d, "sensor.bands.1.pulse_energy_mJ=10");
+  EXPECT_EQ(parse_config(d).sensor.bands[1].pulse_energy_mJ, 10.0);
+  EXPECT_THROW(apply_override(d, "sensor.bands.2.name=x"), Error);
+  EXPECT_THROW(apply_override(d, "sensor.bands.first.name=x"), Error);
+}
+
+TEST(Override, Errors) {
+  json d = doc("{}");
+  auto what = [&](const std::string& assignment) -> std::string {
+    try {
+      apply_override(d, assignment);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::config);
+      return e.place();
+    }
+    return "(no error)";
+  };
+  EXPECT_EQ(what("canopy.pai"), "--set");
+  EXPECT_EQ(what("=2"), "--set");
+  EXPECT_EQ(what("canopy..pai=2"), "--set");
+  EXPECT_EQ(what("canopy.pai.=2"), "--set");
+  d["seed"] = 1;
+  EXPECT_EQ(what("seed.x=2"), "--set");  // through a number
+  EXPECT_EQ(what("canopy.pai=1e999"), "/canopy/pai");
+  try {
+    apply_override(d, "canopy.pai");
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "--set: expected KEY=VALUE, got \"canopy.pai\"");
+  }
+}
+
+TEST(Override, UnknownKeyFromSetIsStillCaught) {
+  json d = doc("{}");
+  apply_override(d, "canopy.pia=2");
+  EXPECT_EQ(place_of(d), "/canopy/pia");
+}
+
+// ---- load_config ----------------------------------------------------------------------------
+
+TEST(LoadConfig, OverridesInOrderAndPathsRelativeToTheFile) {
+  TempDir dir;
+  const auto file = dir.write("site/config.json", R"({
+    "terrain": {"dem": "dems/dem.tif"},
+    "canopy": {"pai": 3, "stands": "/abs/stands.geojson", "crowns_file": "../crowns.csv"},
+    "track": {"type": "ephemeris", "ephemeris": "eph.csv"}
+  })");
+  const Config c = load_config(file, {"canopy.pai=2", "canopy.cover=0.5", "canopy.pai=4"});
+  EXPECT_EQ(c.canopy->pai, 4.0);
+  EXPECT_EQ(c.canopy->cover, 0.5);
+  const auto site = std::filesystem::absolute(dir.path() / "site");
+  EXPECT_EQ(c.terrain.dem, (site / "dems" / "dem.tif").lexically_normal().string());
+  EXPECT_EQ(c.canopy->crowns_file,
+            (std::filesystem::absolute(dir.path()) / "crowns.csv").lexically_normal().string());
+  EXPECT_EQ(c.canopy->stands, "/abs/stands.geojson");
+  EXPECT_EQ(c.track.ephemeris, (site / "eph.csv").lexically_normal().string());
+  EXPECT_EQ(c.resolved["terrain"]["dem"], c.terrain.dem);
+  EXPECT_EQ(c.resolved["canopy"]["crowns_file"], c.canopy->crowns_file);
+  EXPECT_EQ(c.resolved["canopy"]["pai"], 4);
+}
+
+TEST(LoadConfig, BareGroundResolvedHasNoDanglingPaths) {
+  TempDir dir;
+  const auto file = dir.write("config.json", R"({"terrain": {"plane": {}}})");
+  const Config c = load_config(file, {});
+  EXPECT_FALSE(c.resolved["terrain"].contains("dem"));
+  EXPECT_FALSE(c.resolved["track"].contains("ephemeris"));
+  EXPECT_TRUE(c.resolved["canopy"].is_null());
+}
+
+// ---- ISO 8601 and the GLAS epoch ------------------------------------------------------------
+
+TEST(GlasTime, ParsesAgainstHandComputedValues) {
+  EXPECT_EQ(parse_iso8601_utc("2000-01-01T12:00:00Z"), 0.0);  // the GLAS epoch itself
+  EXPECT_EQ(parse_iso8601_utc("2000-01-01T00:00:00Z"), -43200.0);
+  // 2000-01-01 to 2005-01-01: 2000 and 2004 are leap years, 366+365+365+365+366 = 1827 days;
+  // 2005-01-01 to 2005-10-21: Jan..Sep = 31+28+31+30+31+30+31+31+30 = 273 days, plus 20 = 293;
+  // 1827 + 293 = 2120 days = 2120 * 86400 s = 183168000 s, both times at 12:00.
+  EXPECT_EQ(parse_iso8601_utc("2005-10-21T12:00:00Z"), 183168000.0);
+  EXPECT_EQ(parse_iso8601_utc("2005-10-21T12:00:00+00:00"), 183168000.0);
+  // 2000 is a leap year: 31 (January) + 29 (February) days to 1 March.
+  EXPECT_EQ(parse_iso8601_utc("2000-03-01T12:00:00Z"), 60.0 * 86400.0);
+  // The Unix epoch: 946728000 s before the GLAS epoch (10957 days and 12 hours).
+  EXPECT_EQ(parse_iso8601_utc("1970-01-01T00:00:00Z"), -(10957.0 * 86400.0 + 43200.0));
+  EXPECT_EQ(parse_iso8601_utc("2000-01-01T12:00:00.25Z"), 0.25);
+  EXPECT_NEAR(parse_iso8601_utc("2003-02-20T01:02:03.123456Z"),
+              // 2000..2002: 366+365+365 = 1096 days; January 31 + 19 days = 50; total 1146 days,
+              // from 12:00 to 01:02:03.123456 is -(10*3600 + 57*60 + 56.876544) s.
+              1146.0 * 86400.0 - (10 * 3600 + 57 * 60 + 56.876544), 1e-6);
+}
+
+TEST(GlasTime, RefusesBadText) {
+  for (const char* text : {"", "2005-10-21", "2005-10-21T12:00:00", "2005-10-21 12:00:00Z",
+                           "2005-10-21T12:00:00+01:00", "2005-13-01T00:00:00Z",
+                           "2005-02-29T00:00:00Z", "2005-10-32T00:00:00Z", "2005-10-21T24:00:00Z",
+                           "2005-10-21T12:60:00Z", "2005-10-21T12:00:60Z", "2005-10-21T12:00:00.Z",
+                           "05-10-21T12:00:00Z", "2005-10-21T12:00:00Zjunk"}) {
+    EXPECT_THROW(parse_iso8601_utc(text), std::invalid_argument) << text;
+  }
+  EXPECT_NO_THROW(parse_iso8601_utc("2004-02-29T00:00:00Z"));
+}
+
+TEST(GlasTime, FormatsAndRoundTrips) {
+  EXPECT_EQ(format_iso8601_utc(0.0), "2000-01-01T12:00:00Z");
+  EXPECT_EQ(format_iso8601_utc(183168000.0), "2005-10-21T12:00:00Z");
+  EXPECT_EQ(format_iso8601_utc(0.25), "2000-01-01T12:00:00.25Z");
+  EXPECT_EQ(format_iso8601_utc(-43200.5), "1999-12-31T23:59:59.5Z");
+  EXPECT_EQ(format_iso8601_utc(59.9999999), "2000-01-01T12:01:00Z");  // rounds to the microsecond
+  for (double s : {-1.0e9, -0.125, 1.0, 1.0e8 + 0.5, 5.0e8}) {
+    EXPECT_NEAR(parse_iso8601_utc(format_iso8601_utc(s)), s, 1e-6) << s;
+  }
+  EXPECT_THROW(format_iso8601_utc(std::numeric_limits<double>::infinity()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace glaswave

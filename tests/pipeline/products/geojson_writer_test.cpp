@@ -1,0 +1,329 @@
+// Tests of footprints.geojson: written from hand-made records out of order, then read back
+// through GDAL/OGR as QGIS and ogrinfo would (no warning allowed), and as plain JSON for what
+// RFC 7946 asks of the text itself (no crs, no NaN, 8-decimal coordinates).
+#include "pipeline/products/geojson_writer.hpp"
+
+#include <cpl_error.h>
+#include <gdal_priv.h>
+#include <gtest/gtest.h>
+#include <ogrsf_frmts.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "terrain/error.hpp"
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kShots = 3;
+
+RunInfo make_info() {
+  RunInfo info;
+  info.command_line = "glaswave run demo.json";
+  info.config_json = "{}";
+  info.seed = 7;
+  info.shots = kShots;
+  info.bands = {Band{"532", 532.0, 32.0, 0.8}, Band{"1064", 1064.0, 72.0, 0.9}};
+  info.bin_time_ns = {0.0, 1.0, 2.0};
+  info.tx_time_ns = {-1.0, 0.0, 1.0};
+  info.tx_waveform_W = {{1.0, 2.0, 1.0}, {1.0, 2.0, 1.0}};
+  return info;
+}
+
+// A closed octagon about (lon, lat), counter-clockwise (angle increasing in the lon/lat plane),
+// with more decimals than the product keeps.
+std::vector<std::array<double, 2>> octagon(double lon, double lat) {
+  std::vector<std::array<double, 2>> ring;
+  for (int k = 0; k < 8; ++k) {
+    const double angle = 2.0 * std::numbers::pi * k / 8.0;
+    ring.push_back(
+        {lon + 0.00038123456789 * std::cos(angle), lat + 0.00031987654321 * std::sin(angle)});
+  }
+  ring.push_back(ring.front());
+  return ring;
+}
+
+ShotRecord make_record(int record) {
+  ShotRecord shot;
+  shot.shot_number = 100 + record;
+  shot.time_s = 183254400.0 + 0.025 * record;
+  shot.lat_deg = 34.3 + 0.0015 * record;
+  shot.lon_deg = -118.123456789012 + 0.0003 * record;
+  shot.elev_m = 1200.5 + record;
+  shot.sc_lat_deg = 34.2;
+  shot.sc_lon_deg = -118.21;
+  shot.sc_alt_m = 600000.0;
+  shot.off_nadir_deg = 0.3;
+  shot.range_m = 598800.0 - record;
+  shot.slope_deg = 10.0 + record;  // integral values on purpose: the field must still be Real
+  shot.aspect_deg = record == 0 ? std::nan("") : 270.0;  // no aspect on flat ground
+  shot.elev_bin0_m = 1260.0;
+  shot.elev_lastbin_m = 1180.0;
+  shot.quality_flag = quality_good;
+  shot.rx_energy_J = {1e-15 * (record + 1), 2e-15};
+  shot.rx_energy_canopy_J = {0.6e-15 * (record + 1), 1e-15};
+  shot.rx_energy_ground_J = {0.4e-15 * (record + 1), 1e-15};
+  shot.reflectance = {0.1 * (record + 1), 0.5};
+  shot.footprint_lonlat = octagon(shot.lon_deg, shot.lat_deg);
+  return shot;
+}
+
+ShotRecord make_flagged_record(int record) {
+  ShotRecord shot = make_record(record);
+  shot.quality_flag = quality_no_terrain;
+  shot.elev_m = std::nan("");
+  shot.rx_energy_J.clear();
+  shot.rx_energy_canopy_J.clear();
+  shot.rx_energy_ground_J.clear();
+  shot.reflectance.clear();
+  shot.footprint_lonlat.clear();
+  return shot;
+}
+
+// Counts GDAL warnings and errors, keeping their text for the failure message.
+struct GdalMessages {
+  int count = 0;
+  std::string text;
+};
+
+void CPL_STDCALL collect_gdal_message(CPLErr level, CPLErrorNum, const char* message) {
+  auto* messages = static_cast<GdalMessages*>(CPLGetErrorHandlerUserData());
+  if (level >= CE_Warning) {
+    ++messages->count;
+    messages->text += std::string(message) + "\n";
+  }
+}
+
+class GeojsonWriterTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { GDALAllRegister(); }
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("glaswave_geojson_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);  // kept for inspection when a test fails
+  }
+  fs::path file() const { return dir_ / "footprints.geojson"; }
+  fs::path part() const { return dir_ / "footprints.geojson.part"; }
+
+  void write_product() const {
+    GeojsonWriter writer(file(), make_info());
+    for (int record : {2, 1, 0})
+      writer.write(record, record == 1 ? make_flagged_record(1) : make_record(record));
+    writer.finish(RunStats{10, 1.0, 1});
+  }
+
+  std::string text() const {
+    std::ifstream in(file());
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    return buffer.str();
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(GeojsonWriterTest, FinalFileAndNoPart) {
+  write_product();
+  EXPECT_TRUE(fs::exists(file()));
+  EXPECT_FALSE(fs::exists(part()));
+}
+
+TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
+  write_product();
+  GdalMessages messages;
+  CPLPushErrorHandlerEx(collect_gdal_message, &messages);
+  GDALDatasetUniquePtr dataset(GDALDataset::FromHandle(
+      GDALOpenEx(file().c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+  std::vector<OGRFeatureUniquePtr> features;
+  OGRLayer* layer = dataset ? dataset->GetLayer(0) : nullptr;
+  if (layer != nullptr) {
+    // Reading every feature, not only opening, is what ogrinfo does.
+    for (auto& feature : *layer) features.emplace_back(feature.release());
+  }
+  CPLPopErrorHandler();
+  EXPECT_EQ(messages.count, 0) << messages.text;
+  ASSERT_TRUE(dataset);
+  ASSERT_NE(layer, nullptr);
+  EXPECT_STREQ(dataset->GetDriver()->GetDescription(), "GeoJSON");
+
+  EXPECT_EQ(dataset->GetLayerCount(), 1);
+  EXPECT_EQ(layer->GetFeatureCount(), kShots);
+  EXPECT_EQ(wkbFlatten(layer->GetGeomType()), wkbPolygon);
+  const OGRSpatialReference* crs = layer->GetSpatialRef();
+  ASSERT_NE(crs, nullptr);
+  EXPECT_TRUE(crs->IsGeographic());
+
+  const OGRFeatureDefn* definition = layer->GetLayerDefn();
+  for (const char* name :
+       {"time", "lat", "lon", "elev", "sc_lat", "sc_lon", "sc_alt", "off_nadir_deg", "range_m",
+        "slope_deg", "aspect_deg", "elev_bin0", "elev_lastbin", "rx_energy", "rx_energy_canopy",
+        "rx_energy_ground", "reflectance"}) {
+    const int index = definition->GetFieldIndex(name);
+    ASSERT_GE(index, 0) << name;
+    EXPECT_EQ(definition->GetFieldDefn(index)->GetType(), OFTReal) << name;
+  }
+  for (const char* name : {"shot_number", "quality_flag"}) {
+    const int index = definition->GetFieldIndex(name);
+    ASSERT_GE(index, 0) << name;
+    const OGRFieldType type = definition->GetFieldDefn(index)->GetType();
+    EXPECT_TRUE(type == OFTInteger || type == OFTInteger64) << name;
+  }
+  EXPECT_EQ(definition->GetFieldCount(), 19);
+
+  // Features come in record order although they were written 2, 1, 0.
+  ASSERT_EQ(features.size(), 3u);
+  for (int record = 0; record < kShots; ++record) {
+    const OGRFeature& feature = *features[record];
+    const ShotRecord expected = record == 1 ? make_flagged_record(1) : make_record(record);
+    EXPECT_EQ(feature.GetFieldAsInteger64("shot_number"), expected.shot_number);
+    EXPECT_EQ(feature.GetFieldAsDouble("time"), expected.time_s);
+    EXPECT_EQ(feature.GetFieldAsDouble("lat"), expected.lat_deg);
+    EXPECT_EQ(feature.GetFieldAsDouble("lon"), expected.lon_deg);
+    EXPECT_EQ(feature.GetFieldAsDouble("slope_deg"), expected.slope_deg);
+    EXPECT_EQ(feature.GetFieldAsInteger("quality_flag"), expected.quality_flag);
+  }
+
+  // A good shot: its polygon, first vertex to the 8 decimals kept, orientation as given.
+  const OGRFeature& first = *features[0];
+  const ShotRecord record0 = make_record(0);
+  const OGRGeometry* geometry = first.GetGeometryRef();
+  ASSERT_NE(geometry, nullptr);
+  ASSERT_EQ(wkbFlatten(geometry->getGeometryType()), wkbPolygon);
+  const OGRLinearRing* ring = geometry->toPolygon()->getExteriorRing();
+  ASSERT_NE(ring, nullptr);
+  ASSERT_EQ(ring->getNumPoints(), static_cast<int>(record0.footprint_lonlat.size()));
+  EXPECT_NEAR(ring->getX(0), record0.footprint_lonlat[0][0], 0.51e-8);
+  EXPECT_NEAR(ring->getY(0), record0.footprint_lonlat[0][1], 0.51e-8);
+  EXPECT_NEAR(ring->getX(2), record0.footprint_lonlat[2][0], 0.51e-8);
+  EXPECT_NEAR(ring->getY(2), record0.footprint_lonlat[2][1], 0.51e-8);
+  EXPECT_FALSE(ring->isClockwise());
+  EXPECT_EQ(geometry->toPolygon()->getNumInteriorRings(), 0);
+  EXPECT_TRUE(first.IsFieldNull(definition->GetFieldIndex("aspect_deg")))
+      << "NaN must read back as null";
+  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("reflectance"), record0.reflectance[0]);
+  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("rx_energy"), record0.rx_energy_J[0]);
+  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("rx_energy_ground"), record0.rx_energy_ground_J[0]);
+
+  // The flagged shot: no geometry, no metrics, its position still there.
+  const OGRFeature& flagged = *features[1];
+  EXPECT_EQ(flagged.GetGeometryRef(), nullptr);
+  EXPECT_EQ(flagged.GetFieldAsInteger("quality_flag"), quality_no_terrain);
+  for (const char* name :
+       {"elev", "rx_energy", "rx_energy_canopy", "rx_energy_ground", "reflectance"}) {
+    EXPECT_TRUE(flagged.IsFieldNull(definition->GetFieldIndex(name))) << name;
+  }
+  EXPECT_FALSE(flagged.IsFieldNull(definition->GetFieldIndex("lat")));
+}
+
+TEST_F(GeojsonWriterTest, TextIsRfc7946) {
+  write_product();
+  const std::string content = text();
+  EXPECT_EQ(content.find("NaN"), std::string::npos);
+  EXPECT_EQ(content.find("nan"), std::string::npos);
+  EXPECT_EQ(content.find("inf"), std::string::npos);
+  const nlohmann::json document = nlohmann::json::parse(content);  // throws on invalid JSON
+  EXPECT_EQ(document.at("type"), "FeatureCollection");
+  EXPECT_FALSE(document.contains("crs"));
+  ASSERT_EQ(document.at("features").size(), 3u);
+  for (const auto& feature : document.at("features")) {
+    EXPECT_EQ(feature.at("type"), "Feature");
+    EXPECT_TRUE(feature.contains("geometry"));
+    EXPECT_TRUE(feature.at("properties").is_object());
+  }
+  EXPECT_TRUE(document.at("features")[1].at("geometry").is_null());
+  const auto& coordinates = document.at("features")[0].at("geometry").at("coordinates");
+  ASSERT_EQ(coordinates.size(), 1u);
+  EXPECT_EQ(coordinates[0].front(), coordinates[0].back()) << "ring closed";
+
+  // No more than 8 decimals in coordinates (about a millimetre on the ground).
+  const std::regex coordinate_list(R"re("coordinates":\[\[(.*?)\]\]\})re");
+  const std::regex too_precise(R"(\.\d{9,})");
+  int polygons = 0;
+  for (auto it = std::sregex_iterator(content.begin(), content.end(), coordinate_list);
+       it != std::sregex_iterator(); ++it) {
+    ++polygons;
+    const std::string numbers = (*it)[1];
+    EXPECT_FALSE(std::regex_search(numbers, too_precise)) << numbers;
+    EXPECT_TRUE(std::regex_search(numbers, std::regex(R"(\.\d{8}\b)")))
+        << "8 decimals kept: " << numbers;
+  }
+  EXPECT_EQ(polygons, 2);
+}
+
+TEST_F(GeojsonWriterTest, UnfinishedWriterLeavesNothing) {
+  {
+    GeojsonWriter writer(file(), make_info());
+    writer.write(0, make_record(0));
+    writer.write(2, make_record(2));
+    EXPECT_TRUE(fs::exists(part()));
+    EXPECT_FALSE(fs::exists(file()));
+  }
+  EXPECT_FALSE(fs::exists(part()));
+  EXPECT_FALSE(fs::exists(file()));
+}
+
+TEST_F(GeojsonWriterTest, FinishWithMissingRecordFailsAndLeavesNothing) {
+  {
+    GeojsonWriter writer(file(), make_info());
+    writer.write(0, make_record(0));
+    writer.write(2, make_record(2));
+    try {
+      writer.finish(RunStats{});
+      FAIL() << "finish accepted a product with record 1 missing";
+    } catch (const Error& error) {
+      EXPECT_EQ(error.kind(), ErrorKind::run);
+      EXPECT_EQ(error.place(), file().string());
+      EXPECT_NE(std::string(error.what()).find("record 1"), std::string::npos) << error.what();
+    }
+  }
+  EXPECT_FALSE(fs::exists(part()));
+  EXPECT_FALSE(fs::exists(file()));
+}
+
+TEST_F(GeojsonWriterTest, BadRecordsAreErrors) {
+  GeojsonWriter writer(file(), make_info());
+  EXPECT_THROW(writer.write(3, make_record(0)), Error);
+  EXPECT_THROW(writer.write(-1, make_record(0)), Error);
+
+  ShotRecord open_ring = make_record(0);
+  open_ring.footprint_lonlat.pop_back();
+  EXPECT_THROW(writer.write(0, open_ring), Error);
+  ShotRecord nan_vertex = make_record(0);
+  nan_vertex.footprint_lonlat[3][1] = std::nan("");
+  EXPECT_THROW(writer.write(0, nan_vertex), Error);
+
+  writer.write(1, make_record(1));
+  EXPECT_THROW(writer.write(1, make_record(1)), Error);  // held, not yet written out
+  writer.write(0, make_record(0));
+  EXPECT_THROW(writer.write(0, make_record(0)), Error);  // already written out
+}
+
+TEST_F(GeojsonWriterTest, UnwritableDirectoryIsARunError) {
+  try {
+    GeojsonWriter writer(dir_ / "missing" / "footprints.geojson", make_info());
+    FAIL() << "created a file in a directory that does not exist";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::run);
+    EXPECT_EQ(error.exit_status(), 4);
+  }
+}
+
+}  // namespace
+}  // namespace glaswave

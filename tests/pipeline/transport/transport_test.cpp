@@ -1,0 +1,124 @@
+// The lidar model (pulse, bins, beam sampling) and the determinism of the shot transport.
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include "pipeline/transport/random.hpp"
+#include "pipeline/transport/shot_transport.hpp"
+#include "terrain/ground_mesh.hpp"
+
+namespace glaswave {
+namespace {
+
+SensorSettings table2_sensor() {
+  SensorSettings sensor;  // defaults are the seed's Table 2
+  sensor.bands = {{"532", 532.0, 32.0, 0.8}, {"1064", 1064.0, 72.0, 0.9}};
+  return sensor;
+}
+
+TEST(LidarModel, PulseConvolutionKeepsEnergyAndHasTheTransmittedWidth) {
+  const LidarModel lidar(table2_sensor());
+  std::vector<double> tally(lidar.tally_size(), 0.0);
+  tally[lidar.tally_index(0.0)] = 2.0e-12;
+  const std::vector<double> power = lidar.power_W(tally);
+  const std::vector<double> times = lidar.bin_time_ns();
+  double energy = 0, first = 0, second = 0;
+  for (std::size_t i = 0; i < power.size(); ++i) {
+    energy += power[i] * 1e-9;
+    first += power[i] * times[i];
+    second += power[i] * times[i] * times[i];
+  }
+  EXPECT_NEAR(energy / 2.0e-12, 1.0, 1e-12);
+  EXPECT_NEAR(first / (energy * 1e9), 0.0, 1e-9);  // the reference return sits on a bin centre
+  EXPECT_NEAR(std::sqrt(second / (energy * 1e9)), 5.0, 1e-3);
+}
+
+TEST(LidarModel, BinsAreOneBinWidthApartAndCoverTheWindow) {
+  SensorSettings sensor = table2_sensor();
+  sensor.bin_ns = 0.5;
+  sensor.bins = 300;
+  const LidarModel lidar(sensor);
+  const std::vector<double> times = lidar.bin_time_ns();
+  ASSERT_EQ(times.size(), 300u);
+  for (std::size_t i = 1; i < times.size(); ++i) EXPECT_DOUBLE_EQ(times[i] - times[i - 1], 0.5);
+  EXPECT_LT(times.front(), 0.0);
+  EXPECT_GT(times.back(), 0.0);
+  // A time maps to the bin whose centre is nearest.
+  const int margin = (lidar.tally_size() - sensor.bins) / 2;
+  EXPECT_EQ(lidar.tally_index(times[17] + 0.2) - margin, 17);
+  EXPECT_EQ(lidar.tally_index(times[17] - 0.2) - margin, 17);
+  EXPECT_EQ(lidar.tally_index(-1.0e6), -1);
+}
+
+TEST(LidarModel, TransmittedPulseCarriesThePulseEnergy) {
+  const LidarModel lidar(table2_sensor());
+  double energy_J = 0;
+  for (double power_W : lidar.tx_waveform_W(1)) energy_J += power_W * 1e-9;
+  EXPECT_NEAR(energy_J, 72e-3, 72e-3 * 1e-6);
+}
+
+// Rays follow the beam's irradiance inside the field of view: for a 2-D Gaussian truncated
+// at r0, E[r^2] = 2 s^2 (1 - (1 + a) e^-a) / (1 - e^-a), a = r0^2 / 2 s^2.
+TEST(BeamSampler, AnglesFollowTheTruncatedGaussian) {
+  const LidarModel lidar(table2_sensor());
+  const BeamSampler beam(lidar, {0.0, 0.0, -1.0});
+  const double s = 0.00011, a = 0.0002 * 0.0002 / (2 * s * s);
+  const double expected = 2 * s * s * (1 - (1 + a) * std::exp(-a)) / (1 - std::exp(-a));
+  double sum = 0, max_angle = 0;
+  const int n = 200000;
+  for (int i = 0; i < n; ++i) {
+    RayRandom random(3, 0, i);
+    const double u1 = random.uniform(), u2 = random.uniform();
+    const Vec3 d = beam.direction(u1, u2);
+    const double angle = std::acos(std::min(1.0, -d[2]));
+    sum += angle * angle;
+    max_angle = std::max(max_angle, angle);
+  }
+  EXPECT_NEAR(sum / n / expected, 1.0, 0.01);
+  EXPECT_LE(max_angle, 0.0002 * (1 + 1e-6));
+}
+
+TEST(RayRandom, DependsOnlyOnSeedShotAndRay) {
+  RayRandom a(1, 2, 3), b(1, 2, 3), c(1, 2, 4), d(1, 3, 3), e(2, 2, 3);
+  const double first = a.uniform();
+  EXPECT_EQ(first, b.uniform());
+  EXPECT_NE(first, c.uniform());
+  EXPECT_NE(first, d.uniform());
+  EXPECT_NE(first, e.uniform());
+  double sum = 0;
+  for (int i = 0; i < 100000; ++i) sum += a.uniform();
+  EXPECT_NEAR(sum / 100000, 0.5, 0.005);
+}
+
+TEST(ShotTransport, SameBitsForAnyThreadCount) {
+  const LidarModel lidar(table2_sensor());
+  const PlaneTerrain plane({0.0, 0.0, 0.0, 20.0, 45.0});
+  const LocalFrame frame({0.0, 0.0, 0.0});
+  const RayDevice device;
+  const Scene scene(device, build_ground_mesh(plane, frame, 200.0, 1.0e9));
+  ShotGeometry geometry;
+  geometry.sensor_m = {0.0, 0.0, 600000.0};
+  geometry.axis = {0.0, 0.0, -1.0};
+  geometry.range_m = 600000.0;
+  const SceneOptics optics{{0.15, 0.3}};
+  TransportOptions options;
+  options.rays = 20000;
+  auto run = [&](int threads) {
+    tbb::task_arena arena(threads);
+    ShotWaveforms waveforms;
+    arena.execute([&] { waveforms = simulate_shot(scene, lidar, geometry, optics, options, 11); });
+    return waveforms;
+  };
+  const ShotWaveforms one = run(1), two = run(2);
+  EXPECT_EQ(one.total_W, two.total_W);
+  EXPECT_EQ(one.energy_J, two.energy_J);
+  EXPECT_EQ(one.ray_queries, 20000);
+  // Another shot number is another sample.
+  const ShotWaveforms other = simulate_shot(scene, lidar, geometry, optics, options, 12);
+  EXPECT_NE(one.total_W, other.total_W);
+}
+
+}  // namespace
+}  // namespace glaswave
