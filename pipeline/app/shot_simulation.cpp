@@ -6,7 +6,9 @@
 #include <limits>
 #include <numbers>
 
+#include "pipeline/scene/vegetation.hpp"
 #include "pipeline/transport/shot_transport.hpp"
+#include "terrain/error.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
@@ -63,7 +65,16 @@ std::vector<std::array<double, 2>> beam_outline(const Scene& scene, const LidarM
 }  // namespace
 
 ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
-    : config_(config), terrain_(terrain), lidar_(config.sensor) {}
+    : config_(config), terrain_(terrain), lidar_(config.sensor) {
+  if (config.canopy) {
+    const CanopySettings& canopy = *config.canopy;
+    if (!canopy.crowns_file.empty())
+      throw config_error("/canopy/crowns_file", "explicit crowns are not available in this version yet");
+    if (!canopy.stands.empty()) throw config_error("/canopy/stands", "stands are not available in this version yet");
+    leaf_angles_.emplace(canopy.lad, canopy.lad_mean_deg);
+    stand_.emplace(canopy, config.seed);
+  }
+}
 
 ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray_queries) const {
   const std::size_t bands = lidar_.band_count();
@@ -104,12 +115,17 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   geometry.axis = frame.local_direction(footprint.beam_ecef);
   geometry.range_m = footprint.range_m;
 
-  const double half_size_m = patch_half_size_m(terrain_, lidar_, footprint, frame);
-  const GroundMesh ground = build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m());
-  const Scene scene(device_, ground);
-
   const double beam_sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
   const SurfaceOrientation orientation = fit_surface_orientation(terrain_, frame, beam_sigma_m);
+
+  // With vegetation, diffuse light wanders beyond the beam: the ground reaches further out.
+  const double vegetation_margin_m = config_.canopy ? 100.0 : 0.0;
+  const double half_size_m = patch_half_size_m(terrain_, lidar_, footprint, frame) + vegetation_margin_m;
+  const GroundMesh ground = build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m());
+  const Vegetation vegetation = config_.canopy ? build_vegetation(*config_.canopy, *stand_, terrain_, frame,
+                                                                  half_size_m, orientation)
+                                               : Vegetation{};
+  const Scene scene(device_, ground, vegetation);
   record.slope_deg = orientation.slope_deg;
   record.aspect_deg = orientation.aspect_deg;
 
@@ -129,6 +145,17 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   options.seed = config_.seed;
   SceneOptics optics;
   optics.soil_reflectance = config_.terrain.soil_reflectance;
+  if (config_.canopy) {
+    const CanopySettings& canopy = *config_.canopy;
+    for (std::size_t band = 0; band < bands; ++band) {
+      optics.foliage_reflectance.push_back(canopy.green_fraction * canopy.leaf_reflectance[band] +
+                                           canopy.bark_fraction * canopy.bark_reflectance[band]);
+      optics.foliage_transmittance.push_back(canopy.green_fraction * canopy.leaf_transmittance[band]);
+    }
+    optics.trunk_reflectance = canopy.bark_reflectance;
+    optics.leaf_angles = &*leaf_angles_;
+    optics.leaf_size_m = canopy.leaf_size_m;
+  }
   ShotWaveforms waveforms = simulate_shot(scene, lidar_, geometry, optics, options, footprint.shot_number);
   if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;
 

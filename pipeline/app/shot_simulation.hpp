@@ -4,6 +4,8 @@
 
 #include <memory>
 
+#include "canopy/leaf_angles.hpp"
+#include "canopy/stand.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/products/shot_record.hpp"
@@ -30,6 +32,8 @@ class ShotSimulator {
   const Terrain& terrain_;
   LidarModel lidar_;
   RayDevice device_;
+  std::optional<LeafAngles> leaf_angles_;  // when there is vegetation
+  std::optional<Stand> stand_;
 };
 
 }  // namespace glaswave

@@ -1,6 +1,7 @@
-// Embree scenes of the ground (and later the canopy) in a shot's local frame.
+// Embree scenes of the ground, trunks and crowns in a shot's local frame.
 #include "pipeline/scene/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -13,9 +14,73 @@
 namespace glaswave {
 namespace {
 
+constexpr unsigned ground_geometry = 0;
+
 void check_device(RTCDevice device, const char* what) {
   const RTCError code = rtcGetDeviceError(device);
   if (code != RTC_ERROR_NONE) throw run_error("Embree", std::string(what) + " failed (error " + std::to_string(code) + ")");
+}
+
+void attach_mesh(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsigned id) {
+  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                               3 * sizeof(float), mesh.vertices_m.size() / 3));
+  auto* triangles = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size() / 3));
+  check_device(device, "allocating a mesh");
+  std::memcpy(vertices, mesh.vertices_m.data(), mesh.vertices_m.size() * sizeof(float));
+  std::memcpy(triangles, mesh.triangles.data(), mesh.triangles.size() * sizeof(unsigned));
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometryByID(scene, geometry, id);
+  rtcReleaseGeometry(geometry);
+}
+
+// Crowns are Embree user geometry: their callbacks record every crossing and accept none as a
+// hit, so that traversal goes on to every crown along the ray.
+struct SpanCollector {
+  RTCIntersectContext context;  // first, so Embree's context pointer is ours
+  const std::vector<Crown>* crowns;
+  std::vector<VolumeSpan>* spans;
+  Vec3 origin, direction;  // in double: the float ray is only for traversal
+};
+
+void crown_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto& crown = static_cast<const std::vector<Crown>*>(args->geometryUserPtr)->at(args->primID);
+  const double r = crown.radius_m;
+  args->bounds_o->lower_x = static_cast<float>(crown.base_m[0] - r);
+  args->bounds_o->lower_y = static_cast<float>(crown.base_m[1] - r);
+  args->bounds_o->lower_z = static_cast<float>(crown.base_m[2]);
+  args->bounds_o->upper_x = static_cast<float>(crown.base_m[0] + r);
+  args->bounds_o->upper_y = static_cast<float>(crown.base_m[1] + r);
+  args->bounds_o->upper_z = static_cast<float>(crown.base_m[2] + 2.0 * crown.half_height_m);
+}
+
+void crown_intersect(const RTCIntersectFunctionNArguments* args) {
+  auto* collector = reinterpret_cast<SpanCollector*>(args->context);
+  const Crown& crown = (*collector->crowns)[args->primID];
+  const auto* ray = reinterpret_cast<const RTCRay*>(args->rayhit);
+  const auto interval = crown_interval(crown, collector->origin, collector->direction);
+  if (!interval) return;
+  const double t0 = std::max(interval->first, static_cast<double>(ray->tnear));
+  const double t1 = std::min(interval->second, static_cast<double>(ray->tfar));
+  if (t0 < t1) collector->spans->push_back({t0, t1, crown.area_density_m2_m3});
+}
+
+// A slab between two heights above a plane: where the ray is inside it.
+void layer_span(const TurbidLayer& layer, const Vec3& origin, const Vec3& direction, double max_distance_m,
+                std::vector<VolumeSpan>& spans) {
+  const double height = origin[2] - layer.ground_slope_x * origin[0] - layer.ground_slope_y * origin[1];
+  const double rate = direction[2] - layer.ground_slope_x * direction[0] - layer.ground_slope_y * direction[1];
+  double t0 = 0.0, t1 = max_distance_m;
+  if (rate == 0.0) {
+    if (height < layer.bottom_m || height > layer.top_m) return;
+  } else {
+    double a = (layer.bottom_m - height) / rate, b = (layer.top_m - height) / rate;
+    if (a > b) std::swap(a, b);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, b);
+  }
+  if (t0 < t1) spans.push_back({t0, t1, layer.area_density_m2_m3});
 }
 
 }  // namespace
@@ -26,56 +91,113 @@ RayDevice::RayDevice() : device_(rtcNewDevice(nullptr)) {
 
 RayDevice::~RayDevice() { rtcReleaseDevice(device_); }
 
-Scene::Scene(const RayDevice& device, const GroundMesh& ground)
-    : scene_(rtcNewScene(device.handle())), top_m_(ground.max_height_m) {
+Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation& vegetation)
+    : surfaces_(rtcNewScene(device.handle())),
+      crowns_(vegetation.crowns),
+      layer_(vegetation.layer),
+      top_m_(ground.max_height_m) {
   check_device(device.handle(), "creating a scene");
-  if (!ground.triangles.empty()) {
-    RTCGeometry mesh = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
-    const std::size_t vertex_count = ground.vertices_m.size() / 3;
-    const std::size_t triangle_count = ground.triangles.size() / 3;
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(mesh, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                                 RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertex_count));
-    auto* triangles = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        mesh, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangle_count));
-    check_device(device.handle(), "allocating the ground mesh");
-    std::memcpy(vertices, ground.vertices_m.data(), ground.vertices_m.size() * sizeof(float));
-    std::memcpy(triangles, ground.triangles.data(), ground.triangles.size() * sizeof(unsigned));
-    rtcCommitGeometry(mesh);
-    rtcAttachGeometry(scene_, mesh);
-    rtcReleaseGeometry(mesh);
+  if (!ground.triangles.empty()) attach_mesh(device.handle(), surfaces_, ground, ground_geometry);
+  if (!vegetation.trunks.triangles.empty()) {
+    attach_mesh(device.handle(), surfaces_, vegetation.trunks, ground_geometry + 1);
+    top_m_ = std::max(top_m_, vegetation.trunks.max_height_m);
   }
-  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
-  rtcCommitScene(scene_);
+  rtcSetSceneFlags(surfaces_, RTC_SCENE_FLAG_ROBUST);
+  rtcCommitScene(surfaces_);
   check_device(device.handle(), "building the scene");
+
+  if (!crowns_.empty()) {
+    crown_scene_ = rtcNewScene(device.handle());
+    RTCGeometry geometry = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(geometry, crowns_.size());
+    rtcSetGeometryUserData(geometry, &crowns_);
+    rtcSetGeometryBoundsFunction(geometry, crown_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(geometry, crown_intersect);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(crown_scene_, geometry);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(crown_scene_);
+    check_device(device.handle(), "building the crowns");
+    for (const Crown& crown : crowns_) top_m_ = std::max(top_m_, crown.base_m[2] + 2.0 * crown.half_height_m);
+  }
+  if (layer_) {
+    // The layer's top plane at the far corners of the ground patch.
+    double reach_m = 0.0;
+    for (std::size_t i = 0; i + 2 < ground.vertices_m.size(); i += 3)
+      reach_m = std::max({reach_m, std::abs(double{ground.vertices_m[i]}), std::abs(double{ground.vertices_m[i + 1]})});
+    top_m_ = std::max(top_m_, layer_->top_m + reach_m * (std::abs(layer_->ground_slope_x) +
+                                                         std::abs(layer_->ground_slope_y)));
+  }
 }
 
-Scene::~Scene() { rtcReleaseScene(scene_); }
+Scene::~Scene() {
+  if (crown_scene_) rtcReleaseScene(crown_scene_);
+  rtcReleaseScene(surfaces_);
+}
 
-SurfaceHit Scene::intersect(const Vec3& origin, const Vec3& direction, double max_distance_m) const {
+namespace {
+
+RTCRay make_ray(const Vec3& origin, const Vec3& direction, double min_distance_m, double max_distance_m) {
+  RTCRay ray{};
+  ray.org_x = static_cast<float>(origin[0]);
+  ray.org_y = static_cast<float>(origin[1]);
+  ray.org_z = static_cast<float>(origin[2]);
+  ray.dir_x = static_cast<float>(direction[0]);
+  ray.dir_y = static_cast<float>(direction[1]);
+  ray.dir_z = static_cast<float>(direction[2]);
+  ray.tnear = static_cast<float>(min_distance_m);
+  ray.tfar = static_cast<float>(max_distance_m);
+  ray.mask = std::numeric_limits<unsigned>::max();
+  return ray;
+}
+
+}  // namespace
+
+SurfaceHit Scene::intersect(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                            double min_distance_m) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit query{};
-  query.ray.org_x = static_cast<float>(origin[0]);
-  query.ray.org_y = static_cast<float>(origin[1]);
-  query.ray.org_z = static_cast<float>(origin[2]);
-  query.ray.dir_x = static_cast<float>(direction[0]);
-  query.ray.dir_y = static_cast<float>(direction[1]);
-  query.ray.dir_z = static_cast<float>(direction[2]);
-  query.ray.tnear = 0.0f;
-  query.ray.tfar = static_cast<float>(max_distance_m);
-  query.ray.mask = std::numeric_limits<unsigned>::max();
+  query.ray = make_ray(origin, direction, min_distance_m, max_distance_m);
   query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(scene_, &context, &query);
+  rtcIntersect1(surfaces_, &context, &query);
 
   SurfaceHit hit;
   if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
-  hit.kind = SurfaceKind::ground;
+  hit.kind = query.hit.geomID == ground_geometry ? SurfaceKind::ground : SurfaceKind::trunk;
   hit.distance_m = query.ray.tfar;
   Vec3 normal = normalized(Vec3{query.hit.Ng_x, query.hit.Ng_y, query.hit.Ng_z});
   if (dot(normal, direction) > 0.0) normal = -1.0 * normal;
   hit.normal = normal;
   return hit;
+}
+
+bool Scene::occluded(const Vec3& origin, const Vec3& direction, double max_distance_m, double min_distance_m) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay ray = make_ray(origin, direction, min_distance_m, max_distance_m);
+  rtcOccluded1(surfaces_, &context, &ray);
+  return ray.tfar < 0.0f;  // Embree marks an occluded ray with tfar = -inf
+}
+
+void Scene::volume_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                         std::vector<VolumeSpan>& spans) const {
+  spans.clear();
+  if (crown_scene_) {
+    SpanCollector collector{};
+    rtcInitIntersectContext(&collector.context);
+    collector.crowns = &crowns_;
+    collector.spans = &spans;
+    collector.origin = origin;
+    collector.direction = direction;
+    RTCRayHit query{};
+    query.ray = make_ray(origin, direction, 0.0, max_distance_m);
+    query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(crown_scene_, &collector.context, &query);
+  }
+  if (layer_) layer_span(*layer_, origin, direction, max_distance_m, spans);
 }
 
 }  // namespace glaswave

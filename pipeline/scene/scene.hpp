@@ -1,10 +1,13 @@
-// The scene of one shot, in its local east-north-up frame, held by Embree in single precision:
-// the ground mesh now, crowns later. Ray origins are placed just above the scene so that
-// float coordinates stay small (PHYSICS.md section 0).
+// The scene of one shot, in its local east-north-up frame: the ground and tree trunks as
+// surfaces, crowns and a homogeneous layer as turbid volumes. Embree holds the geometry in
+// single precision; ray origins are placed just above the scene so that float coordinates stay
+// small (PHYSICS.md section 0).
 #pragma once
 
-#include <memory>
+#include <optional>
+#include <vector>
 
+#include "canopy/crown.hpp"
 #include "terrain/ground_mesh.hpp"
 
 struct RTCDeviceTy;
@@ -25,7 +28,22 @@ class RayDevice {
   RTCDeviceTy* device_;
 };
 
-enum class SurfaceKind { none, ground };
+// A horizontally homogeneous turbid slab (the RAMI HOM case) between two heights above the
+// plane z = ground_slope_x * x + ground_slope_y * y (the footprint's mean ground).
+struct TurbidLayer {
+  double ground_slope_x = 0.0, ground_slope_y = 0.0;
+  double bottom_m = 0.0, top_m = 0.0;
+  double area_density_m2_m3 = 0.0;
+};
+
+// What grows on the ground of one shot.
+struct Vegetation {
+  std::vector<Crown> crowns;
+  GroundMesh trunks;  // bark-covered cylinders, triangulated
+  std::optional<TurbidLayer> layer;
+};
+
+enum class SurfaceKind { none, ground, trunk };
 
 struct SurfaceHit {
   SurfaceKind kind = SurfaceKind::none;
@@ -33,21 +51,40 @@ struct SurfaceHit {
   Vec3 normal{};            // unit, on the side the ray came from
 };
 
+// A stretch [t0, t1] of a ray inside turbid foliage of the given plant area density.
+struct VolumeSpan {
+  double t0 = 0.0, t1 = 0.0;
+  double area_density_m2_m3 = 0.0;
+};
+
 class Scene {
  public:
-  Scene(const RayDevice& device, const GroundMesh& ground);
+  Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation& vegetation = {});
   ~Scene();
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
 
-  // The nearest surface along origin + t * direction for t in (0, max_distance_m].
-  // Thread-safe.
-  SurfaceHit intersect(const Vec3& origin, const Vec3& direction, double max_distance_m) const;
+  // The nearest surface along origin + t * direction for t in (min_distance_m, max_distance_m].
+  SurfaceHit intersect(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                       double min_distance_m = 0.0) const;
 
-  double top_m() const { return top_m_; }  // highest point of any surface, local frame
+  // Whether any surface lies along the ray within (min_distance_m, max_distance_m).
+  bool occluded(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                double min_distance_m) const;
+
+  // Every stretch of the ray inside foliage for t in [0, max_distance_m], in no particular
+  // order; overlapping crowns give overlapping spans. Cleared first.
+  void volume_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                    std::vector<VolumeSpan>& spans) const;
+
+  double top_m() const { return top_m_; }  // highest point of anything, local frame
+  bool has_volumes() const { return !crowns_.empty() || layer_.has_value(); }
 
  private:
-  RTCSceneTy* scene_;
+  RTCSceneTy* surfaces_;
+  RTCSceneTy* crown_scene_ = nullptr;
+  std::vector<Crown> crowns_;
+  std::optional<TurbidLayer> layer_;
   double top_m_;
 };
 

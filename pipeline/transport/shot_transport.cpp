@@ -1,8 +1,11 @@
 // Monte Carlo transport of one shot.
 #include "pipeline/transport/shot_transport.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <optional>
 
 #include <tbb/parallel_for.h>
 
@@ -39,37 +42,205 @@ struct Tally {
   std::int64_t ray_queries = 0;
 };
 
+enum class Vertex { leaf, ground, trunk };
+
+// Where the accumulated optical depth along the ray reaches `target`, within the spans
+// (overlapping spans add their densities); empty if it never does.
+std::optional<double> free_path(std::vector<VolumeSpan>& spans, double projection, double target) {
+  if (spans.empty()) return std::nullopt;
+  // One sweep over span ends: +density where a span starts, -density where it ends.
+  thread_local std::vector<std::pair<double, double>> events;
+  events.clear();
+  for (const VolumeSpan& span : spans) {
+    events.emplace_back(span.t0, span.area_density_m2_m3);
+    events.emplace_back(span.t1, -span.area_density_m2_m3);
+  }
+  std::sort(events.begin(), events.end());
+  double density = 0.0, depth = 0.0, t_previous = events.front().first;
+  for (const auto& [t, change] : events) {
+    const double extinction = density * projection;
+    if (extinction > 0.0 && t > t_previous) {
+      const double step = extinction * (t - t_previous);
+      if (depth + step >= target) return t_previous + (target - depth) / extinction;
+      depth += step;
+    }
+    t_previous = t;
+    density += change;
+  }
+  return std::nullopt;
+}
+
+// Optical depth along a connection ray whose first `shared_m` metres run close to a path
+// already sampled, at separation angle `separation_rad`: over a length l the two paths are
+// l * separation apart, and where that is less than a leaf they see the same gaps, so only a
+// fraction 1 - exp(-l separation / leaf_size) of the foliage there is new (Kuusk's hotspot).
+double connection_depth(const std::vector<VolumeSpan>& spans, double projection, double shared_m,
+                        double separation_rad, double leaf_size_m) {
+  const double rate = leaf_size_m > 0.0 ? separation_rad / leaf_size_m : std::numeric_limits<double>::infinity();
+  double depth = 0.0;
+  for (const VolumeSpan& span : spans) {
+    const double extinction = span.area_density_m2_m3 * projection;
+    const double a = span.t0, b = std::min(span.t1, shared_m);
+    double length = std::max(0.0, span.t1 - std::max(span.t0, shared_m));  // beyond the shared part
+    if (b > a) {
+      if (std::isinf(rate)) length += b - a;
+      else if (rate > 0.0) length += (b - a) - (std::exp(-rate * a) - std::exp(-rate * b)) / rate;
+    }
+    depth += extinction * length;
+  }
+  return depth;
+}
+
+// A direction about `normal`, cosine-weighted.
+Vec3 cosine_direction(const Vec3& normal, double u1, double u2) {
+  const Vec3 helper = std::abs(normal[2]) < 0.9 ? Vec3{0.0, 0.0, 1.0} : Vec3{1.0, 0.0, 0.0};
+  const Vec3 across = normalized(cross(helper, normal));
+  const Vec3 along = cross(normal, across);
+  const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
+  return (r * std::cos(phi)) * across + (r * std::sin(phi)) * along + std::sqrt(std::max(0.0, 1.0 - u1)) * normal;
+}
+
 void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry& geometry,
                  const SceneOptics& optics, const TransportOptions& options, std::int64_t shot_number,
                  std::int64_t first_ray, std::int64_t last_ray, Tally& tally) {
   const BeamSampler beam(lidar, geometry.axis);
   const std::size_t bands = lidar.band_count();
+  const double two_sigma_sq = 2.0 * lidar.beam_sigma_rad() * lidar.beam_sigma_rad();
+  const double range_m = geometry.range_m;
   // Rays start just above the scene, so Embree's float coordinates stay small.
   const double start_height_m = scene.top_m() + 1.0;
+  const bool foliage = scene.has_volumes();
+  constexpr double surface_offset_m = 1e-4;
+  constexpr double far_m = 1.0e5;
+  std::vector<VolumeSpan> spans;
+  std::vector<double> throughput(bands), response(bands);
+  auto angle_from_axis = [&](const Vec3& d) { return std::atan2(norm(cross(d, geometry.axis)), dot(d, geometry.axis)); };
+
   for (std::int64_t ray = first_ray; ray < last_ray; ++ray) {
     RayRandom random(options.seed, shot_number, ray);
+    auto uniform = [&random] { return random.uniform(); };
     const double u1 = random.uniform(), u2 = random.uniform();
-    const Vec3 direction = beam.direction(u1, u2);
-    const double start_m = (geometry.sensor_m[2] - start_height_m) / -direction[2];
-    const Vec3 origin = geometry.sensor_m + start_m * direction;
-    const SurfaceHit hit = scene.intersect(origin, direction, 1.0e5);
-    ++tally.ray_queries;
-    if (hit.kind == SurfaceKind::none) continue;
+    const Vec3 first_direction = beam.direction(u1, u2);
+    const double start_m = (geometry.sensor_m[2] - start_height_m) / -first_direction[2];
+    const double first_angle_sq = std::pow(angle_from_axis(first_direction), 2);
 
-    // The way back to the detector is the way in (a monostatic lidar): the return leaves the
-    // surface at the same angle the light arrived, and travels the same path.
-    const double path_m = start_m + hit.distance_m;
-    const double cos_exit = dot(hit.normal, -1.0 * direction);
-    const double spread = (geometry.range_m / path_m) * (geometry.range_m / path_m);
-    const double time_ns = 2.0 * (path_m - geometry.range_m) / speed_of_light_m_s * 1e9;
-    const int bin = lidar.tally_index(time_ns);
-    if (bin < 0) continue;
-    for (std::size_t band = 0; band < bands; ++band) {
-      const double weight = optics.soil_reflectance[band] * cos_exit * spread;
-      const std::size_t at = band * tally.size + bin;
-      tally.total[at] += weight;
-      tally.ground[at] += weight;
-      if (tally.orders > 0) tally.order[(band * tally.orders + 0) * tally.size + bin] += weight;
+    Vec3 position = geometry.sensor_m + start_m * first_direction;
+    Vec3 direction = first_direction;
+    double path_m = start_m;  // from the detector to `position` along the path
+    double min_distance_m = 0.0;
+    std::fill(throughput.begin(), throughput.end(), 1.0);
+    bool canopy_return = false;
+
+    for (int order = 1; order <= options.max_order; ++order) {
+      // The next interaction: foliage by free-path sampling, but never beyond the nearest surface.
+      const SurfaceHit hit = scene.intersect(position, direction, far_m, min_distance_m);
+      ++tally.ray_queries;
+      std::optional<double> leaf_m;
+      if (foliage) {
+        scene.volume_spans(position, direction, hit.kind == SurfaceKind::none ? far_m : hit.distance_m, spans);
+        ++tally.ray_queries;
+        leaf_m = free_path(spans, optics.leaf_angles->projection(direction[2]), -std::log1p(-random.uniform()));
+      }
+      if (!leaf_m && hit.kind == SurfaceKind::none) break;  // left the scene
+      const Vertex vertex = leaf_m ? Vertex::leaf : hit.kind == SurfaceKind::ground ? Vertex::ground : Vertex::trunk;
+      const double segment_m = leaf_m ? *leaf_m : hit.distance_m;
+      const Vec3 point = position + segment_m * direction;
+      path_m += segment_m;
+      if (order == 1) canopy_return = vertex != Vertex::ground;
+
+      // The element met: a leaf normal drawn for this direction, or the surface's.
+      const Vec3 normal = leaf_m ? optics.leaf_angles->sample_normal(direction, uniform) : hit.normal;
+
+      // Direct laser light at the point, scored toward the detector. The laser sits with the
+      // detector: at the first interaction its light comes down the very path sampled, and with
+      // finite leaves it finds the same gaps (the hotspot, PHYSICS.md section 3).
+      const Vec3 to_laser = geometry.sensor_m - point;
+      const double laser_m = norm(to_laser);
+      const Vec3 up_to_laser = (1.0 / laser_m) * to_laser;
+      const Vec3 laser_light = -1.0 * up_to_laser;  // travel direction of the laser's light
+      double transmission = 1.0, beam_ratio = 1.0;
+      if (order > 1) {
+        // Surfaces between the point and the laser block it.
+        const double exit_m = (start_height_m - point[2]) / up_to_laser[2];
+        if (scene.occluded(point, up_to_laser, exit_m, surface_offset_m)) transmission = 0.0;
+        ++tally.ray_queries;
+        // The beam's irradiance here, relative to that of the ray's first direction, which the
+        // detector rays were sampled by.
+        beam_ratio = std::exp((first_angle_sq - std::pow(angle_from_axis(laser_light), 2)) / two_sigma_sq);
+      }
+      if (foliage && transmission > 0.0 && (order > 1 || optics.leaf_size_m == 0.0)) {
+        const double exit_m = (start_height_m - point[2]) / up_to_laser[2];
+        scene.volume_spans(point, up_to_laser, exit_m, spans);
+        ++tally.ray_queries;
+        // The connection runs beside the segment just sampled (traced back from the point).
+        const double separation_rad = std::acos(std::clamp(dot(up_to_laser, -1.0 * direction), -1.0, 1.0));
+        const double shared_m = order == 1 ? std::numeric_limits<double>::infinity() : segment_m;
+        transmission *= std::exp(-connection_depth(spans, optics.leaf_angles->projection(up_to_laser[2]), shared_m,
+                                                   order == 1 ? 0.0 : separation_rad, optics.leaf_size_m));
+      }
+      if (transmission > 0.0) {
+        const double scale = transmission * beam_ratio * (range_m / laser_m) * (range_m / laser_m);
+        const double time_ns = (laser_m + path_m - 2.0 * range_m) / speed_of_light_m_s * 1e9;
+        const int bin = lidar.tally_index(time_ns);
+        const Vec3 toward_detector = -1.0 * direction;
+        for (std::size_t band = 0; band < bands; ++band) {
+          double element = 0.0;
+          if (vertex == Vertex::leaf) {
+            element = bilambertian_response(normal, laser_light, toward_detector, optics.foliage_reflectance[band],
+                                            optics.foliage_transmittance[band]);
+          } else {
+            const double reflectance =
+                vertex == Vertex::ground ? optics.soil_reflectance[band] : optics.trunk_reflectance[band];
+            element = reflectance * std::max(0.0, dot(normal, up_to_laser));
+          }
+          response[band] = throughput[band] * element * scale;
+        }
+        if (bin >= 0) {
+          for (std::size_t band = 0; band < bands; ++band) {
+            const std::size_t at = band * tally.size + bin;
+            tally.total[at] += response[band];
+            (canopy_return ? tally.canopy : tally.ground)[at] += response[band];
+            if (order <= tally.orders) tally.order[(band * tally.orders + order - 1) * tally.size + bin] += response[band];
+          }
+        }
+      }
+      if (order == options.max_order) break;
+
+      // The diffuse light: where the light scattered here toward the detector came from.
+      const Vec3 back = -1.0 * direction;  // the side the path arrived from
+      if (vertex == Vertex::leaf) {
+        // Reflection sends the path back to the side it came from, transmission through.
+        double reflected = 0.0, transmitted = 0.0;
+        for (std::size_t band = 0; band < bands; ++band) {
+          reflected += throughput[band] * optics.foliage_reflectance[band];
+          transmitted += throughput[band] * optics.foliage_transmittance[band];
+        }
+        if (reflected + transmitted <= 0.0) break;
+        const double p_reflect = reflected / (reflected + transmitted);
+        const bool reflect = random.uniform() < p_reflect;
+        const Vec3 facing = dot(normal, back) >= 0.0 ? normal : -1.0 * normal;
+        const double v1 = random.uniform(), v2 = random.uniform();
+        direction = cosine_direction(reflect ? facing : -1.0 * facing, v1, v2);
+        for (std::size_t band = 0; band < bands; ++band)
+          throughput[band] *= reflect ? optics.foliage_reflectance[band] / p_reflect
+                                      : optics.foliage_transmittance[band] / (1.0 - p_reflect);
+        position = point;
+        min_distance_m = 0.0;
+      } else {
+        const double v1 = random.uniform(), v2 = random.uniform();
+        direction = cosine_direction(normal, v1, v2);
+        for (std::size_t band = 0; band < bands; ++band)
+          throughput[band] *= vertex == Vertex::ground ? optics.soil_reflectance[band] : optics.trunk_reflectance[band];
+        position = point;
+        min_distance_m = surface_offset_m;
+      }
+      // Russian roulette on faint paths keeps the estimate unbiased and the work bounded.
+      const double strongest = *std::max_element(throughput.begin(), throughput.end());
+      if (strongest <= 0.0) break;
+      if (strongest < 0.05) {
+        if (random.uniform() >= 0.5) break;
+        for (double& weight : throughput) weight *= 2.0;
+      }
     }
   }
 }

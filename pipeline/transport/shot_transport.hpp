@@ -1,12 +1,15 @@
 // The seed's backward Monte Carlo for one shot (section 2.3): rays sampled over the field of
-// view, each ray's first surface, its return toward the detector scored with its two-way path
-// length, binned in time, converted to power and convolved with the pulse. All bands in one
-// pass, one weight per band.
+// view; at each interaction along a ray (a leaf or bark element met by free-path sampling in
+// turbid foliage, or a surface found by Embree) the direct laser illumination is scored toward
+// the detector with the path's total length, and the diffuse light is followed by sampling the
+// next scattering, up to max_order. Scores are binned in time, converted to power and
+// convolved with the pulse. All bands in one pass, one weight per band.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
+#include "canopy/leaf_angles.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"
@@ -20,9 +23,19 @@ struct ShotGeometry {
   double range_m = 0.0;  // to the footprint centre: times are relative to 2 * range_m / c
 };
 
-// Optical properties of the scene's surfaces, one value per band.
+// Optical properties of the scene, one value per band.
 struct SceneOptics {
-  std::vector<double> soil_reflectance;
+  std::vector<double> soil_reflectance;  // Lambertian
+  std::vector<double> trunk_reflectance;  // Lambertian bark
+  // Foliage elements, plant-area weighted: leaves are bi-Lambertian, bark inside crowns is
+  // Lambertian and opaque, so reflectance = f_green rho_leaf + f_bark rho_bark and
+  // transmittance = f_green tau_leaf.
+  std::vector<double> foliage_reflectance;
+  std::vector<double> foliage_transmittance;
+  const LeafAngles* leaf_angles = nullptr;  // needed when the scene has foliage
+  // Leaf size: paths in and out that run within a leaf's width of each other see the same
+  // gaps (the hotspot); 0 is the point-leaf turbid limit.
+  double leaf_size_m = 0.0;
 };
 
 // The received signal of one shot: [band][bin] power (W) and [band] energy (J).

@@ -102,7 +102,8 @@ TEST(ShotTransport, SameBitsForAnyThreadCount) {
   geometry.sensor_m = {0.0, 0.0, 600000.0};
   geometry.axis = {0.0, 0.0, -1.0};
   geometry.range_m = 600000.0;
-  const SceneOptics optics{{0.15, 0.3}};
+  SceneOptics optics;
+  optics.soil_reflectance = {0.15, 0.3};
   TransportOptions options;
   options.rays = 20000;
   auto run = [&](int threads) {
@@ -114,7 +115,8 @@ TEST(ShotTransport, SameBitsForAnyThreadCount) {
   const ShotWaveforms one = run(1), two = run(2);
   EXPECT_EQ(one.total_W, two.total_W);
   EXPECT_EQ(one.energy_J, two.energy_J);
-  EXPECT_EQ(one.ray_queries, 20000);
+  EXPECT_EQ(one.ray_queries, two.ray_queries);
+  EXPECT_GE(one.ray_queries, 20000);
   // Another shot number is another sample.
   const ShotWaveforms other = simulate_shot(scene, lidar, geometry, optics, options, 12);
   EXPECT_NE(one.total_W, other.total_W);

@@ -1,0 +1,29 @@
+// Crowns: envelopes of turbid foliage (the seed's section 2.1), in a shot's local frame, and
+// where a ray crosses them.
+#pragma once
+
+#include <optional>
+#include <utility>
+
+#include "canopy/canopy_settings.hpp"
+#include "terrain/local_frame.hpp"
+
+namespace glaswave {
+
+struct Crown {
+  CrownShape shape = CrownShape::ellipsoid;  // ellipsoid or cone
+  Vec3 base_m{};                             // centre of the crown's bottom, local frame
+  double radius_m = 0.0;                     // horizontal radius (a cone's at its base)
+  double half_height_m = 0.0;                // the crown is 2 * half_height_m tall
+  double area_density_m2_m3 = 0.0;           // one-sided plant area per unit volume
+};
+
+// Volume of a crown's envelope (m^3).
+double crown_volume_m3(CrownShape shape, double radius_m, double half_height_m);
+
+// The parameter interval [t_in, t_out] where origin + t * direction is inside the crown, or
+// nothing when the line misses it. t_in may be negative when the origin is inside.
+std::optional<std::pair<double, double>> crown_interval(const Crown& crown, const Vec3& origin,
+                                                        const Vec3& direction);
+
+}  // namespace glaswave

@@ -1,0 +1,87 @@
+// Deterministic random stands, tile by tile.
+#include "canopy/stand.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include <pcg_random.hpp>
+
+#include "canopy/crown.hpp"
+#include "terrain/error.hpp"
+
+namespace glaswave {
+namespace {
+
+constexpr double pi = std::numbers::pi;
+constexpr double tile_m = 50.0;
+constexpr double wgs84_a_m = 6378137.0;
+constexpr double wgs84_e2 = 6.69437999014e-3;
+constexpr double metres_per_degree = 111132.954;  // along the meridian, mean
+
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+double uniform(pcg32& engine) {
+  return (static_cast<double>(engine() >> 5) * 67108864.0 + (engine() >> 6)) * 0x1.0p-53;
+}
+
+}  // namespace
+
+Stand::Stand(const CanopySettings& canopy, std::uint64_t seed) : canopy_(canopy), seed_(seed) {
+  const double crown_area_m2 = pi * canopy.crown_radius_m * canopy.crown_radius_m;
+  if (canopy.cover >= 1.0)
+    throw config_error("/canopy/cover", "must be < 1 for randomly placed crowns (use crown_shape \"layer\")");
+  trees_per_m2_ = -std::log1p(-canopy.cover) / crown_area_m2;
+  const double volume_m3 = crown_volume_m3(canopy.crown_shape, canopy.crown_radius_m, canopy.crown_half_height_m);
+  area_density_m2_m3_ = trees_per_m2_ > 0.0 ? canopy.pai / (trees_per_m2_ * volume_m3) : 0.0;
+}
+
+std::vector<Tree> Stand::trees_near(double lat_deg, double lon_deg, double radius_m) const {
+  std::vector<Tree> trees;
+  if (trees_per_m2_ <= 0.0) return trees;
+  const double deg = pi / 180.0;
+  const double tile_lat_deg = tile_m / metres_per_degree;
+  const double reach_lat_deg = radius_m / metres_per_degree + tile_lat_deg;
+  const auto row_first = static_cast<std::int64_t>(std::floor((lat_deg - reach_lat_deg) / tile_lat_deg));
+  const auto row_last = static_cast<std::int64_t>(std::floor((lat_deg + reach_lat_deg) / tile_lat_deg));
+  for (std::int64_t row = row_first; row <= row_last; ++row) {
+    const double row_lat_deg = (row + 0.5) * tile_lat_deg;
+    const double cos_lat = std::max(std::cos(row_lat_deg * deg), 1e-3);
+    const double tile_lon_deg = tile_lat_deg / cos_lat;
+    const double reach_lon_deg = radius_m / (metres_per_degree * cos_lat) + tile_lon_deg;
+    // The tile's true area, from the ellipsoid's radii of curvature at its centre.
+    const double s2 = std::sin(row_lat_deg * deg) * std::sin(row_lat_deg * deg);
+    const double meridian_m = wgs84_a_m * (1.0 - wgs84_e2) / std::pow(1.0 - wgs84_e2 * s2, 1.5);
+    const double normal_m = wgs84_a_m / std::sqrt(1.0 - wgs84_e2 * s2);
+    const double tile_area_m2 = meridian_m * tile_lat_deg * deg * normal_m * cos_lat * tile_lon_deg * deg;
+    const auto col_first = static_cast<std::int64_t>(std::floor((lon_deg - reach_lon_deg) / tile_lon_deg));
+    const auto col_last = static_cast<std::int64_t>(std::floor((lon_deg + reach_lon_deg) / tile_lon_deg));
+    for (std::int64_t col = col_first; col <= col_last; ++col) {
+      pcg32 engine(mix(seed_ ^ mix(static_cast<std::uint64_t>(row))), mix(static_cast<std::uint64_t>(col) + seed_));
+      // Poisson number of trees by inversion.
+      const double mean = trees_per_m2_ * tile_area_m2;
+      double term = std::exp(-mean), cumulative = term;
+      const double u = uniform(engine);
+      int count = 0;
+      while (u > cumulative && count < 100000) {
+        ++count;
+        term *= mean / count;
+        cumulative += term;
+      }
+      for (int i = 0; i < count; ++i) {
+        Tree tree;
+        tree.lat_deg = (row + uniform(engine)) * tile_lat_deg;
+        tree.lon_deg = (col + uniform(engine)) * tile_lon_deg;
+        tree.crown_base_m = canopy_.crown_base_m[0] + uniform(engine) * (canopy_.crown_base_m[1] - canopy_.crown_base_m[0]);
+        trees.push_back(tree);
+      }
+    }
+  }
+  return trees;
+}
+
+}  // namespace glaswave

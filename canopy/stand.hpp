@@ -1,0 +1,39 @@
+// A stand of trees placed at random at the target crown cover, deterministically by location:
+// the ground is cut into tiles of about 50 m and each tile's trees come from a random stream
+// keyed by (seed, tile), so the same tree is in the same place for every shot that sees it and
+// a long track never builds the whole forest.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "canopy/canopy_settings.hpp"
+
+namespace glaswave {
+
+struct Tree {
+  double lat_deg = 0.0;
+  double lon_deg = 0.0;
+  double crown_base_m = 0.0;  // height of the crown's bottom above the terrain under the stem
+};
+
+class Stand {
+ public:
+  Stand(const CanopySettings& canopy, std::uint64_t seed);
+
+  // Trees whose stems stand within `radius_m` of a point (a few tiles more may come back).
+  std::vector<Tree> trees_near(double lat_deg, double lon_deg, double radius_m) const;
+
+  // Poisson density that gives the crown cover: 1 - exp(-n pi r^2) = cover.
+  double trees_per_m2() const { return trees_per_m2_; }
+  // Plant area per unit crown volume that gives the scene's PAI.
+  double area_density_m2_m3() const { return area_density_m2_m3_; }
+
+ private:
+  CanopySettings canopy_;
+  std::uint64_t seed_;
+  double trees_per_m2_;
+  double area_density_m2_m3_;
+};
+
+}  // namespace glaswave

@@ -1,0 +1,140 @@
+// PHYSICS.md sections 3, 4 and 6 for vegetation: a homogeneous turbid layer (the RAMI HOM case)
+// against its closed-form single scattering, the omega^k scaling of scattering orders, the
+// n^-1/2 error law, and the seed's base-case forest. Expected values are computed here.
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "footprints/track.hpp"
+#include "pipeline/app/shot_simulation.hpp"
+
+namespace glaswave {
+namespace {
+
+constexpr double pi = std::numbers::pi;
+constexpr double c_m_s = 299792458.0;
+
+// A nadir shot over a layer of PAI `pai` and depth 10 m sitting on level soil.
+nlohmann::json layer_shot(double pai, double leaf_size_m, double rho, double tau, double soil, int max_order,
+                          std::int64_t rays) {
+  return {
+      {"seed", 5},
+      {"sensor", {{"preset", "north2010"}, {"bands", {{{"name", "1064"}, {"wavelength_nm", 1064}, {"pulse_energy_mJ", 72},
+                                                         {"atmos_transmission_roundtrip", 0.9}}}}}},
+      {"simulation", {{"rays_per_shot", rays}, {"max_order", max_order}}},
+      {"terrain", {{"plane", {{"elevation_m", 0.0}}}, {"soil_reflectance", soil}}},
+      {"canopy",
+       {{"crown_shape", "layer"}, {"pai", pai}, {"lad", "spherical"}, {"crown_base_m", {0.0, 0.0}},
+        {"crown_half_height_m", 5.0}, {"green_fraction", 1.0}, {"bark_fraction", 0.0}, {"leaf_size_m", leaf_size_m},
+        {"leaf_reflectance", rho}, {"leaf_transmittance", tau}, {"dbh_m", 0.0}}},
+      {"track", {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}}},
+      {"output", {{"netcdf", false}, {"geojson", false}, {"per_order", true}}},
+  };
+}
+
+struct Simulated {
+  ShotRecord record;
+  std::vector<double> bin_time_ns;
+  double normalisation_J;  // E_t T A_T f_fov / (pi R^2): a Lambertian reflectance of 1 at nadir
+};
+
+Simulated simulate(const nlohmann::json& document) {
+  const Config config = parse_config(document);
+  const auto terrain = make_terrain(config.terrain);
+  const auto footprints = plan_track(config.track, *terrain, 0, 1);
+  const ShotSimulator simulator(config, *terrain);
+  const SensorSettings& s = config.sensor;
+  const double f_fov = 1.0 - std::exp(-s.ifov_rad * s.ifov_rad / (8.0 * s.divergence_sigma_rad * s.divergence_sigma_rad));
+  const double range_m = footprints.at(0).range_m;
+  const Band& band = s.bands.at(0);
+  const double normalisation_J = band.pulse_energy_mJ * 1e-3 * band.atmos_transmission_roundtrip *
+                                 s.telescope_area_m2 * f_fov / (pi * range_m * range_m);
+  return {simulator.simulate(footprints.at(0)), simulator.lidar().bin_time_ns(), normalisation_J};
+}
+
+// PHYSICS.md section 3, single scattering of a layer with L = 3, rho = 0.45, rho_s = 0.3:
+// point leaves (rho/3)(1 - e^-L) and rho_s e^-L; finite leaves (2 rho/3)(1 - e^-L/2) and
+// rho_s e^-L/2 (the hotspot). To 2 %.
+TEST(TurbidLayer, SingleScatteringMatchesClosedForms) {
+  const double L = 3.0, rho = 0.45, soil = 0.3;
+  struct Case {
+    double leaf_size_m, canopy, ground;
+  };
+  const Case cases[] = {
+      {0.0, rho / 3.0 * (1.0 - std::exp(-L)), soil * std::exp(-L)},
+      {0.05, 2.0 * rho / 3.0 * (1.0 - std::exp(-L / 2.0)), soil * std::exp(-L / 2.0)},
+  };
+  EXPECT_NEAR(cases[0].canopy, 0.1425, 1e-4);  // the values PHYSICS.md quotes
+  EXPECT_NEAR(cases[0].ground, 0.01494, 1e-5);
+  EXPECT_NEAR(cases[1].canopy, 0.2331, 1e-4);
+  EXPECT_NEAR(cases[1].ground, 0.06694, 1e-5);
+  for (const Case& c : cases) {
+    const Simulated shot = simulate(layer_shot(L, c.leaf_size_m, rho, 0.45, soil, 1, 40000));
+    const double canopy = shot.record.rx_energy_canopy_J[0] / shot.normalisation_J;
+    const double ground = shot.record.rx_energy_ground_J[0] / shot.normalisation_J;
+    EXPECT_NEAR(canopy / c.canopy, 1.0, 0.02) << "leaf size " << c.leaf_size_m;
+    EXPECT_NEAR(ground / c.ground, 1.0, 0.02) << "leaf size " << c.leaf_size_m;
+  }
+}
+
+// The single-scattering canopy return per unit depth z below the top: (u rho / 3) e^(-u z / 2)
+// with the hotspot, (u rho / 3) e^(-u z) for point leaves (u = L / H). With a short pulse, the
+// energy in each third of the layer's depth against the integral of that law.
+TEST(TurbidLayer, CanopyReturnFollowsItsExponentialLawWithDepth) {
+  const double L = 3.0, rho = 0.45, depth_m = 10.0, u = L / depth_m;
+  for (double leaf_size_m : {0.0, 0.05}) {
+    const double k = leaf_size_m > 0.0 ? u / 2.0 : u;  // attenuation per metre of depth
+    nlohmann::json document = layer_shot(L, leaf_size_m, rho, 0.45, 0.0, 1, 40000);
+    document["sensor"]["pulse_sigma_ns"] = 0.05;
+    const Simulated shot = simulate(document);
+    const auto& waveform = shot.record.rx_waveform_canopy_W[0];
+    double simulated[3] = {0, 0, 0}, expected[3] = {0, 0, 0};
+    for (std::size_t i = 0; i < waveform.size(); ++i) {
+      // Bin i covers heights c (t +- 0.5 ns) / 2 above the ground; depth below the top.
+      const double z0 = depth_m + c_m_s * (shot.bin_time_ns[i] - 0.5) * 1e-9 / 2.0;
+      const double z1 = depth_m + c_m_s * (shot.bin_time_ns[i] + 0.5) * 1e-9 / 2.0;
+      const double a = std::clamp(z0, 0.0, depth_m), b = std::clamp(z1, 0.0, depth_m);
+      if (b <= a) continue;
+      const int third = std::min(2, static_cast<int>(3.0 * (0.5 * (a + b)) / depth_m));
+      simulated[third] += waveform[i] * 1e-9 / shot.normalisation_J;
+      expected[third] += u * rho / 3.0 / k * (std::exp(-k * a) - std::exp(-k * b));
+    }
+    for (int third = 0; third < 3; ++third)
+      EXPECT_NEAR(simulated[third] / expected[third], 1.0, 0.03) << "leaf size " << leaf_size_m << ", third " << third;
+  }
+}
+
+// PHYSICS.md section 4: over black soil with rho : tau fixed, the energy of scattering order k
+// scales as omega^k. One run per omega, to 3 %.
+TEST(TurbidLayer, OrderEnergiesScaleAsOmegaToTheK) {
+  const Simulated white = simulate(layer_shot(3.0, 0.05, 0.5, 0.5, 0.0, 5, 20000));
+  const Simulated grey = simulate(layer_shot(3.0, 0.05, 0.3, 0.3, 0.0, 5, 20000));
+  for (int k = 1; k <= 5; ++k) {
+    double white_J = 0, grey_J = 0;
+    for (double p : white.record.rx_waveform_order_W[0][k - 1]) white_J += p;
+    for (double p : grey.record.rx_waveform_order_W[0][k - 1]) grey_J += p;
+    ASSERT_GT(white_J, 0.0) << k;
+    EXPECT_NEAR(grey_J / white_J / std::pow(0.6, k), 1.0, 0.03) << "order " << k;
+  }
+}
+
+// Per-order waveforms do not change with max_order (PHYSICS.md section 8), and the orders add
+// up to the total.
+TEST(TurbidLayer, OrdersDoNotDependOnMaxOrderAndSumToTheTotal) {
+  const Simulated three = simulate(layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 3, 5000));
+  const Simulated eight = simulate(layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 8, 5000));
+  for (int k = 0; k < 3; ++k) {
+    const auto& a = three.record.rx_waveform_order_W[0][k];
+    const auto& b = eight.record.rx_waveform_order_W[0][k];
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-9 * (std::abs(a[i]) + 1e-30)) << k;
+  }
+  double total = 0, orders = 0;
+  for (double p : eight.record.rx_waveform_W[0]) total += p;
+  for (const auto& order : eight.record.rx_waveform_order_W[0])
+    for (double p : order) orders += p;
+  EXPECT_NEAR(orders / total, 1.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace glaswave
