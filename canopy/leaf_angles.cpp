@@ -15,8 +15,9 @@ constexpr int projection_steps = 128;
 
 LeafAngles::LeafAngles(LeafAngleDistribution distribution, double mean_deg) : distribution_(distribution) {
   if (distribution == LeafAngleDistribution::ellipsoidal) {
-    // Campbell (1990): the ellipsoid's axis ratio from the mean leaf inclination.
-    campbell_chi_ = -3.0 + std::pow(mean_deg / 9.65, -0.6061);
+    // Campbell (1990): the ellipsoid's axis ratio from the mean leaf inclination in radians,
+    // inverting mean = 9.65 (3 + chi)^-1.65.
+    campbell_chi_ = -3.0 + std::pow(mean_deg * pi / 180.0 / 9.65, -0.6061);
   }
   // Cumulative distribution of the inclination by the midpoint rule, normalised numerically so
   // that every distribution integrates to exactly one.

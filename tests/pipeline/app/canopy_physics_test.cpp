@@ -136,5 +136,77 @@ TEST(TurbidLayer, OrdersDoNotDependOnMaxOrderAndSumToTheTotal) {
   EXPECT_NEAR(orders / total, 1.0, 1e-9);
 }
 
+// PHYSICS.md section 6: the error falls as n^-1/2. The RMS difference of the waveform from a
+// reference run of 256 times the rays, for n, 4n and 16n rays (several seeds each): the slope
+// on a log-log plot is -0.5 +- 0.05. A layer, so that the scene does not change with the seed.
+TEST(TurbidLayer, ErrorFallsAsTheInverseSquareRootOfTheRays) {
+  auto waveform = [](std::int64_t rays, int seed) {
+    nlohmann::json document = layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 8, rays);
+    document["seed"] = seed;
+    return simulate(document).record.rx_waveform_W[0];
+  };
+  const std::vector<double> reference = waveform(160000, 1000);
+  std::vector<double> log_n, log_rms;
+  for (std::int64_t rays : {625, 2500, 10000}) {
+    double squares = 0;
+    int count = 0;
+    for (int seed = 1; seed <= 6; ++seed) {
+      const std::vector<double> w = waveform(rays, seed);
+      for (std::size_t i = 0; i < w.size(); ++i, ++count) squares += (w[i] - reference[i]) * (w[i] - reference[i]);
+    }
+    log_n.push_back(std::log(static_cast<double>(rays)));
+    log_rms.push_back(0.5 * std::log(squares / count));
+  }
+  // Least-squares slope through the three points.
+  const double mean_x = (log_n[0] + log_n[1] + log_n[2]) / 3, mean_y = (log_rms[0] + log_rms[1] + log_rms[2]) / 3;
+  double sxy = 0, sxx = 0;
+  for (int i = 0; i < 3; ++i) {
+    sxy += (log_n[i] - mean_x) * (log_rms[i] - mean_y);
+    sxx += (log_n[i] - mean_x) * (log_n[i] - mean_x);
+  }
+  EXPECT_NEAR(sxy / sxx, -0.5, 0.05);
+}
+
+// The seed's base case (Tables 1 and 2): a two-peaked waveform, the canopy's single scattering
+// from the crowns' heights (bases 15-20 m, 16 m tall: 15-36 m) and the ground return at the
+// ground. (Multiple scattering travels further and shows below the crowns.)
+TEST(BaseForest, TwoPeaksWithTheCanopyAboveTheGround) {
+  nlohmann::json document = {
+      {"seed", 1},
+      {"sensor", {{"preset", "north2010"}}},
+      {"terrain", {{"plane", {{"origin_lat_deg", 45.0}, {"origin_lon_deg", 7.0}}}}},
+      {"canopy", nlohmann::json::object()},  // Table 1's defaults
+      {"track", {{"type", "points"}, {"points", {{{"lat_deg", 45.0}, {"lon_deg", 7.0}}}}}},
+  };
+  const Simulated shot = simulate(document);
+  document["simulation"]["max_order"] = 1;
+  const Simulated single = simulate(document);
+  const auto& total = shot.record.rx_waveform_W[1];
+  const auto& canopy = single.record.rx_waveform_canopy_W[1];
+  const auto& ground = shot.record.rx_waveform_ground_W[1];
+  auto height_m = [&](std::size_t i) { return -c_m_s * shot.bin_time_ns[i] * 1e-9 / 2.0; };
+  double canopy_sum = 0, canopy_inside = 0, ground_sum = 0, ground_moment = 0;
+  for (std::size_t i = 0; i < total.size(); ++i) {
+    canopy_sum += canopy[i];
+    // The pulse spreads returns by 0.75 m RMS: allow 3 of them about the crowns' span.
+    if (height_m(i) > 15.0 - 2.25 && height_m(i) < 36.0 + 2.25) canopy_inside += canopy[i];
+    ground_sum += ground[i];
+    ground_moment += ground[i] * height_m(i);
+  }
+  EXPECT_GT(canopy_inside / canopy_sum, 0.97);
+  EXPECT_NEAR(ground_moment / ground_sum, 0.0, 1.0);
+  // Peaks: the highest bin among the crowns and among the ground, and a dip between them.
+  double canopy_peak = 0, ground_peak = 0, dip = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < total.size(); ++i) {
+    const double h = height_m(i);
+    if (h > 15.0 && h < 36.0) canopy_peak = std::max(canopy_peak, total[i]);
+    if (std::abs(h) < 2.0) ground_peak = std::max(ground_peak, total[i]);
+    if (h > 4.0 && h < 12.0) dip = std::min(dip, total[i]);
+  }
+  EXPECT_LT(dip, 0.5 * canopy_peak);
+  EXPECT_LT(dip, 0.5 * ground_peak);
+  EXPECT_GT(canopy_sum, ground_sum);  // 70 % cover, PAI 3: mostly canopy return
+}
+
 }  // namespace
 }  // namespace glaswave
