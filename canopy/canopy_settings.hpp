@@ -20,6 +20,8 @@ enum class LeafAngleDistribution {
 
 enum class CrownShape { ellipsoid, cone, layer };
 
+struct StandArea;
+
 struct CanopySettings {
   double pai = 3.0;  // one-sided plant area (leaves and bark) per unit ground area of the scene
   LeafAngleDistribution lad = LeafAngleDistribution::spherical;
@@ -38,6 +40,14 @@ struct CanopySettings {
   std::vector<double> bark_reflectance;    // one value per sensor band
   std::string crowns_file;                 // optional CSV of explicit crowns
   std::string stands;                      // optional GeoJSON of stands
+  std::vector<StandArea> stand_areas;      // the stands file's polygons, read by pipeline/config
+};
+
+// A stand: polygons (lon, lat rings; a point is inside when an odd number of rings hold it, so
+// holes work) where the canopy differs from the scene's.
+struct StandArea {
+  std::vector<std::vector<std::array<double, 2>>> rings;
+  CanopySettings canopy;  // the scene's canopy with the stand's properties applied
 };
 
 }  // namespace glaswave

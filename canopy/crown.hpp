@@ -16,6 +16,7 @@ struct Crown {
   double radius_m = 0.0;                     // horizontal radius (a cone's at its base)
   double half_height_m = 0.0;                // the crown is 2 * half_height_m tall
   double area_density_m2_m3 = 0.0;           // one-sided plant area per unit volume
+  int material = 0;                          // which foliage (stand) it is made of
 };
 
 // Volume of a crown's envelope (m^3).

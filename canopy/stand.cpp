@@ -77,6 +77,8 @@ std::vector<Tree> Stand::trees_near(double lat_deg, double lon_deg, double radiu
         tree.lat_deg = (row + uniform(engine)) * tile_lat_deg;
         tree.lon_deg = (col + uniform(engine)) * tile_lon_deg;
         tree.crown_base_m = canopy_.crown_base_m[0] + uniform(engine) * (canopy_.crown_base_m[1] - canopy_.crown_base_m[0]);
+        tree.crown_radius_m = canopy_.crown_radius_m;
+        tree.crown_half_height_m = canopy_.crown_half_height_m;
         trees.push_back(tree);
       }
     }

@@ -15,6 +15,9 @@ struct Tree {
   double lat_deg = 0.0;
   double lon_deg = 0.0;
   double crown_base_m = 0.0;  // height of the crown's bottom above the terrain under the stem
+  double crown_radius_m = 0.0;
+  double crown_half_height_m = 0.0;
+  int kind = 0;  // which foliage it bears (Forest's kinds)
 };
 
 class Stand {

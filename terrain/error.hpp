@@ -19,15 +19,18 @@ class Error : public std::runtime_error {
   Error(ErrorKind kind, std::string place, const std::string& message)
       : std::runtime_error(place.empty() ? message : place + ": " + message),
         kind_(kind),
-        place_(std::move(place)) {}
+        place_(std::move(place)),
+        message_(message) {}
 
   ErrorKind kind() const { return kind_; }
   const std::string& place() const { return place_; }
+  const std::string& message() const { return message_; }  // what() without the place
   int exit_status() const { return static_cast<int>(kind_); }
 
  private:
   ErrorKind kind_;
   std::string place_;
+  std::string message_;
 };
 
 inline Error config_error(std::string place, const std::string& message) {

@@ -8,7 +8,6 @@
 
 #include "pipeline/scene/vegetation.hpp"
 #include "pipeline/transport/shot_transport.hpp"
-#include "terrain/error.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
@@ -66,14 +65,7 @@ std::vector<std::array<double, 2>> beam_outline(const Scene& scene, const LidarM
 
 ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
     : config_(config), terrain_(terrain), lidar_(config.sensor) {
-  if (config.canopy) {
-    const CanopySettings& canopy = *config.canopy;
-    if (!canopy.crowns_file.empty())
-      throw config_error("/canopy/crowns_file", "explicit crowns are not available in this version yet");
-    if (!canopy.stands.empty()) throw config_error("/canopy/stands", "stands are not available in this version yet");
-    leaf_angles_.emplace(canopy.lad, canopy.lad_mean_deg);
-    stand_.emplace(canopy, config.seed);
-  }
+  if (config.canopy) forest_.emplace(*config.canopy, config.seed, config.terrain.plane);
 }
 
 ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray_queries) const {
@@ -122,9 +114,8 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   const double vegetation_margin_m = config_.canopy ? 100.0 : 0.0;
   const double half_size_m = patch_half_size_m(terrain_, lidar_, footprint, frame) + vegetation_margin_m;
   const GroundMesh ground = build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m());
-  const Vegetation vegetation = config_.canopy ? build_vegetation(*config_.canopy, *stand_, terrain_, frame,
-                                                                  half_size_m, orientation)
-                                               : Vegetation{};
+  const Vegetation vegetation =
+      forest_ ? build_vegetation(*forest_, terrain_, frame, half_size_m, orientation) : Vegetation{};
   const Scene scene(device_, ground, vegetation);
   record.slope_deg = orientation.slope_deg;
   record.aspect_deg = orientation.aspect_deg;
@@ -145,16 +136,18 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   options.seed = config_.seed;
   SceneOptics optics;
   optics.soil_reflectance = config_.terrain.soil_reflectance;
-  if (config_.canopy) {
-    const CanopySettings& canopy = *config_.canopy;
+  for (std::size_t kind = 0; forest_ && kind < forest_->kinds(); ++kind) {
+    const CanopySettings& canopy = forest_->canopy(kind);
+    Foliage foliage;
     for (std::size_t band = 0; band < bands; ++band) {
-      optics.foliage_reflectance.push_back(canopy.green_fraction * canopy.leaf_reflectance[band] +
-                                           canopy.bark_fraction * canopy.bark_reflectance[band]);
-      optics.foliage_transmittance.push_back(canopy.green_fraction * canopy.leaf_transmittance[band]);
+      foliage.reflectance.push_back(canopy.green_fraction * canopy.leaf_reflectance[band] +
+                                    canopy.bark_fraction * canopy.bark_reflectance[band]);
+      foliage.transmittance.push_back(canopy.green_fraction * canopy.leaf_transmittance[band]);
     }
-    optics.trunk_reflectance = canopy.bark_reflectance;
-    optics.leaf_angles = &*leaf_angles_;
-    optics.leaf_size_m = canopy.leaf_size_m;
+    foliage.trunk_reflectance = canopy.bark_reflectance;
+    foliage.leaf_angles = &forest_->leaf_angles(kind);
+    foliage.leaf_size_m = canopy.leaf_size_m;
+    optics.foliage.push_back(foliage);
   }
   ShotWaveforms waveforms = simulate_shot(scene, lidar_, geometry, optics, options, footprint.shot_number);
   if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;

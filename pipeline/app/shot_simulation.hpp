@@ -4,8 +4,7 @@
 
 #include <memory>
 
-#include "canopy/leaf_angles.hpp"
-#include "canopy/stand.hpp"
+#include "canopy/forest.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/products/shot_record.hpp"
@@ -32,8 +31,7 @@ class ShotSimulator {
   const Terrain& terrain_;
   LidarModel lidar_;
   RayDevice device_;
-  std::optional<LeafAngles> leaf_angles_;  // when there is vegetation
-  std::optional<Stand> stand_;
+  std::optional<Forest> forest_;  // when there is vegetation
 };
 
 }  // namespace glaswave

@@ -636,6 +636,66 @@ Config parse_config(const json& document) {
   return c;
 }
 
+namespace {
+
+// A stands file: GeoJSON polygons whose properties override canopy keys inside them. Each
+// feature's canopy is the scene's with its properties applied, checked as the configuration is;
+// a fault is the file's (exit status 3), named by its feature and key.
+std::vector<StandArea> read_stands(const std::string& path, const json& scene_canopy, const std::vector<Band>& bands) {
+  json document;
+  try {
+    document = read_json_file(path);
+  } catch (const Error& e) {
+    throw input_error(e.place(), e.message());
+  }
+  if (!document.is_object() || document.value("type", "") != "FeatureCollection" || !document.contains("features") ||
+      !document["features"].is_array())
+    throw input_error(path, "a stands file must be a GeoJSON FeatureCollection");
+  std::vector<StandArea> areas;
+  for (std::size_t i = 0; i < document["features"].size(); ++i) {
+    const json& feature = document["features"][i];
+    const std::string where = "feature " + std::to_string(i);
+    const json geometry = feature.is_object() ? feature.value("geometry", json()) : json();
+    const std::string type = geometry.is_object() ? geometry.value("type", "") : "";
+    if (type != "Polygon" && type != "MultiPolygon")
+      throw input_error(path, where + ": the geometry must be a Polygon or MultiPolygon");
+    StandArea area;
+    const json polygons = type == "Polygon" ? json::array({geometry["coordinates"]}) : geometry["coordinates"];
+    try {
+      for (const json& polygon : polygons)
+        for (const json& ring : polygon) {
+          std::vector<std::array<double, 2>> points;
+          for (const json& point : ring) points.push_back({point.at(0).get<double>(), point.at(1).get<double>()});
+          if (points.size() < 4) throw std::invalid_argument("a ring needs at least 4 positions");
+          area.rings.push_back(std::move(points));
+        }
+    } catch (const std::exception& e) {
+      throw input_error(path, where + ": bad coordinates (" + e.what() + ")");
+    }
+    json canopy = scene_canopy;
+    canopy.erase("stands");
+    canopy.erase("crowns_file");
+    const json properties = feature.value("properties", json::object());
+    if (!properties.is_null() && !properties.is_object()) throw input_error(path, where + ": properties must be an object");
+    if (properties.is_object())
+      for (const auto& [key, value] : properties.items()) canopy[key] = value;
+    const json document_of_stand = {{"canopy", canopy}};  // the reader keeps a pointer to it
+    json resolved = json::object();
+    JsonReader root(document_of_stand, "", resolved);
+    try {
+      area.canopy = *read_canopy(root, bands);
+    } catch (const Error& e) {
+      // "/canopy/pai: must be >= 0" becomes "feature 2: pai: must be >= 0".
+      const std::string key = e.place().size() > 8 ? e.place().substr(8) : e.place();
+      throw input_error(path, where + ": property " + key + ": " + e.message());
+    }
+    areas.push_back(std::move(area));
+  }
+  return areas;
+}
+
+}  // namespace
+
 Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
   json document = read_json_file(file);
   for (const std::string& assignment : overrides) apply_override(document, assignment);
@@ -648,6 +708,7 @@ Config load_config(const std::filesystem::path& file, const std::vector<std::str
     resolve_path(c.canopy->stands, r["canopy"], "stands", folder);
   }
   resolve_path(c.track.ephemeris, r["track"], "ephemeris", folder);
+  if (c.canopy && !c.canopy->stands.empty()) c.canopy->stand_areas = read_stands(c.canopy->stands, r["canopy"], c.sensor.bands);
   return c;
 }
 

@@ -63,7 +63,7 @@ void crown_intersect(const RTCIntersectFunctionNArguments* args) {
   if (!interval) return;
   const double t0 = std::max(interval->first, static_cast<double>(ray->tnear));
   const double t1 = std::min(interval->second, static_cast<double>(ray->tfar));
-  if (t0 < t1) collector->spans->push_back({t0, t1, crown.area_density_m2_m3});
+  if (t0 < t1) collector->spans->push_back({t0, t1, crown.area_density_m2_m3, crown.material});
 }
 
 // A slab between two heights above a plane: where the ray is inside it.
@@ -80,7 +80,7 @@ void layer_span(const TurbidLayer& layer, const Vec3& origin, const Vec3& direct
     t0 = std::max(t0, a);
     t1 = std::min(t1, b);
   }
-  if (t0 < t1) spans.push_back({t0, t1, layer.area_density_m2_m3});
+  if (t0 < t1) spans.push_back({t0, t1, layer.area_density_m2_m3, layer.material});
 }
 
 }  // namespace
@@ -94,6 +94,7 @@ RayDevice::~RayDevice() { rtcReleaseDevice(device_); }
 Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation& vegetation)
     : surfaces_(rtcNewScene(device.handle())),
       crowns_(vegetation.crowns),
+      trunk_materials_(vegetation.trunk_materials),
       layer_(vegetation.layer),
       top_m_(ground.max_height_m) {
   check_device(device.handle(), "creating a scene");
@@ -166,6 +167,8 @@ SurfaceHit Scene::intersect(const Vec3& origin, const Vec3& direction, double ma
   SurfaceHit hit;
   if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
   hit.kind = query.hit.geomID == ground_geometry ? SurfaceKind::ground : SurfaceKind::trunk;
+  if (hit.kind == SurfaceKind::trunk && query.hit.primID < trunk_materials_.size())
+    hit.material = trunk_materials_[query.hit.primID];
   hit.distance_m = query.ray.tfar;
   Vec3 normal = normalized(Vec3{query.hit.Ng_x, query.hit.Ng_y, query.hit.Ng_z});
   if (dot(normal, direction) > 0.0) normal = -1.0 * normal;

@@ -34,12 +34,14 @@ struct TurbidLayer {
   double ground_slope_x = 0.0, ground_slope_y = 0.0;
   double bottom_m = 0.0, top_m = 0.0;
   double area_density_m2_m3 = 0.0;
+  int material = 0;
 };
 
 // What grows on the ground of one shot.
 struct Vegetation {
   std::vector<Crown> crowns;
   GroundMesh trunks;  // bark-covered cylinders, triangulated
+  std::vector<int> trunk_materials;  // the material of each trunk triangle
   std::optional<TurbidLayer> layer;
 };
 
@@ -49,12 +51,14 @@ struct SurfaceHit {
   SurfaceKind kind = SurfaceKind::none;
   double distance_m = 0.0;  // along the ray from its origin
   Vec3 normal{};            // unit, on the side the ray came from
+  int material = 0;         // of a trunk
 };
 
 // A stretch [t0, t1] of a ray inside turbid foliage of the given plant area density.
 struct VolumeSpan {
   double t0 = 0.0, t1 = 0.0;
   double area_density_m2_m3 = 0.0;
+  int material = 0;
 };
 
 class Scene {
@@ -84,6 +88,7 @@ class Scene {
   RTCSceneTy* surfaces_;
   RTCSceneTy* crown_scene_ = nullptr;
   std::vector<Crown> crowns_;
+  std::vector<int> trunk_materials_;
   std::optional<TurbidLayer> layer_;
   double top_m_;
 };

@@ -44,28 +44,48 @@ struct Tally {
 
 enum class Vertex { leaf, ground, trunk };
 
+struct Interaction {
+  double distance_m;
+  int material;
+};
+
 // Where the accumulated optical depth along the ray reaches `target`, within the spans
-// (overlapping spans add their densities); empty if it never does.
-std::optional<double> free_path(std::vector<VolumeSpan>& spans, double projection, double target) {
+// (overlapping spans add their extinctions), and which foliage the ray met there, chosen in
+// proportion to each one's extinction at that point; empty if the depth is never reached.
+template <class Uniform>
+std::optional<Interaction> free_path(const std::vector<VolumeSpan>& spans, const std::vector<double>& projection,
+                                     double target, Uniform&& uniform) {
   if (spans.empty()) return std::nullopt;
-  // One sweep over span ends: +density where a span starts, -density where it ends.
+  // One sweep over span ends: extinction added where a span starts, removed where it ends.
   thread_local std::vector<std::pair<double, double>> events;
   events.clear();
   for (const VolumeSpan& span : spans) {
-    events.emplace_back(span.t0, span.area_density_m2_m3);
-    events.emplace_back(span.t1, -span.area_density_m2_m3);
+    const double extinction = span.area_density_m2_m3 * projection[span.material];
+    events.emplace_back(span.t0, extinction);
+    events.emplace_back(span.t1, -extinction);
   }
   std::sort(events.begin(), events.end());
-  double density = 0.0, depth = 0.0, t_previous = events.front().first;
+  double extinction = 0.0, depth = 0.0, t_previous = events.front().first;
   for (const auto& [t, change] : events) {
-    const double extinction = density * projection;
     if (extinction > 0.0 && t > t_previous) {
       const double step = extinction * (t - t_previous);
-      if (depth + step >= target) return t_previous + (target - depth) / extinction;
+      if (depth + step >= target) {
+        const double at = t_previous + (target - depth) / extinction;
+        // The spans covering the point share the interaction by their extinction.
+        double pick = uniform() * extinction;
+        int material = spans.front().material;
+        for (const VolumeSpan& span : spans) {
+          if (span.t0 > at || span.t1 <= at) continue;
+          material = span.material;
+          pick -= span.area_density_m2_m3 * projection[span.material];
+          if (pick < 0.0) break;
+        }
+        return Interaction{at, material};
+      }
       depth += step;
     }
     t_previous = t;
-    density += change;
+    extinction += change;
   }
   return std::nullopt;
 }
@@ -74,19 +94,19 @@ std::optional<double> free_path(std::vector<VolumeSpan>& spans, double projectio
 // already sampled, at separation angle `separation_rad`: over a length l the two paths are
 // l * separation apart, and where that is less than a leaf they see the same gaps, so only a
 // fraction 1 - exp(-l separation / leaf_size) of the foliage there is new (Kuusk's hotspot).
-double connection_depth(const std::vector<VolumeSpan>& spans, double projection, double shared_m,
-                        double separation_rad, double leaf_size_m) {
-  const double rate = leaf_size_m > 0.0 ? separation_rad / leaf_size_m : std::numeric_limits<double>::infinity();
+double connection_depth(const std::vector<VolumeSpan>& spans, const std::vector<double>& projection,
+                        const std::vector<Foliage>& foliage, double shared_m, double separation_rad) {
   double depth = 0.0;
   for (const VolumeSpan& span : spans) {
-    const double extinction = span.area_density_m2_m3 * projection;
+    const double leaf_size_m = foliage[span.material].leaf_size_m;
+    const double rate = leaf_size_m > 0.0 ? separation_rad / leaf_size_m : std::numeric_limits<double>::infinity();
     const double a = span.t0, b = std::min(span.t1, shared_m);
     double length = std::max(0.0, span.t1 - std::max(span.t0, shared_m));  // beyond the shared part
     if (b > a) {
       if (std::isinf(rate)) length += b - a;
       else if (rate > 0.0) length += (b - a) - (std::exp(-rate * a) - std::exp(-rate * b)) / rate;
     }
-    depth += extinction * length;
+    depth += span.area_density_m2_m3 * projection[span.material] * length;
   }
   return depth;
 }
@@ -114,6 +134,12 @@ void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry
   constexpr double far_m = 1.0e5;
   std::vector<VolumeSpan> spans;
   std::vector<double> throughput(bands), response(bands);
+  std::vector<double> projection(optics.foliage.size());  // G of each foliage for one direction
+  bool any_point_leaves = false;
+  for (const Foliage& f : optics.foliage) any_point_leaves = any_point_leaves || f.leaf_size_m == 0.0;
+  auto project = [&](const Vec3& d) {
+    for (std::size_t m = 0; m < optics.foliage.size(); ++m) projection[m] = optics.foliage[m].leaf_angles->projection(d[2]);
+  };
   auto angle_from_axis = [&](const Vec3& d) { return std::atan2(norm(cross(d, geometry.axis)), dot(d, geometry.axis)); };
 
   for (std::int64_t ray = first_ray; ray < last_ray; ++ray) {
@@ -135,21 +161,25 @@ void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry
       // The next interaction: foliage by free-path sampling, but never beyond the nearest surface.
       const SurfaceHit hit = scene.intersect(position, direction, far_m, min_distance_m);
       ++tally.ray_queries;
-      std::optional<double> leaf_m;
+      std::optional<Interaction> leaf;
       if (foliage) {
         scene.volume_spans(position, direction, hit.kind == SurfaceKind::none ? far_m : hit.distance_m, spans);
         ++tally.ray_queries;
-        leaf_m = free_path(spans, optics.leaf_angles->projection(direction[2]), -std::log1p(-random.uniform()));
+        project(direction);
+        leaf = free_path(spans, projection, -std::log1p(-random.uniform()), uniform);
       }
-      if (!leaf_m && hit.kind == SurfaceKind::none) break;  // left the scene
-      const Vertex vertex = leaf_m ? Vertex::leaf : hit.kind == SurfaceKind::ground ? Vertex::ground : Vertex::trunk;
-      const double segment_m = leaf_m ? *leaf_m : hit.distance_m;
+      if (!leaf && hit.kind == SurfaceKind::none) break;  // left the scene
+      const Vertex vertex = leaf ? Vertex::leaf : hit.kind == SurfaceKind::ground ? Vertex::ground : Vertex::trunk;
+      const double segment_m = leaf ? leaf->distance_m : hit.distance_m;
+      const Foliage* material = leaf ? &optics.foliage[leaf->material]
+                                : vertex == Vertex::trunk ? &optics.foliage[hit.material]
+                                                          : nullptr;
       const Vec3 point = position + segment_m * direction;
       path_m += segment_m;
       if (order == 1) canopy_return = vertex != Vertex::ground;
 
       // The element met: a leaf normal drawn for this direction, or the surface's.
-      const Vec3 normal = leaf_m ? optics.leaf_angles->sample_normal(direction, uniform) : hit.normal;
+      const Vec3 normal = leaf ? material->leaf_angles->sample_normal(direction, uniform) : hit.normal;
 
       // Direct laser light at the point, scored toward the detector. The laser sits with the
       // detector: at the first interaction its light comes down the very path sampled, and with
@@ -168,15 +198,17 @@ void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry
         // detector rays were sampled by.
         beam_ratio = std::exp((first_angle_sq - std::pow(angle_from_axis(laser_light), 2)) / two_sigma_sq);
       }
-      if (foliage && transmission > 0.0 && (order > 1 || optics.leaf_size_m == 0.0)) {
+      // At the first interaction with finite leaves only, the way out needs no second look.
+      if (foliage && transmission > 0.0 && (order > 1 || any_point_leaves)) {
         const double exit_m = (start_height_m - point[2]) / up_to_laser[2];
         scene.volume_spans(point, up_to_laser, exit_m, spans);
         ++tally.ray_queries;
         // The connection runs beside the segment just sampled (traced back from the point).
         const double separation_rad = std::acos(std::clamp(dot(up_to_laser, -1.0 * direction), -1.0, 1.0));
         const double shared_m = order == 1 ? std::numeric_limits<double>::infinity() : segment_m;
-        transmission *= std::exp(-connection_depth(spans, optics.leaf_angles->projection(up_to_laser[2]), shared_m,
-                                                   order == 1 ? 0.0 : separation_rad, optics.leaf_size_m));
+        project(up_to_laser);
+        transmission *= std::exp(-connection_depth(spans, projection, optics.foliage, shared_m,
+                                                   order == 1 ? 0.0 : separation_rad));
       }
       if (transmission > 0.0) {
         const double scale = transmission * beam_ratio * (range_m / laser_m) * (range_m / laser_m);
@@ -186,11 +218,11 @@ void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry
         for (std::size_t band = 0; band < bands; ++band) {
           double element = 0.0;
           if (vertex == Vertex::leaf) {
-            element = bilambertian_response(normal, laser_light, toward_detector, optics.foliage_reflectance[band],
-                                            optics.foliage_transmittance[band]);
+            element = bilambertian_response(normal, laser_light, toward_detector, material->reflectance[band],
+                                            material->transmittance[band]);
           } else {
             const double reflectance =
-                vertex == Vertex::ground ? optics.soil_reflectance[band] : optics.trunk_reflectance[band];
+                vertex == Vertex::ground ? optics.soil_reflectance[band] : material->trunk_reflectance[band];
             element = reflectance * std::max(0.0, dot(normal, up_to_laser));
           }
           response[band] = throughput[band] * element * scale;
@@ -212,8 +244,8 @@ void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry
         // Reflection sends the path back to the side it came from, transmission through.
         double reflected = 0.0, transmitted = 0.0;
         for (std::size_t band = 0; band < bands; ++band) {
-          reflected += throughput[band] * optics.foliage_reflectance[band];
-          transmitted += throughput[band] * optics.foliage_transmittance[band];
+          reflected += throughput[band] * material->reflectance[band];
+          transmitted += throughput[band] * material->transmittance[band];
         }
         if (reflected + transmitted <= 0.0) break;
         const double p_reflect = reflected / (reflected + transmitted);
@@ -222,15 +254,15 @@ void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry
         const double v1 = random.uniform(), v2 = random.uniform();
         direction = cosine_direction(reflect ? facing : -1.0 * facing, v1, v2);
         for (std::size_t band = 0; band < bands; ++band)
-          throughput[band] *= reflect ? optics.foliage_reflectance[band] / p_reflect
-                                      : optics.foliage_transmittance[band] / (1.0 - p_reflect);
+          throughput[band] *= reflect ? material->reflectance[band] / p_reflect
+                                      : material->transmittance[band] / (1.0 - p_reflect);
         position = point;
         min_distance_m = 0.0;
       } else {
         const double v1 = random.uniform(), v2 = random.uniform();
         direction = cosine_direction(normal, v1, v2);
         for (std::size_t band = 0; band < bands; ++band)
-          throughput[band] *= vertex == Vertex::ground ? optics.soil_reflectance[band] : optics.trunk_reflectance[band];
+          throughput[band] *= vertex == Vertex::ground ? optics.soil_reflectance[band] : material->trunk_reflectance[band];
         position = point;
         min_distance_m = surface_offset_m;
       }

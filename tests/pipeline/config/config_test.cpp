@@ -733,9 +733,12 @@ TEST(Override, UnknownKeyFromSetIsStillCaught) {
 
 TEST(LoadConfig, OverridesInOrderAndPathsRelativeToTheFile) {
   TempDir dir;
+  // The stands file is read with the configuration; the others are opened later by their readers.
+  const std::string stands = std::filesystem::absolute(
+      dir.write("elsewhere/stands.geojson", R"({"type": "FeatureCollection", "features": []})")).string();
   const auto file = dir.write("site/config.json", R"({
     "terrain": {"dem": "dems/dem.tif"},
-    "canopy": {"pai": 3, "stands": "/abs/stands.geojson", "crowns_file": "../crowns.csv"},
+    "canopy": {"pai": 3, "stands": ")" + stands + R"(", "crowns_file": "../crowns.csv"},
     "track": {"type": "ephemeris", "ephemeris": "eph.csv"}
   })");
   const Config c = load_config(file, {"canopy.pai=2", "canopy.cover=0.5", "canopy.pai=4"});
@@ -745,7 +748,7 @@ TEST(LoadConfig, OverridesInOrderAndPathsRelativeToTheFile) {
   EXPECT_EQ(c.terrain.dem, (site / "dems" / "dem.tif").lexically_normal().string());
   EXPECT_EQ(c.canopy->crowns_file,
             (std::filesystem::absolute(dir.path()) / "crowns.csv").lexically_normal().string());
-  EXPECT_EQ(c.canopy->stands, "/abs/stands.geojson");
+  EXPECT_EQ(c.canopy->stands, stands);
   EXPECT_EQ(c.track.ephemeris, (site / "eph.csv").lexically_normal().string());
   EXPECT_EQ(c.resolved["terrain"]["dem"], c.terrain.dem);
   EXPECT_EQ(c.resolved["canopy"]["crowns_file"], c.canopy->crowns_file);
