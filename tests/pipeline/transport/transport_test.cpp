@@ -7,6 +7,7 @@
 
 #include "pipeline/transport/random.hpp"
 #include "pipeline/transport/shot_transport.hpp"
+#include "canopy/leaf_angles.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
@@ -120,6 +121,67 @@ TEST(ShotTransport, SameBitsForAnyThreadCount) {
   // Another shot number is another sample.
   const ShotWaveforms other = simulate_shot(scene, lidar, geometry, optics, options, 12);
   EXPECT_NE(one.total_W, other.total_W);
+}
+
+// A scene with one crown over level ground, seen from 600 km at nadir.
+struct CrownScene {
+  explicit CrownScene(std::vector<Crown> crowns) {
+    vegetation.crowns = std::move(crowns);
+    scene = std::make_unique<Scene>(device, build_ground_mesh(plane, frame, 150.0, 1.0e9), vegetation);
+    geometry.sensor_m = {0.0, 0.0, 600000.0};
+    geometry.axis = {0.0, 0.0, -1.0};
+    geometry.range_m = 600000.0;
+    foliage.reflectance = {0.45, 0.45};
+    foliage.transmittance = {0.45, 0.45};
+    foliage.trunk_reflectance = {0.3, 0.3};
+    foliage.leaf_angles = &angles;
+    foliage.leaf_size_m = 0.05;
+    optics.soil_reflectance = {0.2, 0.2};
+    optics.foliage = {foliage};
+  }
+  PlaneTerrain plane{{0.0, 0.0, 0.0, 0.0, 0.0}};
+  LocalFrame frame{{0.0, 0.0, 0.0}};
+  RayDevice device;
+  Vegetation vegetation;
+  std::unique_ptr<Scene> scene;
+  ShotGeometry geometry;
+  LeafAngles angles{LeafAngleDistribution::spherical, 0.0};
+  Foliage foliage;
+  SceneOptics optics;
+};
+
+// Overlapping crowns add their foliage: two coincident crowns of density u scatter as one of 2u.
+TEST(ShotTransport, OverlappingCrownsAddTheirFoliage) {
+  const Crown crown{CrownShape::ellipsoid, {0.0, 0.0, 5.0}, 60.0, 8.0, 0.05};
+  Crown dense = crown;
+  dense.area_density_m2_m3 = 0.1;
+  const CrownScene two({crown, crown}), one({dense});
+  const LidarModel lidar(table2_sensor());
+  TransportOptions options;
+  options.rays = 40000;
+  options.max_order = 3;
+  const ShotWaveforms a = simulate_shot(*two.scene, lidar, two.geometry, two.optics, options, 1);
+  const ShotWaveforms b = simulate_shot(*one.scene, lidar, one.geometry, one.optics, options, 2);
+  EXPECT_NEAR(a.canopy_energy_J[0] / b.canopy_energy_J[0], 1.0, 0.02);
+  EXPECT_NEAR(a.ground_energy_J[0] / b.ground_energy_J[0], 1.0, 0.03);
+}
+
+TEST(ShotTransport, SameBitsForAnyThreadCountInAForest) {
+  const CrownScene forest({{CrownShape::ellipsoid, {3.0, 0.0, 15.0}, 8.0, 8.0, 0.3},
+                           {CrownShape::cone, {-6.0, 4.0, 12.0}, 5.0, 9.0, 0.4}});
+  const LidarModel lidar(table2_sensor());
+  TransportOptions options;
+  options.rays = 12000;
+  auto run = [&](int threads) {
+    tbb::task_arena arena(threads);
+    ShotWaveforms waveforms;
+    arena.execute([&] { waveforms = simulate_shot(*forest.scene, lidar, forest.geometry, forest.optics, options, 5); });
+    return waveforms;
+  };
+  const ShotWaveforms one = run(1), two = run(2);
+  EXPECT_GT(one.canopy_energy_J[0], 0.0);
+  EXPECT_EQ(one.total_W, two.total_W);
+  EXPECT_EQ(one.canopy_W, two.canopy_W);
 }
 
 }  // namespace
