@@ -1,45 +1,32 @@
-// Track geometry: pass and points tracks, pointing, and the beam against the terrain.
+// Track geometry: the spacecraft position and beam of each shot (pass, points, orbit,
+// ephemeris), and its footprint on the terrain.
 #include "footprints/track.hpp"
-
-#include <cmath>
-#include <numbers>
 
 #include <GeographicLib/Constants.hpp>
 #include <GeographicLib/Geodesic.hpp>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
 
+#include "footprints/glas_time.hpp"
 #include "terrain/error.hpp"
 
 namespace glaswave {
 namespace {
 
 constexpr double deg = std::numbers::pi / 180.0;
-constexpr double earth_gm_m3_s2 = 3.986004418e14;
-
-// Smallest t >= 0 where origin + t * direction meets the ellipsoid raised by height_m.
-std::optional<double> ellipsoid_crossing(const Vec3& origin, const Vec3& direction, double height_m) {
-  const double a = GeographicLib::Constants::WGS84_a() + height_m;
-  const double b = GeographicLib::Constants::WGS84_a() * (1.0 - GeographicLib::Constants::WGS84_f()) + height_m;
-  const Vec3 o{origin[0] / a, origin[1] / a, origin[2] / b};
-  const Vec3 d{direction[0] / a, direction[1] / a, direction[2] / b};
-  const double qa = dot(d, d), qb = 2.0 * dot(o, d), qc = dot(o, o) - 1.0;
-  const double discriminant = qb * qb - 4.0 * qa * qc;
-  if (discriminant < 0.0) return std::nullopt;
-  // The nearer root, written to avoid cancellation.
-  const double q = -0.5 * (qb + std::copysign(std::sqrt(discriminant), qb));
-  double t0 = q / qa, t1 = qc / q;
-  if (t0 > t1) std::swap(t0, t1);
-  if (t1 < 0.0) return std::nullopt;
-  return t0 >= 0.0 ? t0 : t1;
-}
 
 // The spacecraft position at geodetic height `altitude_m` whose tilted beam lands on `target`.
+// A fixed point: the beam direction depends on the spacecraft's own geodetic vertical, which moves
+// a little with the spacecraft; each pass slides back along the current beam to the altitude.
 Vec3 aim_at(const Vec3& target_ecef, double altitude_m, double off_nadir_deg, double azimuth_deg) {
   const Geodetic target = geodetic_from_ecef(target_ecef);
   Vec3 spacecraft = ecef_from_geodetic({target.lat_deg, target.lon_deg, altitude_m});
   for (int iteration = 0; iteration < 50; ++iteration) {
     const Geodetic at = geodetic_from_ecef(spacecraft);
     const Vec3 beam = pointing_direction(at, off_nadir_deg, azimuth_deg);
-    // Slide back along the beam from the target until the height is the altitude.
     double range_m = norm(spacecraft - target_ecef);
     for (int step = 0; step < 20; ++step) {
       const Geodetic p = geodetic_from_ecef(target_ecef - range_m * beam);
@@ -51,124 +38,190 @@ Vec3 aim_at(const Vec3& target_ecef, double altitude_m, double off_nadir_deg, do
     const Vec3 moved = target_ecef - range_m * beam;
     const double change_m = norm(moved - spacecraft);
     spacecraft = moved;
-    if (change_m < 1e-5) break;
+    if (change_m < 1e-6) break;
   }
   return spacecraft;
 }
 
-Footprint locate(std::int64_t shot_number, double time_s, const Vec3& spacecraft_ecef, const Vec3& beam,
-                 double off_nadir_deg, const Terrain& terrain) {
-  Footprint footprint;
-  footprint.shot_number = shot_number;
-  footprint.time_s = time_s;
-  footprint.spacecraft_ecef = spacecraft_ecef;
-  footprint.spacecraft = geodetic_from_ecef(spacecraft_ecef);
-  footprint.beam_ecef = beam;
-  footprint.off_nadir_deg = off_nadir_deg;
-  if (const auto hit = intersect_terrain(terrain, spacecraft_ecef, beam)) {
-    footprint.on_terrain = true;
-    footprint.ground = geodetic_from_ecef(*hit);
-    footprint.range_m = norm(*hit - spacecraft_ecef);
-  }
-  return footprint;
+// The ground speed of a circular orbit at this altitude, ignoring the Earth's rotation.
+double orbital_ground_speed_m_s(double altitude_m) {
+  const double radius_m = GeographicLib::Constants::WGS84_a() + altitude_m;
+  return std::sqrt(GeographicLib::Constants::WGS84_GM() / radius_m) *
+         GeographicLib::Constants::WGS84_a() / radius_m;
 }
 
 }  // namespace
 
-Vec3 pointing_direction(const Geodetic& spacecraft, double off_nadir_deg, double pointing_azimuth_deg) {
+Vec3 pointing_direction(const Geodetic& spacecraft, double off_nadir_deg,
+                        double pointing_azimuth_deg) {
   const auto axes = enu_axes(spacecraft.lat_deg, spacecraft.lon_deg);
   const double tilt = std::sin(off_nadir_deg * deg);
   return (tilt * std::sin(pointing_azimuth_deg * deg)) * axes[0] +
-         (tilt * std::cos(pointing_azimuth_deg * deg)) * axes[1] + (-std::cos(off_nadir_deg * deg)) * axes[2];
+         (tilt * std::cos(pointing_azimuth_deg * deg)) * axes[1] +
+         (-std::cos(off_nadir_deg * deg)) * axes[2];
 }
 
-std::optional<Vec3> intersect_terrain(const Terrain& terrain, const Vec3& origin_ecef,
-                                      const Vec3& direction_ecef) {
-  const Vec3 direction = normalized(direction_ecef);
-  // Height of the point at distance t above the terrain below it.
-  auto clearance_m = [&](double t) {
-    const Geodetic p = geodetic_from_ecef(origin_ecef + t * direction);
-    return p.h_m - terrain.height_m(p.lat_deg, p.lon_deg);
-  };
-  const auto start = ellipsoid_crossing(origin_ecef, direction, 0.0);
-  if (!start) return std::nullopt;
-  // First guess: the ellipsoid raised to the terrain's height at the ellipsoid crossing.
-  const Geodetic on_ellipsoid = geodetic_from_ecef(origin_ecef + *start * direction);
-  const double guess_height_m = terrain.height_m(on_ellipsoid.lat_deg, on_ellipsoid.lon_deg);
-  if (!std::isfinite(guess_height_m)) return std::nullopt;
-  auto t = ellipsoid_crossing(origin_ecef, direction, guess_height_m);
-  if (!t) return std::nullopt;
-  // Secant iterations on the clearance, started with the slope of a level surface.
-  double t0 = *t, f0 = clearance_m(t0);
-  if (!std::isfinite(f0)) return std::nullopt;
-  const Vec3 up = enu_axes(on_ellipsoid.lat_deg, on_ellipsoid.lon_deg)[2];
-  double t1 = t0 + f0 / -dot(direction, up);
-  for (int iteration = 0; iteration < 60; ++iteration) {
-    const double f1 = clearance_m(t1);
-    if (!std::isfinite(f1)) return std::nullopt;
-    if (std::abs(t1 - t0) < 1e-3 || f1 == 0.0) return origin_ecef + t1 * direction;
-    const double t2 = (f1 == f0) ? t1 : t1 - f1 * (t1 - t0) / (f1 - f0);
-    t0 = t1;
-    f0 = f1;
-    t1 = t2;
+double off_nadir_angle_deg(const Vec3& spacecraft_ecef, const Vec3& beam_ecef) {
+  const Geodetic at = geodetic_from_ecef(spacecraft_ecef);
+  const Vec3 down = -1.0 * enu_axes(at.lat_deg, at.lon_deg)[2];
+  const Vec3 beam = normalized(beam_ecef);
+  // atan2 of sine and cosine keeps its precision near nadir, where acos does not.
+  return std::atan2(norm(cross(beam, down)), dot(beam, down)) / deg;
+}
+
+Track::Track(const TrackSettings& settings, const Terrain& terrain, const TerrainLimits& limits)
+    : settings_(settings), terrain_(terrain), limits_(limits) {
+  switch (settings_.type) {
+    case TrackType::pass:
+      sequence_length_ = settings_.shots;
+      pass_spacing_m_ = settings_.spacing_m.value_or(
+          orbital_ground_speed_m_s(settings_.altitude_m) / settings_.rate_hz);
+      break;
+    case TrackType::points:
+      sequence_length_ = static_cast<std::int64_t>(settings_.points.size());
+      break;
+    case TrackType::orbit:
+      sequence_length_ = settings_.shots;
+      orbit_ = std::make_unique<Orbit>(settings_.orbit);
+      break;
+    case TrackType::ephemeris:
+      ephemeris_ = read_ephemeris(settings_.ephemeris);
+      sequence_length_ = static_cast<std::int64_t>(ephemeris_.size());
+      break;
   }
-  return std::nullopt;
+
+  if (settings_.type == TrackType::orbit) {
+    // Locating a shot is a few dozen height queries, against thousands of rays to simulate it,
+    // so the whole orbit is screened here to know the records before anything is written.
+    for (std::int64_t shot = 0; shot < sequence_length_; ++shot)
+      if (locate_shot(shot).on_terrain) kept_shots_.push_back(shot);
+    if (kept_shots_.empty()) {
+      char rate[32];
+      std::snprintf(rate, sizeof rate, "%g", settings_.rate_hz);
+      throw input_error("/track", "the orbit never meets the terrain: none of its " +
+                                      std::to_string(sequence_length_) + " shots from " +
+                                      format_iso8601_utc(settings_.start_time_s) + " at " + rate +
+                                      " Hz falls on it");
+    }
+    return;
+  }
+  // A track whose every shot misses the terrain is a mistake (the wrong place or the wrong DEM),
+  // not a product of flagged shots. The first shot usually meets it, so this costs one shot.
+  for (std::int64_t shot = 0; shot < sequence_length_; ++shot)
+    if (locate_shot(shot).on_terrain) return;
+  throw input_error("/track", "the track never meets the terrain: none of its " +
+                                  std::to_string(sequence_length_) +
+                                  " shots' beams reaches ground with data");
+}
+
+std::int64_t Track::size() const {
+  return settings_.type == TrackType::orbit ? static_cast<std::int64_t>(kept_shots_.size())
+                                            : sequence_length_;
+}
+
+std::int64_t Track::shot_number(std::int64_t record) const {
+  return settings_.type == TrackType::orbit ? kept_shots_.at(static_cast<std::size_t>(record))
+                                            : record;
+}
+
+std::pair<std::int64_t, std::int64_t> Track::records_of_shots(std::int64_t first_shot,
+                                                              std::int64_t last_shot) const {
+  first_shot = std::clamp<std::int64_t>(first_shot, 0, sequence_length_);
+  last_shot = std::clamp<std::int64_t>(last_shot, first_shot, sequence_length_);
+  if (settings_.type != TrackType::orbit) return {first_shot, last_shot};
+  const auto first = std::lower_bound(kept_shots_.begin(), kept_shots_.end(), first_shot);
+  const auto last = std::lower_bound(first, kept_shots_.end(), last_shot);
+  return {first - kept_shots_.begin(), last - kept_shots_.begin()};
+}
+
+std::vector<Footprint> Track::footprints(std::int64_t first_record,
+                                         std::int64_t last_record) const {
+  last_record = std::min(last_record, size());
+  std::vector<Footprint> out;
+  for (std::int64_t record = std::max<std::int64_t>(first_record, 0); record < last_record;
+       ++record)
+    out.push_back(footprint(record));
+  return out;
+}
+
+Footprint Track::locate_shot(std::int64_t shot) const {
+  Footprint f;
+  f.shot_number = shot;
+  f.time_s = settings_.start_time_s + static_cast<double>(shot) / settings_.rate_hz;
+  f.off_nadir_deg = settings_.off_nadir_deg;
+  std::optional<Vec3> target;  // points: the ground point aimed at
+  switch (settings_.type) {
+    case TrackType::pass: {
+      double lat_deg = 0.0, lon_deg = 0.0;
+      GeographicLib::Geodesic::WGS84().Direct(
+          settings_.start_lat_deg, settings_.start_lon_deg, settings_.heading_deg,
+          static_cast<double>(shot) * pass_spacing_m_, lat_deg, lon_deg);
+      f.spacecraft = {lat_deg, lon_deg, settings_.altitude_m};
+      f.spacecraft_ecef = ecef_from_geodetic(f.spacecraft);
+      f.beam_ecef =
+          pointing_direction(f.spacecraft, settings_.off_nadir_deg, settings_.pointing_azimuth_deg);
+      break;
+    }
+    case TrackType::points: {
+      const GroundPoint& point = settings_.points.at(static_cast<std::size_t>(shot));
+      const double height_m = terrain_.height_m(point.lat_deg, point.lon_deg);
+      // No ground under the target: the spacecraft is placed as if the ground were the ellipsoid,
+      // and the shot is flagged.
+      target = ecef_from_geodetic(
+          {point.lat_deg, point.lon_deg, std::isfinite(height_m) ? height_m : 0.0});
+      f.spacecraft_ecef = aim_at(*target, settings_.altitude_m, settings_.off_nadir_deg,
+                                 settings_.pointing_azimuth_deg);
+      f.spacecraft = geodetic_from_ecef(f.spacecraft_ecef);
+      f.beam_ecef = normalized(*target - f.spacecraft_ecef);
+      if (!std::isfinite(height_m)) return f;
+      break;
+    }
+    case TrackType::orbit: {
+      f.spacecraft_ecef = orbit_->ecef_position_m(f.time_s);
+      f.spacecraft = geodetic_from_ecef(f.spacecraft_ecef);
+      f.beam_ecef =
+          pointing_direction(f.spacecraft, settings_.off_nadir_deg, settings_.pointing_azimuth_deg);
+      break;
+    }
+    case TrackType::ephemeris: {
+      const EphemerisRow& row = ephemeris_.at(static_cast<std::size_t>(shot));
+      f.time_s = row.time_s;
+      f.spacecraft_ecef = row.spacecraft_ecef;
+      f.spacecraft = geodetic_from_ecef(f.spacecraft_ecef);
+      if (row.pointing_ecef) {
+        f.beam_ecef = *row.pointing_ecef;
+        f.off_nadir_deg = off_nadir_angle_deg(f.spacecraft_ecef, f.beam_ecef);
+      } else {
+        f.beam_ecef = pointing_direction(f.spacecraft, settings_.off_nadir_deg,
+                                         settings_.pointing_azimuth_deg);
+      }
+      break;
+    }
+  }
+  if (const auto hit = intersect_terrain(terrain_, f.spacecraft_ecef, f.beam_ecef, limits_)) {
+    f.on_terrain = true;
+    f.ground = geodetic_from_ecef(*hit);
+    f.range_m = norm(*hit - f.spacecraft_ecef);
+  }
+  return f;
 }
 
 std::int64_t track_length(const TrackSettings& track) {
-  if (track.type == TrackType::points) return static_cast<std::int64_t>(track.points.size());
+  switch (track.type) {
+    case TrackType::points:
+      return static_cast<std::int64_t>(track.points.size());
+    case TrackType::ephemeris:
+      return static_cast<std::int64_t>(read_ephemeris(track.ephemeris).size());
+    case TrackType::pass:
+    case TrackType::orbit:
+      break;
+  }
   return track.shots;
 }
 
-std::vector<Footprint> plan_track(const TrackSettings& track, const Terrain& terrain, std::int64_t first,
-                                  std::int64_t last) {
-  last = std::min(last, track_length(track));
-  std::vector<Footprint> footprints;
-  for (std::int64_t shot = first; shot < last; ++shot) {
-    const double time_s = track.start_time_s + shot / track.rate_hz;
-    switch (track.type) {
-      case TrackType::points: {
-        const GroundPoint& point = track.points[shot];
-        const double height_m = terrain.height_m(point.lat_deg, point.lon_deg);
-        if (!std::isfinite(height_m)) {
-          // No ground under the target: the spacecraft is placed as if the ground were the ellipsoid.
-          const Vec3 target = ecef_from_geodetic({point.lat_deg, point.lon_deg, 0.0});
-          const Vec3 spacecraft = aim_at(target, track.altitude_m, track.off_nadir_deg, track.pointing_azimuth_deg);
-          Footprint footprint = locate(shot, time_s, spacecraft, normalized(target - spacecraft),
-                                       track.off_nadir_deg, terrain);
-          footprint.on_terrain = false;
-          footprints.push_back(footprint);
-          break;
-        }
-        const Vec3 target = ecef_from_geodetic({point.lat_deg, point.lon_deg, height_m});
-        const Vec3 spacecraft = aim_at(target, track.altitude_m, track.off_nadir_deg, track.pointing_azimuth_deg);
-        footprints.push_back(locate(shot, time_s, spacecraft, normalized(target - spacecraft), track.off_nadir_deg,
-                                    terrain));
-        break;
-      }
-      case TrackType::pass: {
-        // The ground speed of a circular orbit at this altitude, when no spacing is given.
-        const double radius_m = GeographicLib::Constants::WGS84_a() + track.altitude_m;
-        const double ground_speed_m_s =
-            std::sqrt(earth_gm_m3_s2 / radius_m) * GeographicLib::Constants::WGS84_a() / radius_m;
-        const double spacing_m = track.spacing_m.value_or(ground_speed_m_s / track.rate_hz);
-        double lat_deg = 0.0, lon_deg = 0.0;
-        GeographicLib::Geodesic::WGS84().Direct(track.start_lat_deg, track.start_lon_deg, track.heading_deg,
-                                                shot * spacing_m, lat_deg, lon_deg);
-        const Geodetic spacecraft{lat_deg, lon_deg, track.altitude_m};
-        footprints.push_back(locate(shot, time_s, ecef_from_geodetic(spacecraft),
-                                    pointing_direction(spacecraft, track.off_nadir_deg, track.pointing_azimuth_deg),
-                                    track.off_nadir_deg, terrain));
-        break;
-      }
-      case TrackType::orbit:
-        throw config_error("/track/type", "orbit tracks are not available in this version yet; use pass or points");
-      case TrackType::ephemeris:
-        throw config_error("/track/type",
-                           "ephemeris tracks are not available in this version yet; use pass or points");
-    }
-  }
-  return footprints;
+std::vector<Footprint> plan_track(const TrackSettings& track, const Terrain& terrain,
+                                  std::int64_t first, std::int64_t last) {
+  return Track(track, terrain).footprints(first, last);
 }
 
 }  // namespace glaswave

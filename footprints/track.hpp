@@ -3,9 +3,13 @@
 #pragma once
 
 #include <cstdint>
-#include <optional>
+#include <memory>
+#include <utility>
 #include <vector>
 
+#include "footprints/ephemeris.hpp"
+#include "footprints/orbit.hpp"
+#include "footprints/terrain_intersection.hpp"
 #include "footprints/track_settings.hpp"
 #include "terrain/local_frame.hpp"
 #include "terrain/terrain.hpp"
@@ -21,23 +25,70 @@ struct Footprint {
   double off_nadir_deg = 0.0;
   bool on_terrain = false;  // false: the beam axis never met the terrain (flagged shot)
   Geodetic ground;          // footprint centre, when on_terrain
-  double range_m = 0.0;     // spacecraft to footprint centre
+  double range_m = 0.0;     // spacecraft to footprint centre, when on_terrain
 };
 
 // Unit vector (ECEF) of a beam tilted `off_nadir_deg` from the geodetic nadir at the
 // spacecraft, toward the azimuth `pointing_azimuth_deg` (clockwise from north).
-Vec3 pointing_direction(const Geodetic& spacecraft, double off_nadir_deg, double pointing_azimuth_deg);
+Vec3 pointing_direction(const Geodetic& spacecraft, double off_nadir_deg,
+                        double pointing_azimuth_deg);
 
-// Where a ray first meets the terrain: against the WGS84 ellipsoid in closed form, then refined
-// against the terrain's heights until it moves less than 1 mm. Empty when it never meets it.
-std::optional<Vec3> intersect_terrain(const Terrain& terrain, const Vec3& origin_ecef,
-                                      const Vec3& direction_ecef);
+// Angle (deg) between a beam direction and the geodetic nadir at the spacecraft.
+double off_nadir_angle_deg(const Vec3& spacecraft_ecef, const Vec3& beam_ecef);
 
-// The footprints of shots [first, last) of the track (last clamped to the track's length).
+// A planned track. Shot numbers count the track's shots in time order, from 0:
+//   pass, points  shot k is the k-th shot of `track.shots` (the k-th point), at start_time + k /
+//   rate_hz; orbit         shot k is at start_time + k / rate_hz, k < track.shots; only the shots
+//   whose
+//                 footprint falls on the terrain become records, the others are skipped;
+//   ephemeris     shot k is the file's k-th row, at its time.
+// A shot number is the same whichever part of the track a run simulates (`--shots A:B`).
+// Records are the shots a run writes, in shot order: every shot of pass, points and ephemeris
+// (those that miss the terrain flagged), the kept shots of an orbit.
+class Track {
+ public:
+  // Plans the geometry (no simulation): reads an ephemeris file and, for an orbit, locates every
+  // shot to keep those on the terrain. The terrain must outlive the track.
+  // Throws an input Error when no shot of the track meets the terrain, or for a bad ephemeris file.
+  Track(const TrackSettings& settings, const Terrain& terrain, const TerrainLimits& limits = {});
+
+  // Number of records.
+  std::int64_t size() const;
+  // Number of shot numbers in the track's time sequence (shot numbers are below it).
+  std::int64_t sequence_length() const { return sequence_length_; }
+  // The shot number of a record, 0 <= record < size().
+  std::int64_t shot_number(std::int64_t record) const;
+  // The records [first, last) whose shot numbers lie in [first_shot, last_shot).
+  std::pair<std::int64_t, std::int64_t> records_of_shots(std::int64_t first_shot,
+                                                         std::int64_t last_shot) const;
+
+  // The footprint of a record, and of the records [first, last).
+  Footprint footprint(std::int64_t record) const { return locate_shot(shot_number(record)); }
+  std::vector<Footprint> footprints(std::int64_t first_record, std::int64_t last_record) const;
+  // The footprint of any shot of the sequence, kept or not, 0 <= shot_number < sequence_length().
+  Footprint locate_shot(std::int64_t shot_number) const;
+
+  const TrackSettings& settings() const { return settings_; }
+
+ private:
+  TrackSettings settings_;
+  const Terrain& terrain_;
+  TerrainLimits limits_;
+  std::int64_t sequence_length_ = 0;
+  std::unique_ptr<Orbit> orbit_;          // orbit
+  std::vector<EphemerisRow> ephemeris_;   // ephemeris
+  std::vector<std::int64_t> kept_shots_;  // orbit: shot numbers of the records, ascending
+  double pass_spacing_m_ = 0.0;           // pass
+};
+
+// The footprints of records [first, last) of Track(track, terrain) (last clamped to its size).
+// A convenience for a few shots: it plans the whole track at each call.
 std::vector<Footprint> plan_track(const TrackSettings& track, const Terrain& terrain,
                                   std::int64_t first, std::int64_t last);
 
-// Number of shots in the track.
+// The length of the track's shot sequence, Track::sequence_length(), known without a terrain:
+// an upper bound on its records (an orbit keeps only the shots on the terrain). An ephemeris
+// file is read to count its rows.
 std::int64_t track_length(const TrackSettings& track);
 
 }  // namespace glaswave

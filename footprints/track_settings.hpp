@@ -16,7 +16,8 @@ struct GroundPoint {
   double lon_deg = 0.0;
 };
 
-// Keplerian elements at `epoch`, propagated with J2 secular rates.
+// Mean Keplerian elements at `epoch`, in the true-equator mean-equinox frame of date (as
+// two-line elements), propagated with J2 secular rates (footprints/orbit.hpp).
 struct OrbitElements {
   double semi_major_axis_m = 6978137.0;
   double eccentricity = 0.0;
@@ -32,7 +33,7 @@ struct TrackSettings {
   double start_lat_deg = 0.0;
   double start_lon_deg = 0.0;
   double heading_deg = 0.0;
-  std::int64_t shots = 1;
+  std::int64_t shots = 1;  // pass; orbit: shots in its time sequence, kept where on the terrain
   double rate_hz = 40.0;
   std::optional<double> spacing_m;  // unset: from rate_hz and the ground speed
   double altitude_m = 600000.0;
@@ -41,7 +42,7 @@ struct TrackSettings {
   double pointing_azimuth_deg = 0.0;
   std::vector<GroundPoint> points;  // type points
   OrbitElements orbit;              // type orbit
-  std::string ephemeris;            // type ephemeris: CSV path
+  std::string ephemeris;            // type ephemeris: CSV path (format in footprints/ephemeris.hpp)
 };
 
 }  // namespace glaswave

@@ -117,14 +117,18 @@ int run(const Arguments& arguments, const std::string& command_line) {
 
 int check(const Arguments& arguments) {
   const Config config = load(arguments);
-  if (config.canopy)
-    throw config_error("/canopy", "vegetation is not available in this version yet; set \"canopy\": null");
   const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
-  const std::vector<Footprint> footprints = plan_track(config.track, *terrain, 0, track_length(config.track));
+  const Track track(config.track, *terrain);
   std::int64_t off_terrain = 0;
-  for (const Footprint& footprint : footprints) off_terrain += footprint.on_terrain ? 0 : 1;
-  std::printf("glaswave: %s is valid: %zu shots, %lld off the terrain\n", arguments.config_file.c_str(),
-              footprints.size(), static_cast<long long>(off_terrain));
+  for (std::int64_t record = 0; record < track.size(); ++record)
+    off_terrain += track.footprint(record).on_terrain ? 0 : 1;
+  std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain", arguments.config_file.c_str(),
+              static_cast<long long>(track.size()), static_cast<long long>(off_terrain));
+  // An orbit keeps only the shots on the terrain: say how many it skipped.
+  if (track.size() < track.sequence_length())
+    std::printf(" (%lld of the orbit's %lld shots fall on it)", static_cast<long long>(track.size()),
+                static_cast<long long>(track.sequence_length()));
+  std::printf("\n");
   return 0;
 }
 

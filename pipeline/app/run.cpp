@@ -20,15 +20,17 @@ namespace glaswave {
 RunSummary run_simulation(const Config& config, const RunRequest& request, const ProgressCallback& progress) {
   const auto started = std::chrono::steady_clock::now();
   namespace fs = std::filesystem;
-  if (config.canopy)
-    throw config_error("/canopy", "vegetation is not available in this version yet; set \"canopy\": null");
 
   const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
-  const std::int64_t length = track_length(config.track);
-  const std::int64_t first = request.first_shot.value_or(0);
-  const std::int64_t last = std::min(request.last_shot.value_or(length), length);
-  if (first < 0 || first >= last)
-    throw config_error("--shots", "selects no shot of the track's " + std::to_string(length));
+  // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
+  const Track track(config.track, *terrain);
+  const std::int64_t length = track.sequence_length();
+  const auto selected = track.records_of_shots(request.first_shot.value_or(0), request.last_shot.value_or(length));
+  const std::int64_t first = selected.first, last = selected.second;  // records
+  if (first >= last)
+    throw config_error("--shots", "selects no shot of the track's " + std::to_string(length) +
+                                      (track.size() < length ? " (" + std::to_string(track.size()) + " on the terrain)"
+                                                             : std::string()));
 
   std::error_code exists_error;
   if (fs::exists(request.out_dir, exists_error))
@@ -59,7 +61,7 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
   std::atomic<std::int64_t> ray_queries{0};
   for (std::int64_t batch_first = first; batch_first < last; batch_first += batch_size) {
     const std::int64_t batch_last = std::min(batch_first + batch_size, last);
-    const std::vector<Footprint> footprints = plan_track(config.track, *terrain, batch_first, batch_last);
+    const std::vector<Footprint> footprints = track.footprints(batch_first, batch_last);
     std::vector<ShotRecord> records(footprints.size());
     arena.execute([&] {
       tbb::parallel_for(std::size_t{0}, footprints.size(), [&](std::size_t i) {

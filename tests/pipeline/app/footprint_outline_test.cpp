@@ -1,0 +1,111 @@
+// The footprint polygon of the products: the beam's 1/e^2 contour traced on the terrain. A
+// narrow cone of half-angle alpha at slant range R cuts a surface in an ellipse 2 R alpha across
+// the tilt and 2 R alpha / cos(i) along it, i the local incidence: from 600 km that is
+// 2 H alpha / (cos(off-nadir) cos(i)) along, about 1/cos^2 of the nadir footprint on level ground.
+#include <gtest/gtest.h>
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "footprints/track.hpp"
+#include "pipeline/app/shot_simulation.hpp"
+
+namespace glaswave {
+namespace {
+
+constexpr double deg = std::numbers::pi / 180.0;
+
+struct Outline {
+  double along_m, across_m, incidence_deg, range_m, angle_rad;
+};
+
+// One shot aimed at the plane's origin, tilted toward the east; its polygon measured on the
+// plane: the longest chord (the ellipse's major axis) and the width north-south.
+Outline outline(double off_nadir_deg, double slope_deg) {
+  const nlohmann::json document = {
+      {"seed", 5},
+      {"sensor", {{"preset", "glas"}}},
+      {"simulation", {{"rays_per_shot", 200}}},
+      {"terrain",
+       {{"plane",
+         {{"origin_lat_deg", 0.0},
+          {"origin_lon_deg", 0.0},
+          {"elevation_m", 0.0},
+          {"slope_deg", slope_deg},
+          {"aspect_deg", 90.0}}}}},
+      {"canopy", nullptr},
+      {"track",
+       {{"type", "points"},
+        {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}},
+        {"altitude_m", 600000.0},
+        {"off_nadir_deg", off_nadir_deg},
+        {"pointing_azimuth_deg", 90.0}}},
+      {"output", {{"netcdf", false}, {"geojson", false}}},
+  };
+  const Config config = parse_config(document);
+  const auto terrain = make_terrain(config.terrain);
+  const Footprint footprint = Track(config.track, *terrain).footprint(0);
+  const ShotSimulator simulator(config, *terrain);
+  const ShotRecord record = simulator.simulate(footprint);
+  EXPECT_GE(record.footprint_lonlat.size(), 30u);
+
+  const GeographicLib::LocalCartesian local(footprint.ground.lat_deg, footprint.ground.lon_deg,
+                                            footprint.ground.h_m);
+  std::vector<Vec3> points;
+  for (const auto& [lon, lat] : record.footprint_lonlat) {
+    Vec3 p{};
+    local.Forward(lat, lon, terrain->height_m(lat, lon), p[0], p[1], p[2]);
+    points.push_back(p);
+  }
+  Outline out{};
+  double north_min = 1e9, north_max = -1e9;
+  for (const Vec3& p : points) {
+    for (const Vec3& q : points) out.along_m = std::max(out.along_m, norm(p - q));
+    north_min = std::min(north_min, p[1]);
+    north_max = std::max(north_max, p[1]);
+  }
+  out.across_m = north_max - north_min;
+  // Incidence on the plane (facing east, tilted by the slope), the beam seen in the local frame.
+  const Vec3 normal{std::sin(slope_deg * deg), 0.0, std::cos(slope_deg * deg)};
+  const LocalFrame frame(footprint.ground);
+  out.incidence_deg = std::acos(-dot(frame.local_direction(footprint.beam_ecef), normal)) / deg;
+  out.range_m = footprint.range_m;
+  out.angle_rad = std::min(2.0 * simulator.lidar().beam_sigma_rad(), 0.5 * config.sensor.ifov_rad);
+  // Counter-clockwise in longitude and latitude.
+  double twice_area = 0.0;
+  for (std::size_t i = 0; i + 1 < record.footprint_lonlat.size(); ++i) {
+    const auto& a = record.footprint_lonlat[i];
+    const auto& b = record.footprint_lonlat[i + 1];
+    twice_area += a[0] * b[1] - b[0] * a[1];
+  }
+  EXPECT_GT(twice_area, 0.0);
+  return out;
+}
+
+TEST(FootprintOutline, OffNadirPolygonIsStretchedAlongTheTiltBy1OverCosIncidence) {
+  const Outline nadir = outline(0.0, 0.0);
+  EXPECT_NEAR(nadir.across_m / (2.0 * nadir.range_m * nadir.angle_rad), 1.0, 0.01);
+  EXPECT_NEAR(nadir.along_m / nadir.across_m, 1.0, 0.01);
+  EXPECT_NEAR(nadir.along_m, 70.0, 5.0);  // the glas beam
+
+  for (const double slope_deg : {0.0, 15.0}) {
+    const Outline tilted = outline(30.0, slope_deg);
+    // 30 deg off nadir from 600 km meets level ground at about 33 deg (the Earth curves away).
+    EXPECT_NEAR(tilted.incidence_deg, 33.2 + slope_deg, 0.3) << slope_deg;
+    const double cos_i = std::cos(tilted.incidence_deg * deg);
+    EXPECT_NEAR(tilted.across_m / (2.0 * tilted.range_m * tilted.angle_rad), 1.0, 0.01)
+        << slope_deg;
+    EXPECT_NEAR(tilted.along_m * cos_i / tilted.across_m, 1.0, 0.01) << slope_deg;
+    // Against the nadir footprint: (R / H) / cos(i), which is 1 / (cos(off-nadir) cos(i)), near
+    // 1/cos^2 on level ground, but for the Earth's curvature (the range is 1.6 % longer here).
+    EXPECT_NEAR(tilted.along_m / nadir.along_m * cos_i * nadir.range_m / tilted.range_m, 1.0, 0.01)
+        << slope_deg;
+    EXPECT_NEAR(tilted.along_m / nadir.along_m * std::cos(30.0 * deg) * cos_i, 1.0, 0.025)
+        << slope_deg;
+  }
+}
+
+}  // namespace
+}  // namespace glaswave
