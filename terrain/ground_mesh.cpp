@@ -1,4 +1,4 @@
-// Ground meshes sampled from a terrain, and beam-weighted plane fits.
+// Ground meshes from terrains (with roughness), and beam-weighted plane fits over them.
 #include "terrain/ground_mesh.hpp"
 
 #include <algorithm>
@@ -8,10 +8,22 @@
 
 #include <Eigen/Dense>
 
+#include "terrain/roughness.hpp"
+
 namespace glaswave {
 
 GroundMesh build_ground_mesh(const Terrain& terrain, const LocalFrame& frame, double half_size_m,
-                             double spacing_m) {
+                             double spacing_m, const RoughnessField* roughness,
+                             double rough_half_size_m) {
+  GroundMesh base = terrain.mesh(frame, half_size_m, spacing_m);
+  if (!roughness || !roughness->enabled()) return base;
+  const double rough_m =
+      rough_half_size_m > 0.0 ? std::min(rough_half_size_m, half_size_m) : half_size_m;
+  return roughness->roughen(base, frame, rough_m);
+}
+
+GroundMesh sample_ground_mesh(const Terrain& terrain, const LocalFrame& frame, double half_size_m,
+                              double spacing_m) {
   const int cells = std::clamp(static_cast<int>(std::ceil(2.0 * half_size_m / spacing_m)), 2, 4096);
   const int nodes = cells + 1;
   const double step_m = 2.0 * half_size_m / cells;
@@ -25,10 +37,12 @@ GroundMesh build_ground_mesh(const Terrain& terrain, const LocalFrame& frame, do
     for (int i = 0; i < nodes; ++i) {
       // A node is placed on the terrain below its east-north position, then expressed in the
       // frame: over a few hundred metres the frame's up and the local vertical agree.
-      const Geodetic below = frame.to_geodetic({-half_size_m + i * step_m, -half_size_m + j * step_m, 0.0});
+      const Geodetic below =
+          frame.to_geodetic({-half_size_m + i * step_m, -half_size_m + j * step_m, 0.0});
       const double height_m = terrain.height_m(below.lat_deg, below.lon_deg);
       valid[j * nodes + i] = std::isfinite(height_m);
-      const Vec3 node = frame.to_local({below.lat_deg, below.lon_deg, valid[j * nodes + i] ? height_m : 0.0});
+      const Vec3 node =
+          frame.to_local({below.lat_deg, below.lon_deg, valid[j * nodes + i] ? height_m : 0.0});
       for (double coordinate : node) mesh.vertices_m.push_back(static_cast<float>(coordinate));
       if (valid[j * nodes + i]) {
         mesh.min_height_m = std::min(mesh.min_height_m, node[2]);
@@ -36,42 +50,84 @@ GroundMesh build_ground_mesh(const Terrain& terrain, const LocalFrame& frame, do
       }
     }
   }
+  // Each triangle stands on its own three nodes, as a DEM's do: a hole removes only the
+  // triangles that touch it.
   for (int j = 0; j < cells; ++j) {
     for (int i = 0; i < cells; ++i) {
       const std::uint32_t a = j * nodes + i, b = a + 1, c = a + nodes, d = c + 1;
-      if (!(valid[a] && valid[b] && valid[c] && valid[d])) continue;
-      mesh.triangles.insert(mesh.triangles.end(), {a, b, d, a, d, c});
+      if (valid[a] && valid[b] && valid[d]) mesh.triangles.insert(mesh.triangles.end(), {a, b, d});
+      if (valid[a] && valid[d] && valid[c]) mesh.triangles.insert(mesh.triangles.end(), {a, d, c});
     }
   }
+  if (mesh.triangles.empty()) mesh.min_height_m = mesh.max_height_m = 0.0;
   return mesh;
 }
 
 SurfaceOrientation fit_surface_orientation(const Terrain& terrain, const LocalFrame& frame,
-                                           double sigma_m) {
-  // Weighted least squares for z = c0 + c1 x + c2 y on a grid out to 2.5 sigma.
-  constexpr int half_nodes = 10;
-  const double step_m = 2.5 * sigma_m / half_nodes;
+                                           double sigma_m, const Vec3& beam_axis) {
+  const Vec3 axis = normalized(beam_axis);
+  // The beam's trace on the ground lengthens as 1 / cos(off-nadir); 3.5 sigma leaves out 0.2 %
+  // of its weight.
+  const double reach_m = 3.5 * sigma_m / std::max(0.2, std::abs(axis[2]));
+  const GroundMesh mesh = terrain.mesh(frame, reach_m, std::min(terrain.detail_m(), sigma_m / 4.0));
+
+  // Weighted least squares for z = c0 + c1 x + c2 y over the surface: each triangle is cut into
+  // m^2 equal parts no wider than sigma / 4, each weighted at its centroid by its horizontal
+  // area and the beam's irradiance there.
   Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  for (int j = -half_nodes; j <= half_nodes; ++j) {
-    for (int i = -half_nodes; i <= half_nodes; ++i) {
-      const Geodetic below = frame.to_geodetic({i * step_m, j * step_m, 0.0});
-      const double height_m = terrain.height_m(below.lat_deg, below.lon_deg);
-      if (!std::isfinite(height_m)) continue;
-      const Vec3 p = frame.to_local({below.lat_deg, below.lon_deg, height_m});
-      const double weight = std::exp(-(p[0] * p[0] + p[1] * p[1]) / (2.0 * sigma_m * sigma_m));
-      const Eigen::Vector3d row(1.0, p[0], p[1]);
+  const double part_m = sigma_m / 4.0;
+  auto vertex = [&](std::uint32_t index) {
+    return Eigen::Vector3d(mesh.vertices_m[3 * index], mesh.vertices_m[3 * index + 1],
+                           mesh.vertices_m[3 * index + 2]);
+  };
+  const Eigen::Vector3d a_axis(axis[0], axis[1], axis[2]);
+  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3) {
+    const Eigen::Vector3d p0 = vertex(mesh.triangles[t]), p1 = vertex(mesh.triangles[t + 1]),
+                          p2 = vertex(mesh.triangles[t + 2]);
+    const Eigen::Vector3d e1 = p1 - p0, e2 = p2 - p0;
+    const double area_m2 = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
+    if (area_m2 == 0.0) continue;
+    // Far triangles weigh nothing: skip them before cutting them up.
+    const Eigen::Vector3d centroid = (p0 + p1 + p2) / 3.0;
+    const double radius_m =
+        std::max({(p0 - centroid).norm(), (p1 - centroid).norm(), (p2 - centroid).norm()});
+    const double centroid_off_m =
+        std::sqrt(std::max(0.0, centroid.squaredNorm() - std::pow(centroid.dot(a_axis), 2)));
+    if (centroid_off_m - radius_m > 6.0 * sigma_m) continue;
+    const double longest_m =
+        std::max({e1.head<2>().norm(), e2.head<2>().norm(), (p2 - p1).head<2>().norm()});
+    const int m = std::clamp(static_cast<int>(std::ceil(longest_m / part_m)), 1, 64);
+    const double part_area_m2 = area_m2 / (m * m);
+    auto add = [&](double u, double v) {
+      const Eigen::Vector3d p = p0 + (u / m) * e1 + (v / m) * e2;
+      const double along_m = p.dot(a_axis);
+      const double off_sq_m2 = std::max(0.0, p.squaredNorm() - along_m * along_m);
+      const double weight = part_area_m2 * std::exp(-off_sq_m2 / (2.0 * sigma_m * sigma_m));
+      const Eigen::Vector3d row(1.0, p.x(), p.y());
       normal_matrix += weight * row * row.transpose();
-      rhs += weight * p[2] * row;
+      rhs += weight * p.z() * row;
+    };
+    for (int i = 0; i < m; ++i) {
+      for (int j = 0; i + j < m; ++j) {
+        add(i + 1.0 / 3.0, j + 1.0 / 3.0);  // the part pointing like the triangle
+        if (i + j + 2 <= m) add(i + 2.0 / 3.0, j + 2.0 / 3.0);  // the part between, upside down
+      }
     }
   }
-  const Eigen::Vector3d c = normal_matrix.ldlt().solve(rhs);
   SurfaceOrientation orientation;
+  if (normal_matrix(0, 0) <= 0.0) {  // no ground under the beam
+    orientation.slope_deg = orientation.aspect_deg = std::numeric_limits<double>::quiet_NaN();
+    return orientation;
+  }
+  const Eigen::Vector3d c = normal_matrix.ldlt().solve(rhs);
   const double rad = 180.0 / std::numbers::pi;
   orientation.slope_deg = std::atan(std::hypot(c[1], c[2])) * rad;
   // The surface faces down the gradient.
   orientation.aspect_deg = std::atan2(-c[1], -c[2]) * rad;
   if (orientation.aspect_deg < 0.0) orientation.aspect_deg += 360.0;
+  if (orientation.aspect_deg >= 360.0)
+    orientation.aspect_deg -= 360.0;  // -1e-17 + 360 rounds to 360
   if (orientation.slope_deg == 0.0) orientation.aspect_deg = 0.0;
   return orientation;
 }

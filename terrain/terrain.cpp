@@ -1,14 +1,43 @@
-// Terrain height fields: the synthetic plane, and the factory that picks a terrain from settings.
+// Terrain height fields: what every terrain does by default, the synthetic plane, and the
+// factory that picks a terrain from settings.
 #include "terrain/terrain.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include <GeographicLib/LocalCartesian.hpp>
 
+#include "terrain/dem_terrain.hpp"
 #include "terrain/error.hpp"
+#include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
+
+GroundMesh Terrain::mesh(const LocalFrame& frame, double half_size_m, double spacing_m) const {
+  return sample_ground_mesh(*this, frame, half_size_m, spacing_m);
+}
+
+bool Terrain::has_data(const LocalFrame& frame, double radius_m) const {
+  // Rings of samples no further apart than the terrain's detail (at most 64 a ring): a terrain
+  // that only answers height queries cannot say more about its holes.
+  const int rings =
+      std::clamp(static_cast<int>(std::ceil(radius_m / std::max(detail_m(), 1e-3))), 2, 16);
+  for (int ring = 0; ring <= rings; ++ring) {
+    const double r_m = radius_m * ring / rings;
+    const int points = ring == 0
+                           ? 1
+                           : std::clamp(static_cast<int>(std::ceil(2.0 * std::numbers::pi * r_m /
+                                                                   std::max(detail_m(), 1e-3))),
+                                        8, 64);
+    for (int k = 0; k < points; ++k) {
+      const double azimuth = 2.0 * std::numbers::pi * k / points;
+      const Geodetic p = frame.to_geodetic({r_m * std::sin(azimuth), r_m * std::cos(azimuth), 0.0});
+      if (!std::isfinite(height_m(p.lat_deg, p.lon_deg))) return false;
+    }
+  }
+  return true;
+}
 
 struct PlaneTerrain::Frame {
   GeographicLib::LocalCartesian local;
@@ -33,7 +62,7 @@ double PlaneTerrain::height_m(double lat_deg, double lon_deg) const {
 
 std::unique_ptr<Terrain> make_terrain(const TerrainSettings& settings) {
   if (settings.plane) return std::make_unique<PlaneTerrain>(*settings.plane);
-  throw config_error("/terrain/dem", "DEM terrain is not available in this version yet; use terrain.plane");
+  return std::make_unique<DemTerrain>(settings);
 }
 
 }  // namespace glaswave

@@ -25,7 +25,12 @@ struct RoughnessSettings {
 };
 
 struct TerrainSettings {
-  std::string dem;                     // raster path; empty when `plane` is set
+  std::string dem;   // raster path; empty when `plane` is set
+  int dem_band = 0;  // 1-based band of the DEM; 0: not given (a one-band raster)
+  // What the DEM's heights are measured from when its CRS has no vertical part: "ellipsoid"
+  // (its own ellipsoid), "egm96" (the EGM96 geoid, EPSG:5773) or a vertical CRS PROJ knows
+  // ("EPSG:3855"). A vertical CRS of the DEM's own always wins.
+  std::string vertical_datum = "ellipsoid";
   std::optional<PlaneSettings> plane;  // exactly one of dem and plane
   RoughnessSettings roughness;
   std::vector<double> soil_reflectance;  // Lambertian, one value per sensor band

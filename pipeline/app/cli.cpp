@@ -108,10 +108,10 @@ int run(const Arguments& arguments, const std::string& command_line) {
     summary = run_simulation(config, request, std::ref(bar));
   }
   const double wall_s = std::max(summary.wall_s, 1e-9);
-  std::printf("glaswave: %lld shots in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; products in %s\n",
+  std::printf("glaswave: %lld shots in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; %s; products in %s\n",
               static_cast<long long>(summary.shots), summary.wall_s, summary.shots / wall_s,
               summary.ray_queries / wall_s, static_cast<long long>(summary.shots_flagged),
-              request.out_dir.string().c_str());
+              summary.vertical_datum.c_str(), request.out_dir.string().c_str());
   return 0;
 }
 

@@ -46,7 +46,11 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
     }
   } cleanup{request.out_dir};
 
-  const ShotSimulator simulator(config, *terrain);
+  // The products record what the DEM's heights were measured from, as the terrain chose it (its
+  // own vertical CRS wins over terrain.vertical_datum).
+  Config used = config;
+  used.resolved["terrain"]["vertical_datum"] = terrain->vertical_datum().key;
+  const ShotSimulator simulator(used, *terrain);
   const RunInfo info = simulator.run_info(last - first, request.command_line);
   std::unique_ptr<NetcdfWriter> netcdf;
   std::unique_ptr<GeojsonWriter> geojson;
@@ -80,6 +84,7 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
   }
 
   summary.shots = last - first;
+  summary.vertical_datum = terrain->vertical_datum().description;
   summary.ray_queries = ray_queries;
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   RunStats stats;

@@ -23,6 +23,7 @@ struct RunSummary {
   std::int64_t shots_flagged = 0;
   std::int64_t ray_queries = 0;
   double wall_s = 0.0;
+  std::string vertical_datum;  // what the terrain's heights were measured from, in words
 };
 
 // Called after each batch of shots with (shots done, shots in all).

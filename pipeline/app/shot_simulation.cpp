@@ -6,9 +6,12 @@
 #include <limits>
 #include <numbers>
 
+#include "pipeline/products/waveform_metrics.hpp"
 #include "pipeline/scene/vegetation.hpp"
+#include "pipeline/transport/detector.hpp"
 #include "pipeline/transport/shot_transport.hpp"
 #include "terrain/ground_mesh.hpp"
+#include "terrain/roughness.hpp"
 
 namespace glaswave {
 namespace {
@@ -16,14 +19,14 @@ namespace {
 constexpr double fill = std::numeric_limits<double>::quiet_NaN();
 constexpr int outline_vertices = 36;
 
-// Half-width of the ground patch that every sampled ray lands on: the widest ray of the beam
-// traced to the terrain in a few directions, with a margin.
+// Half-width of the ground patch that every sampled ray lands on: the beam's rays at `angle_rad`
+// from its axis traced to the terrain in a few directions, with a margin.
 double patch_half_size_m(const Terrain& terrain, const LidarModel& lidar, const Footprint& footprint,
-                         const LocalFrame& frame) {
+                         const LocalFrame& frame, double angle_rad) {
   const BeamSampler beam(lidar, footprint.beam_ecef);
-  double reach_m = footprint.range_m * lidar.max_angle_rad();
+  double reach_m = footprint.range_m * angle_rad;
   for (int k = 0; k < 8; ++k) {
-    const Vec3 direction = beam.direction_at(lidar.max_angle_rad(), k * std::numbers::pi / 4.0);
+    const Vec3 direction = beam.direction_at(angle_rad, k * std::numbers::pi / 4.0);
     if (const auto hit = intersect_terrain(terrain, footprint.spacecraft_ecef, direction)) {
       const Vec3 local = frame.local_from_ecef(*hit);
       reach_m = std::max(reach_m, std::hypot(local[0], local[1]));
@@ -61,6 +64,15 @@ std::vector<std::array<double, 2>> beam_outline(const Scene& scene, const LidarM
   return ring;
 }
 
+// Waveform processing as the sensor and detector make it: noise-free waveforms get the
+// fraction-of-peak threshold, detected ones the threshold above their noise.
+WaveformProcessing waveform_processing(const Config& config) {
+  WaveformProcessing processing;
+  processing.pulse_sigma_ns = config.sensor.pulse_sigma_ns;
+  processing.noise_free = !config.detector.enabled;
+  return processing;
+}
+
 }  // namespace
 
 ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
@@ -78,7 +90,11 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   record.sc_alt_m = footprint.spacecraft.h_m;
   record.off_nadir_deg = footprint.off_nadir_deg;
 
-  if (!footprint.on_terrain) {
+  // A beam over a hole in the DEM or its edge (3 sigma: 99 % of its energy) gives no waveform
+  // worth having: the shot is flagged like one off the terrain.
+  const double data_radius_m =
+      3.0 * footprint.range_m * lidar_.beam_sigma_rad() / std::cos(footprint.off_nadir_deg * std::numbers::pi / 180.0);
+  if (!footprint.on_terrain || !terrain_.has_data(LocalFrame(footprint.ground), data_radius_m)) {
     record.quality_flag = quality_no_terrain;
     record.lat_deg = record.lon_deg = record.elev_m = fill;
     record.range_m = record.slope_deg = record.aspect_deg = fill;
@@ -93,6 +109,7 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
     record.rx_energy_canopy_J.assign(bands, fill);
     record.rx_energy_ground_J.assign(bands, fill);
     record.reflectance.assign(bands, fill);
+    process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
     return record;
   }
 
@@ -108,12 +125,19 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   geometry.range_m = footprint.range_m;
 
   const double beam_sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
-  const SurfaceOrientation orientation = fit_surface_orientation(terrain_, frame, beam_sigma_m);
+  const SurfaceOrientation orientation = fit_surface_orientation(terrain_, frame, beam_sigma_m, geometry.axis);
 
   // With vegetation, diffuse light wanders beyond the beam: the ground reaches further out.
   const double vegetation_margin_m = config_.canopy ? 100.0 : 0.0;
-  const double half_size_m = patch_half_size_m(terrain_, lidar_, footprint, frame) + vegetation_margin_m;
-  const GroundMesh ground = build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m());
+  const double half_size_m = patch_half_size_m(terrain_, lidar_, footprint, frame, lidar_.max_angle_rad()) + vegetation_margin_m;
+  // Roughness is subdivided only where the beam is: beyond 4.5 sigma go 4e-5 of the rays.
+  const RoughnessField roughness(config_.terrain.roughness, config_.seed);
+  const double rough_half_size_m =
+      roughness.enabled() ? patch_half_size_m(terrain_, lidar_, footprint, frame,
+                                              std::min(lidar_.max_angle_rad(), 4.5 * lidar_.beam_sigma_rad()))
+                          : 0.0;
+  const GroundMesh ground =
+      build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m(), &roughness, rough_half_size_m);
   const Vegetation vegetation =
       forest_ ? build_vegetation(*forest_, terrain_, frame, half_size_m, orientation) : Vegetation{};
   const Scene scene(device_, ground, vegetation);
@@ -159,10 +183,33 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   record.rx_energy_J = waveforms.energy_J;
   record.rx_energy_canopy_J = waveforms.canopy_energy_J;
   record.rx_energy_ground_J = waveforms.ground_energy_J;
+  // The detector turns the received power into the recorded waveform (its canopy and ground
+  // parts stay the noise-free truth); rx_energy stays the integral of rx_waveform.
+  const double bin_s = config_.sensor.bin_ns * 1e-9;
+  if (config_.detector.enabled) {
+    const Detector detector(config_.detector, config_.seed);
+    for (std::size_t band = 0; band < bands; ++band) {
+      record.rx_waveform_W[band] = detector.record(record.rx_waveform_W[band], config_.sensor.bin_ns,
+                                                   config_.sensor.bands[band].wavelength_nm, footprint.shot_number, band);
+      double sum_W = 0.0;
+      for (double p : record.rx_waveform_W[band]) sum_W += p;
+      record.rx_energy_J[band] = sum_W * bin_s;
+    }
+  }
+  process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
+  // The truth over the footprint, beside the estimates: what the beam really fell on.
+  const VegetationTruth truth = measure_vegetation(scene, beam_sigma_m);
+  record.cover_true = truth.cover;
+  record.pai_true = truth.pai;
+  record.canopy_height_true_m = truth.canopy_height_m;
   for (std::size_t band = 0; band < bands; ++band) {
-    // The seed's eq. (1): rho = pi E_rec R^2 / (E_t A_T T).
+    // The seed's eq. (1): rho = pi E_rec R^2 / (E_t A_T T). E_rec is all of the received energy;
+    // from a detected waveform it is what a user would take: the energy above the noise between
+    // signal begin and end (energy_tr), as background and noise summed over the whole window
+    // would swamp it.
     const Band& b = config_.sensor.bands[band];
-    record.reflectance.push_back(std::numbers::pi * record.rx_energy_J[band] * footprint.range_m * footprint.range_m /
+    const double received_J = config_.detector.enabled ? record.energy_tr_J[band] : record.rx_energy_J[band];
+    record.reflectance.push_back(std::numbers::pi * received_J * footprint.range_m * footprint.range_m /
                                  (b.pulse_energy_mJ * 1e-3 * config_.sensor.telescope_area_m2 *
                                   b.atmos_transmission_roundtrip));
   }

@@ -282,6 +282,23 @@ TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
     p.finish();
     t.plane = plane;
   }
+  // The DEM's band of heights (required by the terrain when it has several) and what its heights
+  // are measured from when its CRS does not say; a plane's heights are above the ellipsoid.
+  if (r.has("dem_band")) {
+    if (!dem) r.fail("dem_band", "applies to terrain.dem only");
+    t.dem_band = static_cast<int>(r.integer("dem_band", 1, 1, int_max));
+  }
+  t.vertical_datum = r.string("vertical_datum", t.vertical_datum);
+  if (t.vertical_datum != "ellipsoid" && t.vertical_datum != "egm96" &&
+      t.vertical_datum.find(':') == std::string::npos) {
+    std::string message = "must be \"ellipsoid\", \"egm96\" or a vertical CRS such as \"EPSG:3855\", got \"" +
+                          t.vertical_datum + "\"";
+    if (const auto suggestion = nearest_name(t.vertical_datum, {"ellipsoid", "egm96"}))
+      message += "; did you mean \"" + *suggestion + "\"?";
+    r.fail("vertical_datum", message);
+  }
+  if (!dem && t.vertical_datum != "ellipsoid")
+    r.fail("vertical_datum", "applies to terrain.dem only: a plane's elevation_m is above the WGS84 ellipsoid");
   JsonReader g = r.object("roughness");
   t.roughness.rms_m = g.number("rms_m", t.roughness.rms_m, at_least(0));
   t.roughness.correlation_m = g.number("correlation_m", t.roughness.correlation_m, above(0));
@@ -476,6 +493,28 @@ OutputSettings read_output(JsonReader& root) {
   return o;
 }
 
+// `"detector"`: the signal chain from received light to the recorded waveform, in its order:
+// background light added, photon statistics, detector noise, gain, saturation, digitiser.
+// Off unless "enabled" is true; every level is in W at the detector's input except
+// saturation_W, the digitiser's full scale after the gain.
+DetectorSettings read_detector(JsonReader& root) {
+  DetectorSettings d;
+  JsonReader r = root.object("detector");
+  d.enabled = r.boolean("enabled", d.enabled);
+  d.background_W = r.number("background_W", d.background_W, at_least(0));
+  d.photon_noise = r.boolean("photon_noise", d.photon_noise);
+  d.quantum_efficiency = r.number("quantum_efficiency", d.quantum_efficiency, open_closed(0, 1));
+  d.noise_rms_W = r.number("noise_rms_W", d.noise_rms_W, at_least(0));
+  d.gain = r.number("gain", d.gain, above(0));
+  d.bits = static_cast<int>(r.integer("bits", d.bits, 0, 32));
+  d.saturation_W = r.optional_number("saturation_W", above(0));
+  if (!d.saturation_W) r.resolved()["saturation_W"] = nullptr;
+  if (d.bits > 0 && !d.saturation_W)
+    r.fail("saturation_W", "is required when bits > 0: the digitiser's full scale");
+  r.finish();
+  return d;
+}
+
 BrfSettings read_brf(JsonReader& root) {
   BrfSettings b;
   JsonReader r = root.object("brf");
@@ -630,6 +669,7 @@ Config parse_config(const json& document) {
   c.canopy = read_canopy(root, c.sensor.bands);
   c.track = read_track(root);
   c.output = read_output(root);
+  c.detector = read_detector(root);
   c.brf = read_brf(root);
   root.finish();
   c.resolved.erase("$schema");

@@ -47,6 +47,22 @@ struct OutputSettings {
   bool per_order = false;
 };
 
+// The detector and digitiser between the received light and the recorded waveform (`"detector"`).
+// Off by default: the waveform is then the noise-free received power. All levels are referred
+// to the detector's input (W of received light), so rx_waveform keeps its unit whatever the gain.
+struct DetectorSettings {
+  bool enabled = false;
+  double background_W = 0.0;       // mean background light in the field of view (sunlit scene)
+  bool photon_noise = false;       // Poisson statistics of signal and background photons
+  double quantum_efficiency = 1.0; // photoelectrons per photon, for photon_noise
+  double noise_rms_W = 0.0;        // Gaussian detector (dark and amplifier) noise, RMS
+  double gain = 1.0;               // amplification before the digitiser
+  int bits = 0;                    // digitiser resolution; 0: not digitised
+  // Full scale at the digitiser (its input-referred level is saturation_W / gain): output above
+  // it clips. Required when bits > 0; absent: no saturation.
+  std::optional<double> saturation_W;
+};
+
 struct BrfView {
   double zenith_deg = 0.0;
   double azimuth_deg = 0.0;
@@ -69,6 +85,7 @@ struct Config {
   std::optional<CanopySettings> canopy;  // empty: bare ground
   TrackSettings track;
   OutputSettings output;
+  DetectorSettings detector;
   BrfSettings brf;
   // The configuration as used, presets expanded and defaults filled in; written into products.
   nlohmann::json resolved;

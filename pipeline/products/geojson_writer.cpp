@@ -142,6 +142,25 @@ struct GeojsonWriter::Impl {
     first_band("rx_energy_canopy", shot.rx_energy_canopy_J);
     first_band("rx_energy_ground", shot.rx_energy_ground_J);
     first_band("reflectance", shot.reflectance);
+    first_band("energy_tr", shot.energy_tr_J);
+    first_band("energy_cr", shot.energy_cr_J);
+    first_band("energy_gr", shot.energy_gr_J);
+    first_band("waveform_index", shot.waveform_index);
+    first_band("sig_begin_m", shot.sig_begin_m);
+    first_band("sig_end_m", shot.sig_end_m);
+    first_band("centroid_m", shot.centroid_m);
+    first_band("ground_elev_est", shot.ground_elev_est_m);
+    first_band("canopy_height_est", shot.canopy_height_est_m);
+    text += ",\"n_peaks\":";
+    text += shot.n_peaks.empty() ? std::string("null") : std::to_string(shot.n_peaks.front());
+    // GEDI L2A's usual few of rh0..rh100, named as GEDI names them.
+    for (const int k : {25, 50, 75, 98, 100}) {
+      const bool known = !shot.rh_m.empty() && shot.rh_m.front().size() > static_cast<std::size_t>(k);
+      real(("rh" + std::to_string(k)).c_str(), known ? shot.rh_m.front()[k] : std::nan(""));
+    }
+    real("cover_true", shot.cover_true);
+    real("pai_true", shot.pai_true);
+    real("canopy_height_true", shot.canopy_height_true_m);
     text += "}}";
     return text;
   }

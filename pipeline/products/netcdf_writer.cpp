@@ -22,6 +22,7 @@ namespace glaswave {
 namespace {
 
 constexpr std::size_t kGaussians = 6;  // PRODUCT.md: decomposition into up to 6 Gaussians
+constexpr std::size_t kPercentiles = 101;  // rh0 .. rh100
 // Level 2 already takes most of what deflate can from waveforms (long runs of zero power
 // before and after the return); higher levels cost time for little more.
 constexpr int kDeflateLevel = 2;
@@ -32,10 +33,12 @@ using Int64Field = std::int64_t ShotRecord::*;
 using UByteField = std::uint8_t ShotRecord::*;
 using DoubleField = double ShotRecord::*;
 using BandField = std::vector<double> ShotRecord::*;
+using BandIntField = std::vector<std::int32_t> ShotRecord::*;
 using BandArrayField = std::vector<std::vector<double>> ShotRecord::*;
 using BandArray2Field = std::vector<std::vector<std::vector<double>>> ShotRecord::*;
 using Field =
-    std::variant<Int64Field, UByteField, DoubleField, BandField, BandArrayField, BandArray2Field>;
+    std::variant<Int64Field, UByteField, DoubleField, BandField, BandIntField, BandArrayField,
+                 BandArray2Field>;
 
 struct ShotVariable {
   const char* name;
@@ -47,6 +50,7 @@ struct ShotVariable {
   // Dimensions after (shot, band) for array fields. A variable whose dimensions this run
   // lacks (`order` without per-order output) is left out of the file.
   std::array<const char*, 2> inner_dims = {nullptr, nullptr};
+  const char* comment = nullptr;  // how a derived quantity is defined
 };
 
 // Spacecraft latitude/longitude carry no standard_name on purpose: tools that find the
@@ -109,6 +113,59 @@ const ShotVariable kShotVariables[] = {
     {"reflectance", NC_DOUBLE, &ShotRecord::reflectance, "1",
      "surface reflectance from the waveform, pi E_rec R^2 / (E_trans A_t T_atm) "
      "(North et al. 2010, eq. 1)"},
+    // Waveform processing (pipeline/products/waveform_metrics.hpp states the rules).
+    {"energy_tr", NC_DOUBLE, &ShotRecord::energy_tr_J, "J",
+     "total return: energy above the noise between signal begin and end (seed TR)", nullptr,
+     {}, "energy_tr = energy_cr + energy_gr"},
+    {"energy_cr", NC_DOUBLE, &ShotRecord::energy_cr_J, "J",
+     "canopy return: the part of energy_tr above the canopy/ground split (seed CR)", nullptr, {},
+     "split 4 sigma of the lowest Gaussian above its centre, or lower where the other Gaussians "
+     "outweigh it"},
+    {"energy_gr", NC_DOUBLE, &ShotRecord::energy_gr_J, "J",
+     "ground return: the part of energy_tr below the canopy/ground split (seed GR)"},
+    {"waveform_index", NC_DOUBLE, &ShotRecord::waveform_index, "1",
+     "waveform index (CR - GR) / (CR + GR) (North et al. 2010, eq. 3)"},
+    {"sig_begin_m", NC_DOUBLE, &ShotRecord::sig_begin_m, "m",
+     "elevation of signal begin: first crossing of the threshold by the smoothed waveform",
+     "height_above_reference_ellipsoid", {},
+     "threshold = noise mean + max(4 noise sd, 0.01 (peak - noise mean)) on the waveform "
+     "smoothed with the pulse's width"},
+    {"sig_end_m", NC_DOUBLE, &ShotRecord::sig_end_m, "m",
+     "elevation of signal end: last crossing of the threshold by the smoothed waveform",
+     "height_above_reference_ellipsoid"},
+    {"centroid_m", NC_DOUBLE, &ShotRecord::centroid_m, "m",
+     "elevation of the waveform's centroid between signal begin and end",
+     "height_above_reference_ellipsoid"},
+    {"n_peaks", NC_INT, &ShotRecord::n_peaks, "1", "number of Gaussians fitted to the waveform"},
+    {"gauss_amp", NC_DOUBLE, &ShotRecord::gauss_amp_W, "W", "amplitude of each fitted Gaussian",
+     nullptr, {"gaussian"}},
+    {"gauss_center_m", NC_DOUBLE, &ShotRecord::gauss_center_m, "m",
+     "elevation of the centre of each fitted Gaussian (in waveform order, highest first)",
+     "height_above_reference_ellipsoid", {"gaussian"}},
+    {"gauss_sigma_ns", NC_DOUBLE, &ShotRecord::gauss_sigma_ns, "ns",
+     "standard deviation of each fitted Gaussian", nullptr, {"gaussian"}},
+    {"gauss_area", NC_DOUBLE, &ShotRecord::gauss_area_J, "J",
+     "energy of each fitted Gaussian (its integral)", nullptr, {"gaussian"}},
+    {"ground_elev_est", NC_DOUBLE, &ShotRecord::ground_elev_est_m, "m",
+     "ground elevation estimated from the waveform: centre of the lowest Gaussian",
+     "height_above_reference_ellipsoid"},
+    {"canopy_height_est", NC_DOUBLE, &ShotRecord::canopy_height_est_m, "m",
+     "canopy height estimated from the waveform: signal begin above ground_elev_est",
+     "canopy_height", {},
+     "less the pulse's own rise to the threshold, so that bare ground reads 0; rh100 is the "
+     "uncorrected signal begin above the ground"},
+    {"rh", NC_FLOAT, &ShotRecord::rh_m, "m",
+     "relative height above ground_elev_est at which the energy counted up from signal end "
+     "reaches percentile % of energy_tr (GEDI L2A)",
+     nullptr, {"percentile"}},
+    {"cover_true", NC_DOUBLE, &ShotRecord::cover_true, "1",
+     "crown cover over the footprint, weighted by the beam (simulation truth)",
+     "vegetation_area_fraction"},
+    {"pai_true", NC_DOUBLE, &ShotRecord::pai_true, "1",
+     "plant area index over the footprint, weighted by the beam (simulation truth)"},
+    {"canopy_height_true", NC_DOUBLE, &ShotRecord::canopy_height_true_m, "m",
+     "highest vegetation above the ground over the footprint (simulation truth)",
+     "canopy_height"},
 };
 
 // Copies a [band][...] nested vector into `out` in C order when its shape is `shape`.
@@ -116,6 +173,12 @@ bool flatten(const std::vector<double>& values, std::span<const std::size_t> sha
              std::vector<double>& out) {
   if (shape.size() != 1 || values.size() != shape[0]) return false;
   out.insert(out.end(), values.begin(), values.end());
+  return true;
+}
+bool flatten(const std::vector<std::int32_t>& values, std::span<const std::size_t> shape,
+             std::vector<double>& out) {
+  if (shape.size() != 1 || values.size() != shape[0]) return false;
+  out.insert(out.end(), values.begin(), values.end());  // exact: every int32 is a double
   return true;
 }
 template <class T>
@@ -129,6 +192,9 @@ bool flatten(const std::vector<std::vector<T>>& values, std::span<const std::siz
 }
 
 std::string describe_shape(const std::vector<double>& values) {
+  return std::to_string(values.size());
+}
+std::string describe_shape(const std::vector<std::int32_t>& values) {
   return std::to_string(values.size());
 }
 template <class T>
@@ -259,6 +325,7 @@ struct NetcdfWriter::Impl {
 
     const int varid =
         define_variable(def.name, def.type, dimids, def.units, def.long_name, def.standard_name);
+    if (def.comment != nullptr) put_text(varid, def.name, "comment", def.comment);
     const std::string what = std::string("variable '") + def.name + "'";
     if (def.type == NC_FLOAT) {
       const float fill = std::numeric_limits<float>::quiet_NaN();
@@ -307,6 +374,7 @@ struct NetcdfWriter::Impl {
     define_dim("bin", bins);
     define_dim("tx_bin", tx_bins);
     define_dim("gaussian", kGaussians);
+    define_dim("percentile", kPercentiles);
     if (orders > 0) define_dim("order", orders);
 
     // CF: a single trajectory is identified by a scalar variable with cf_role trajectory_id.
@@ -327,6 +395,9 @@ struct NetcdfWriter::Impl {
                                             "W", "transmitted pulse power");
     const int order =
         orders > 0 ? define_variable("order", NC_INT, {dim("order")}, "1", "scattering order") : -1;
+    // The coordinate of rh's last dimension, so that ds.rh.sel(percentile=98) reads as GEDI's rh98.
+    const int percentile = define_variable("percentile", NC_INT, {dim("percentile")}, "percent",
+                                           "percentage of energy_tr counted up from signal end");
 
     for (const ShotVariable& def : kShotVariables) define_shot_variable(def);
     // The few attributes beyond the common ones.
@@ -365,6 +436,9 @@ struct NetcdfWriter::Impl {
            describe_shape(info.tx_waveform_W));
     }
     check(nc_put_var_double(nc.id(), tx_waveform, tx.data()), "writing variable 'tx_waveform'");
+    std::vector<int> percentiles;
+    for (std::size_t k = 0; k < kPercentiles; ++k) percentiles.push_back(static_cast<int>(k));
+    check(nc_put_var_int(nc.id(), percentile, percentiles.data()), "writing variable 'percentile'");
     if (order >= 0) {
       std::vector<int> numbers;
       for (std::size_t o = 1; o <= orders; ++o) numbers.push_back(static_cast<int>(o));

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,22 @@ struct ShotRecord {
   // [band]
   std::vector<double> rx_energy_J, rx_energy_canopy_J, rx_energy_ground_J;
   std::vector<double> reflectance;  // seed eq. (1)
+
+  // Waveform processing of rx_waveform (pipeline/products/waveform_metrics.hpp), [band].
+  // Elevations are m above WGS84; NaN where the waveform has no signal.
+  std::vector<double> energy_tr_J, energy_cr_J, energy_gr_J;  // the seed's TR, CR, GR
+  std::vector<double> waveform_index;                          // seed eq. (3)
+  std::vector<double> sig_begin_m, sig_end_m, centroid_m;
+  std::vector<std::int32_t> n_peaks;
+  // [band][gaussian], 6 slots in waveform order, NaN where unused.
+  std::vector<std::vector<double>> gauss_amp_W, gauss_center_m, gauss_sigma_ns, gauss_area_J;
+  std::vector<double> ground_elev_est_m, canopy_height_est_m;
+  std::vector<std::vector<double>> rh_m;  // [band][101]: rh0..rh100 above ground_elev_est
+
+  // The footprint's truth from the scene, beam-weighted (NaN when unknown; 0 on bare ground).
+  double cover_true = std::numeric_limits<double>::quiet_NaN();
+  double pai_true = std::numeric_limits<double>::quiet_NaN();
+  double canopy_height_true_m = std::numeric_limits<double>::quiet_NaN();
 
   // The beam's 1/e^2 contour on the terrain: closed ring of (lon, lat), counter-clockwise.
   std::vector<std::array<double, 2>> footprint_lonlat;

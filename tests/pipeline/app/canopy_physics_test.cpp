@@ -74,6 +74,12 @@ TEST(TurbidLayer, SingleScatteringMatchesClosedForms) {
     const double canopy = shot.record.rx_energy_canopy_J[0] / shot.normalisation_J;
     const double ground = shot.record.rx_energy_ground_J[0] / shot.normalisation_J;
     EXPECT_NEAR(canopy / c.canopy, 1.0, 0.02) << "leaf size " << c.leaf_size_m;
+    // The footprint's truth: a layer covers everything with its PAI, 10 m tall.
+    EXPECT_NEAR(shot.record.cover_true, 1.0, 1e-12);
+    EXPECT_NEAR(shot.record.pai_true, L, 1e-6);
+    // 1 cm: the slab is flat in the shot's frame, the ground curves away by d^2 / 2R (3 mm at
+    // the footprint's 3 sigma, 200 m).
+    EXPECT_NEAR(shot.record.canopy_height_true_m, 10.0, 0.01);
     EXPECT_NEAR(ground / c.ground, 1.0, 0.02) << "leaf size " << c.leaf_size_m;
   }
 }

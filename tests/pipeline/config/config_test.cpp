@@ -518,6 +518,34 @@ TEST(Errors, TerrainNeedsExactlyOneOfDemAndPlane) {
   EXPECT_FALSE(c.terrain.plane.has_value());
 }
 
+TEST(Terrain, DemBandAndVerticalDatum) {
+  // Defaults: no band chosen (a one-band raster), heights above the ellipsoid.
+  Config c = parse_config(doc(R"({"terrain": {"dem": "/data/dem.tif"}})"));
+  EXPECT_EQ(c.terrain.dem_band, 0);
+  EXPECT_EQ(c.terrain.vertical_datum, "ellipsoid");
+  EXPECT_EQ(c.resolved["terrain"]["vertical_datum"], "ellipsoid");
+  EXPECT_FALSE(c.resolved["terrain"].contains("dem_band"));
+  c = parse_config(doc(R"({"terrain": {"dem": "a.tif", "dem_band": 2, "vertical_datum": "egm96"}})"));
+  EXPECT_EQ(c.terrain.dem_band, 2);
+  EXPECT_EQ(c.terrain.vertical_datum, "egm96");
+  EXPECT_EQ(parse_config(c.resolved).resolved, c.resolved);
+  c = parse_config(doc(R"({"terrain": {"dem": "a.tif", "vertical_datum": "EPSG:3855"}})"));
+  EXPECT_EQ(c.terrain.vertical_datum, "EPSG:3855");  // PROJ judges it when the DEM is opened
+
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"dem": "a.tif", "dem_band": 0}})")),
+            "/terrain/dem_band: must be >= 1, got 0");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"plane": {}, "dem_band": 1}})")),
+            "/terrain/dem_band: applies to terrain.dem only");
+  EXPECT_THAT(error_of(doc(R"({"terrain": {"dem": "a.tif", "vertical_datum": "egm69"}})")),
+              AllOf(StartsWith("/terrain/vertical_datum: must be"), HasSubstr("did you mean \"egm96\"?")));
+  EXPECT_THAT(error_of(doc(R"({"terrain": {"plane": {}, "vertical_datum": "egm96"}})")),
+              StartsWith("/terrain/vertical_datum: applies to terrain.dem only"));
+  // A plane's resolved configuration says "ellipsoid", and parses back.
+  c = parse_config(doc(R"({"terrain": {"plane": {}}})"));
+  EXPECT_EQ(c.resolved["terrain"]["vertical_datum"], "ellipsoid");
+  EXPECT_EQ(parse_config(c.resolved).resolved, c.resolved);
+}
+
 // ---- canopy shapes --------------------------------------------------------------------------
 
 TEST(Canopy, Fractions) {
@@ -762,6 +790,52 @@ TEST(LoadConfig, BareGroundResolvedHasNoDanglingPaths) {
   EXPECT_FALSE(c.resolved["terrain"].contains("dem"));
   EXPECT_FALSE(c.resolved["track"].contains("ephemeris"));
   EXPECT_TRUE(c.resolved["canopy"].is_null());
+}
+
+// ---- detector -------------------------------------------------------------------------------
+
+TEST(Detector, OffByDefaultWithNeutralSettings) {
+  const Config c = parse_config(doc("{}"));
+  EXPECT_FALSE(c.detector.enabled);
+  EXPECT_EQ(c.detector.background_W, 0.0);
+  EXPECT_FALSE(c.detector.photon_noise);
+  EXPECT_EQ(c.detector.quantum_efficiency, 1.0);
+  EXPECT_EQ(c.detector.noise_rms_W, 0.0);
+  EXPECT_EQ(c.detector.gain, 1.0);
+  EXPECT_EQ(c.detector.bits, 0);
+  EXPECT_FALSE(c.detector.saturation_W.has_value());
+  EXPECT_EQ(c.resolved["detector"],
+            json::parse(R"({"enabled": false, "background_W": 0.0, "photon_noise": false,
+                            "quantum_efficiency": 1.0, "noise_rms_W": 0.0, "gain": 1.0,
+                            "bits": 0, "saturation_W": null})"));
+}
+
+TEST(Detector, EveryKeyIsRead) {
+  const Config c = parse_config(doc(R"({"detector": {"enabled": true, "background_W": 1e-8,
+      "photon_noise": true, "quantum_efficiency": 0.3, "noise_rms_W": 2e-8, "gain": 50,
+      "bits": 8, "saturation_W": 1e-4}})"));
+  EXPECT_TRUE(c.detector.enabled);
+  EXPECT_EQ(c.detector.background_W, 1e-8);
+  EXPECT_TRUE(c.detector.photon_noise);
+  EXPECT_EQ(c.detector.quantum_efficiency, 0.3);
+  EXPECT_EQ(c.detector.noise_rms_W, 2e-8);
+  EXPECT_EQ(c.detector.gain, 50.0);
+  EXPECT_EQ(c.detector.bits, 8);
+  EXPECT_EQ(c.detector.saturation_W, 1e-4);
+  EXPECT_EQ(parse_config(c.resolved).resolved, c.resolved);
+}
+
+TEST(Detector, Errors) {
+  EXPECT_EQ(error_of(doc(R"({"detector": {"bits": 8}})")),
+            "/detector/saturation_W: is required when bits > 0: the digitiser's full scale");
+  EXPECT_EQ(error_of(doc(R"({"detector": {"noise_rms_W": -1}})")),
+            "/detector/noise_rms_W: must be >= 0, got -1");
+  EXPECT_EQ(error_of(doc(R"({"detector": {"gain": 0}})")), "/detector/gain: must be > 0, got 0");
+  EXPECT_EQ(place_of(doc(R"({"detector": {"bits": 33, "saturation_W": 1}})")), "/detector/bits");
+  EXPECT_EQ(place_of(doc(R"({"detector": {"quantum_efficiency": 0}})")),
+            "/detector/quantum_efficiency");
+  EXPECT_THAT(error_of(doc(R"({"detector": {"noise_rms": 1e-8}})")),
+              HasSubstr("did you mean \"noise_rms_W\"?"));
 }
 
 // ---- ISO 8601 and the GLAS epoch ------------------------------------------------------------

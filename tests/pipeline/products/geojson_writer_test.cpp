@@ -75,6 +75,21 @@ ShotRecord make_record(int record) {
   shot.rx_energy_canopy_J = {0.6e-15 * (record + 1), 1e-15};
   shot.rx_energy_ground_J = {0.4e-15 * (record + 1), 1e-15};
   shot.reflectance = {0.1 * (record + 1), 0.5};
+  shot.energy_tr_J = {1e-15 * (record + 1), 2e-15};
+  shot.energy_cr_J = {0.7e-15 * (record + 1), 1e-15};
+  shot.energy_gr_J = {0.3e-15 * (record + 1), 1e-15};
+  shot.waveform_index = {0.4, 0.0};
+  shot.sig_begin_m = {1230.5 + record, 1231.0};
+  shot.sig_end_m = {1198.25 + record, 1198.0};
+  shot.centroid_m = {1215.125 + record, 1215.0};
+  shot.ground_elev_est_m = {1200.75 + record, 1200.5};
+  shot.canopy_height_est_m = {27.5 + record, 28.0};
+  shot.n_peaks = {3 + record, 2};
+  shot.rh_m.assign(2, std::vector<double>(101, 0.0));
+  for (int k = 0; k <= 100; ++k) shot.rh_m[0][k] = -1.5 + 0.3 * k + record;
+  shot.cover_true = 0.65;
+  shot.pai_true = 3.0;
+  shot.canopy_height_true_m = 31.0 + record;
   shot.footprint_lonlat = octagon(shot.lon_deg, shot.lat_deg);
   return shot;
 }
@@ -87,6 +102,14 @@ ShotRecord make_flagged_record(int record) {
   shot.rx_energy_canopy_J.clear();
   shot.rx_energy_ground_J.clear();
   shot.reflectance.clear();
+  for (auto field : {&ShotRecord::energy_tr_J, &ShotRecord::energy_cr_J, &ShotRecord::energy_gr_J,
+                     &ShotRecord::waveform_index, &ShotRecord::sig_begin_m, &ShotRecord::sig_end_m,
+                     &ShotRecord::centroid_m, &ShotRecord::ground_elev_est_m,
+                     &ShotRecord::canopy_height_est_m})
+    (shot.*field).clear();
+  shot.n_peaks.clear();
+  shot.rh_m.clear();
+  shot.cover_true = shot.pai_true = shot.canopy_height_true_m = std::nan("");
   shot.footprint_lonlat.clear();
   return shot;
 }
@@ -174,18 +197,21 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
   for (const char* name :
        {"time", "lat", "lon", "elev", "sc_lat", "sc_lon", "sc_alt", "off_nadir_deg", "range_m",
         "slope_deg", "aspect_deg", "elev_bin0", "elev_lastbin", "rx_energy", "rx_energy_canopy",
-        "rx_energy_ground", "reflectance"}) {
+        "rx_energy_ground", "reflectance", "energy_tr", "energy_cr", "energy_gr",
+        "waveform_index", "sig_begin_m", "sig_end_m", "centroid_m", "ground_elev_est",
+        "canopy_height_est", "rh25", "rh50", "rh75", "rh98", "rh100", "cover_true", "pai_true",
+        "canopy_height_true"}) {
     const int index = definition->GetFieldIndex(name);
     ASSERT_GE(index, 0) << name;
     EXPECT_EQ(definition->GetFieldDefn(index)->GetType(), OFTReal) << name;
   }
-  for (const char* name : {"shot_number", "quality_flag"}) {
+  for (const char* name : {"shot_number", "quality_flag", "n_peaks"}) {
     const int index = definition->GetFieldIndex(name);
     ASSERT_GE(index, 0) << name;
     const OGRFieldType type = definition->GetFieldDefn(index)->GetType();
     EXPECT_TRUE(type == OFTInteger || type == OFTInteger64) << name;
   }
-  EXPECT_EQ(definition->GetFieldCount(), 19);
+  EXPECT_EQ(definition->GetFieldCount(), 37);
 
   // Features come in record order although they were written 2, 1, 0.
   ASSERT_EQ(features.size(), 3u);
@@ -220,13 +246,34 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
   EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("reflectance"), record0.reflectance[0]);
   EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("rx_energy"), record0.rx_energy_J[0]);
   EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("rx_energy_ground"), record0.rx_energy_ground_J[0]);
+  // The first band's waveform metrics and the footprint's truth.
+  for (int record : {0, 2}) {
+    const OGRFeature& feature = *features[record];
+    const ShotRecord expected = make_record(record);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("energy_tr"), expected.energy_tr_J[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("energy_cr"), expected.energy_cr_J[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("energy_gr"), expected.energy_gr_J[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("waveform_index"), expected.waveform_index[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("sig_begin_m"), expected.sig_begin_m[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("sig_end_m"), expected.sig_end_m[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("centroid_m"), expected.centroid_m[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("ground_elev_est"), expected.ground_elev_est_m[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("canopy_height_est"), expected.canopy_height_est_m[0]);
+    EXPECT_EQ(feature.GetFieldAsInteger("n_peaks"), expected.n_peaks[0]);
+    for (int k : {25, 50, 75, 98, 100})
+      EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble(("rh" + std::to_string(k)).c_str()), expected.rh_m[0][k]) << k;
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("cover_true"), expected.cover_true);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("pai_true"), expected.pai_true);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("canopy_height_true"), expected.canopy_height_true_m);
+  }
 
   // The flagged shot: no geometry, no metrics, its position still there.
   const OGRFeature& flagged = *features[1];
   EXPECT_EQ(flagged.GetGeometryRef(), nullptr);
   EXPECT_EQ(flagged.GetFieldAsInteger("quality_flag"), quality_no_terrain);
   for (const char* name :
-       {"elev", "rx_energy", "rx_energy_canopy", "rx_energy_ground", "reflectance"}) {
+       {"elev", "rx_energy", "rx_energy_canopy", "rx_energy_ground", "reflectance", "energy_tr",
+        "ground_elev_est", "canopy_height_est", "n_peaks", "rh98", "cover_true"}) {
     EXPECT_TRUE(flagged.IsFieldNull(definition->GetFieldIndex(name))) << name;
   }
   EXPECT_FALSE(flagged.IsFieldNull(definition->GetFieldIndex("lat")));

@@ -88,7 +88,37 @@ ShotRecord make_record(int record, int orders) {
     shot.rx_energy_canopy_J.push_back(0.6e-15 * (record + 1) * (band + 1));
     shot.rx_energy_ground_J.push_back(0.4e-15 * (record + 1) * (band + 1));
     shot.reflectance.push_back(0.1 * (record + 1) + 0.01 * band);
+    // Waveform metrics: values that tell record and band apart.
+    const double tag = 10 * record + band;
+    shot.energy_tr_J.push_back(1.0e-15 + 1e-17 * tag);
+    shot.energy_cr_J.push_back(0.7e-15 + 1e-17 * tag);
+    shot.energy_gr_J.push_back(0.3e-15);
+    shot.waveform_index.push_back(0.4 - 0.01 * tag);
+    shot.sig_begin_m.push_back(1240.0 + tag);
+    shot.sig_end_m.push_back(1195.0 + tag);
+    shot.centroid_m.push_back(1215.0 + tag);
+    shot.n_peaks.push_back(1 + (record + band) % 6);
+    std::vector<double> amp(6, std::nan("")), center(6, std::nan("")), sigma(6, std::nan("")),
+        area(6, std::nan(""));
+    for (int k = 0; k < shot.n_peaks.back(); ++k) {
+      amp[k] = 1e-6 * (k + 1) + 1e-9 * tag;
+      center[k] = 1230.0 - 5.0 * k + tag;
+      sigma[k] = 5.0 + k + 0.01 * tag;
+      area[k] = 1e-14 * (k + 1) + 1e-17 * tag;
+    }
+    shot.gauss_amp_W.push_back(amp);
+    shot.gauss_center_m.push_back(center);
+    shot.gauss_sigma_ns.push_back(sigma);
+    shot.gauss_area_J.push_back(area);
+    shot.ground_elev_est_m.push_back(1200.25 + tag);
+    shot.canopy_height_est_m.push_back(25.5 + tag);
+    std::vector<double> rh;
+    for (int k = 0; k <= 100; ++k) rh.push_back(-2.0 + 0.25 * k + 0.01 * tag);
+    shot.rh_m.push_back(rh);
   }
+  shot.cover_true = 0.7 - 0.1 * record;
+  shot.pai_true = 3.0 + record;
+  shot.canopy_height_true_m = 30.0 + record;
   return shot;
 }
 
@@ -104,6 +134,16 @@ ShotRecord make_flagged_record(int record) {
   shot.rx_energy_canopy_J.clear();
   shot.rx_energy_ground_J.clear();
   shot.reflectance.clear();
+  for (auto field : {&ShotRecord::energy_tr_J, &ShotRecord::energy_cr_J, &ShotRecord::energy_gr_J,
+                     &ShotRecord::waveform_index, &ShotRecord::sig_begin_m, &ShotRecord::sig_end_m,
+                     &ShotRecord::centroid_m, &ShotRecord::ground_elev_est_m,
+                     &ShotRecord::canopy_height_est_m})
+    (shot.*field).clear();
+  shot.n_peaks = {0, 0};  // what the simulation hands over for a flagged shot
+  for (auto field : {&ShotRecord::gauss_amp_W, &ShotRecord::gauss_center_m,
+                     &ShotRecord::gauss_sigma_ns, &ShotRecord::gauss_area_J, &ShotRecord::rh_m})
+    (shot.*field).clear();
+  shot.cover_true = shot.pai_true = shot.canopy_height_true_m = std::nan("");
   return shot;
 }
 
@@ -276,6 +316,25 @@ TEST_F(NetcdfWriterTest, EveryVariableHasUnitsAndLongName) {
                                           "rx_energy_canopy",
                                           "rx_energy_ground",
                                           "reflectance",
+                                          "energy_tr",
+                                          "energy_cr",
+                                          "energy_gr",
+                                          "waveform_index",
+                                          "sig_begin_m",
+                                          "sig_end_m",
+                                          "centroid_m",
+                                          "n_peaks",
+                                          "gauss_amp",
+                                          "gauss_center_m",
+                                          "gauss_sigma_ns",
+                                          "gauss_area",
+                                          "ground_elev_est",
+                                          "canopy_height_est",
+                                          "rh",
+                                          "percentile",
+                                          "cover_true",
+                                          "pai_true",
+                                          "canopy_height_true",
                                           "order"};
   int nvars = 0;
   ASSERT_EQ(nc_inq_nvars(nc.id(), &nvars), NC_NOERR);
@@ -463,6 +522,98 @@ TEST_F(NetcdfWriterTest, ValuesComeBack) {
   EXPECT_STREQ(names[0], "532");
   EXPECT_STREQ(names[1], "1064");
   nc_free_string(2, names);
+}
+
+// PRODUCT.md section 4's waveform metrics: dimensions, units, CF attributes and values.
+TEST_F(NetcdfWriterTest, WaveformMetricsComeBackWithTheirUnits) {
+  write_product(file(), make_info(kOrders), true);
+  Reader nc(file());
+  EXPECT_EQ(nc.dim("percentile"), 101u);
+  const std::map<std::string, std::string> units = {
+      {"energy_tr", "J"},          {"energy_cr", "J"},        {"energy_gr", "J"},
+      {"waveform_index", "1"},     {"sig_begin_m", "m"},      {"sig_end_m", "m"},
+      {"centroid_m", "m"},         {"n_peaks", "1"},          {"gauss_amp", "W"},
+      {"gauss_center_m", "m"},     {"gauss_sigma_ns", "ns"},  {"gauss_area", "J"},
+      {"ground_elev_est", "m"},    {"canopy_height_est", "m"}, {"rh", "m"},
+      {"cover_true", "1"},         {"pai_true", "1"},         {"canopy_height_true", "m"},
+      {"percentile", "percent"}};
+  for (const auto& [name, unit] : units) {
+    EXPECT_EQ(nc.text(name, "units"), unit) << name;
+    EXPECT_FALSE(nc.text(name, "long_name").empty()) << name;
+  }
+  for (const char* name : {"energy_tr", "waveform_index", "sig_begin_m", "ground_elev_est",
+                           "canopy_height_est", "n_peaks"})
+    EXPECT_EQ(nc.dims_of(name), (std::vector<std::string>{"shot", "band"})) << name;
+  for (const char* name : {"gauss_amp", "gauss_center_m", "gauss_sigma_ns", "gauss_area"})
+    EXPECT_EQ(nc.dims_of(name), (std::vector<std::string>{"shot", "band", "gaussian"})) << name;
+  EXPECT_EQ(nc.dims_of("rh"), (std::vector<std::string>{"shot", "band", "percentile"}));
+  EXPECT_EQ(nc.dims_of("percentile"), (std::vector<std::string>{"percentile"}));
+  for (const char* name : {"cover_true", "pai_true", "canopy_height_true"})
+    EXPECT_EQ(nc.dims_of(name), (std::vector<std::string>{"shot"})) << name;
+  EXPECT_EQ(nc.type_of("n_peaks"), NC_INT);
+  EXPECT_EQ(nc.type_of("rh"), NC_FLOAT);
+  // CF names where CF has them, and the coordinates of a trajectory.
+  EXPECT_EQ(nc.text("ground_elev_est", "standard_name"), "height_above_reference_ellipsoid");
+  EXPECT_EQ(nc.text("gauss_center_m", "standard_name"), "height_above_reference_ellipsoid");
+  EXPECT_EQ(nc.text("canopy_height_est", "standard_name"), "canopy_height");
+  EXPECT_EQ(nc.text("cover_true", "standard_name"), "vegetation_area_fraction");
+  EXPECT_NE(nc.text("waveform_index", "long_name").find("eq. 3"), std::string::npos);
+  EXPECT_FALSE(nc.text("energy_gr", "comment").empty() && nc.text("energy_cr", "comment").empty());
+  for (const char* name : {"energy_tr", "rh", "gauss_amp", "cover_true"})
+    EXPECT_EQ(nc.text(name, "coordinates"), "time lat lon") << name;
+  for (const char* name : {"energy_tr", "rh", "gauss_center_m", "canopy_height_true"}) {
+    double fill = 0.0;
+    ASSERT_EQ(nc_get_att_double(nc.id(), nc.var(name), "_FillValue", &fill), NC_NOERR) << name;
+    EXPECT_TRUE(std::isnan(fill)) << name;
+  }
+  std::vector<double> percentiles;
+  for (int k = 0; k <= 100; ++k) percentiles.push_back(k);
+  EXPECT_EQ(nc.doubles("percentile"), percentiles);
+
+  const std::map<std::string, std::vector<double> ShotRecord::*> per_band = {
+      {"energy_tr", &ShotRecord::energy_tr_J},           {"energy_cr", &ShotRecord::energy_cr_J},
+      {"energy_gr", &ShotRecord::energy_gr_J},           {"waveform_index", &ShotRecord::waveform_index},
+      {"sig_begin_m", &ShotRecord::sig_begin_m},         {"sig_end_m", &ShotRecord::sig_end_m},
+      {"centroid_m", &ShotRecord::centroid_m},           {"ground_elev_est", &ShotRecord::ground_elev_est_m},
+      {"canopy_height_est", &ShotRecord::canopy_height_est_m}};
+  const std::map<std::string, std::vector<std::vector<double>> ShotRecord::*> per_gaussian = {
+      {"gauss_amp", &ShotRecord::gauss_amp_W},
+      {"gauss_center_m", &ShotRecord::gauss_center_m},
+      {"gauss_sigma_ns", &ShotRecord::gauss_sigma_ns},
+      {"gauss_area", &ShotRecord::gauss_area_J}};
+  const std::map<std::string, double ShotRecord::*> truth = {
+      {"cover_true", &ShotRecord::cover_true},
+      {"pai_true", &ShotRecord::pai_true},
+      {"canopy_height_true", &ShotRecord::canopy_height_true_m}};
+  const auto n_peaks = nc.doubles("n_peaks");
+  const auto rh = nc.doubles("rh");
+  for (int record : {0, 2}) {
+    const ShotRecord expected = make_record(record, kOrders);
+    for (int band = 0; band < 2; ++band) {
+      for (const auto& [name, field] : per_band)
+        EXPECT_EQ(nc.doubles(name)[record * 2 + band], (expected.*field)[band]) << name;
+      EXPECT_EQ(n_peaks[record * 2 + band], expected.n_peaks[band]);
+      for (const auto& [name, field] : per_gaussian) {
+        const auto values = nc.doubles(name);
+        for (int k = 0; k < 6; ++k) {
+          const double want = (expected.*field)[band][k], got = values[(record * 2 + band) * 6 + k];
+          if (std::isnan(want))
+            EXPECT_TRUE(std::isnan(got)) << name << " slot " << k << " is unused";
+          else
+            EXPECT_EQ(got, want) << name << " slot " << k;
+        }
+      }
+      for (int k = 0; k <= 100; ++k)
+        EXPECT_FLOAT_EQ(rh[(record * 2 + band) * 101 + k], expected.rh_m[band][k]) << "rh" << k;
+    }
+    for (const auto& [name, field] : truth) EXPECT_EQ(nc.doubles(name)[record], expected.*field) << name;
+  }
+  // The flagged shot (record 1): fill, and no peaks.
+  EXPECT_TRUE(std::isnan(nc.doubles("energy_tr")[2]));
+  EXPECT_TRUE(std::isnan(nc.doubles("gauss_center_m")[1 * 2 * 6]));
+  EXPECT_TRUE(std::isnan(rh[1 * 2 * 101 + 98]));
+  EXPECT_TRUE(std::isnan(nc.doubles("cover_true")[1]));
+  EXPECT_EQ(n_peaks[2], 0.0);
 }
 
 TEST_F(NetcdfWriterTest, FlaggedShotKeepsFill) {

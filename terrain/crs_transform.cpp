@@ -1,0 +1,223 @@
+// PROJ behind a small RAII layer: one prototype operation, cloned per borrowing thread.
+#include "terrain/crs_transform.hpp"
+
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <vector>
+
+#include <proj.h>
+#include <proj_experimental.h>
+
+#include "terrain/error.hpp"
+
+namespace glaswave {
+namespace {
+
+struct ContextDeleter {
+  void operator()(PJ_CONTEXT* context) const { proj_context_destroy(context); }
+};
+struct PjDeleter {
+  void operator()(PJ* object) const { proj_destroy(object); }
+};
+using ContextPtr = std::unique_ptr<PJ_CONTEXT, ContextDeleter>;
+using PjPtr = std::unique_ptr<PJ, PjDeleter>;
+
+// A context that keeps PROJ quiet: its messages would reach the user's terminal.
+ContextPtr quiet_context() {
+  ContextPtr context(proj_context_create());
+  proj_log_level(context.get(), PJ_LOG_NONE);
+  return context;
+}
+
+std::string proj_message(PJ_CONTEXT* context) {
+  const int code = proj_context_errno(context);
+  const char* text = code ? proj_context_errno_string(context, code) : nullptr;
+  return text ? text : "no reason given";
+}
+
+// "EPSG:5773", or the CRS's name when it has no identifier.
+std::string identifier(const PJ* crs) {
+  const char* authority = proj_get_id_auth_name(crs, 0);
+  const char* code = proj_get_id_code(crs, 0);
+  if (authority && code) return std::string(authority) + ":" + code;
+  const char* name = proj_get_name(crs);
+  return name ? name : "unnamed vertical CRS";
+}
+
+std::string name_of(const PJ* crs) {
+  const char* name = proj_get_name(crs);
+  return name ? name : "unnamed";
+}
+
+// "WGS 84": the name of a CRS's ellipsoid.
+std::string ellipsoid_name(PJ_CONTEXT* context, const PJ* crs) {
+  const PjPtr ellipsoid(proj_get_ellipsoid(context, crs));
+  return ellipsoid ? name_of(ellipsoid.get()) : "unnamed";
+}
+
+// The CRS under a bound CRS (WKT1's TOWGS84 wraps one).
+PjPtr unbound(PJ_CONTEXT* context, const PJ* crs) {
+  if (proj_get_type(crs) == PJ_TYPE_BOUND_CRS) return PjPtr(proj_get_source_crs(context, crs));
+  return PjPtr(proj_clone(context, crs));
+}
+
+// A pooled operation with its own context.
+struct Worker {
+  ContextPtr context;
+  PjPtr operation;
+};
+
+}  // namespace
+
+struct CrsTransform::Impl {
+  ContextPtr context;  // of the prototype; used under `mutex` only
+  PjPtr prototype;     // normalised operation: (easting, northing, height) -> (lon, lat, h)
+  bool geographic = false;
+  VerticalDatum datum;
+  std::mutex mutex;
+  std::vector<std::unique_ptr<Worker>> idle;
+
+  // A worker for the calling thread, returned to the pool when the lease ends.
+  class Lease {
+   public:
+    explicit Lease(Impl& impl) : impl_(impl) {
+      std::lock_guard lock(impl_.mutex);
+      if (!impl_.idle.empty()) {
+        worker_ = std::move(impl_.idle.back());
+        impl_.idle.pop_back();
+      } else {
+        worker_ = std::make_unique<Worker>();
+        worker_->context = quiet_context();
+        worker_->operation.reset(proj_clone(worker_->context.get(), impl_.prototype.get()));
+        if (!worker_->operation) throw run_error("PROJ", "cannot copy a coordinate operation");
+      }
+    }
+    ~Lease() {
+      std::lock_guard lock(impl_.mutex);
+      impl_.idle.push_back(std::move(worker_));
+    }
+    PJ* operation() const { return worker_->operation.get(); }
+
+   private:
+    Impl& impl_;
+    std::unique_ptr<Worker> worker_;
+  };
+};
+
+CrsTransform::CrsTransform(const std::string& crs_wkt, const std::string& vertical_datum,
+                           const std::string& place)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->context = quiet_context();
+  PJ_CONTEXT* context = impl_->context.get();
+  const PjPtr crs(proj_create(context, crs_wkt.c_str()));
+  if (!crs)
+    throw input_error(place,
+                      "PROJ cannot read its coordinate reference system: " + proj_message(context));
+
+  // The horizontal part decides the units of x and y; the vertical part, where heights are from.
+  PjPtr horizontal = unbound(context, crs.get());
+  PjPtr vertical;
+  const bool compound = proj_get_type(crs.get()) == PJ_TYPE_COMPOUND_CRS;
+  if (compound) {
+    const PjPtr first(proj_crs_get_sub_crs(context, crs.get(), 0));
+    vertical.reset(proj_crs_get_sub_crs(context, crs.get(), 1));
+    if (!first || !vertical) throw input_error(place, "PROJ cannot split its compound CRS");
+    horizontal = unbound(context, first.get());
+  }
+  const PJ_TYPE type = proj_get_type(horizontal.get());
+  impl_->geographic = type == PJ_TYPE_GEOGRAPHIC_2D_CRS || type == PJ_TYPE_GEOGRAPHIC_3D_CRS;
+  if (!impl_->geographic && type != PJ_TYPE_PROJECTED_CRS)
+    throw input_error(
+        place, "its CRS (" + name_of(horizontal.get()) + ") is neither geographic nor projected");
+  const PjPtr coordinate_system(proj_crs_get_coordinate_system(context, horizontal.get()));
+  const bool three_d =
+      coordinate_system && proj_cs_get_axis_count(context, coordinate_system.get()) == 3;
+
+  PjPtr source;
+  if (compound) {
+    source.reset(proj_clone(context, crs.get()));
+    impl_->datum = {identifier(vertical.get()), "DEM heights in " + name_of(vertical.get()) + " (" +
+                                                    identifier(vertical.get()) +
+                                                    "), the DEM's own vertical CRS"};
+  } else if (three_d) {
+    // A 3-D CRS holds ellipsoidal heights by definition.
+    source.reset(proj_clone(context, crs.get()));
+    impl_->datum = {"ellipsoid", "DEM heights above the " + ellipsoid_name(context, crs.get()) +
+                                     " ellipsoid, by the DEM's 3-D CRS"};
+  } else if (vertical_datum == "ellipsoid") {
+    source.reset(proj_crs_promote_to_3D(context, nullptr, crs.get()));
+    if (!source)
+      throw input_error(place, "PROJ cannot give its CRS heights: " + proj_message(context));
+    impl_->datum = {"ellipsoid", "DEM heights above the " + ellipsoid_name(context, crs.get()) +
+                                     " ellipsoid, from terrain.vertical_datum"};
+  } else {
+    const std::string definition = vertical_datum == "egm96" ? "EPSG:5773" : vertical_datum;
+    vertical.reset(proj_create(context, definition.c_str()));
+    if (!vertical || proj_get_type(vertical.get()) != PJ_TYPE_VERTICAL_CRS)
+      throw config_error("/terrain/vertical_datum",
+                         "must be \"ellipsoid\", \"egm96\" or a vertical CRS PROJ knows, got \"" +
+                             vertical_datum + "\"");
+    source.reset(proj_create_compound_crs(
+        context, (name_of(crs.get()) + " + " + name_of(vertical.get())).c_str(), crs.get(),
+        vertical.get()));
+    if (!source)
+      throw input_error(
+          place, "PROJ cannot combine its CRS with " + definition + ": " + proj_message(context));
+    impl_->datum = {vertical_datum, "DEM heights in " + name_of(vertical.get()) + " (" +
+                                        identifier(vertical.get()) +
+                                        "), from terrain.vertical_datum"};
+  }
+
+  const PjPtr target(proj_create(context, "EPSG:4979"));  // WGS 84, 3-D
+  if (!target)
+    throw run_error("PROJ", "cannot find EPSG:4979 in its database: " + proj_message(context));
+  // No ballpark: a geoid grid PROJ cannot find must be an error, not heights off by tens of
+  // metres. Without a vertical CRS a ballpark datum shift is better than nothing.
+  const char* const strict[] = {"ALLOW_BALLPARK=NO", nullptr};
+  PjPtr operation(
+      proj_create_crs_to_crs_from_pj(context, source.get(), target.get(), nullptr, strict));
+  if (!operation && !vertical)
+    operation.reset(
+        proj_create_crs_to_crs_from_pj(context, source.get(), target.get(), nullptr, nullptr));
+  if (!operation) {
+    const std::string from = vertical
+                                 ? name_of(vertical.get()) + " (" + identifier(vertical.get()) + ")"
+                                 : "its CRS (" + name_of(crs.get()) + ")";
+    throw input_error(
+        place, "PROJ has no transformation from " + from +
+                   " to WGS84 ellipsoidal heights; is the grid it needs installed (proj-data)?");
+  }
+  impl_->prototype.reset(proj_normalize_for_visualization(context, operation.get()));
+  if (!impl_->prototype)
+    throw input_error(place, "PROJ cannot order its axes: " + proj_message(context));
+}
+
+CrsTransform::~CrsTransform() = default;
+
+void CrsTransform::to_wgs84(std::size_t count, double* x, double* y, double* z) const {
+  if (count == 0) return;
+  const Impl::Lease lease(*impl_);
+  proj_trans_generic(lease.operation(), PJ_FWD, x, sizeof(double), count, y, sizeof(double), count,
+                     z, sizeof(double), count, nullptr, 0, 0);
+  // PROJ marks what it cannot transform with HUGE_VAL.
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!std::isfinite(x[i]) || !std::isfinite(y[i]) || !std::isfinite(z[i]))
+      x[i] = y[i] = z[i] = std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+std::array<double, 2> CrsTransform::from_wgs84(double lon_deg, double lat_deg) const {
+  const Impl::Lease lease(*impl_);
+  const PJ_COORD out =
+      proj_trans(lease.operation(), PJ_INV, proj_coord(lon_deg, lat_deg, 0.0, 0.0));
+  if (!std::isfinite(out.xyz.x) || !std::isfinite(out.xyz.y))
+    return {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  return {out.xyz.x, out.xyz.y};
+}
+
+bool CrsTransform::geographic() const { return impl_->geographic; }
+
+const VerticalDatum& CrsTransform::vertical_datum() const { return impl_->datum; }
+
+}  // namespace glaswave

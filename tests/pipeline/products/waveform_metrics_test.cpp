@@ -1,0 +1,218 @@
+// Tests of the waveform metrics on waveforms with known answers: a lone pulse (begin and end
+// where its smoothed shape crosses the threshold, rh50 at its centre, no canopy height), a
+// uniform block (rh linear), canopy over ground (ground at the lowest Gaussian, TR = CR + GR with
+// each part the energy of its Gaussians), noise (threshold above the noise), and the record-level
+// processing with its fill for flagged shots.
+#include "pipeline/products/waveform_metrics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+namespace glaswave {
+namespace {
+
+constexpr int kBins = 400;
+constexpr double kBinNs = 1.0;
+constexpr double kPulseNs = 5.0;
+constexpr double kBinM = 299792458.0 * kBinNs * 1e-9 / 2.0;  // two-way: 0.1499 m a bin
+constexpr double kTopM = 1060.0;                             // elevation of bin 0
+
+const WaveformAxis kAxis{kBinNs, kTopM, kTopM - (kBins - 1) * kBinM};
+
+double elevation(double bin) { return kTopM - bin * kBinM; }
+
+WaveformProcessing noise_free() {
+  WaveformProcessing p;
+  p.pulse_sigma_ns = kPulseNs;
+  p.noise_free = true;
+  return p;
+}
+
+std::vector<double> gaussians(const std::vector<GaussianComponent>& components) {
+  std::vector<double> values(kBins, 0.0);
+  for (int i = 0; i < kBins; ++i)
+    for (const GaussianComponent& g : components) values[i] += g.value_at(i);
+  return values;
+}
+
+TEST(WaveformAxis, ElevationIsLinearInTheBin) {
+  EXPECT_DOUBLE_EQ(kAxis.elevation_m(0.0, kBins), kTopM);
+  EXPECT_NEAR(kAxis.elevation_m(kBins - 1.0, kBins), kAxis.elev_lastbin_m, 1e-9);
+  EXPECT_NEAR(kAxis.elevation_m(100.5, kBins), elevation(100.5), 1e-9);
+}
+
+// A flat surface: one pulse-wide Gaussian. Seen through the pulse-wide filter it is a Gaussian
+// of sqrt(2) pulse widths and 1/sqrt(2) the amplitude, so the 1 %-of-peak threshold is crossed
+// sqrt(2) sigma sqrt(2 ln 100) either side of the centre.
+TEST(WaveformMetrics, LonePulse) {
+  const double center = 250.3, amplitude_W = 2e-6;
+  const auto m =
+      process_waveform(gaussians({{amplitude_W, center, kPulseNs}}), kAxis, noise_free());
+  const double reach_bins = std::sqrt(2.0) * kPulseNs * std::sqrt(2.0 * std::log(100.0));
+  // To 0.05 bin (7 mm): the crossing is interpolated linearly on the tail's curve.
+  EXPECT_NEAR(m.sig_begin_bin, center - reach_bins, 0.05);
+  EXPECT_NEAR(m.sig_end_bin, center + reach_bins, 0.05);
+  EXPECT_NEAR(m.sig_begin_m, elevation(center - reach_bins), 0.05 * kBinM);
+  EXPECT_NEAR(m.sig_end_m, elevation(center + reach_bins), 0.05 * kBinM);
+  EXPECT_NEAR(m.centroid_m, elevation(center), 0.001);
+  EXPECT_EQ(m.noise_mean_W, 0.0);
+  EXPECT_NEAR(m.threshold_W, 0.01 * amplitude_W / std::sqrt(2.0), 1e-4 * amplitude_W);
+
+  ASSERT_EQ(m.n_peaks, 1);
+  EXPECT_NEAR(m.gauss_amp_W[0] / amplitude_W, 1.0, 1e-6);
+  EXPECT_NEAR(m.gauss_center_m[0], elevation(center), 1e-5);
+  EXPECT_NEAR(m.gauss_sigma_ns[0], kPulseNs, 1e-5);
+  const double area_J = amplitude_W * kPulseNs * 1e-9 * std::sqrt(2.0 * std::numbers::pi);
+  EXPECT_NEAR(m.gauss_area_J[0] / area_J, 1.0, 1e-6);
+  for (int k = 1; k < kMaxGaussians; ++k) {
+    EXPECT_TRUE(std::isnan(m.gauss_amp_W[k])) << k;
+    EXPECT_TRUE(std::isnan(m.gauss_center_m[k])) << k;
+  }
+
+  // The ground is the pulse; its own rise is no canopy.
+  EXPECT_NEAR(m.ground_elev_m, elevation(center), 1e-5);
+  EXPECT_NEAR(m.canopy_height_m, 0.0, 0.02);
+  // rh: symmetric about the centre, rh0 and rh100 at signal end and begin.
+  EXPECT_NEAR(m.rh_m[50], 0.0, 0.002);
+  EXPECT_NEAR(m.rh_m[0], m.sig_end_m - m.ground_elev_m, 1e-6);
+  EXPECT_NEAR(m.rh_m[100], m.sig_begin_m - m.ground_elev_m, 1e-6);
+  EXPECT_NEAR(m.rh_m[16], -m.rh_m[84], 0.005);
+  for (int k = 1; k < kRhLevels; ++k) EXPECT_GE(m.rh_m[k], m.rh_m[k - 1]) << k;
+  // rh84 - rh16 is two sigma of the pulse in metres, nearly (the window cuts the tails).
+  EXPECT_NEAR(m.rh_m[84] - m.rh_m[16], 2.0 * kPulseNs * kBinM, 0.02);
+
+  // All ground: TR = CR + GR, with only the smoothed reach above 4 sigma in CR.
+  EXPECT_DOUBLE_EQ(m.energy_tr_J, m.energy_cr_J + m.energy_gr_J);
+  EXPECT_NEAR(m.energy_tr_J / area_J, 1.0, 1e-3);
+  EXPECT_LT(m.energy_cr_J / m.energy_tr_J, 1e-4);
+  EXPECT_NEAR(m.waveform_index, -1.0, 2e-4);
+}
+
+// A uniform block of 100 bins: the energy grows linearly from its bottom, so rh does too, one
+// bin (0.15 m) a percent; rh0 and rh100 are the block's edges.
+TEST(WaveformMetrics, UniformBlockHasLinearRh) {
+  std::vector<double> values(kBins, 0.0);
+  for (int i = 150; i < 250; ++i) values[i] = 1e-6;
+  const auto m = process_waveform(values, kAxis, noise_free());
+  ASSERT_GE(m.n_peaks, 1);
+  const double bottom_m = elevation(249.5), top_m = elevation(149.5);
+  for (int k = 0; k <= 100; ++k) {
+    const double expected_m = bottom_m + (top_m - bottom_m) * k / 100.0 - m.ground_elev_m;
+    EXPECT_NEAR(m.rh_m[k], expected_m, 1e-6) << "rh" << k;
+  }
+  EXPECT_NEAR(m.energy_tr_J, 100 * 1e-6 * kBinNs * 1e-9, 1e-20);
+  EXPECT_DOUBLE_EQ(m.energy_tr_J, m.energy_cr_J + m.energy_gr_J);
+  EXPECT_NEAR(m.centroid_m, elevation(199.5), 1e-9);
+}
+
+// Canopy (a broad return) well above the ground (a pulse): the ground is the lowest Gaussian,
+// GR and CR are the energies of the ground's and the canopy's Gaussians, and the canopy height
+// reaches the canopy return's upper flank.
+TEST(WaveformMetrics, CanopyOverGround) {
+  const GaussianComponent canopy{0.8e-6, 150.0, 12.0}, ground{1.2e-6, 300.0, kPulseNs};
+  const auto m = process_waveform(gaussians({canopy, ground}), kAxis, noise_free());
+  ASSERT_EQ(m.n_peaks, 2);
+  EXPECT_NEAR(m.gauss_center_m[0], elevation(150.0), 1e-4);
+  EXPECT_NEAR(m.gauss_center_m[1], elevation(300.0), 1e-4);
+  EXPECT_NEAR(m.ground_elev_m, elevation(300.0), 1e-4);
+  const double to_J = kBinNs * 1e-9;
+  EXPECT_NEAR(m.energy_gr_J / (ground.area() * to_J), 1.0, 1e-3);
+  EXPECT_NEAR(m.energy_cr_J / (canopy.area() * to_J), 1.0, 5e-3);  // less the tails beyond begin
+  EXPECT_DOUBLE_EQ(m.energy_tr_J, m.energy_cr_J + m.energy_gr_J);
+  EXPECT_NEAR(m.waveform_index, (canopy.area() - ground.area()) / (canopy.area() + ground.area()),
+              5e-3);
+  // Signal begin: where the smoothed canopy (12 and 5 -> 13 bins wide) crosses 1 % of the
+  // smoothed peak, which is the ground's (1.2e-6 / sqrt 2 = 0.85e-6 against 0.8e-6 * 12 / 13).
+  const double smoothed_ground = 1.2e-6 / std::sqrt(2.0), canopy_sigma = std::hypot(12.0, kPulseNs);
+  const double smoothed_canopy = 0.8e-6 * 12.0 / canopy_sigma;
+  const double begin =
+      150.0 - canopy_sigma * std::sqrt(2.0 * std::log(smoothed_canopy / (0.01 * smoothed_ground)));
+  EXPECT_NEAR(m.sig_begin_bin, begin, 0.05);
+  // Height: begin above the ground less the rise of a lone pulse as strong as the canopy's.
+  const double rise = std::sqrt(2.0) * kPulseNs *
+                      std::sqrt(2.0 * std::log(smoothed_canopy / (0.01 * smoothed_ground)));
+  EXPECT_NEAR(m.canopy_height_m, (300.0 - begin - rise) * kBinM, 0.01);
+  // Above the canopy return's centre by more than its sigma, below the uncorrected rh100.
+  EXPECT_GT(m.canopy_height_m, (300.0 - 150.0 + 12.0) * kBinM);
+  EXPECT_LT(m.canopy_height_m, m.rh_m[100]);
+}
+
+// With noise: the threshold sits 4 noise sigmas (of the smoothed waveform) over the noise mean,
+// which comes from the quiet end of the window; the noise mean is taken out of the energies.
+TEST(WaveformMetrics, ThresholdAboveTheNoise) {
+  const double background_W = 0.05e-6, noise_W = 0.01e-6;
+  auto values = gaussians({{1.0e-6, 200.0, kPulseNs}});
+  std::mt19937_64 engine(7);
+  std::normal_distribution<double> normal(0.0, noise_W);
+  for (double& v : values) v += background_W + normal(engine);
+  WaveformProcessing processing = noise_free();
+  processing.noise_free = false;
+  const auto m = process_waveform(values, kAxis, processing);
+  EXPECT_NEAR(m.noise_mean_W, background_W, 3.0 * noise_W / std::sqrt(60.0));
+  // White noise through a Gaussian filter of s bins keeps 1 / sqrt(2 sqrt(pi) s) of its RMS.
+  const double smoothed_sd = noise_W / std::sqrt(2.0 * std::sqrt(std::numbers::pi) * kPulseNs);
+  EXPECT_NEAR(m.noise_sd_W / smoothed_sd, 1.0, 0.2);
+  EXPECT_NEAR(m.threshold_W, m.noise_mean_W + 4.0 * m.noise_sd_W, 1e-15)
+      << "4 sigma above 1 % of the peak";
+  const double reach =
+      std::sqrt(2.0) * kPulseNs *
+      std::sqrt(2.0 * std::log(1.0e-6 / std::sqrt(2.0) / (m.threshold_W - m.noise_mean_W)));
+  EXPECT_NEAR(m.sig_begin_bin, 200.0 - reach, 1.0);
+  EXPECT_NEAR(m.sig_end_bin, 200.0 + reach, 1.0);
+  ASSERT_EQ(m.n_peaks, 1);
+  EXPECT_NEAR(m.ground_elev_m, elevation(200.0), 0.02);
+  EXPECT_NEAR(m.gauss_amp_W[0] / 1e-6, 1.0, 0.02);
+  EXPECT_NEAR(m.canopy_height_m, 0.0, 0.15);
+  EXPECT_NEAR(m.rh_m[50], 0.0, 0.05);
+  const double area_J = 1.0e-6 * kPulseNs * 1e-9 * std::sqrt(2.0 * std::numbers::pi);
+  EXPECT_NEAR(m.energy_tr_J / area_J, 1.0, 0.03);
+  EXPECT_DOUBLE_EQ(m.energy_tr_J, m.energy_cr_J + m.energy_gr_J);
+}
+
+TEST(WaveformMetrics, NoSignal) {
+  const auto m = process_waveform(std::vector<double>(kBins, 0.0), kAxis, noise_free());
+  EXPECT_EQ(m.n_peaks, 0);
+  EXPECT_EQ(m.energy_tr_J, 0.0);
+  EXPECT_EQ(m.energy_gr_J, 0.0);
+  EXPECT_TRUE(std::isnan(m.sig_begin_m));
+  EXPECT_TRUE(std::isnan(m.ground_elev_m));
+  EXPECT_TRUE(std::isnan(m.canopy_height_m));
+  EXPECT_TRUE(std::isnan(m.waveform_index));
+  EXPECT_TRUE(std::isnan(m.rh_m[50]));
+  const auto fill = process_waveform(std::vector<double>(kBins, std::nan("")), kAxis, noise_free());
+  EXPECT_EQ(fill.n_peaks, 0);
+  EXPECT_TRUE(std::isnan(fill.energy_tr_J));
+}
+
+TEST(ProcessShotWaveforms, FillsEveryBandAndFillsFlaggedShots) {
+  ShotRecord record;
+  record.elev_bin0_m = kAxis.elev_bin0_m;
+  record.elev_lastbin_m = kAxis.elev_lastbin_m;
+  record.rx_waveform_W = {gaussians({{1e-6, 250.0, kPulseNs}}),
+                          gaussians({{2e-6, 240.0, kPulseNs}})};
+  const auto noise = process_shot_waveforms(record, kBinNs, noise_free());
+  EXPECT_EQ(noise, (std::vector<double>{0.0, 0.0}));
+  ASSERT_EQ(record.energy_tr_J.size(), 2u);
+  ASSERT_EQ(record.n_peaks, (std::vector<std::int32_t>{1, 1}));
+  EXPECT_NEAR(record.ground_elev_est_m[0], elevation(250.0), 1e-4);
+  EXPECT_NEAR(record.ground_elev_est_m[1], elevation(240.0), 1e-4);
+  ASSERT_EQ(record.gauss_amp_W.size(), 2u);
+  EXPECT_EQ(record.gauss_amp_W[1].size(), static_cast<std::size_t>(kMaxGaussians));
+  ASSERT_EQ(record.rh_m.size(), 2u);
+  EXPECT_EQ(record.rh_m[0].size(), static_cast<std::size_t>(kRhLevels));
+  EXPECT_NEAR(record.rh_m[1][50], 0.0, 0.002);
+
+  record.quality_flag = quality_no_terrain;
+  process_shot_waveforms(record, kBinNs, noise_free());
+  EXPECT_EQ(record.n_peaks, (std::vector<std::int32_t>{0, 0}));
+  EXPECT_TRUE(std::isnan(record.energy_tr_J[1]));
+  EXPECT_TRUE(std::isnan(record.rh_m[0][98]));
+  EXPECT_TRUE(std::isnan(record.gauss_center_m[0][0]));
+}
+
+}  // namespace
+}  // namespace glaswave
