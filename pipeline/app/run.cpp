@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "footprints/track.hpp"
+#include "pipeline/app/plots.hpp"
 #include "pipeline/app/shot_simulation.hpp"
 #include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
@@ -32,6 +33,9 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
                                       (track.size() < length ? " (" + std::to_string(track.size()) + " on the terrain)"
                                                              : std::string()));
 
+  if (config.output.plots && !(config.output.netcdf && config.output.geojson))
+    throw config_error("/output/plots", "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
+                                        "and output.geojson");
   std::error_code exists_error;
   if (fs::exists(request.out_dir, exists_error))
     throw config_error(request.out_dir.string(), "output directory exists; remove it or choose another --out");
@@ -94,6 +98,8 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
   if (netcdf) netcdf->finish(stats);
   if (geojson) geojson->finish(stats);
   cleanup.keep = true;
+  // Plots are drawn from the finished products; a failure there leaves the products whole.
+  if (config.output.plots) write_plots(request.out_dir);
   return summary;
 }
 

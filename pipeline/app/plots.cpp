@@ -1,0 +1,142 @@
+// write_plots: runs the matplotlib script as a child process (posix_spawn with an argument
+// vector, so no shell sees the paths) and turns its failure, with its stderr, into an Error.
+#include "pipeline/app/plots.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "terrain/error.hpp"
+
+extern char** environ;
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Enough of a Python traceback to see where it failed, without flooding the message.
+constexpr std::size_t kMaxStderrChars = 4000;
+
+std::string describe_errno(int error) { return std::generic_category().message(error); }
+
+fs::path share_dir() {
+  const char* env = std::getenv("GLASWAVE_SHARE");
+  if (env != nullptr && *env != '\0') return env;
+  return GLASWAVE_SHARE_DIR;
+}
+
+// A file descriptor closed when its owner goes.
+class Fd {
+ public:
+  explicit Fd(int fd = -1) : fd_(fd) {}
+  ~Fd() { reset(); }
+  Fd(const Fd&) = delete;
+  Fd& operator=(const Fd&) = delete;
+  int get() const { return fd_; }
+  void reset() {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+  }
+
+ private:
+  int fd_;
+};
+
+class SpawnActions {
+ public:
+  SpawnActions() {
+    if (const int error = posix_spawn_file_actions_init(&actions_); error != 0)
+      throw run_error("plots", "cannot prepare the child process: " + describe_errno(error));
+  }
+  ~SpawnActions() { posix_spawn_file_actions_destroy(&actions_); }
+  SpawnActions(const SpawnActions&) = delete;
+  SpawnActions& operator=(const SpawnActions&) = delete;
+  posix_spawn_file_actions_t* get() { return &actions_; }
+
+ private:
+  posix_spawn_file_actions_t actions_;
+};
+
+std::string trimmed(std::string text) {
+  const auto first = text.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return "";
+  text = text.substr(first, text.find_last_not_of(" \t\r\n") - first + 1);
+  if (text.size() > kMaxStderrChars) text = "..." + text.substr(text.size() - kMaxStderrChars);
+  return text;
+}
+
+}  // namespace
+
+void write_plots(const fs::path& out_dir) {
+  const fs::path script = share_dir() / "plots" / "plot_products.py";
+  std::error_code ignored;
+  if (!fs::is_regular_file(script, ignored)) {
+    throw run_error("plots", "cannot find " + script.string() +
+                                 " (set GLASWAVE_SHARE to the folder that holds plots/)");
+  }
+  // Debian's python3 has the matplotlib that scripts/setup installs; a python3 first on PATH
+  // (a virtual environment) may not.
+  const bool debian_python = fs::exists("/usr/bin/python3", ignored);
+  const std::string python = debian_python ? "/usr/bin/python3" : "python3";
+  std::vector<std::string> args = {python, script.string(), out_dir.string()};
+  std::vector<char*> argv;
+  for (std::string& arg : args) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+
+  // Close-on-exec, so that no other child started meanwhile holds the write end open.
+  int ends[2];
+  if (::pipe2(ends, O_CLOEXEC) != 0)
+    throw run_error("plots", "cannot create a pipe: " + describe_errno(errno));
+  Fd read_end(ends[0]), write_end(ends[1]);
+
+  SpawnActions actions;
+  int error =
+      posix_spawn_file_actions_addopen(actions.get(), STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  if (error == 0)
+    error =
+        posix_spawn_file_actions_addopen(actions.get(), STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  if (error == 0)
+    error = posix_spawn_file_actions_adddup2(actions.get(), write_end.get(), STDERR_FILENO);
+  if (error != 0)
+    throw run_error("plots", "cannot prepare the child process: " + describe_errno(error));
+
+  pid_t pid = -1;
+  error = debian_python ? posix_spawn(&pid, argv[0], actions.get(), nullptr, argv.data(), environ)
+                        : posix_spawnp(&pid, argv[0], actions.get(), nullptr, argv.data(), environ);
+  if (error != 0) throw run_error("plots", "cannot start " + python + ": " + describe_errno(error));
+  write_end.reset();  // so that reading ends when the child exits
+
+  std::string errors;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = ::read(read_end.get(), buffer, sizeof buffer);
+    if (n > 0) {
+      errors.append(buffer, static_cast<std::size_t>(n));
+    } else if (n == 0 || errno != EINTR) {
+      break;
+    }
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR)
+      throw run_error("plots", "cannot wait for " + python + ": " + describe_errno(errno));
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+
+  const std::string how = WIFEXITED(status)
+                              ? "exited with status " + std::to_string(WEXITSTATUS(status))
+                              : "was killed by signal " + std::to_string(WTERMSIG(status));
+  const std::string message = trimmed(std::move(errors));
+  throw run_error("plots",
+                  script.filename().string() + " " + how + (message.empty() ? "" : ": " + message));
+}
+
+}  // namespace glaswave

@@ -1,0 +1,18 @@
+// The PNG quick-looks of a run (PRODUCT.md section 4, DIR/plots/): drawn by matplotlib in
+// share/plots/plot_products.py, which this runs as a child process after the products are
+// written.
+#pragma once
+
+#include <filesystem>
+
+namespace glaswave {
+
+// Runs `python3 <share>/plots/plot_products.py out_dir`, which reads out_dir/shots.nc and
+// out_dir/footprints.geojson and writes out_dir/plots/*.png. <share> is the environment
+// variable GLASWAVE_SHARE when set and non-empty, else the source tree's share/ folder
+// (GLASWAVE_SHARE_DIR, fixed at build time). Python is /usr/bin/python3 when it exists (the
+// one that has Debian's matplotlib), else python3 on PATH. Throws Error (run, place "plots")
+// with the script's stderr when the script cannot be started or fails.
+void write_plots(const std::filesystem::path& out_dir);
+
+}  // namespace glaswave

@@ -1,0 +1,179 @@
+// Tests of write_plots: a tiny product (three shots, one flagged) written with the product
+// writers into a temporary folder, drawn by share/plots/plot_products.py, and the three PNGs
+// checked for existence, signature and size; and the script's failure on a folder without
+// shots.nc turned into an Error. Missing matplotlib fails the test (scripts/setup installs it).
+#include "pipeline/app/plots.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "pipeline/products/geojson_writer.hpp"
+#include "pipeline/products/netcdf_writer.hpp"
+#include "pipeline/products/waveform_metrics.hpp"
+#include "terrain/error.hpp"
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kShots = 3;
+constexpr int kBins = 120;
+constexpr double kBinNs = 1.0;
+constexpr double kBinM = 0.15;  // c * 1 ns / 2
+
+RunInfo make_info() {
+  RunInfo info;
+  info.command_line = "plots_test";
+  info.config_json = "{}";
+  info.seed = 1;
+  info.shots = kShots;
+  info.bands = {Band{"532", 532.0, 32.0, 0.8}, Band{"1064", 1064.0, 72.0, 0.9}};
+  for (int b = 0; b < kBins; ++b) info.bin_time_ns.push_back(kBinNs * (b - kBins / 2));
+  info.tx_time_ns = {-1.0, 0.0, 1.0};
+  info.tx_waveform_W = {{1.0e6, 2.0e6, 1.0e6}, {3.0e6, 4.0e6, 3.0e6}};
+  return info;
+}
+
+double gaussian(double x, double mean, double sigma) {
+  return std::exp(-0.5 * (x - mean) * (x - mean) / (sigma * sigma));
+}
+
+// A canopy return above a ground return, in W, as a waveform of a few hundred nW.
+ShotRecord make_shot(int record) {
+  ShotRecord shot;
+  shot.shot_number = 10 + record;
+  shot.time_s = 183254400.0 + 0.025 * record;
+  shot.lat_deg = 34.30 + 0.0015 * record;
+  shot.lon_deg = -118.20 + 0.0003 * record;
+  shot.elev_m = 1200.0 + 5.0 * record;
+  shot.sc_lat_deg = shot.lat_deg;
+  shot.sc_lon_deg = shot.lon_deg;
+  shot.sc_alt_m = 600000.0;
+  shot.range_m = shot.sc_alt_m - shot.elev_m;
+  shot.slope_deg = 5.0;
+  shot.aspect_deg = 90.0;
+  shot.elev_bin0_m = shot.elev_m + kBinM * kBins / 2;
+  shot.elev_lastbin_m = shot.elev_bin0_m - kBinM * (kBins - 1);
+  for (int band = 0; band < 2; ++band) {
+    std::vector<double> total, canopy, ground;
+    for (int bin = 0; bin < kBins; ++bin) {
+      const double c = 1e-7 * (band + 1) * gaussian(bin, 30.0, 6.0);
+      const double g = 2e-7 * (band + 1) * gaussian(bin, kBins / 2.0, 3.0);
+      canopy.push_back(c);
+      ground.push_back(g);
+      total.push_back(c + g);
+    }
+    shot.rx_waveform_W.push_back(total);
+    shot.rx_waveform_canopy_W.push_back(canopy);
+    shot.rx_waveform_ground_W.push_back(ground);
+    shot.rx_energy_J.push_back(1e-15 * (band + 1));
+    shot.rx_energy_canopy_J.push_back(0.4e-15 * (band + 1));
+    shot.rx_energy_ground_J.push_back(0.6e-15 * (band + 1));
+    shot.reflectance.push_back(0.1 + 0.05 * record + 0.1 * band);
+  }
+  // A 35 m circle, counter-clockwise and closed.
+  const double lat_per_m = 1.0 / 111195.0;
+  const double lon_per_m = lat_per_m / std::cos(shot.lat_deg * std::numbers::pi / 180.0);
+  for (int k = 0; k < 24; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / 24;
+    shot.footprint_lonlat.push_back({shot.lon_deg + 35.0 * std::cos(a) * lon_per_m,
+                                     shot.lat_deg + 35.0 * std::sin(a) * lat_per_m});
+  }
+  shot.footprint_lonlat.push_back(shot.footprint_lonlat.front());
+  process_shot_waveforms(shot, kBinNs, WaveformProcessing{});  // the metrics the products hold
+  return shot;
+}
+
+// Off the terrain: no arrays, no footprint.
+ShotRecord make_flagged_shot(int record) {
+  ShotRecord shot;
+  shot.shot_number = 10 + record;
+  shot.time_s = 183254400.0 + 0.025 * record;
+  shot.lat_deg = shot.lon_deg = shot.elev_m = std::nan("");
+  shot.quality_flag = quality_no_terrain;
+  return shot;
+}
+
+void write_products(const fs::path& dir, bool all_flagged) {
+  const RunInfo info = make_info();
+  NetcdfWriter netcdf(dir / "shots.nc", info);
+  GeojsonWriter geojson(dir / "footprints.geojson", info);
+  for (int i = 0; i < kShots; ++i) {
+    const ShotRecord shot = all_flagged || i == 1 ? make_flagged_shot(i) : make_shot(i);
+    netcdf.write(i, shot);
+    geojson.write(i, shot);
+  }
+  netcdf.finish({});
+  geojson.finish({});
+}
+
+class PlotsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("glaswave plots " +  // a space, as no shell must see the path
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Each plot exists, is a PNG, and holds more than axes alone would; no .part is left.
+  void expect_plots() const {
+    for (const char* name : {"waveforms.png", "track_profile.png", "footprints_map.png"}) {
+      SCOPED_TRACE(name);
+      const fs::path path = dir_ / "plots" / name;
+      ASSERT_TRUE(fs::is_regular_file(path));
+      EXPECT_GT(fs::file_size(path), 5000u);
+      std::ifstream in(path, std::ios::binary);
+      std::array<char, 8> head{};
+      in.read(head.data(), head.size());
+      EXPECT_EQ(std::string(head.data(), head.size()), std::string("\x89PNG\r\n\x1a\n", 8));
+    }
+    for (const auto& entry : fs::directory_iterator(dir_ / "plots")) {
+      EXPECT_NE(entry.path().extension(), ".part") << entry.path();
+    }
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(PlotsTest, WritesThreePngsOfATinyProduct) {
+  write_products(dir_, false);
+  ASSERT_NO_THROW(write_plots(dir_));
+  expect_plots();
+}
+
+TEST_F(PlotsTest, DrawsAProductWhoseShotsAreAllFlagged) {
+  write_products(dir_, true);
+  ASSERT_NO_THROW(write_plots(dir_));
+  expect_plots();
+}
+
+TEST_F(PlotsTest, FolderWithoutShotsThrowsWithTheScriptsMessage) {
+  try {
+    write_plots(dir_);
+    FAIL() << "no error";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::run);
+    EXPECT_EQ(error.place(), "plots");
+    EXPECT_NE(std::string(error.what()).find("plot_products: error: cannot read"),
+              std::string::npos)
+        << error.what();
+    EXPECT_NE(std::string(error.what()).find("shots.nc"), std::string::npos) << error.what();
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "plots"));
+}
+
+}  // namespace
+}  // namespace glaswave
