@@ -86,7 +86,8 @@ void write_plots(const fs::path& out_dir) {
   // (a virtual environment) may not.
   const bool debian_python = fs::exists("/usr/bin/python3", ignored);
   const std::string python = debian_python ? "/usr/bin/python3" : "python3";
-  std::vector<std::string> args = {python, script.string(), out_dir.string()};
+  // -B: no bytecode written next to the script, which may sit in a read-only install.
+  std::vector<std::string> args = {python, "-B", script.string(), out_dir.string()};
   std::vector<char*> argv;
   for (std::string& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);

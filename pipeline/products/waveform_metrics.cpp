@@ -136,7 +136,6 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
   m.gaussians = decompose_waveform(signal, static_cast<int>(std::floor(begin)) - margin,
                                    static_cast<int>(std::ceil(end)) + margin, decomposition);
   m.n_peaks = static_cast<int>(m.gaussians.size());
-  const double bin_m = (axis.elev_bin0_m - axis.elev_lastbin_m) / static_cast<double>(n - 1);
   for (int k = 0; k < m.n_peaks && k < kMaxGaussians; ++k) {
     const GaussianComponent& g = m.gaussians[k];
     m.gauss_amp_W[k] = g.amplitude;
@@ -225,13 +224,10 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
       m.rh_m[k] = axis.elevation_m(position[k], bins) - m.ground_elev_m;
   }
 
-  // Canopy height: signal begin above the ground, less the pulse's own rise to the threshold.
-  const GaussianComponent& top = m.gaussians.front();
-  const double lone_sigma = std::sqrt(2.0) * pulse_bins;  // a flat return seen through the filter
-  const double top_peak = top.amplitude * top.sigma_bins / std::hypot(top.sigma_bins, pulse_bins);
-  const double rise_bins =
-      top_peak > above ? lone_sigma * std::sqrt(2.0 * std::log(top_peak / above)) : 0.0;
-  m.canopy_height_m = m.sig_begin_m - m.ground_elev_m - rise_bins * bin_m;
+  // Canopy height as the product contract and GLA14 define it: signal begin above the ground.
+  // It includes the pulse's own rise to the threshold (about 3 m for a 5 ns pulse over bare
+  // ground with no noise), as the instrument's products do.
+  m.canopy_height_m = m.sig_begin_m - m.ground_elev_m;
   return m;
 }
 

@@ -3,13 +3,25 @@
 
 Usage: plot_products.py DIR
 
-Reads DIR/shots.nc and DIR/footprints.geojson and writes DIR/plots/waveforms.png,
-track_profile.png and footprints_map.png, each through a temporary name so that no
-half-written plot lies under its final name. On unreadable inputs it prints one line,
+Reads DIR/shots.nc and DIR/footprints.geojson and writes, each through a temporary name so
+that no half-written plot lies under its final name:
+
+  waveforms.png       a dozen good shots' waveforms against elevation, every band, with their
+                      canopy and ground parts, the sum of the Gaussians fitted to them (the
+                      products' gauss_* variables: nothing is fitted here) and the estimated
+                      ground elevation;
+  track_profile.png   along track: terrain, signal extent, estimated ground and canopy top,
+                      and the true canopy top;
+  footprints_map.png  the footprints, coloured by reflectance, over a hillshade of the run's
+                      DEM in the DEM's own CRS (the resolved configuration, global attribute
+                      `config`, names it), or in longitude and latitude for a synthetic plane
+                      or a DEM that can no longer be read.
+ On unreadable inputs it prints one line,
 "plot_products: error: ...", on stderr and exits with status 1. Run by `glaswave run`
 (pipeline/app/plots.cpp) when output.plots is true.
 """
 import json
+import math
 import os
 import sys
 
@@ -20,11 +32,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 import netCDF4  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 EARTH_RADIUS_M = 6371008.8  # mean radius; plenty for distances along a short track
 MAX_PANELS = 12
 SIGNAL_FRACTION = 0.01  # signal extent: where the waveform exceeds 1% of its peak
+NOISE_FRACTION = 0.15  # bins at each end for the noise level (waveform_metrics.hpp)
+SUN_AZIMUTH_DEG, SUN_ALTITUDE_DEG = 315.0, 45.0  # hillshade light, the cartographers' default
+MAX_HILLSHADE_CELLS = 1500  # along either side of the map; a bigger window is read decimated
 
 
 def read_shots(path):
@@ -32,8 +49,17 @@ def read_shots(path):
         ds.set_auto_mask(False)  # fill is NaN already; plain arrays are simpler
         v = {name: ds[name][...] for name in (
             "shot_number", "lat", "lon", "elev", "elev_bin0", "elev_lastbin", "quality_flag",
-            "rx_waveform", "rx_waveform_canopy", "rx_waveform_ground")}
+            "bin_time_ns", "rx_waveform", "rx_waveform_canopy", "rx_waveform_ground",
+            "n_peaks", "gauss_amp", "gauss_center_m", "gauss_sigma_ns",
+            "ground_elev_est", "canopy_height_est", "canopy_height_true")}
         v["band_name"] = [str(name) for name in ds["band_name"][...]]
+        config = ds.getncattr("config") if "config" in ds.ncattrs() else "{}"
+    try:
+        v["config"] = json.loads(config)
+    except ValueError:
+        v["config"] = {}
+    if not isinstance(v["config"], dict):
+        v["config"] = {}
     return v
 
 
@@ -51,8 +77,41 @@ def power_unit(peak_W):
     return (1e-9, "nW") if peak_W >= 1e-9 else (1e-12, "pW")
 
 
-def add_gaussian_fit(ax, elev_m, waveform_W, scale):
-    """Hook for the Gaussian decomposition of the waveform (a later issue): nothing yet."""
+def metres_per_ns(shots, i):
+    """Elevation step per nanosecond along shot i's profile (c/2 at nadir, less off nadir)."""
+    span_ns = shots["bin_time_ns"][-1] - shots["bin_time_ns"][0]
+    return (shots["elev_bin0"][i] - shots["elev_lastbin"][i]) / span_ns if span_ns > 0 else np.nan
+
+
+def noise_level(shots, wave):
+    """The level the Gaussians were fitted above: with the detector on, the mean of the
+    quieter end of the window, as pipeline/products/waveform_metrics.cpp takes it; else 0."""
+    detector = shots["config"].get("detector")
+    if not (isinstance(detector, dict) and detector.get("enabled") is True):
+        return 0.0
+    n = max(2, int(NOISE_FRACTION * len(wave)))
+    return min(np.mean(wave[:n]), np.mean(wave[-n:]))
+
+
+def gaussian_fit(shots, i, band, elev_m):
+    """Sum (W) over elev_m of the Gaussians fitted to shot i's band, or None without any."""
+    n = max(0, int(shots["n_peaks"][i, band]))
+    amp, centre, sigma_ns = (shots[name][i, band, :n]
+                             for name in ("gauss_amp", "gauss_center_m", "gauss_sigma_ns"))
+    sigma_m = sigma_ns * metres_per_ns(shots, i)
+    ok = np.isfinite(amp) & np.isfinite(centre) & (sigma_m > 0)
+    if not np.any(ok):
+        return None
+    parts = amp[ok, None] * np.exp(-0.5 * ((elev_m[None, :] - centre[ok, None])
+                                           / sigma_m[ok, None]) ** 2)
+    return noise_level(shots, shots["rx_waveform"][i, band]) + parts.sum(axis=0)
+
+
+def add_gaussian_fit(ax, shots, i, band, elev_m, scale, colour):
+    """Draws the sum of the Gaussians fitted to shot i's band, thin over the pale total."""
+    fit = gaussian_fit(shots, i, band, elev_m)
+    if fit is not None:
+        ax.plot(fit / scale, elev_m, color=colour, lw=1.0)
 
 
 def signal_extent(shots, i, fraction=SIGNAL_FRACTION, band=0):
@@ -88,7 +147,10 @@ def plot_waveforms(shots, path):
                 values = shots["rx_waveform_" + part][i, band]
                 ax.plot(np.where(values > 0, values, np.nan) / scale, elev, color=colour,
                         ls=style, lw=1.1, label=f"{name} {part}")
-            add_gaussian_fit(ax, elev, wave, scale)
+            add_gaussian_fit(ax, shots, i, band, elev, scale, colour)
+        ground = shots["ground_elev_est"][i, 0]
+        if np.isfinite(ground):
+            ax.axhline(ground, color="k", ls=(0, (4, 3)), lw=0.8)
         # Zoom on the return: the window is usually much longer than the signal.
         extents = np.array([signal_extent(shots, i, 1e-3, b)
                             for b in range(len(shots["band_name"]))])
@@ -105,14 +167,30 @@ def plot_waveforms(shots, path):
     for ax in axes[:, 0]:
         ax.set_ylabel("elevation (m)")
     bottom = 0.0
-    if len(chosen):  # one column per band, filled top to bottom: total, canopy, ground
-        handles, labels = axes.flat[0].get_legend_handles_labels()
-        fig.legend(handles, labels, loc="lower center", ncol=len(shots["band_name"]),
+    if len(chosen):
+        fig.legend(*waveform_legend(shots), loc="lower center", ncol=len(shots["band_name"]) + 1,
                    fontsize=8, frameon=False)
-        bottom = (0.1 + 0.17 * 3) / fig.get_figheight()
-    fig.suptitle("Received waveforms (canopy and ground parts dashed)")
+        bottom = (0.1 + 0.17 * 4) / fig.get_figheight()
+    fig.suptitle("Received waveforms: canopy and ground parts, Gaussian fit", fontsize=11)
     fig.tight_layout(rect=(0, bottom, 1, 1))
     save(fig, path)
+
+
+def waveform_legend(shots):
+    """Handles and labels: a column per band (total, canopy, ground, fit), then one for the
+    ground estimate, padded to the same rows."""
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    handles, labels = [], []
+    for band, name in enumerate(band_labels(shots)):
+        colour = colours[band % len(colours)]
+        handles += [Line2D([], [], color=colour, lw=2.5, alpha=0.45),
+                    Line2D([], [], color=colour, ls="--", lw=1.1),
+                    Line2D([], [], color=colour, ls="-.", lw=1.1),
+                    Line2D([], [], color=colour, lw=1.0)]
+        labels += [f"{name} total", f"{name} canopy", f"{name} ground", f"{name} Gaussian fit"]
+    handles += [Line2D([], [], color="k", ls=(0, (4, 3)), lw=0.8)] + [Patch(visible=False)] * 3
+    labels += [f"ground estimate, {band_labels(shots)[0]}", "", "", ""]
+    return handles, labels
 
 
 def along_track_km(lat_deg, lon_deg):
@@ -134,6 +212,15 @@ def plot_track_profile(shots, path):
     ax.fill_between(dist, extent[:, 0], extent[:, 1], color="tab:green", alpha=0.35, lw=0,
                     label=label)
     ax.plot(dist, shots["elev"][good], "k.-", lw=1, ms=4, label="terrain at footprint centre")
+    band = band_labels(shots)[0]
+    ground = shots["ground_elev_est"][good, 0]
+    ax.plot(dist, ground, color="tab:orange", ls="--", lw=1.4, label=f"estimated ground, {band}")
+    ax.plot(dist, ground + shots["canopy_height_est"][good, 0], color="darkgreen", ls="--",
+            lw=1.2, label=f"estimated canopy top, {band}")
+    height = shots["canopy_height_true"][good]
+    treed = np.isfinite(height) & (height > 0)
+    ax.plot(dist[treed], (shots["elev"][good] + height)[treed], "^", color="darkgreen", ms=4,
+            label="true canopy top (simulation)")
     ax.set_xlabel("distance along track (km)")
     ax.set_ylabel("elevation (m)")
     skipped = len(shots["quality_flag"]) - len(good)
@@ -141,7 +228,7 @@ def plot_track_profile(shots, path):
                  + (f" ({skipped} flagged shots skipped)" if skipped else ""))
     ax.grid(alpha=0.3)
     if len(good):  # below the axes, where no terrain can hide under it
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, fontsize=9,
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3, fontsize=9,
                   frameon=False)
     else:
         ax.text(0.5, 0.5, "no shot met the terrain", ha="center", va="center",
@@ -150,17 +237,135 @@ def plot_track_profile(shots, path):
     save(fig, path)
 
 
-def plot_footprints_map(geojson, path):
+def read_footprints(geojson):
+    """The footprints' outer rings (lon, lat arrays) and their first band's reflectance."""
     polygons, values = [], []
     for feature in geojson["features"]:
         geometry = feature.get("geometry")
         if geometry is None or geometry.get("type") != "Polygon":
             continue  # a flagged shot has no footprint
-        polygons.append(np.asarray(geometry["coordinates"][0], dtype=float))
+        polygons.append(np.asarray(geometry["coordinates"][0], dtype=float)[:, :2])
         value = feature["properties"].get("reflectance")
         values.append(np.nan if value is None else value)
+    return polygons, values
+
+
+def dem_background(config, polygons):
+    """The hillshade under the footprints from the run's DEM (terrain.dem of the resolved
+    configuration), or None for a synthetic plane or a DEM that cannot be read or drawn (moved
+    with the products, no CRS, rotated, not under the footprints): the map then stays in
+    longitude and latitude. Nothing here fails the plots."""
+    terrain = config.get("terrain")
+    dem = terrain.get("dem") if isinstance(terrain, dict) else None
+    if not polygons or not isinstance(dem, str) or not dem:
+        return None
+    band = terrain.get("dem_band", 1)
+    try:
+        from osgeo import gdal, osr
+        gdal.UseExceptions()
+        osr.UseExceptions()
+        gdal.PushErrorHandler("CPLQuietErrorHandler")
+        try:
+            return read_hillshade(gdal, osr, dem, band if isinstance(band, int) else 1, polygons)
+        finally:
+            gdal.PopErrorHandler()
+    except Exception:  # noqa: BLE001 - whatever GDAL or the file does, the plain map is drawn
+        return None
+
+
+def read_hillshade(gdal, osr, dem, band_number, polygons):
+    dataset = gdal.Open(dem)
+    srs = dataset.GetSpatialRef()
+    transform = dataset.GetGeoTransform()
+    if srs is None or transform[2] != 0 or transform[4] != 0:
+        return None
+    if srs.IsCompound() and hasattr(srs, "StripVertical"):
+        srs.StripVertical()  # the map is horizontal
+    lonlat = osr.SpatialReference()
+    lonlat.ImportFromEPSG(4326)
+    for ref in (lonlat, srs):
+        ref.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    to_dem = osr.CoordinateTransformation(lonlat, srs)
+    points = np.array(to_dem.TransformPoints(np.concatenate(polygons).tolist()))[:, :2]
+    if not np.all(np.isfinite(points)):
+        return None
+    rings = np.split(points, np.cumsum([len(p) for p in polygons])[:-1])
+
+    # Metres per CRS unit across and along (a degree of longitude shrinks with cos(lat)), for
+    # gradients in metres and an equal-metre aspect.
+    if srs.IsGeographic():
+        mid_lat = np.mean(np.concatenate(polygons)[:, 1])
+        metres_per_deg = EARTH_RADIUS_M * math.pi / 180.0
+        scale_x, scale_y = metres_per_deg * math.cos(math.radians(mid_lat)), metres_per_deg
+    else:
+        scale_x = scale_y = srs.GetLinearUnits()
+
+    # A square window (in metres) around the footprints with a margin, so that a track running
+    # north-south gets terrain beside it; clipped to the raster.
+    low, high = points.min(axis=0), points.max(axis=0)
+    centre = (low + high) / 2
+    size_m = max((high[0] - low[0]) * scale_x, (high[1] - low[1]) * scale_y)
+    half_m = 0.55 * size_m + max(300.0, 0.05 * size_m)
+    x_edges = (np.array([centre[0] - half_m / scale_x, centre[0] + half_m / scale_x])
+               - transform[0]) / transform[1]
+    y_edges = (np.array([centre[1] - half_m / scale_y, centre[1] + half_m / scale_y])
+               - transform[3]) / transform[5]
+    col0 = max(0, math.floor(x_edges.min()))
+    col1 = min(dataset.RasterXSize, math.ceil(x_edges.max()))
+    row0 = max(0, math.floor(y_edges.min()))
+    row1 = min(dataset.RasterYSize, math.ceil(y_edges.max()))
+    if col1 - col0 < 3 or row1 - row0 < 3:
+        return None  # the footprints are off the DEM
+
+    step = max(1, math.ceil(max(col1 - col0, row1 - row0) / MAX_HILLSHADE_CELLS))
+    width, height = math.ceil((col1 - col0) / step), math.ceil((row1 - row0) / step)
+    raster = dataset.GetRasterBand(band_number)
+    z = raster.ReadAsArray(col0, row0, col1 - col0, row1 - row0, width, height).astype(float)
+    nodata = raster.GetNoDataValue()
+    if nodata is not None:
+        z[z == nodata] = np.nan
+    z = z * (raster.GetScale() or 1.0) + (raster.GetOffset() or 0.0)
+    cell_x = transform[1] * (col1 - col0) / width  # signed: a row going south has cell_y < 0
+    cell_y = transform[5] * (row1 - row0) / height
+    left, top = transform[0] + col0 * transform[1], transform[3] + row0 * transform[5]
+    extent = (left, left + width * cell_x, top + height * cell_y, top)
+    return {"shade": hillshade(z, cell_x * scale_x, cell_y * scale_y), "extent": extent,
+            "rings": rings, "aspect": scale_y / scale_x, "srs": srs}
+
+
+def hillshade(z, cell_east_m, cell_north_m):
+    """Cosine of the angle between the ground's normal and the sun (SUN_AZIMUTH_DEG clockwise
+    from north, SUN_ALTITUDE_DEG above the horizon), 0 in its shadow; NaN where z is."""
+    d_rows, d_cols = np.gradient(z)
+    dz_east, dz_north = d_cols / cell_east_m, d_rows / cell_north_m
+    azimuth, altitude = np.radians(SUN_AZIMUTH_DEG), np.radians(SUN_ALTITUDE_DEG)
+    sun = (np.sin(azimuth) * np.cos(altitude), np.cos(azimuth) * np.cos(altitude), np.sin(altitude))
+    shade = (sun[2] - dz_east * sun[0] - dz_north * sun[1]) / np.sqrt(1 + dz_east ** 2
+                                                                     + dz_north ** 2)
+    return np.clip(shade, 0.0, 1.0)
+
+
+def crs_labels(srs):
+    """Axis labels and a name for the CRS of the map."""
+    authority = srs.GetAuthorityName(None), srs.GetAuthorityCode(None)
+    name = srs.GetName() + (f" ({authority[0]}:{authority[1]})" if all(authority) else "")
+    if srs.IsGeographic():
+        return "longitude (°E)", "latitude (°N)", name
+    unit = srs.GetLinearUnitsName()
+    unit = "m" if unit in ("metre", "meter", "metres", "meters") else unit
+    return f"easting ({unit})", f"northing ({unit})", name
+
+
+def plot_footprints_map(geojson, shots, path):
+    polygons, values = read_footprints(geojson)
+    background = dem_background(shots["config"], polygons)
     fig, ax = plt.subplots(figsize=(8, 7))
     if polygons:
+        if background is not None:  # the map in the DEM's CRS
+            cmap = matplotlib.colormaps["gray"].with_extremes(bad=(1, 1, 1, 0))
+            ax.imshow(background["shade"], cmap=cmap, vmin=0, vmax=1, extent=background["extent"],
+                      origin="upper", interpolation="bilinear")
+            polygons = background["rings"]
         cmap = matplotlib.colormaps["viridis"].with_extremes(bad="lightgrey")
         cells = PolyCollection(polygons, cmap=cmap, edgecolors="k", linewidths=0.3)
         cells.set_array(np.ma.masked_invalid(values))
@@ -169,29 +374,50 @@ def plot_footprints_map(geojson, path):
             mid, half = (low + high) / 2, max((high - low) / 2, 0.005)
             cells.set_clim(mid - half, mid + half)
         ax.add_collection(cells)
-        ax.autoscale_view()
         bar = fig.colorbar(cells, ax=ax, shrink=0.8, label="reflectance, first band (1)")
         bar.formatter.set_useOffset(False)
-        # Equal metres on both axes: a degree of longitude is cos(lat) degrees of latitude.
-        # The limits widen to keep that aspect, so a north-south track gets room beside it.
-        mean_lat = np.mean(np.concatenate([p[:, 1] for p in polygons]))
-        ax.set_aspect(1.0 / np.cos(np.radians(mean_lat)), adjustable="datalim")
+        if background is not None:
+            x0, x1, y0, y1 = background["extent"]
+            ax.set_xlim(min(x0, x1), max(x0, x1))
+            ax.set_ylim(min(y0, y1), max(y0, y1))
+            ax.set_aspect(background["aspect"], adjustable="box")
+        else:
+            ax.autoscale_view()
+            # Equal metres on both axes: a degree of longitude is cos(lat) degrees of latitude.
+            # The limits widen to keep that aspect, so a north-south track gets room beside it.
+            mean_lat = np.mean(np.concatenate([p[:, 1] for p in polygons]))
+            ax.set_aspect(1.0 / np.cos(np.radians(mean_lat)), adjustable="datalim")
     else:
         ax.text(0.5, 0.5, "no footprint on the terrain", ha="center", va="center")
-    ax.ticklabel_format(useOffset=False)
+    ax.ticklabel_format(style="plain", useOffset=False)
     ax.xaxis.set_major_locator(MaxNLocator(5))
-    ax.set_xlabel("longitude (°E)")
-    ax.set_ylabel("latitude (°N)")
-    ax.set_title(f"Footprints (1/e² contour on the terrain), {len(polygons)} shots")
-    ax.grid(alpha=0.3)
+    title = f"Footprints (1/e² contour on the terrain), {len(polygons)} shots"
+    if background is not None:
+        xlabel, ylabel, crs = crs_labels(background["srs"])
+        title += (f",\nover a hillshade of the DEM (sun from {SUN_AZIMUTH_DEG:g}° at "
+                  f"{SUN_ALTITUDE_DEG:g}°) in its CRS, {crs}")
+        description = f"glaswave footprints over a hillshade of the DEM; CRS {crs}"
+    else:
+        xlabel, ylabel = "longitude (°E)", "latitude (°N)"
+        description = "glaswave footprints; longitude and latitude (WGS 84)"
+        ax.grid(alpha=0.3)
+        terrain = shots["config"].get("terrain")
+        if polygons and isinstance(terrain, dict) and terrain.get("dem"):
+            title += "\n(no hillshade: the run's DEM cannot be read or does not cover them)"
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
     fig.tight_layout()
-    save(fig, path)
+    save(fig, path, description)
 
 
-def save(fig, path):
+def save(fig, path, description=None):
+    """Writes the PNG under path + ".part", then renames it; description goes into its
+    Description text chunk (the map says there in which CRS it is drawn)."""
     part = path + ".part"
     try:
-        fig.savefig(part, format="png", dpi=120)
+        fig.savefig(part, format="png", dpi=120,
+                    metadata={"Description": description} if description else None)
         os.replace(part, path)
     finally:
         plt.close(fig)
@@ -210,7 +436,7 @@ def main(argv):
     os.makedirs(plots, exist_ok=True)
     plot_waveforms(shots, os.path.join(plots, "waveforms.png"))
     plot_track_profile(shots, os.path.join(plots, "track_profile.png"))
-    plot_footprints_map(geojson, os.path.join(plots, "footprints_map.png"))
+    plot_footprints_map(geojson, shots, os.path.join(plots, "footprints_map.png"))
 
 
 if __name__ == "__main__":

@@ -1,16 +1,21 @@
 // Tests of write_plots: a tiny product (three shots, one flagged) written with the product
 // writers into a temporary folder, drawn by share/plots/plot_products.py, and the three PNGs
-// checked for existence, signature and size; and the script's failure on a folder without
-// shots.nc turned into an Error. Missing matplotlib fails the test (scripts/setup installs it).
+// checked for existence, signature and size; the footprint map over a hillshade of a DEM the
+// test writes with GDAL, and the plain map when that DEM is gone; and the script's failure on a
+// folder without shots.nc turned into an Error. Missing matplotlib fails the test (scripts/setup
+// installs it).
 #include "pipeline/app/plots.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <GeographicLib/UTMUPS.hpp>
 #include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -19,6 +24,7 @@
 #include "pipeline/products/netcdf_writer.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
 #include "terrain/error.hpp"
+#include "tests/terrain/dem_fixture.hpp"
 
 namespace glaswave {
 namespace {
@@ -30,10 +36,10 @@ constexpr int kBins = 120;
 constexpr double kBinNs = 1.0;
 constexpr double kBinM = 0.15;  // c * 1 ns / 2
 
-RunInfo make_info() {
+RunInfo make_info(const std::string& config_json) {
   RunInfo info;
   info.command_line = "plots_test";
-  info.config_json = "{}";
+  info.config_json = config_json;
   info.seed = 1;
   info.shots = kShots;
   info.bands = {Band{"532", 532.0, 32.0, 0.8}, Band{"1064", 1064.0, 72.0, 0.9}};
@@ -103,8 +109,8 @@ ShotRecord make_flagged_shot(int record) {
   return shot;
 }
 
-void write_products(const fs::path& dir, bool all_flagged) {
-  const RunInfo info = make_info();
+void write_products(const fs::path& dir, bool all_flagged, const std::string& config_json = "{}") {
+  const RunInfo info = make_info(config_json);
   NetcdfWriter netcdf(dir / "shots.nc", info);
   GeojsonWriter geojson(dir / "footprints.geojson", info);
   for (int i = 0; i < kShots; ++i) {
@@ -158,6 +164,47 @@ TEST_F(PlotsTest, DrawsAProductWhoseShotsAreAllFlagged) {
   write_products(dir_, true);
   ASSERT_NO_THROW(write_plots(dir_));
   expect_plots();
+}
+
+// Hills in UTM zone 11N, 10 m cells, 2 km about the tiny product's footprints.
+void write_hills(const fs::path& file) {
+  int zone = 0;
+  bool north = true;
+  double x = 0, y = 0;
+  GeographicLib::UTMUPS::Forward(34.3015, -118.1997, zone, north, x, y, 11);
+  testing::RasterSpec spec;
+  spec.crs = "EPSG:32611";
+  spec.width = spec.height = 400;
+  spec.geotransform = {std::floor(x - 2000.0), 10.0, 0.0, std::floor(y + 2000.0), 0.0, -10.0};
+  spec.nodata = -9999.0;
+  testing::write_raster(file, spec, [](int col, int row, int) {
+    if (col < 170 && row < 170) return -9999.0;  // nodata in the map's corner: left blank
+    return 1200.0 + 30.0 * std::sin(col / 25.0) * std::cos(row / 40.0) + 0.5 * row;
+  });
+}
+
+// The map's PNG says in its Description text chunk (tEXt, uncompressed) how it was drawn.
+std::string png_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST_F(PlotsTest, DrawsTheFootprintsOverAHillshadeOfTheDemAndWithoutItWhenItIsGone) {
+  const fs::path dem = dir_ / "hills.tif";
+  const fs::path map = dir_ / "plots" / "footprints_map.png";
+  write_hills(dem);
+  write_products(dir_, false, nlohmann::json{{"terrain", {{"dem", dem.string()}}}}.dump());
+  ASSERT_NO_THROW(write_plots(dir_));
+  expect_plots();
+  EXPECT_NE(
+      png_bytes(map).find("over a hillshade of the DEM; CRS WGS 84 / UTM zone 11N (EPSG:32611)"),
+      std::string::npos);
+
+  fs::remove(dem);  // the products moved away from their DEM: the plain map, no error
+  ASSERT_NO_THROW(write_plots(dir_));
+  expect_plots();
+  EXPECT_EQ(png_bytes(map).find("hillshade"), std::string::npos);
+  EXPECT_NE(png_bytes(map).find("longitude and latitude (WGS 84)"), std::string::npos);
 }
 
 TEST_F(PlotsTest, FolderWithoutShotsThrowsWithTheScriptsMessage) {

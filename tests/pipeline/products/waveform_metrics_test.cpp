@@ -73,9 +73,9 @@ TEST(WaveformMetrics, LonePulse) {
     EXPECT_TRUE(std::isnan(m.gauss_center_m[k])) << k;
   }
 
-  // The ground is the pulse; its own rise is no canopy.
+  // The ground is the pulse; the height (signal begin - ground) is the pulse's own rise.
   EXPECT_NEAR(m.ground_elev_m, elevation(center), 1e-5);
-  EXPECT_NEAR(m.canopy_height_m, 0.0, 0.02);
+  EXPECT_NEAR(m.canopy_height_m, reach_bins * kBinM, 0.05 * kBinM);
   // rh: symmetric about the centre, rh0 and rh100 at signal end and begin.
   EXPECT_NEAR(m.rh_m[50], 0.0, 0.002);
   EXPECT_NEAR(m.rh_m[0], m.sig_end_m - m.ground_elev_m, 1e-6);
@@ -132,13 +132,9 @@ TEST(WaveformMetrics, CanopyOverGround) {
   const double begin =
       150.0 - canopy_sigma * std::sqrt(2.0 * std::log(smoothed_canopy / (0.01 * smoothed_ground)));
   EXPECT_NEAR(m.sig_begin_bin, begin, 0.05);
-  // Height: begin above the ground less the rise of a lone pulse as strong as the canopy's.
-  const double rise = std::sqrt(2.0) * kPulseNs *
-                      std::sqrt(2.0 * std::log(smoothed_canopy / (0.01 * smoothed_ground)));
-  EXPECT_NEAR(m.canopy_height_m, (300.0 - begin - rise) * kBinM, 0.01);
-  // Above the canopy return's centre by more than its sigma, below the uncorrected rh100.
-  EXPECT_GT(m.canopy_height_m, (300.0 - 150.0 + 12.0) * kBinM);
-  EXPECT_LT(m.canopy_height_m, m.rh_m[100]);
+  // Height: signal begin above the ground (the ground Gaussian's centre at bin 300), = rh100.
+  EXPECT_NEAR(m.canopy_height_m, (300.0 - begin) * kBinM, 0.01);
+  EXPECT_NEAR(m.canopy_height_m, m.rh_m[100], 1e-6);  // rh100 goes through the bin axis
 }
 
 // With noise: the threshold sits 4 noise sigmas (of the smoothed waveform) over the noise mean,
@@ -166,7 +162,7 @@ TEST(WaveformMetrics, ThresholdAboveTheNoise) {
   ASSERT_EQ(m.n_peaks, 1);
   EXPECT_NEAR(m.ground_elev_m, elevation(200.0), 0.02);
   EXPECT_NEAR(m.gauss_amp_W[0] / 1e-6, 1.0, 0.02);
-  EXPECT_NEAR(m.canopy_height_m, 0.0, 0.15);
+  EXPECT_NEAR(m.canopy_height_m, reach * kBinM, 1.0 * kBinM);  // the pulse's rise over the noise
   EXPECT_NEAR(m.rh_m[50], 0.0, 0.05);
   const double area_J = 1.0e-6 * kPulseNs * 1e-9 * std::sqrt(2.0 * std::numbers::pi);
   EXPECT_NEAR(m.energy_tr_J / area_J, 1.0, 0.03);
