@@ -7,6 +7,7 @@
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
+#include "tests/pipeline/app/app_test_support.hpp"
 
 namespace glaswave {
 namespace {
@@ -36,28 +37,14 @@ struct Simulated {
   std::vector<double> bin_time_ns;
 };
 
+// The one shot of a points track.
 Simulated simulate(const nlohmann::json& document) {
-  const Config config = parse_config(document);
-  const auto terrain = make_terrain(config.terrain);
-  const auto footprints = plan_track(config.track, *terrain, 0, 1);
-  const ShotSimulator simulator(config, *terrain);
-  return {simulator.simulate(footprints.at(0)), simulator.lidar().bin_time_ns()};
+  test_support::SimulatedTrack run = test_support::simulate_track(document);
+  return {run.records.at(0), run.bin_time_ns};
 }
 
-struct Moments {
-  double mean_ns, rms_ns;
-};
-
-Moments moments(const std::vector<double>& power_W, const std::vector<double>& time_ns) {
-  double sum = 0, first = 0, second = 0;
-  for (std::size_t i = 0; i < power_W.size(); ++i) {
-    sum += power_W[i];
-    first += power_W[i] * time_ns[i];
-  }
-  const double mean = first / sum;
-  for (std::size_t i = 0; i < power_W.size(); ++i) second += power_W[i] * (time_ns[i] - mean) * (time_ns[i] - mean);
-  return {mean, std::sqrt(second / sum)};
-}
+using test_support::Moments;
+using test_support::waveform_moments;
 
 // PHYSICS.md section 1: E_rec = E_t T A_T rho_s cos(alpha) f_fov / (pi R^2),
 // f_fov = 1 - exp(-ifov^2 / (8 sigma^2)); Table 2 of the seed at nadir over level ground.
@@ -85,7 +72,7 @@ TEST(BareGround, ReceivedEnergyMatchesLambertianFormulaAtNadir) {
 TEST(BareGround, LevelSurfaceReturnsThePulseAtTwoRangeOverC) {
   const Simulated shot = simulate(plane_shot(0.0, 0.0, 10000));
   for (int band = 0; band < 2; ++band) {
-    const Moments m = moments(shot.record.rx_waveform_W[band], shot.bin_time_ns);
+    const Moments m = waveform_moments(shot.record.rx_waveform_W[band], shot.bin_time_ns);
     EXPECT_NEAR(m.rms_ns, std::sqrt(25.0 + 1.0 / 12.0), 0.02);
     EXPECT_NEAR(m.mean_ns, 0.0, 0.1);
   }
@@ -117,7 +104,7 @@ TEST(BareGround, SlopeBroadensThePulseAsGardnerAndDimsAsCosine) {
     const double slope_term_ns = 2.0 * range_m * sigma_theta * std::tan(slope_deg * pi / 180.0) / c_m_s * 1e9;
     const double expected_ns = std::sqrt(sigma_tx_ns * sigma_tx_ns + slope_term_ns * slope_term_ns + 1.0 / 12.0);
     EXPECT_NEAR(expected_ns, quoted_ns[k], 0.01) << "formula check at " << slope_deg << " deg";
-    const Moments m = moments(shot.record.rx_waveform_W[1], shot.bin_time_ns);
+    const Moments m = waveform_moments(shot.record.rx_waveform_W[1], shot.bin_time_ns);
     EXPECT_NEAR(m.rms_ns / expected_ns, 1.0, 0.02) << slope_deg << " deg";
     EXPECT_NEAR(shot.record.rx_energy_J[1] / level_energy_J, std::cos(slope_deg * pi / 180.0), 0.005)
         << slope_deg << " deg";

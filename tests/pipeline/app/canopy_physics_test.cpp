@@ -8,6 +8,7 @@
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
+#include "tests/pipeline/app/app_test_support.hpp"
 
 namespace glaswave {
 namespace {
@@ -40,17 +41,14 @@ struct Simulated {
 };
 
 Simulated simulate(const nlohmann::json& document) {
-  const Config config = parse_config(document);
-  const auto terrain = make_terrain(config.terrain);
-  const auto footprints = plan_track(config.track, *terrain, 0, 1);
-  const ShotSimulator simulator(config, *terrain);
-  const SensorSettings& s = config.sensor;
+  test_support::SimulatedTrack run = test_support::simulate_track(document);
+  const SensorSettings& s = run.config.sensor;
   const double f_fov = 1.0 - std::exp(-s.ifov_rad * s.ifov_rad / (8.0 * s.divergence_sigma_rad * s.divergence_sigma_rad));
-  const double range_m = footprints.at(0).range_m;
+  const double range_m = run.footprints.at(0).range_m;
   const Band& band = s.bands.at(0);
   const double normalisation_J = band.pulse_energy_mJ * 1e-3 * band.atmos_transmission_roundtrip *
                                  s.telescope_area_m2 * f_fov / (pi * range_m * range_m);
-  return {simulator.simulate(footprints.at(0)), simulator.lidar().bin_time_ns(), normalisation_J};
+  return {run.records.at(0), run.bin_time_ns, normalisation_J};
 }
 
 // PHYSICS.md section 3, single scattering of a layer with L = 3, rho = 0.45, rho_s = 0.3:

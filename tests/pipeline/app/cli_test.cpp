@@ -14,25 +14,13 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/pipeline/app/app_test_support.hpp"
+
 namespace glaswave {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Outcome {
-  int status;
-  std::string output;  // stdout and stderr together
-};
-
-Outcome glaswave(const std::string& arguments) {
-  const std::string command = std::string(GLASWAVE_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using namespace test_support;
 
 class Cli : public ::testing::Test {
  protected:
@@ -87,7 +75,7 @@ std::vector<float> read_waveforms(const fs::path& file, std::size_t* shots = nul
 
 TEST_F(Cli, RunWritesProductsThatReadBack) {
   const std::string config = write_config();
-  const Outcome run = glaswave("run " + config + " --out " + (dir_ / "out").string() + " --quiet");
+  const CommandOutcome run = run_glaswave("run " + config + " --out " + (dir_ / "out").string() + " --quiet");
   ASSERT_EQ(run.status, 0) << run.output;
   // The summary line: shots, seconds, shots/s, ray queries/s.
   EXPECT_NE(run.output.find("5 shots in"), std::string::npos) << run.output;
@@ -140,10 +128,10 @@ TEST_F(Cli, RunWritesProductsThatReadBack) {
 
 TEST_F(Cli, ResultsDoNotDependOnThreadsOrShotSplits) {
   const std::string config = write_config();
-  ASSERT_EQ(glaswave("run " + config + " --quiet --threads 1 --out " + (dir_ / "one").string()).status, 0);
-  ASSERT_EQ(glaswave("run " + config + " --quiet --threads 2 --out " + (dir_ / "two").string()).status, 0);
-  ASSERT_EQ(glaswave("run " + config + " --quiet --shots 0:2 --out " + (dir_ / "a").string()).status, 0);
-  ASSERT_EQ(glaswave("run " + config + " --quiet --shots 2:5 --out " + (dir_ / "b").string()).status, 0);
+  ASSERT_EQ(run_glaswave("run " + config + " --quiet --threads 1 --out " + (dir_ / "one").string()).status, 0);
+  ASSERT_EQ(run_glaswave("run " + config + " --quiet --threads 2 --out " + (dir_ / "two").string()).status, 0);
+  ASSERT_EQ(run_glaswave("run " + config + " --quiet --shots 0:2 --out " + (dir_ / "a").string()).status, 0);
+  ASSERT_EQ(run_glaswave("run " + config + " --quiet --shots 2:5 --out " + (dir_ / "b").string()).status, 0);
   const std::vector<float> one = read_waveforms(dir_ / "one" / "shots.nc");
   EXPECT_EQ(one, read_waveforms(dir_ / "two" / "shots.nc"));
   std::vector<float> split = read_waveforms(dir_ / "a" / "shots.nc");
@@ -151,7 +139,7 @@ TEST_F(Cli, ResultsDoNotDependOnThreadsOrShotSplits) {
   split.insert(split.end(), rest.begin(), rest.end());
   EXPECT_EQ(one, split);
   // Another seed is another sample.
-  ASSERT_EQ(glaswave("run " + config + " --quiet --seed 4 --out " + (dir_ / "seed4").string()).status, 0);
+  ASSERT_EQ(run_glaswave("run " + config + " --quiet --seed 4 --out " + (dir_ / "seed4").string()).status, 0);
   EXPECT_NE(one, read_waveforms(dir_ / "seed4" / "shots.nc"));
 }
 
@@ -173,7 +161,7 @@ TEST_F(Cli, BadConfigurationsFailWithOneLineNamingThePlace) {
       {"--shots 9:12", "--shots"},
   };
   for (const Case& c : cases) {
-    const Outcome run = glaswave("run " + config + " --quiet --out " + (dir_ / "out").string() + " " + c.arguments);
+    const CommandOutcome run = run_glaswave("run " + config + " --quiet --out " + (dir_ / "out").string() + " " + c.arguments);
     EXPECT_EQ(run.status, 2) << c.arguments << ": " << run.output;
     EXPECT_EQ(run.output.rfind("glaswave: error: ", 0), 0u) << run.output;
     EXPECT_NE(run.output.find(c.expected), std::string::npos) << c.arguments << ": " << run.output;
@@ -185,7 +173,7 @@ TEST_F(Cli, BadConfigurationsFailWithOneLineNamingThePlace) {
 TEST_F(Cli, MalformedJsonNamesLineAndColumn) {
   const fs::path file = dir_ / "broken.json";
   std::ofstream(file) << "{\n  \"seed\": 1,\n  \"sensor\": {\"preset\": \"glas\",}\n}\n";
-  const Outcome run = glaswave("check " + file.string());
+  const CommandOutcome run = run_glaswave("check " + file.string());
   EXPECT_EQ(run.status, 2);
   EXPECT_NE(run.output.find("line 3"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("column"), std::string::npos) << run.output;
@@ -196,24 +184,24 @@ TEST_F(Cli, ExistingOutputDirectoryIsRefusedAndKept) {
   const std::string config = write_config();
   fs::create_directories(dir_ / "out");
   std::ofstream(dir_ / "out" / "mine.txt") << "a user's file";
-  const Outcome run = glaswave("run " + config + " --quiet --out " + (dir_ / "out").string());
+  const CommandOutcome run = run_glaswave("run " + config + " --quiet --out " + (dir_ / "out").string());
   EXPECT_EQ(run.status, 2);
   EXPECT_TRUE(fs::exists(dir_ / "out" / "mine.txt"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "shots.nc"));
 }
 
 TEST_F(Cli, CheckHelpAndVersion) {
-  const Outcome check = glaswave("check " + write_config());
+  const CommandOutcome check = run_glaswave("check " + write_config());
   EXPECT_EQ(check.status, 0) << check.output;
   EXPECT_NE(check.output.find("5 shots"), std::string::npos) << check.output;
-  const Outcome help = glaswave("--help");
+  const CommandOutcome help = run_glaswave("--help");
   EXPECT_EQ(help.status, 0);
   EXPECT_NE(help.output.find("run"), std::string::npos);
   EXPECT_NE(help.output.find("check"), std::string::npos);
-  const Outcome version = glaswave("--version");
+  const CommandOutcome version = run_glaswave("--version");
   EXPECT_EQ(version.status, 0);
   EXPECT_NE(version.output.find("glaswave " GLASWAVE_VERSION), std::string::npos) << version.output;
-  const Outcome bad = glaswave("fly");
+  const CommandOutcome bad = run_glaswave("fly");
   EXPECT_EQ(bad.status, 2);
   EXPECT_EQ(bad.output.rfind("glaswave: error: ", 0), 0u) << bad.output;
 }

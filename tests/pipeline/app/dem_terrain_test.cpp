@@ -18,12 +18,14 @@
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
+#include "tests/pipeline/app/app_test_support.hpp"
 #include "tests/terrain/dem_fixture.hpp"
 
 namespace glaswave {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace test_support;
 using nlohmann::json;
 using ::testing::HasSubstr;
 using testing::RasterSpec;
@@ -59,36 +61,6 @@ json shots_at(const json& terrain, const std::vector<std::array<double, 2>>& poi
         {"pointing_azimuth_deg", 60.0}}},
       {"output", {{"netcdf", false}, {"geojson", false}}},
   };
-}
-
-struct Simulated {
-  std::vector<Footprint> footprints;
-  std::vector<ShotRecord> records;
-  std::vector<double> bin_time_ns;
-};
-
-Simulated simulate(const json& document) {
-  const Config config = parse_config(document);
-  const auto terrain = make_terrain(config.terrain);
-  Simulated out;
-  out.footprints = plan_track(config.track, *terrain, 0, 1000);  // clamped to the track
-  const ShotSimulator simulator(config, *terrain);
-  for (const Footprint& footprint : out.footprints)
-    out.records.push_back(simulator.simulate(footprint));
-  out.bin_time_ns = simulator.lidar().bin_time_ns();
-  return out;
-}
-
-double rms_width_ns(const std::vector<double>& power_W, const std::vector<double>& time_ns) {
-  double sum = 0, first = 0, second = 0;
-  for (std::size_t i = 0; i < power_W.size(); ++i) {
-    sum += power_W[i];
-    first += power_W[i] * time_ns[i];
-  }
-  const double mean = first / sum;
-  for (std::size_t i = 0; i < power_W.size(); ++i)
-    second += power_W[i] * (time_ns[i] - mean) * (time_ns[i] - mean);
-  return std::sqrt(second / sum);
 }
 
 // Points about the origin, some off nadir-level ground.
@@ -152,8 +124,8 @@ TEST(DemShots, FootprintsOnUtmAndGeographicPlanesAgree) {
     }
   }
   // The record of a shot carries them (and a good quality flag).
-  const Simulated shot =
-      simulate(shots_at({{"dem", (dir / "utm.tif").string()}}, {points[1]}, 200, 4.0));
+  const SimulatedTrack shot =
+      simulate_track(shots_at({{"dem", (dir / "utm.tif").string()}}, {points[1]}, 200, 4.0));
   const Located where =
       locate(shots_at({{"dem", (dir / "utm.tif").string()}}, {points[1]}, 200, 4.0));
   EXPECT_EQ(shot.records[0].quality_flag, quality_good);
@@ -175,10 +147,10 @@ TEST(DemShots, WaveformOverADemPlaneIsThePlanes) {
     return document;
   };
   const std::vector<std::array<double, 2>> origin = {{origin_lat, origin_lon}};
-  const Simulated over_plane =
-      simulate(widen(shots_at(plane_terrain(slope_deg, 90.0), origin, 40000)));
-  const Simulated over_dem =
-      simulate(widen(shots_at({{"dem", (dir / "plane.tif").string()}}, origin, 40000)));
+  const SimulatedTrack over_plane =
+      simulate_track(widen(shots_at(plane_terrain(slope_deg, 90.0), origin, 40000)));
+  const SimulatedTrack over_dem =
+      simulate_track(widen(shots_at({{"dem", (dir / "plane.tif").string()}}, origin, 40000)));
   const double range_m = over_dem.records[0].range_m;
   const double slope_term_ns =
       2.0 * range_m * 27.5e-6 * std::tan(slope_deg * std::numbers::pi / 180.0) / c_m_s * 1e9;
@@ -187,9 +159,9 @@ TEST(DemShots, WaveformOverADemPlaneIsThePlanes) {
     EXPECT_NEAR(over_dem.records[0].rx_energy_J[band] / over_plane.records[0].rx_energy_J[band],
                 1.0, 0.005);
     const double dem_ns =
-        rms_width_ns(over_dem.records[0].rx_waveform_W[band], over_dem.bin_time_ns);
+        waveform_moments(over_dem.records[0].rx_waveform_W[band], over_dem.bin_time_ns).rms_ns;
     const double plane_ns =
-        rms_width_ns(over_plane.records[0].rx_waveform_W[band], over_plane.bin_time_ns);
+        waveform_moments(over_plane.records[0].rx_waveform_W[band], over_plane.bin_time_ns).rms_ns;
     EXPECT_NEAR(dem_ns / plane_ns, 1.0, 0.01);
     EXPECT_NEAR(dem_ns / gardner_ns, 1.0, 0.02);
   }
@@ -222,11 +194,11 @@ TEST(DemShots, RoughnessBroadensThePulseAsGardner) {
     json document = shots_at(c.terrain, origin, 40000);
     document["terrain"]["roughness"] = {{"rms_m", c.rms_m}, {"correlation_m", 2.0}};
     document["simulation"]["max_order"] = 1;
-    const Simulated shot = simulate(document);
+    const SimulatedTrack shot = simulate_track(document);
     const double roughness_term_ns = 2.0 * c.rms_m / c_m_s * 1e9;
     const double expected_ns = std::sqrt(25.0 + roughness_term_ns * roughness_term_ns + 1.0 / 12.0);
     for (int band = 0; band < 2; ++band) {
-      const double width_ns = rms_width_ns(shot.records[0].rx_waveform_W[band], shot.bin_time_ns);
+      const double width_ns = waveform_moments(shot.records[0].rx_waveform_W[band], shot.bin_time_ns).rms_ns;
       EXPECT_NEAR(width_ns / expected_ns, 1.0, 0.02) << c.terrain.dump() << " rms " << c.rms_m;
     }
     // The footprint's height is the terrain's, not the relief's.
@@ -235,21 +207,6 @@ TEST(DemShots, RoughnessBroadensThePulseAsGardner) {
 }
 
 // ---- through the built command ---------------------------------------------------------------
-
-struct Outcome {
-  int status;
-  std::string output;  // stdout and stderr together
-};
-
-Outcome glaswave(const std::string& arguments) {
-  const std::string command = std::string(GLASWAVE_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
 
 // A short pass of the glas sensor heading north over a DEM.
 fs::path write_pass(const fs::path& dir, const json& terrain, std::int64_t shots = 3) {
@@ -305,7 +262,7 @@ TEST(DemCommand, BadDemsExitWithStatus3AndOneLine) {
     const fs::path config = write_pass(dir.path(), {{"dem", c.file}});
     for (const std::string command : {"run", "check"}) {
       const std::string out = command == "run" ? " --quiet --out " + (dir / "out").string() : "";
-      const Outcome result = glaswave(command + " " + config.string() + out);
+      const CommandOutcome result = run_glaswave(command + " " + config.string() + out);
       EXPECT_EQ(result.status, 3) << c.file << ": " << result.output;
       // One line of ours, GDAL's own chatter kept off the terminal.
       EXPECT_EQ(result.output.rfind("glaswave: error: " + c.file + ": ", 0), 0u) << result.output;
@@ -339,8 +296,8 @@ TEST(DemCommand, ShotsOverNodataOrOffTheRasterAreFlagged) {
     return std::hypot(px - x, py - hole_y) < 60.0 ? -9999.0 : 700.0 + 0.05 * (py - y);
   });
   const fs::path config = write_pass(dir.path(), {{"dem", (dir / "holes.tif").string()}}, 10);
-  const Outcome run =
-      glaswave("run " + config.string() + " --quiet --out " + (dir / "out").string());
+  const CommandOutcome run =
+      run_glaswave("run " + config.string() + " --quiet --out " + (dir / "out").string());
   ASSERT_EQ(run.status, 0) << run.output;
   EXPECT_THAT(run.output, HasSubstr("10 shots in"));
   EXPECT_THAT(run.output, HasSubstr("3 flagged"));
@@ -389,7 +346,7 @@ TEST(DemCommand, VerticalDatumIsInTheSummaryAndTheProducts) {
   int n = 0;
   for (const Case& c : cases) {
     const fs::path out = dir / ("out" + std::to_string(n++));
-    const Outcome run = glaswave("run " + write_pass(dir.path(), c.terrain, 1).string() +
+    const CommandOutcome run = run_glaswave("run " + write_pass(dir.path(), c.terrain, 1).string() +
                                  " --quiet --out " + out.string());
     ASSERT_EQ(run.status, 0) << run.output;
     EXPECT_THAT(run.output, HasSubstr(c.summary));
@@ -419,7 +376,7 @@ TEST(DemCommand, DemoTerrainIsWrittenAndTheDemoPassLiesOnIt) {
   ASSERT_EQ(written, 0);
   ASSERT_TRUE(fs::exists(dem));
   EXPECT_FALSE(fs::exists(dem.string() + ".part"));
-  const Outcome check = glaswave(
+  const CommandOutcome check = run_glaswave(
       "check " GLASWAVE_SOURCE_DIR "/share/demo/demo.json --set terrain.dem=" + dem.string());
   EXPECT_EQ(check.status, 0) << check.output;
   EXPECT_THAT(check.output, HasSubstr("40 shots, 0 off the terrain"));

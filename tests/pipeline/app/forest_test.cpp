@@ -9,6 +9,7 @@
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
+#include "tests/pipeline/app/app_test_support.hpp"
 #include "terrain/error.hpp"
 
 namespace glaswave {
@@ -36,14 +37,7 @@ class Forests : public ::testing::Test {
   fs::path dir_;
 };
 
-std::vector<ShotRecord> simulate(const Config& config) {
-  const auto terrain = make_terrain(config.terrain);
-  const auto footprints = plan_track(config.track, *terrain, 0, track_length(config.track));
-  const ShotSimulator simulator(config, *terrain);
-  std::vector<ShotRecord> records;
-  for (const Footprint& f : footprints) records.push_back(simulator.simulate(f));
-  return records;
-}
+std::vector<ShotRecord> simulate(const Config& config) { return test_support::simulate_track(config).records; }
 
 // One ellipsoid (radius 8 m, half height 8 m, PAI 1 over its 16 m x 16 m bounding box) under
 // a beam much narrower than the crown: the vertical path through its centre crosses 16 m of

@@ -9,6 +9,7 @@
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
+#include "tests/pipeline/app/app_test_support.hpp"
 
 namespace glaswave {
 namespace {
@@ -27,16 +28,12 @@ Returns simulate(const std::string& key, const nlohmann::json& value) {
       {"track", {{"type", "pass"}, {"start_lat_deg", 45.0}, {"start_lon_deg", 7.0}, {"shots", 6}, {"spacing_m", 172.0}}},
   };
   if (!key.empty()) apply_override(document, key + "=" + value.dump());
-  const Config config = parse_config(document);
-  const auto terrain = make_terrain(config.terrain);
-  const auto footprints = plan_track(config.track, *terrain, 0, config.track.shots);
-  const ShotSimulator simulator(config, *terrain);
+  const std::vector<ShotRecord> records = test_support::simulate_track(document).records;
   Returns mean;
-  for (const Footprint& footprint : footprints) {
-    const ShotRecord record = simulator.simulate(footprint);
-    mean.tr += record.energy_tr_J[1] / footprints.size();
-    mean.cr += record.energy_cr_J[1] / footprints.size();
-    mean.gr += record.energy_gr_J[1] / footprints.size();
+  for (const ShotRecord& record : records) {
+    mean.tr += record.energy_tr_J[1] / records.size();
+    mean.cr += record.energy_cr_J[1] / records.size();
+    mean.gr += record.energy_gr_J[1] / records.size();
   }
   return mean;
 }

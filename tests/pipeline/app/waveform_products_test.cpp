@@ -10,6 +10,7 @@
 #include "canopy/forest.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
+#include "tests/pipeline/app/app_test_support.hpp"
 
 namespace glaswave {
 namespace {
@@ -38,21 +39,8 @@ nlohmann::json pass_over_plane(int shots) {
   };
 }
 
-struct Simulation {
-  Config config;
-  std::vector<Footprint> footprints;
-  std::vector<ShotRecord> records;
-};
-
-Simulation simulate(const nlohmann::json& document) {
-  Simulation run{parse_config(document), {}, {}};
-  const auto terrain = make_terrain(run.config.terrain);
-  run.footprints = plan_track(run.config.track, *terrain, 0, track_length(run.config.track));
-  const ShotSimulator simulator(run.config, *terrain);
-  for (const Footprint& footprint : run.footprints)
-    run.records.push_back(simulator.simulate(footprint));
-  return run;
-}
+using test_support::SimulatedTrack;
+using test_support::simulate_track;
 
 // The highest crown top (base + 2 half heights) of the trees standing within `radius_m` of the
 // footprint centre, above the ground: what the waveform's leading edge should find.
@@ -74,7 +62,7 @@ double highest_crown_top_m(const Forest& forest, const Footprint& footprint, dou
 // sqrt(2 ln 100) with sigma_p^2 = sigma_tx^2 + bin^2/12 (PHYSICS.md section 2 at nadir on level
 // ground), times c/2; all of the return ground return, truth of bare ground.
 TEST(WaveformProducts, BarePlane) {
-  const Simulation run = simulate(pass_over_plane(3));
+  const SimulatedTrack run = simulate_track(pass_over_plane(3));
   for (const ShotRecord& r : run.records) {
     for (std::size_t band = 0; band < 2; ++band) {
       SCOPED_TRACE(band);
@@ -106,7 +94,7 @@ TEST(WaveformProducts, BarePlane) {
 TEST(WaveformProducts, BaseForestGroundAndHeight) {
   nlohmann::json document = pass_over_plane(10);
   document["canopy"] = nlohmann::json::object();
-  const Simulation run = simulate(document);
+  const SimulatedTrack run = simulate_track(document);
   const Forest forest(*run.config.canopy, run.config.seed, run.config.terrain.plane);
   const double radius_m = 2.0 * run.footprints[0].range_m * run.config.sensor.divergence_sigma_rad;
   for (std::size_t band = 0; band < 2; ++band) {
@@ -135,11 +123,11 @@ TEST(WaveformProducts, BaseForestGroundAndHeight) {
 // were, the ground is still found, and the noise is the same for the same shot.
 TEST(WaveformProducts, DetectorNoiseOnTheWaveformOnly) {
   nlohmann::json document = pass_over_plane(2);
-  const Simulation clean = simulate(document);
+  const SimulatedTrack clean = simulate_track(document);
   document["detector"] = {{"enabled", true},      {"background_W", 2e-8}, {"noise_rms_W", 1e-8},
                           {"photon_noise", true}, {"bits", 10},           {"saturation_W", 2e-6}};
-  const Simulation noisy = simulate(document);
-  const Simulation again = simulate(document);
+  const SimulatedTrack noisy = simulate_track(document);
+  const SimulatedTrack again = simulate_track(document);
   for (std::size_t shot = 0; shot < 2; ++shot) {
     const ShotRecord &c = clean.records[shot], &n = noisy.records[shot];
     EXPECT_EQ(n.rx_waveform_W, again.records[shot].rx_waveform_W);

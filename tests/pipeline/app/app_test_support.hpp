@@ -1,0 +1,69 @@
+// What the app tests share: a track simulated shot by shot through ShotSimulator, the built
+// glaswave command run as a user runs it, and the moments of a waveform.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "footprints/track.hpp"
+#include "pipeline/app/shot_simulation.hpp"
+
+namespace glaswave::test_support {
+
+struct SimulatedTrack {
+  Config config;
+  std::vector<Footprint> footprints;
+  std::vector<ShotRecord> records;
+  std::vector<double> bin_time_ns;  // bin centres after the return from range_m
+};
+
+// Every shot of the configuration's track.
+inline SimulatedTrack simulate_track(Config config) {
+  SimulatedTrack run{std::move(config), {}, {}, {}};
+  const auto terrain = make_terrain(run.config.terrain);
+  run.footprints = plan_track(run.config.track, *terrain, 0, track_length(run.config.track));
+  const ShotSimulator simulator(run.config, *terrain);
+  for (const Footprint& footprint : run.footprints) run.records.push_back(simulator.simulate(footprint));
+  run.bin_time_ns = simulator.lidar().bin_time_ns();
+  return run;
+}
+
+inline SimulatedTrack simulate_track(const nlohmann::json& document) { return simulate_track(parse_config(document)); }
+
+struct CommandOutcome {
+  int status;
+  std::string output;  // stdout and stderr together
+};
+
+inline CommandOutcome run_glaswave(const std::string& arguments) {
+  const std::string command = std::string(GLASWAVE_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+struct Moments {
+  double mean_ns, rms_ns;
+};
+
+// Power-weighted mean time and RMS width of a waveform.
+inline Moments waveform_moments(const std::vector<double>& power_W, const std::vector<double>& time_ns) {
+  double sum = 0, first = 0, second = 0;
+  for (std::size_t i = 0; i < power_W.size(); ++i) {
+    sum += power_W[i];
+    first += power_W[i] * time_ns[i];
+  }
+  const double mean = first / sum;
+  for (std::size_t i = 0; i < power_W.size(); ++i) second += power_W[i] * (time_ns[i] - mean) * (time_ns[i] - mean);
+  return {mean, std::sqrt(second / sum)};
+}
+
+}  // namespace glaswave::test_support
