@@ -212,5 +212,27 @@ TEST(BaseForest, TwoPeaksWithTheCanopyAboveTheGround) {
   EXPECT_GT(canopy_sum, ground_sum);  // 70 % cover, PAI 3: mostly canopy return
 }
 
+// PHYSICS.md section 4: at the seed's settings (n = 10^4, Tables 1 and 2) the orders converge by
+// order 8: each order after the second brings less than the one before, and the eighth less
+// than 1 % of the total.
+TEST(BaseForest, ScatteringOrdersConvergeByTheEighth) {
+  const nlohmann::json document = {
+      {"seed", 2},
+      {"sensor", {{"preset", "north2010"}}},
+      {"terrain", {{"plane", {{"origin_lat_deg", 45.0}, {"origin_lon_deg", 7.0}}}}},
+      {"canopy", nlohmann::json::object()},
+      {"track", {{"type", "points"}, {"points", {{{"lat_deg", 45.0}, {"lon_deg", 7.0}}}}}},
+      {"output", {{"per_order", true}}},
+  };
+  const Simulated shot = simulate(document);
+  for (int band = 0; band < 2; ++band) {
+    double total = 0, order_J[8] = {};
+    for (int k = 0; k < 8; ++k)
+      for (double p : shot.record.rx_waveform_order_W[band][k]) order_J[k] += p, total += p;
+    for (int k = 2; k < 8; ++k) EXPECT_LT(order_J[k], order_J[k - 1]) << "band " << band << ", order " << k + 1;
+    EXPECT_LT(order_J[7] / total, 0.01) << "band " << band;
+  }
+}
+
 }  // namespace
 }  // namespace glaswave

@@ -166,6 +166,22 @@ TEST(ShotTransport, OverlappingCrownsAddTheirFoliage) {
   EXPECT_NEAR(a.ground_energy_J[0] / b.ground_energy_J[0], 1.0, 0.03);
 }
 
+// PHYSICS.md section 8: foliage never takes the place of a surface nearer along the ray. A wide
+// crown centred on the ground (half of it below): the soil still returns rho_s e^(-G u 8), the
+// light crossing the 8 m of foliage above it once (the hotspot).
+TEST(ShotTransport, ACrownReachingBelowTheGroundKeepsTheGroundReturn) {
+  const double u = 0.05;
+  const CrownScene scene({{CrownShape::ellipsoid, {0.0, 0.0, -8.0}, 300.0, 8.0, u}});
+  const LidarModel lidar(table2_sensor());
+  TransportOptions options;
+  options.rays = 40000;
+  options.max_order = 1;
+  const ShotWaveforms w = simulate_shot(*scene.scene, lidar, scene.geometry, scene.optics, options, 3);
+  const double f_fov = 1.0 - std::exp(-0.0004 * 0.0004 / (8.0 * 0.00011 * 0.00011));
+  const double normalisation = 32e-3 * 0.8 * 0.709 * f_fov / (std::numbers::pi * 600000.0 * 600000.0);
+  EXPECT_NEAR(w.ground_energy_J[0] / normalisation / (0.2 * std::exp(-0.5 * u * 8.0)), 1.0, 0.02);
+}
+
 TEST(ShotTransport, SameBitsForAnyThreadCountInAForest) {
   const CrownScene forest({{CrownShape::ellipsoid, {3.0, 0.0, 15.0}, 8.0, 8.0, 0.3},
                            {CrownShape::cone, {-6.0, 4.0, 12.0}, 5.0, 9.0, 0.4}});
