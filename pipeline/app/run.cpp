@@ -55,7 +55,8 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
   Config used = config;
   used.resolved["terrain"]["vertical_datum"] = terrain->vertical_datum().key;
   const ShotSimulator simulator(used, *terrain);
-  const RunInfo info = simulator.run_info(last - first, request.command_line);
+  RunInfo info = simulator.run_info(last - first, request.command_line);
+  info.vertical_datum = terrain->vertical_datum().description;
   std::unique_ptr<NetcdfWriter> netcdf;
   std::unique_ptr<GeojsonWriter> geojson;
   if (config.output.netcdf) netcdf = std::make_unique<NetcdfWriter>(request.out_dir / "shots.nc", info);

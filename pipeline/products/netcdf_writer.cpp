@@ -365,6 +365,7 @@ struct NetcdfWriter::Impl {
         NC_GLOBAL, "global", "references",
         "North et al. (2010), A Monte Carlo radiative transfer model of satellite waveform lidar");
     put_text(NC_GLOBAL, "global", "config", info.config_json);
+    if (!info.vertical_datum.empty()) put_text(NC_GLOBAL, "global", "vertical_datum", info.vertical_datum);
     const unsigned long long seed = info.seed;
     check(nc_put_att_ulonglong(nc.id(), NC_GLOBAL, "seed", NC_UINT64, 1, &seed),
           "global attribute 'seed'");

@@ -64,6 +64,7 @@ struct ShotRecord {
 struct RunInfo {
   std::string command_line;  // the `history` attribute
   std::string config_json;   // resolved configuration
+  std::string vertical_datum;  // what the terrain's heights were measured from, in words
   std::uint64_t seed = 0;
   std::int64_t shots = 0;  // records the products will hold
   std::vector<Band> bands;

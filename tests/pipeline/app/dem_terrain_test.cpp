@@ -323,7 +323,8 @@ TEST(DemCommand, ShotsOverNodataOrOffTheRasterAreFlagged) {
   }
 }
 
-// The vertical datum chosen is said in the summary and recorded in the products' configuration.
+// The vertical datum chosen is said in the summary and recorded in the products: in their
+// configuration and in a global attribute `vertical_datum`.
 TEST(DemCommand, VerticalDatumIsInTheSummaryAndTheProducts) {
   const TempFolder dir;
   const PlaneTerrain level({origin_lat, origin_lon, 300.0, 0.0, 0.0});
@@ -356,8 +357,13 @@ TEST(DemCommand, VerticalDatumIsInTheSummaryAndTheProducts) {
     ASSERT_EQ(nc_inq_attlen(nc, NC_GLOBAL, "config", &length), NC_NOERR);
     std::string text(length, '\0');
     nc_get_att_text(nc, NC_GLOBAL, "config", text.data());
+    // And in words, as an attribute of its own.
+    ASSERT_EQ(nc_inq_attlen(nc, NC_GLOBAL, "vertical_datum", &length), NC_NOERR);
+    std::string words(length, '\0');
+    nc_get_att_text(nc, NC_GLOBAL, "vertical_datum", words.data());
     nc_close(nc);
     EXPECT_EQ(json::parse(text)["terrain"]["vertical_datum"], c.recorded) << text;
+    EXPECT_THAT(words, HasSubstr(c.summary));
   }
 }
 
