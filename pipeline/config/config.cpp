@@ -209,11 +209,15 @@ SensorSettings read_sensor(JsonReader& root) {
       throw config_error("/sensor/preset", "must be a string, got " + describe(name));
     preset = name.get<std::string>();
     if (!sensor_presets().count(preset)) {
+      std::vector<std::string> names;
       std::string known;
-      for (const auto& [preset_name, text] : sensor_presets())
+      for (const auto& [preset_name, text] : sensor_presets()) {
+        names.push_back(preset_name);
         known += (known.empty() ? "" : ", ") + preset_name;
-      throw config_error("/sensor/preset",
-                         "unknown preset \"" + preset + "\"; the presets are " + known);
+      }
+      const auto nearest = nearest_name(preset, names);
+      throw config_error("/sensor/preset", "unknown preset \"" + preset + "\"; " +
+                                               (nearest ? "did you mean \"" + *nearest + "\"?" : "the presets are " + known));
     }
   }
   const auto preset_text = sensor_presets().find(preset);

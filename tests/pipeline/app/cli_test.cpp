@@ -201,6 +201,10 @@ TEST_F(Cli, CheckHelpAndVersion) {
   const CommandOutcome version = run_glaswave("--version");
   EXPECT_EQ(version.status, 0);
   EXPECT_NE(version.output.find("glaswave " GLASWAVE_VERSION), std::string::npos) << version.output;
+  // The contract's later commands are named and refused, not mistaken for typos.
+  const CommandOutcome sweep = run_glaswave("sweep " + write_config() + " --vary canopy.pai=1,2");
+  EXPECT_EQ(sweep.status, 2);
+  EXPECT_NE(sweep.output.find("glaswave: error: sweep: this command is not available"), std::string::npos) << sweep.output;
   const CommandOutcome bad = run_glaswave("fly");
   EXPECT_EQ(bad.status, 2);
   EXPECT_EQ(bad.output.rfind("glaswave: error: ", 0), 0u) << bad.output;
