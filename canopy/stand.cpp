@@ -1,10 +1,13 @@
 // Deterministic random stands, tile by tile.
 #include "canopy/stand.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include <pcg_random.hpp>
+
+#include "terrain/bit_mix.hpp"
 
 #include "canopy/crown.hpp"
 #include "terrain/error.hpp"
@@ -18,23 +21,39 @@ constexpr double wgs84_a_m = 6378137.0;
 constexpr double wgs84_e2 = 6.69437999014e-3;
 constexpr double metres_per_degree = 111132.954;  // along the meridian, mean
 
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
+constexpr auto mix = mix_bits;
 
 double uniform(pcg32& engine) {
-  return (static_cast<double>(engine() >> 5) * 67108864.0 + (engine() >> 6)) * 0x1.0p-53;
+  // Two draws in a fixed order (the order of operands in one expression is unspecified).
+  const std::uint32_t high = engine(), low = engine();
+  return (static_cast<double>(high >> 5) * 67108864.0 + (low >> 6)) * 0x1.0p-53;
+}
+
+// A Poisson count by inversion, in chunks of mean at most 500 so that exp(-mean) never
+// underflows (a sum of Poisson counts is a Poisson count of the summed mean).
+std::int64_t poisson(pcg32& engine, double mean) {
+  std::int64_t count = 0;
+  while (mean > 0.0) {
+    const double chunk = std::min(mean, 500.0);
+    mean -= chunk;
+    double term = std::exp(-chunk), cumulative = term;
+    const double u = uniform(engine);
+    std::int64_t k = 0;
+    while (u > cumulative && term > 0.0) {
+      ++k;
+      term *= chunk / static_cast<double>(k);
+      cumulative += term;
+    }
+    count += k;
+  }
+  return count;
 }
 
 }  // namespace
 
 Stand::Stand(const CanopySettings& canopy, std::uint64_t seed) : canopy_(canopy), seed_(seed) {
   const double crown_area_m2 = pi * canopy.crown_radius_m * canopy.crown_radius_m;
-  if (canopy.cover >= 1.0)
-    throw config_error("/canopy/cover", "must be < 1 for randomly placed crowns (use crown_shape \"layer\")");
+  // The configuration keeps cover below 1 for random crowns; a closed canopy is a layer.
   trees_per_m2_ = -std::log1p(-canopy.cover) / crown_area_m2;
   const double volume_m3 = crown_volume_m3(canopy.crown_shape, canopy.crown_radius_m, canopy.crown_half_height_m);
   area_density_m2_m3_ = trees_per_m2_ > 0.0 ? canopy.pai / (trees_per_m2_ * volume_m3) : 0.0;
@@ -62,17 +81,8 @@ std::vector<Tree> Stand::trees_near(double lat_deg, double lon_deg, double radiu
     const auto col_last = static_cast<std::int64_t>(std::floor((lon_deg + reach_lon_deg) / tile_lon_deg));
     for (std::int64_t col = col_first; col <= col_last; ++col) {
       pcg32 engine(mix(seed_ ^ mix(static_cast<std::uint64_t>(row))), mix(static_cast<std::uint64_t>(col) + seed_));
-      // Poisson number of trees by inversion.
-      const double mean = trees_per_m2_ * tile_area_m2;
-      double term = std::exp(-mean), cumulative = term;
-      const double u = uniform(engine);
-      int count = 0;
-      while (u > cumulative && count < 100000) {
-        ++count;
-        term *= mean / count;
-        cumulative += term;
-      }
-      for (int i = 0; i < count; ++i) {
+      const std::int64_t count = poisson(engine, trees_per_m2_ * tile_area_m2);
+      for (std::int64_t i = 0; i < count; ++i) {
         Tree tree;
         tree.lat_deg = (row + uniform(engine)) * tile_lat_deg;
         tree.lon_deg = (col + uniform(engine)) * tile_lon_deg;

@@ -1,6 +1,8 @@
 // The roughness field and the subdivision of a ground mesh under the beam.
 #include "terrain/roughness.hpp"
 
+#include "terrain/bit_mix.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -14,13 +16,7 @@
 namespace glaswave {
 namespace {
 
-// SplitMix64's finaliser: a bijective mix of 64 bits, enough to turn node numbers into noise.
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
+constexpr auto mix = mix_bits;
 
 // Standard normal white noise at a lattice node, a pure function of its arguments.
 double white_noise(std::uint64_t zone_key, std::int64_t i, std::int64_t j) {

@@ -10,6 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "canopy/forest.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/app/run.hpp"
 #include "terrain/error.hpp"
@@ -118,6 +119,8 @@ int run(const Arguments& arguments, const std::string& command_line) {
 int check(const Arguments& arguments) {
   const Config config = load(arguments);
   const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
+  // The forest reads its crowns file and checks what the configuration cannot alone.
+  if (config.canopy) const Forest forest(*config.canopy, config.seed, config.terrain.plane);
   const Track track(config.track, *terrain);
   std::int64_t off_terrain = 0;
   for (std::int64_t record = 0; record < track.size(); ++record)

@@ -386,6 +386,9 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
                                        {{"ellipsoid", CrownShape::ellipsoid},
                                         {"cone", CrownShape::cone},
                                         {"layer", CrownShape::layer}});
+  // Crowns placed at random overlap: their cover 1 - exp(-n pi r^2) never reaches 1.
+  if (c.crown_shape != CrownShape::layer && c.cover >= 1.0)
+    r.fail("cover", "must be < 1 for randomly placed crowns, got 1; a closed canopy is crown_shape \"layer\"");
   c.crown_radius_m = r.number("crown_radius_m", c.crown_radius_m, above(0));
   c.crown_half_height_m = r.number("crown_half_height_m", c.crown_half_height_m, above(0));
   const json& base = r.raw("crown_base_m");
@@ -733,6 +736,8 @@ std::vector<StandArea> read_stands(const std::string& path, const json& scene_ca
       const std::string key = e.place().size() > 8 ? e.place().substr(8) : e.place();
       throw input_error(path, where + ": property " + key + ": " + e.message());
     }
+    if (area.canopy.crown_shape == CrownShape::layer || scene_canopy.value("crown_shape", "") == "layer")
+      throw input_error(path, where + ": a layer covers the whole scene: it cannot be a stand, nor have stands");
     areas.push_back(std::move(area));
   }
   return areas;

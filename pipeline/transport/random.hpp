@@ -7,6 +7,8 @@
 
 #include <pcg_random.hpp>
 
+#include "terrain/bit_mix.hpp"
+
 namespace glaswave {
 
 class RayRandom {
@@ -23,13 +25,8 @@ class RayRandom {
   }
 
  private:
-  // SplitMix64's finaliser: neighbouring seeds and shots get unrelated streams.
-  static std::uint64_t mix(std::uint64_t x) {
-    x += 0x9e3779b97f4a7c15ULL;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-    return x ^ (x >> 31);
-  }
+  // Neighbouring seeds and shots get unrelated streams.
+  static constexpr auto mix = mix_bits;
 
   pcg32 engine_;
 };

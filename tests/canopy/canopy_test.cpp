@@ -178,9 +178,29 @@ TEST(Stand, TreesStayPutAndGiveTheCoverAndPai) {
     }
   }
   EXPECT_NEAR(static_cast<double>(covered) / samples, 0.7, 0.05);
-  // PAI: trees per m^2 times crown volume times area density.
-  EXPECT_NEAR(stand.trees_per_m2() * crown_volume_m3(CrownShape::ellipsoid, 8, 8) * stand.area_density_m2_m3(), 3.0,
-              1e-12);
+  // PAI: the plant area of the trees standing in the 200 m square (their crowns' volume times
+  // the density), per square metre; Poisson counts of ~760 trees: within 4 / sqrt(760) = 15 %.
+  int stems = 0;
+  for (const Tree& t : near)
+    if (std::abs((t.lon_deg - 7.0) * m_lon) < 100.0 && std::abs((t.lat_deg - 45.0) * m_lat) < 100.0) ++stems;
+  const double pai = stems * (4.0 / 3.0 * pi * 64.0 * 8.0) * stand.area_density_m2_m3() / (200.0 * 200.0);
+  EXPECT_NEAR(pai / 3.0, 1.0, 4.0 / std::sqrt(stems));
+}
+
+// Small crowns at high cover: many trees a tile (here ~1000), counted without underflow.
+TEST(Stand, SmallCrownsKeepTheirDensity) {
+  CanopySettings canopy;
+  canopy.crown_radius_m = 0.5;
+  canopy.cover = 0.7;
+  const Stand stand(canopy, 4);
+  const double expected_per_m2 = -std::log(1.0 - 0.7) / (pi * 0.25);
+  EXPECT_NEAR(stand.trees_per_m2(), expected_per_m2, 1e-12);
+  const double m_lat = 111132.954 - 559.822 * std::cos(2 * 45 * pi / 180), m_lon = 111412.84 * std::cos(45 * pi / 180);
+  int stems = 0;
+  for (const Tree& t : stand.trees_near(45.0, 7.0, 30.0))
+    if (std::abs((t.lon_deg - 7.0) * m_lon) < 20.0 && std::abs((t.lat_deg - 45.0) * m_lat) < 20.0) ++stems;
+  const double expected = expected_per_m2 * 40.0 * 40.0;
+  EXPECT_NEAR(stems, expected, 4.0 * std::sqrt(expected));
 }
 
 }  // namespace
