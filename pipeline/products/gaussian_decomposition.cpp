@@ -292,7 +292,14 @@ std::vector<GaussianComponent> decompose_waveform(std::span<const double> values
     }
     if (kept.size() == components.size()) break;
     if (kept.empty()) {
+      // Nothing passed on its own (a noisy return the components shared out between them): the
+      // signal is still there, so it is described by the one Gaussian of its strongest peak.
+      std::vector<GaussianComponent> single =
+          fit_gaussians(values, first, last, {guess(values, smoothed, peaks.front(), first, last, settings)});
       components.clear();
+      if (!single.empty() && single.front().amplitude > 0.0 && std::isfinite(single.front().sigma_bins) &&
+          single.front().center_bin >= first && single.front().center_bin <= last)
+        components = std::move(single);
       break;
     }
     components = fit_gaussians(values, first, last, kept);

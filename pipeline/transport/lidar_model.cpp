@@ -11,7 +11,8 @@ LidarModel::LidarModel(const SensorSettings& sensor) : sensor_(sensor) {
   const double sigma = sensor.divergence_sigma_rad;
   const double half_fov = 0.5 * sensor.ifov_rad;
   fov_fraction_ = -std::expm1(-half_fov * half_fov / (2.0 * sigma * sigma));
-  max_angle_rad_ = std::min(half_fov, 6.0 * sigma);
+  // Rays for multiple scattering come from the whole field of view (see shot_transport.cpp).
+  max_angle_rad_ = half_fov;
   // The reference return sits at the centre of a bin two thirds into the window: canopy comes
   // before the ground, and a level surface's return is not shifted by half a bin.
   lead_ns_ = std::floor(2.0 * sensor.bins / 3.0) * sensor.bin_ns;
@@ -23,6 +24,11 @@ LidarModel::LidarModel(const SensorSettings& sensor) : sensor_(sensor) {
     sum += kernel_.back();
   }
   for (double& weight : kernel_) weight /= sum;
+}
+
+double LidarModel::fov_solid_angle_sr() const {
+  const double s = std::sin(0.25 * sensor_.ifov_rad);  // 1 - cos(half) = 2 sin^2(half / 2)
+  return 4.0 * std::numbers::pi * s * s;
 }
 
 std::vector<double> LidarModel::bin_time_ns() const {
@@ -62,7 +68,8 @@ std::vector<double> LidarModel::tx_waveform_W(std::size_t band) const {
   std::vector<double> power;
   for (double t_ns : tx_time_ns()) {
     const double t = t_ns / sensor_.pulse_sigma_ns;
-    power.push_back(energy_J * std::exp(-0.5 * t * t) / (std::sqrt(2.0 * std::numbers::pi) * sigma_s));
+    power.push_back(energy_J * std::exp(-0.5 * t * t) /
+                    (std::sqrt(2.0 * std::numbers::pi) * sigma_s));
   }
   return power;
 }
@@ -70,7 +77,8 @@ std::vector<double> LidarModel::tx_waveform_W(std::size_t band) const {
 BeamSampler::BeamSampler(const LidarModel& lidar, const Vec3& axis)
     : axis_(normalized(axis)),
       two_sigma_sq_(2.0 * lidar.beam_sigma_rad() * lidar.beam_sigma_rad()),
-      fov_fraction_(lidar.fov_fraction()) {
+      fov_fraction_(lidar.fov_fraction()),
+      sin_quarter_fov_(std::sin(0.25 * lidar.sensor().ifov_rad)) {
   // Any two unit vectors across the axis will do; this pair is stable for a nadir axis.
   const Vec3 helper = std::abs(axis_[2]) < 0.9 ? Vec3{0.0, 0.0, 1.0} : Vec3{0.0, 1.0, 0.0};
   across_ = normalized(cross(helper, axis_));
@@ -80,6 +88,13 @@ BeamSampler::BeamSampler(const LidarModel& lidar, const Vec3& axis)
 Vec3 BeamSampler::direction(double u1, double u2) const {
   // Radial density of a 2-D Gaussian truncated at the field of view, inverted.
   const double angle_rad = std::sqrt(-two_sigma_sq_ * std::log1p(-u1 * fov_fraction_));
+  return direction_at(angle_rad, 2.0 * std::numbers::pi * u2);
+}
+
+Vec3 BeamSampler::uniform_direction(double u1, double u2) const {
+  // Uniform in solid angle: 1 - cos(angle) = 2 sin^2(angle / 2) is uniform (written with sines,
+  // which keep their precision at the microradians of a lidar's field of view).
+  const double angle_rad = 2.0 * std::asin(std::sqrt(u1) * sin_quarter_fov_);
   return direction_at(angle_rad, 2.0 * std::numbers::pi * u2);
 }
 

@@ -21,8 +21,10 @@ class LidarModel {
   // Part of the beam's energy inside the field of view: 1 - exp(-ifov^2 / (8 sigma^2)).
   double fov_fraction() const { return fov_fraction_; }
   double beam_sigma_rad() const { return sensor_.divergence_sigma_rad; }
-  // Largest angle from the axis at which a ray is sampled.
+  // Largest angle from the axis at which a ray is sampled: the field of view's edge.
   double max_angle_rad() const { return max_angle_rad_; }
+  // Solid angle of the field of view (sr).
+  double fov_solid_angle_sr() const;
 
   // Time bins: bin i is centred at bin_time_ns()[i] after the return from the reference range.
   int bins() const { return sensor_.bins; }
@@ -44,8 +46,8 @@ class LidarModel {
   SensorSettings sensor_;
   double fov_fraction_;
   double max_angle_rad_;
-  double lead_ns_;          // time from the centre of bin 0 to the reference return
-  int margin_bins_;         // half-width of the pulse kernel
+  double lead_ns_;              // time from the centre of bin 0 to the reference return
+  int margin_bins_;             // half-width of the pulse kernel
   std::vector<double> kernel_;  // pulse sampled at the bin spacing, sums to 1
 };
 
@@ -56,6 +58,8 @@ class BeamSampler {
   BeamSampler(const LidarModel& lidar, const Vec3& axis);
   // Direction for two uniform numbers in [0, 1).
   Vec3 direction(double u1, double u2) const;
+  // Direction uniform over the field of view, for two uniform numbers in [0, 1).
+  Vec3 uniform_direction(double u1, double u2) const;
   // Direction at angle `angle_rad` from the axis, toward `azimuth_rad` about it.
   Vec3 direction_at(double angle_rad, double azimuth_rad) const;
 
@@ -63,6 +67,7 @@ class BeamSampler {
   Vec3 axis_, across_, along_;
   double two_sigma_sq_;
   double fov_fraction_;
+  double sin_quarter_fov_;
 };
 
 }  // namespace glaswave
