@@ -123,6 +123,49 @@ TEST(TurbidLayer, OrderEnergiesScaleAsOmegaToTheK) {
   }
 }
 
+// Second order of a layer of point leaves over black soil, at nadir, against the plane-parallel
+// integral computed here: light scattered at depth z1 into direction mu (cosine with up), carried
+// to depth z2, scattered up there and out, with Gamma of PHYSICS.md section 3 at both ends:
+//   R2 = pi 2pi int dmu int dz2 e^(-k z2) (u/pi) Gamma(beta2) (u/pi) Gamma(beta1) I(z2, mu),
+// k = G u, cos beta1 = -mu (from straight down), cos beta2 = mu (to straight up), and I the
+// first leg integrated over z1 in closed form. The field of view (0.8 mrad) takes in the light
+// spread by the second order. To 2 %.
+TEST(TurbidLayer, SecondOrderMatchesThePlaneParallelIntegral) {
+  const double L = 3.0, depth_m = 10.0, rho = 0.45, tau = 0.45, u = L / depth_m, k = 0.5 * u;
+  auto gamma = [&](double cos_beta) {
+    const double beta = std::acos(std::clamp(cos_beta, -1.0, 1.0));
+    return (rho + tau) / (3 * pi) * (std::sin(beta) - beta * cos_beta) + tau / 3 * cos_beta;
+  };
+  // First leg: from every z1 above (mu < 0) or below (mu > 0) to z2, per unit of the source.
+  auto first_leg = [&](double z2, double mu) {
+    // (1/m) int e^(-k z1) e^(-k |z2 - z1| / m) dz1, written so that no exponent grows.
+    const double m = std::abs(mu);
+    if (mu < 0) {
+      const double a = k * (1 / m - 1);
+      return a > 1e-12 ? (std::exp(-k * z2) - std::exp(-k * z2 / m)) / (a * m) : z2 * std::exp(-k * z2);
+    }
+    const double b = k * (1 + 1 / m);
+    return std::exp(-k * z2) * -std::expm1(-b * (depth_m - z2)) / (b * m);
+  };
+  const int steps = 2000;
+  double r2 = 0.0;
+  for (int i = 0; i < steps; ++i) {
+    const double mu = -1.0 + (i + 0.5) * 2.0 / steps;
+    for (int j = 0; j < steps; ++j) {
+      const double z2 = (j + 0.5) * depth_m / steps;
+      r2 += std::exp(-k * z2) * (u / pi) * gamma(mu) * (u / pi) * gamma(-mu) * first_leg(z2, mu) * (2.0 / steps) *
+            (depth_m / steps);
+    }
+  }
+  r2 *= pi * 2 * pi;
+  nlohmann::json document = layer_shot(L, 0.0, rho, tau, 0.0, 2, 40000);
+  document["sensor"]["ifov_rad"] = 0.0008;
+  const Simulated shot = simulate(document);
+  double second_J = 0.0;
+  for (double p : shot.record.rx_waveform_order_W[0][1]) second_J += p * 1e-9;
+  EXPECT_NEAR(second_J / shot.normalisation_J / r2, 1.0, 0.02) << "R2 = " << r2;
+}
+
 // Per-order waveforms do not change with max_order (PHYSICS.md section 8), and the orders add
 // up to the total.
 TEST(TurbidLayer, OrdersDoNotDependOnMaxOrderAndSumToTheTotal) {
