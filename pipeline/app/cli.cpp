@@ -149,7 +149,13 @@ int run_command_line(int argc, char** argv) {
   run_command->add_option("--set", arguments.overrides, "override a configuration key: KEY=VALUE (dotted KEY)");
   run_command->add_option("--threads", arguments.threads, "threads (0: every core)")->check(CLI::Range(0, 65536));
   run_command->add_option("--shots", arguments.shots, "simulate shot numbers A to B-1 only (A:B)");
-  run_command->add_option("--seed", arguments.seed, "random seed (overrides the configuration's)");
+  run_command->add_option("--seed", arguments.seed, "random seed (overrides the configuration's)")
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            // An unsigned option would take -1 as 2^64 - 1.
+            return text.rfind('-', 0) == 0 ? "must be a non-negative integer, got " + text : std::string();
+          },
+          "UINT"));
   run_command->add_flag("--resume", arguments.resume, "finish an interrupted run");
   run_command->add_flag("--quiet", arguments.quiet, "no progress bar");
 

@@ -33,13 +33,18 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
                                       (track.size() < length ? " (" + std::to_string(track.size()) + " on the terrain)"
                                                              : std::string()));
 
+  if (!config.output.netcdf && !config.output.geojson)
+    throw config_error("/output", "nothing to write: output.netcdf and output.geojson are both false");
   if (config.output.plots && !(config.output.netcdf && config.output.geojson))
     throw config_error("/output/plots", "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
                                         "and output.geojson");
   std::error_code exists_error;
   if (fs::exists(request.out_dir, exists_error))
     throw config_error(request.out_dir.string(), "output directory exists; remove it or choose another --out");
-  fs::create_directories(request.out_dir);
+  std::error_code create_error;
+  fs::create_directories(request.out_dir, create_error);
+  if (create_error)
+    throw config_error(request.out_dir.string(), "cannot create the output directory: " + create_error.message());
   // A run that fails leaves no empty output directory behind (the writers remove their parts).
   struct RemoveIfEmpty {
     fs::path dir;

@@ -152,8 +152,8 @@ const ShotVariable kShotVariables[] = {
     {"canopy_height_est", NC_DOUBLE, &ShotRecord::canopy_height_est_m, "m",
      "canopy height estimated from the waveform: signal begin above ground_elev_est",
      "canopy_height", {},
-     "less the pulse's own rise to the threshold, so that bare ground reads 0; rh100 is the "
-     "uncorrected signal begin above the ground"},
+     "as GLA14: it includes the pulse's own rise to the threshold (about 3.2 m over bare ground "
+     "for a 5 ns pulse without noise); equal to rh100"},
     {"rh", NC_FLOAT, &ShotRecord::rh_m, "m",
      "relative height above ground_elev_est at which the energy counted up from signal end "
      "reaches percentile % of energy_tr (GEDI L2A)",
@@ -209,11 +209,15 @@ std::string join_shape(std::span<const std::size_t> shape) {
   return text;
 }
 
-// Owns a netCDF id: closed when the owner goes, whatever happened.
+// Owns a netCDF id: closed when the owner goes, whatever happened. One never closed by its
+// owner (a run that failed, a full disk) is aborted: closing would flush a file that is to be
+// removed anyway, and a failed flush leaves the HDF5 library with a half-closed file.
 class NcHandle {
  public:
   NcHandle() = default;
-  ~NcHandle() { close(); }
+  ~NcHandle() {
+    if (id_ >= 0) nc_abort(id_);
+  }
   NcHandle(const NcHandle&) = delete;
   NcHandle& operator=(const NcHandle&) = delete;
 

@@ -23,9 +23,8 @@
 // - rh k: the height above the ground at which the energy counted up from signal end reaches
 //   k % of TR (GEDI L2A), each bin's energy spread evenly over the bin: rh0 and rh100 are the
 //   bottom and the top of the energy (signal end and begin, when the waveform reaches them).
-// - canopy_height: signal begin above the ground, less the pulse's own rise: the distance from
-//   its peak at which a lone flat-surface return as strong as the highest Gaussian crosses the
-//   threshold (without it, bare ground would read 2-3 m of canopy). rh100 keeps the raw value.
+// - canopy_height: signal begin above the ground, as the product contract and GLA14 define it
+//   (= rh100); over bare ground it is the pulse's own rise to the threshold, about 3 m.
 // - No signal above the threshold: TR = CR = GR = 0, n_peaks 0, everything else NaN.
 #pragma once
 

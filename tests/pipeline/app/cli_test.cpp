@@ -159,6 +159,8 @@ TEST_F(Cli, BadConfigurationsFailWithOneLineNamingThePlace) {
       {"--set seed=\\\"x\\\"", "/seed"},
       {"--set simulation.rays_per_shot=1e999", "/simulation/rays_per_shot"},
       {"--shots 9:12", "--shots"},
+      {"--seed -1", "--seed: must be a non-negative integer"},
+      {"--set output.netcdf=false --set output.geojson=false", "/output: nothing to write"},
   };
   for (const Case& c : cases) {
     const CommandOutcome run = run_glaswave("run " + config + " --quiet --out " + (dir_ / "out").string() + " " + c.arguments);
