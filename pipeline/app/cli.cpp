@@ -147,7 +147,7 @@ int run_command_line(int argc, char** argv) {
   run_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
   run_command->add_option("--out", arguments.out_dir, "output directory (default out/<config name>)");
   run_command->add_option("--set", arguments.overrides, "override a configuration key: KEY=VALUE (dotted KEY)");
-  run_command->add_option("--threads", arguments.threads, "threads (0: every core)")->check(CLI::Range(0, 65536));
+  run_command->add_option("--threads", arguments.threads, "threads (0: every core; at most the cores)")->check(CLI::Range(0, 65536));
   run_command->add_option("--shots", arguments.shots, "simulate shot numbers A to B-1 only (A:B)");
   run_command->add_option("--seed", arguments.seed, "random seed (overrides the configuration's)")
       ->check(CLI::Validator(

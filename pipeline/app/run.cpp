@@ -67,7 +67,9 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
   if (config.output.netcdf) netcdf = std::make_unique<NetcdfWriter>(request.out_dir / "shots.nc", info);
   if (config.output.geojson) geojson = std::make_unique<GeojsonWriter>(request.out_dir / "footprints.geojson", info);
 
-  const int threads = request.threads > 0 ? request.threads : tbb::this_task_arena::max_concurrency();
+  // More threads than cores would only wait for each other (and TBB would warn on stderr).
+  const int cores = tbb::this_task_arena::max_concurrency();
+  const int threads = request.threads > 0 ? std::min(request.threads, cores) : cores;
   tbb::task_arena arena(threads);
   // Batches keep memory bounded on long tracks and let records be written in shot order.
   const std::int64_t batch_size = std::max<std::int64_t>(8, 4 * threads);
