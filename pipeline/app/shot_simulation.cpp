@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 
+#include "footprints/terrain_intersection.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
 #include "pipeline/scene/vegetation.hpp"
 #include "pipeline/transport/detector.hpp"
@@ -96,8 +97,20 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
       3.0 * footprint.range_m * lidar_.beam_sigma_rad() / std::cos(footprint.off_nadir_deg * std::numbers::pi / 180.0);
   if (!footprint.on_terrain || !terrain_.has_data(LocalFrame(footprint.ground), data_radius_m)) {
     record.quality_flag = quality_no_terrain;
+    // The shot keeps a position, as a trajectory's coordinates should: where the beam met the
+    // terrain (over nodata), or else where it crosses the ellipsoid; no height when it met none.
     record.lat_deg = record.lon_deg = record.elev_m = fill;
     record.range_m = record.slope_deg = record.aspect_deg = fill;
+    if (footprint.on_terrain) {
+      record.lat_deg = footprint.ground.lat_deg;
+      record.lon_deg = footprint.ground.lon_deg;
+      record.elev_m = footprint.ground.h_m;
+      record.range_m = footprint.range_m;
+    } else if (const auto t_m = ellipsoid_crossing(footprint.spacecraft_ecef, footprint.beam_ecef, 0.0)) {
+      const Geodetic aim = geodetic_from_ecef(footprint.spacecraft_ecef + *t_m * footprint.beam_ecef);
+      record.lat_deg = aim.lat_deg;
+      record.lon_deg = aim.lon_deg;
+    }
     record.elev_bin0_m = record.elev_lastbin_m = fill;
     const std::vector<double> fill_bins(lidar_.bins(), fill);
     record.rx_waveform_W.assign(bands, fill_bins);
