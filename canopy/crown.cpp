@@ -25,14 +25,16 @@ std::optional<std::pair<double, double>> quadratic_roots(double a, double b, dou
   return std::pair{t0, t1};
 }
 
-std::optional<std::pair<double, double>> intersect(std::pair<double, double> a, std::pair<double, double> b) {
+std::optional<std::pair<double, double>> intersect(std::pair<double, double> a,
+                                                   std::pair<double, double> b) {
   const double t0 = std::max(a.first, b.first), t1 = std::min(a.second, b.second);
   if (!(t0 < t1)) return std::nullopt;
   return std::pair{t0, t1};
 }
 
 // Where the line is between two heights.
-std::optional<std::pair<double, double>> slab(double origin_z, double direction_z, double z0, double z1) {
+std::optional<std::pair<double, double>> slab(double origin_z, double direction_z, double z0,
+                                              double z1) {
   if (direction_z == 0.0) {
     if (origin_z < z0 || origin_z > z1) return std::nullopt;
     return std::pair{-infinity, infinity};
@@ -58,14 +60,17 @@ std::optional<std::pair<double, double>> crown_interval(const Crown& crown, cons
     const Vec3 apex = crown.base_m + Vec3{0.0, 0.0, 2.0 * h};
     const double k = r / (2.0 * h);
     const Vec3 o = origin - apex;
-    const double a = direction[0] * direction[0] + direction[1] * direction[1] - k * k * direction[2] * direction[2];
-    const double b = 2.0 * (o[0] * direction[0] + o[1] * direction[1] - k * k * o[2] * direction[2]);
+    const double a = direction[0] * direction[0] + direction[1] * direction[1] -
+                     k * k * direction[2] * direction[2];
+    const double b =
+        2.0 * (o[0] * direction[0] + o[1] * direction[1] - k * k * o[2] * direction[2]);
     const double c = o[0] * o[0] + o[1] * o[1] - k * k * o[2] * o[2];
     const auto height = slab(origin[2], direction[2], crown.base_m[2], apex[2]);
     if (!height) return std::nullopt;
     if (a == 0.0) {  // a line parallel to the cone's side: f = b t + c
       if (b == 0.0) return c <= 0.0 ? height : std::nullopt;
-      return intersect(b > 0.0 ? std::pair{-infinity, -c / b} : std::pair{-c / b, infinity}, *height);
+      return intersect(b > 0.0 ? std::pair{-infinity, -c / b} : std::pair{-c / b, infinity},
+                       *height);
     }
     const auto roots = quadratic_roots(a, b, c);
     if (!roots) return a < 0.0 ? height : std::nullopt;  // a < 0 and no root: inside everywhere
@@ -76,7 +81,8 @@ std::optional<std::pair<double, double>> crown_interval(const Crown& crown, cons
   }
   // Ellipsoid: scaled to the unit sphere about its centre.
   const Vec3 centre = crown.base_m + Vec3{0.0, 0.0, h};
-  const Vec3 o{(origin[0] - centre[0]) / r, (origin[1] - centre[1]) / r, (origin[2] - centre[2]) / h};
+  const Vec3 o{(origin[0] - centre[0]) / r, (origin[1] - centre[1]) / r,
+               (origin[2] - centre[2]) / h};
   const Vec3 d{direction[0] / r, direction[1] / r, direction[2] / h};
   return quadratic_roots(dot(d, d), 2.0 * dot(o, d), dot(o, o) - 1.0);
 }

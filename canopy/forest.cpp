@@ -1,6 +1,7 @@
 // The forest of a run: stands, stand polygons and explicit crowns.
 #include "canopy/forest.hpp"
 
+#include <GeographicLib/LocalCartesian.hpp>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -8,8 +9,6 @@
 #include <numbers>
 #include <sstream>
 #include <string>
-
-#include <GeographicLib/LocalCartesian.hpp>
 
 #include "canopy/crown.hpp"
 #include "terrain/error.hpp"
@@ -19,7 +18,9 @@ namespace {
 
 constexpr double metres_per_degree = 111132.954;  // along the meridian; ample for a search radius
 
-std::uint64_t kind_seed(std::uint64_t seed, std::size_t kind) { return seed + 0x9e3779b97f4a7c15ULL * kind; }
+std::uint64_t kind_seed(std::uint64_t seed, std::size_t kind) {
+  return seed + 0x9e3779b97f4a7c15ULL * kind;
+}
 
 // Even-odd rule over all rings.
 bool inside(const StandArea& area, double lon_deg, double lat_deg) {
@@ -38,7 +39,8 @@ bool inside(const StandArea& area, double lon_deg, double lat_deg) {
 
 }  // namespace
 
-Forest::Forest(const CanopySettings& canopy, std::uint64_t seed, const std::optional<PlaneSettings>& plane)
+Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
+               const std::optional<PlaneSettings>& plane)
     : areas_(canopy.stand_areas) {
   std::vector<const CanopySettings*> settings{&canopy};
   for (const StandArea& area : canopy.stand_areas) settings.push_back(&area.canopy);
@@ -48,14 +50,17 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed, const std::opti
     kind.settings.stand_areas.clear();
     if (s.crown_shape == CrownShape::layer) {
       if (!canopy.stand_areas.empty())
-        throw config_error("/canopy/crown_shape", "a layer covers the whole scene: it cannot be used with stands");
+        throw config_error("/canopy/crown_shape",
+                           "a layer covers the whole scene: it cannot be used with stands");
       kind.area_density_m2_m3 = s.pai / (2.0 * s.crown_half_height_m);
     } else if (k == 0 && !s.crowns_file.empty()) {
       kind.explicit_trees = read_crowns_file(s.crowns_file, plane);
       // PAI is per unit ground area of the scene: here the crowns' bounding box.
-      double crown_volume_m3 = 0.0, lat_min = 90, lat_max = -90, lon_min = 360, lon_max = -360, radius_sum = 0;
+      double crown_volume_m3 = 0.0, lat_min = 90, lat_max = -90, lon_min = 360, lon_max = -360,
+             radius_sum = 0;
       for (const Tree& t : kind.explicit_trees) {
-        crown_volume_m3 += glaswave::crown_volume_m3(s.crown_shape, t.crown_radius_m, t.crown_half_height_m);
+        crown_volume_m3 +=
+            glaswave::crown_volume_m3(s.crown_shape, t.crown_radius_m, t.crown_half_height_m);
         lat_min = std::min(lat_min, t.lat_deg);
         lat_max = std::max(lat_max, t.lat_deg);
         lon_min = std::min(lon_min, t.lon_deg);
@@ -63,8 +68,10 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed, const std::opti
         radius_sum += t.crown_radius_m;
       }
       const double mean_radius_m = radius_sum / kind.explicit_trees.size();
-      const double lat_m = metres_per_degree, lon_m = lat_m * std::cos(0.5 * (lat_min + lat_max) * std::numbers::pi / 180.0);
-      const double area_m2 = ((lat_max - lat_min) * lat_m + 2.0 * mean_radius_m) * ((lon_max - lon_min) * lon_m + 2.0 * mean_radius_m);
+      const double lat_m = metres_per_degree,
+                   lon_m = lat_m * std::cos(0.5 * (lat_min + lat_max) * std::numbers::pi / 180.0);
+      const double area_m2 = ((lat_max - lat_min) * lat_m + 2.0 * mean_radius_m) *
+                             ((lon_max - lon_min) * lon_m + 2.0 * mean_radius_m);
       kind.area_density_m2_m3 = s.pai * area_m2 / crown_volume_m3;
     } else {
       kind.stand.emplace(s, kind_seed(seed, k));
@@ -86,11 +93,14 @@ std::vector<Tree> Forest::trees_near(double lat_deg, double lon_deg, double radi
   for (std::size_t k = 0; k < kinds_.size(); ++k) {
     const Kind& kind = kinds_[k];
     if (kind.settings.crown_shape == CrownShape::layer) continue;
-    std::vector<Tree> candidates = kind.stand ? kind.stand->trees_near(lat_deg, lon_deg, radius_m) : std::vector<Tree>{};
+    std::vector<Tree> candidates =
+        kind.stand ? kind.stand->trees_near(lat_deg, lon_deg, radius_m) : std::vector<Tree>{};
     for (const Tree& tree : kind.explicit_trees) {
       const double north_m = (tree.lat_deg - lat_deg) * metres_per_degree;
-      const double east_m = (tree.lon_deg - lon_deg) * metres_per_degree * std::cos(lat_deg * std::numbers::pi / 180.0);
-      if (std::hypot(north_m, east_m) <= radius_m + tree.crown_radius_m + 10.0) candidates.push_back(tree);
+      const double east_m = (tree.lon_deg - lon_deg) * metres_per_degree *
+                            std::cos(lat_deg * std::numbers::pi / 180.0);
+      if (std::hypot(north_m, east_m) <= radius_m + tree.crown_radius_m + 10.0)
+        candidates.push_back(tree);
     }
     for (Tree& tree : candidates) {
       // A stand's trees grow inside its polygons only; the scene's canopy grows outside them.
@@ -114,14 +124,16 @@ std::vector<std::string> split_csv(const std::string& line) {
   while (std::getline(stream, field, ',')) {
     const auto first = field.find_first_not_of(" \t\r");
     const auto last = field.find_last_not_of(" \t\r");
-    fields.push_back(first == std::string::npos ? std::string() : field.substr(first, last - first + 1));
+    fields.push_back(first == std::string::npos ? std::string()
+                                                : field.substr(first, last - first + 1));
   }
   return fields;
 }
 
 }  // namespace
 
-std::vector<Tree> read_crowns_file(const std::filesystem::path& file, const std::optional<PlaneSettings>& plane) {
+std::vector<Tree> read_crowns_file(const std::filesystem::path& file,
+                                   const std::optional<PlaneSettings>& plane) {
   std::ifstream in(file);
   if (!in) throw input_error(file.string(), "cannot read the crowns file");
   const std::vector<std::string> geographic{"lon", "lat", "base_m", "radius_m", "half_height_m"};
@@ -133,19 +145,25 @@ std::vector<Tree> read_crowns_file(const std::filesystem::path& file, const std:
   for (int number = 1; std::getline(in, line); ++number) {
     const std::string place = file.string() + ":" + std::to_string(number);
     const std::vector<std::string> fields = split_csv(line);
-    if (fields.empty() || (fields.size() == 1 && fields[0].empty()) || fields[0].rfind('#', 0) == 0) continue;
+    if (fields.empty() || (fields.size() == 1 && fields[0].empty()) || fields[0].rfind('#', 0) == 0)
+      continue;
     if (!header_seen) {
       in_degrees = fields == geographic;
       if (!in_degrees && fields != metric)
-        throw input_error(place, "expected the header lon,lat,base_m,radius_m,half_height_m or x,y,base_m,radius_m,half_height_m");
+        throw input_error(place,
+                          "expected the header lon,lat,base_m,radius_m,half_height_m or "
+                          "x,y,base_m,radius_m,half_height_m");
       if (!in_degrees) {
-        if (!plane) throw input_error(place, "x,y crowns are metres from terrain.plane's origin; with a DEM give lon,lat");
+        if (!plane)
+          throw input_error(
+              place, "x,y crowns are metres from terrain.plane's origin; with a DEM give lon,lat");
         origin.emplace(plane->origin_lat_deg, plane->origin_lon_deg, 0.0);
       }
       header_seen = true;
       continue;
     }
-    if (fields.size() != 5) throw input_error(place, "expected 5 values, got " + std::to_string(fields.size()));
+    if (fields.size() != 5)
+      throw input_error(place, "expected 5 values, got " + std::to_string(fields.size()));
     double values[5];
     for (int i = 0; i < 5; ++i) {
       std::size_t used = 0;
@@ -155,11 +173,13 @@ std::vector<Tree> read_crowns_file(const std::filesystem::path& file, const std:
         used = 0;
       }
       if (used != fields[i].size() || fields[i].empty() || !std::isfinite(values[i]))
-        throw input_error(place, (in_degrees ? geographic : metric)[i] + " is not a number: \"" + fields[i] + "\"");
+        throw input_error(place, (in_degrees ? geographic : metric)[i] + " is not a number: \"" +
+                                     fields[i] + "\"");
     }
     Tree tree;
     if (in_degrees) {
-      if (values[1] < -90.0 || values[1] > 90.0) throw input_error(place, "lat must be in [-90, 90]");
+      if (values[1] < -90.0 || values[1] > 90.0)
+        throw input_error(place, "lat must be in [-90, 90]");
       tree.lon_deg = values[0];
       tree.lat_deg = values[1];
     } else {

@@ -18,7 +18,8 @@ class Forest {
  public:
   // Kind 0 is the configuration's canopy (its crowns_file, when given, replaces its random
   // trees); kind k > 0 is stand area k - 1.
-  Forest(const CanopySettings& canopy, std::uint64_t seed, const std::optional<PlaneSettings>& plane);
+  Forest(const CanopySettings& canopy, std::uint64_t seed,
+         const std::optional<PlaneSettings>& plane);
 
   std::size_t kinds() const { return kinds_.size(); }
   const CanopySettings& canopy(int kind) const { return kinds_[kind].settings; }
@@ -36,7 +37,7 @@ class Forest {
   struct Kind {
     CanopySettings settings;
     LeafAngles leaf_angles;
-    std::optional<Stand> stand;   // random trees
+    std::optional<Stand> stand;        // random trees
     std::vector<Tree> explicit_trees;  // from a crowns file
     double area_density_m2_m3 = 0.0;
   };
@@ -47,6 +48,7 @@ class Forest {
 // Reads a crowns file: CSV with a header `lon,lat,base_m,radius_m,half_height_m` (degrees) or
 // `x,y,base_m,radius_m,half_height_m` (metres east and north of the plane terrain's origin).
 // Errors name the file and line (exit status 3).
-std::vector<Tree> read_crowns_file(const std::filesystem::path& file, const std::optional<PlaneSettings>& plane);
+std::vector<Tree> read_crowns_file(const std::filesystem::path& file,
+                                   const std::optional<PlaneSettings>& plane);
 
 }  // namespace glaswave

@@ -13,7 +13,8 @@ constexpr int projection_steps = 128;
 
 }  // namespace
 
-LeafAngles::LeafAngles(LeafAngleDistribution distribution, double mean_deg) : distribution_(distribution) {
+LeafAngles::LeafAngles(LeafAngleDistribution distribution, double mean_deg)
+    : distribution_(distribution) {
   if (distribution == LeafAngleDistribution::ellipsoidal) {
     // Campbell (1990): the ellipsoid's axis ratio from the mean leaf inclination in radians,
     // inverting mean = 9.65 (3 + chi)^-1.65.
@@ -42,7 +43,8 @@ LeafAngles::LeafAngles(LeafAngleDistribution distribution, double mean_deg) : di
       double psi = 0.0;
       for (int k = 0; k < azimuth_steps; ++k) {
         const double phi = 2.0 * pi * (k + 0.5) / azimuth_steps;
-        psi += std::abs(mu * std::cos(inclination) + sin_zenith * std::sin(inclination) * std::cos(phi));
+        psi += std::abs(mu * std::cos(inclination) +
+                        sin_zenith * std::sin(inclination) * std::cos(phi));
       }
       g_sum += density(inclination) / total * (psi / azimuth_steps) * leaf_step;
     }
@@ -83,8 +85,10 @@ double LeafAngles::projection(double cos_zenith) const {
 
 Vec3 LeafAngles::normal_at(double u_inclination, double u_azimuth) const {
   // Invert the tabulated cumulative distribution, linearly within a step.
-  const auto upper = std::upper_bound(inclination_cdf_.begin(), inclination_cdf_.end(), u_inclination);
-  const int i = std::clamp(static_cast<int>(upper - inclination_cdf_.begin()) - 1, 0, inclination_steps - 1);
+  const auto upper =
+      std::upper_bound(inclination_cdf_.begin(), inclination_cdf_.end(), u_inclination);
+  const int i =
+      std::clamp(static_cast<int>(upper - inclination_cdf_.begin()) - 1, 0, inclination_steps - 1);
   const double width = inclination_cdf_[i + 1] - inclination_cdf_[i];
   const double f = width > 0.0 ? (u_inclination - inclination_cdf_[i]) / width : 0.5;
   const double inclination = (i + f) * 0.5 * pi / inclination_steps;

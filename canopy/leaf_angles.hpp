@@ -41,7 +41,7 @@ class LeafAngles {
 
   LeafAngleDistribution distribution_;
   double campbell_chi_ = 1.0;
-  std::vector<double> inclination_cdf_;  // on a uniform grid of inclinations over [0, pi/2]
+  std::vector<double> inclination_cdf_;   // on a uniform grid of inclinations over [0, pi/2]
   std::vector<double> projection_table_;  // G on a uniform grid of |cos zenith| over [0, 1]
 };
 

@@ -4,12 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-
 #include <pcg_random.hpp>
 
-#include "terrain/bit_mix.hpp"
-
 #include "canopy/crown.hpp"
+#include "terrain/bit_mix.hpp"
 #include "terrain/error.hpp"
 
 namespace glaswave {
@@ -55,7 +53,8 @@ Stand::Stand(const CanopySettings& canopy, std::uint64_t seed) : canopy_(canopy)
   const double crown_area_m2 = pi * canopy.crown_radius_m * canopy.crown_radius_m;
   // The configuration keeps cover below 1 for random crowns; a closed canopy is a layer.
   trees_per_m2_ = -std::log1p(-canopy.cover) / crown_area_m2;
-  const double volume_m3 = crown_volume_m3(canopy.crown_shape, canopy.crown_radius_m, canopy.crown_half_height_m);
+  const double volume_m3 =
+      crown_volume_m3(canopy.crown_shape, canopy.crown_radius_m, canopy.crown_half_height_m);
   area_density_m2_m3_ = trees_per_m2_ > 0.0 ? canopy.pai / (trees_per_m2_ * volume_m3) : 0.0;
 }
 
@@ -65,8 +64,10 @@ std::vector<Tree> Stand::trees_near(double lat_deg, double lon_deg, double radiu
   const double deg = pi / 180.0;
   const double tile_lat_deg = tile_m / metres_per_degree;
   const double reach_lat_deg = radius_m / metres_per_degree + tile_lat_deg;
-  const auto row_first = static_cast<std::int64_t>(std::floor((lat_deg - reach_lat_deg) / tile_lat_deg));
-  const auto row_last = static_cast<std::int64_t>(std::floor((lat_deg + reach_lat_deg) / tile_lat_deg));
+  const auto row_first =
+      static_cast<std::int64_t>(std::floor((lat_deg - reach_lat_deg) / tile_lat_deg));
+  const auto row_last =
+      static_cast<std::int64_t>(std::floor((lat_deg + reach_lat_deg) / tile_lat_deg));
   for (std::int64_t row = row_first; row <= row_last; ++row) {
     const double row_lat_deg = (row + 0.5) * tile_lat_deg;
     const double cos_lat = std::max(std::cos(row_lat_deg * deg), 1e-3);
@@ -76,17 +77,22 @@ std::vector<Tree> Stand::trees_near(double lat_deg, double lon_deg, double radiu
     const double s2 = std::sin(row_lat_deg * deg) * std::sin(row_lat_deg * deg);
     const double meridian_m = wgs84_a_m * (1.0 - wgs84_e2) / std::pow(1.0 - wgs84_e2 * s2, 1.5);
     const double normal_m = wgs84_a_m / std::sqrt(1.0 - wgs84_e2 * s2);
-    const double tile_area_m2 = meridian_m * tile_lat_deg * deg * normal_m * cos_lat * tile_lon_deg * deg;
-    const auto col_first = static_cast<std::int64_t>(std::floor((lon_deg - reach_lon_deg) / tile_lon_deg));
-    const auto col_last = static_cast<std::int64_t>(std::floor((lon_deg + reach_lon_deg) / tile_lon_deg));
+    const double tile_area_m2 =
+        meridian_m * tile_lat_deg * deg * normal_m * cos_lat * tile_lon_deg * deg;
+    const auto col_first =
+        static_cast<std::int64_t>(std::floor((lon_deg - reach_lon_deg) / tile_lon_deg));
+    const auto col_last =
+        static_cast<std::int64_t>(std::floor((lon_deg + reach_lon_deg) / tile_lon_deg));
     for (std::int64_t col = col_first; col <= col_last; ++col) {
-      pcg32 engine(mix(seed_ ^ mix(static_cast<std::uint64_t>(row))), mix(static_cast<std::uint64_t>(col) + seed_));
+      pcg32 engine(mix(seed_ ^ mix(static_cast<std::uint64_t>(row))),
+                   mix(static_cast<std::uint64_t>(col) + seed_));
       const std::int64_t count = poisson(engine, trees_per_m2_ * tile_area_m2);
       for (std::int64_t i = 0; i < count; ++i) {
         Tree tree;
         tree.lat_deg = (row + uniform(engine)) * tile_lat_deg;
         tree.lon_deg = (col + uniform(engine)) * tile_lon_deg;
-        tree.crown_base_m = canopy_.crown_base_m[0] + uniform(engine) * (canopy_.crown_base_m[1] - canopy_.crown_base_m[0]);
+        tree.crown_base_m = canopy_.crown_base_m[0] +
+                            uniform(engine) * (canopy_.crown_base_m[1] - canopy_.crown_base_m[0]);
         tree.crown_radius_m = canopy_.crown_radius_m;
         tree.crown_half_height_m = canopy_.crown_half_height_m;
         trees.push_back(tree);

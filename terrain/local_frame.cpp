@@ -1,10 +1,9 @@
 // Local east-north-up frames and WGS84 conversions.
 #include "terrain/local_frame.hpp"
 
+#include <GeographicLib/Geocentric.hpp>
 #include <cmath>
 #include <numbers>
-
-#include <GeographicLib/Geocentric.hpp>
 
 namespace glaswave {
 
@@ -26,29 +25,35 @@ Geodetic LocalFrame::to_geodetic(const Vec3& local) const {
   return point;
 }
 
-Vec3 LocalFrame::local_from_ecef(const Vec3& ecef) const { return local_direction(ecef - origin_ecef_); }
+Vec3 LocalFrame::local_from_ecef(const Vec3& ecef) const {
+  return local_direction(ecef - origin_ecef_);
+}
 
-Vec3 LocalFrame::ecef_from_local(const Vec3& local) const { return origin_ecef_ + ecef_direction(local); }
+Vec3 LocalFrame::ecef_from_local(const Vec3& local) const {
+  return origin_ecef_ + ecef_direction(local);
+}
 
 Vec3 LocalFrame::local_direction(const Vec3& ecef_direction) const {
-  return {dot(axes_[0], ecef_direction), dot(axes_[1], ecef_direction), dot(axes_[2], ecef_direction)};
+  return {dot(axes_[0], ecef_direction), dot(axes_[1], ecef_direction),
+          dot(axes_[2], ecef_direction)};
 }
 
 Vec3 LocalFrame::ecef_direction(const Vec3& local_direction) const {
-  return local_direction[0] * axes_[0] + local_direction[1] * axes_[1] + local_direction[2] * axes_[2];
+  return local_direction[0] * axes_[0] + local_direction[1] * axes_[1] +
+         local_direction[2] * axes_[2];
 }
 
 Vec3 ecef_from_geodetic(const Geodetic& point) {
   Vec3 ecef{};
-  GeographicLib::Geocentric::WGS84().Forward(point.lat_deg, point.lon_deg, point.h_m, ecef[0], ecef[1],
-                                             ecef[2]);
+  GeographicLib::Geocentric::WGS84().Forward(point.lat_deg, point.lon_deg, point.h_m, ecef[0],
+                                             ecef[1], ecef[2]);
   return ecef;
 }
 
 Geodetic geodetic_from_ecef(const Vec3& ecef) {
   Geodetic point;
-  GeographicLib::Geocentric::WGS84().Reverse(ecef[0], ecef[1], ecef[2], point.lat_deg, point.lon_deg,
-                                             point.h_m);
+  GeographicLib::Geocentric::WGS84().Reverse(ecef[0], ecef[1], ecef[2], point.lat_deg,
+                                             point.lon_deg, point.h_m);
   return point;
 }
 

@@ -2,9 +2,8 @@
 // in double precision: each shot is simulated in the frame of its footprint.
 #pragma once
 
-#include <array>
-
 #include <GeographicLib/LocalCartesian.hpp>
+#include <array>
 
 namespace glaswave {
 
@@ -45,8 +44,12 @@ Geodetic geodetic_from_ecef(const Vec3& ecef);
 std::array<Vec3, 3> enu_axes(double lat_deg, double lon_deg);
 
 inline double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-inline Vec3 operator+(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-inline Vec3 operator-(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+inline Vec3 operator+(const Vec3& a, const Vec3& b) {
+  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+}
+inline Vec3 operator-(const Vec3& a, const Vec3& b) {
+  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
 inline Vec3 operator*(double s, const Vec3& a) { return {s * a[0], s * a[1], s * a[2]}; }
 Vec3 cross(const Vec3& a, const Vec3& b);
 double norm(const Vec3& a);

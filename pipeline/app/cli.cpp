@@ -3,12 +3,11 @@
 
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
-
-#include <CLI/CLI.hpp>
 
 #include "canopy/forest.hpp"
 #include "footprints/track.hpp"
@@ -42,10 +41,12 @@ void parse_shot_range(const std::string& text, RunRequest& request) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used != part.size() || value < 0) throw config_error("--shots", "expected A:B with shot numbers, got \"" + text + "\"");
+    if (used != part.size() || value < 0)
+      throw config_error("--shots", "expected A:B with shot numbers, got \"" + text + "\"");
     return value;
   };
-  if (colon == std::string::npos) throw config_error("--shots", "expected A:B, got \"" + text + "\"");
+  if (colon == std::string::npos)
+    throw config_error("--shots", "expected A:B, got \"" + text + "\"");
   request.first_shot = number(text.substr(0, colon));
   request.last_shot = number(text.substr(colon + 1));
 }
@@ -65,7 +66,8 @@ std::string joined(int argc, char** argv) {
 // A progress bar on a terminal: shots done, shots/s, time left.
 class ProgressBar {
  public:
-  explicit ProgressBar(bool enabled) : enabled_(enabled && isatty(STDERR_FILENO)), started_(now()) {}
+  explicit ProgressBar(bool enabled)
+      : enabled_(enabled && isatty(STDERR_FILENO)), started_(now()) {}
   ~ProgressBar() {
     if (drawn_) std::fprintf(stderr, "\n");
   }
@@ -76,16 +78,17 @@ class ProgressBar {
     const double left_s = rate > 0.0 ? (total - done) / rate : 0.0;
     constexpr int width = 30;
     const int filled = static_cast<int>(width * done / std::max<std::int64_t>(total, 1));
-    std::fprintf(stderr, "\r[%s%s] %lld/%lld shots  %.1f shots/s  %.0f s left ", std::string(filled, '#').c_str(),
-                 std::string(width - filled, '.').c_str(), static_cast<long long>(done),
-                 static_cast<long long>(total), rate, left_s);
+    std::fprintf(stderr, "\r[%s%s] %lld/%lld shots  %.1f shots/s  %.0f s left ",
+                 std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(),
+                 static_cast<long long>(done), static_cast<long long>(total), rate, left_s);
     std::fflush(stderr);
     drawn_ = true;
   }
 
  private:
   static double now() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
   }
   bool enabled_;
   bool drawn_ = false;
@@ -93,14 +96,16 @@ class ProgressBar {
 };
 
 int run(const Arguments& arguments, const std::string& command_line) {
-  if (arguments.resume) throw config_error("--resume", "resuming a run is not available in this version yet");
+  if (arguments.resume)
+    throw config_error("--resume", "resuming a run is not available in this version yet");
   const Config config = load(arguments);
   RunRequest request;
   request.threads = arguments.threads;
   request.command_line = command_line;
-  request.out_dir = arguments.out_dir.empty()
-                        ? std::filesystem::path("out") / std::filesystem::path(arguments.config_file).stem()
-                        : std::filesystem::path(arguments.out_dir);
+  request.out_dir =
+      arguments.out_dir.empty()
+          ? std::filesystem::path("out") / std::filesystem::path(arguments.config_file).stem()
+          : std::filesystem::path(arguments.out_dir);
   if (!arguments.shots.empty()) parse_shot_range(arguments.shots, request);
 
   RunSummary summary;
@@ -109,10 +114,12 @@ int run(const Arguments& arguments, const std::string& command_line) {
     summary = run_simulation(config, request, std::ref(bar));
   }
   const double wall_s = std::max(summary.wall_s, 1e-9);
-  std::printf("glaswave: %lld shots in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; %s; products in %s\n",
-              static_cast<long long>(summary.shots), summary.wall_s, summary.shots / wall_s,
-              summary.ray_queries / wall_s, static_cast<long long>(summary.shots_flagged),
-              summary.vertical_datum.c_str(), request.out_dir.string().c_str());
+  std::printf(
+      "glaswave: %lld shots in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; %s; "
+      "products in %s\n",
+      static_cast<long long>(summary.shots), summary.wall_s, summary.shots / wall_s,
+      summary.ray_queries / wall_s, static_cast<long long>(summary.shots_flagged),
+      summary.vertical_datum.c_str(), request.out_dir.string().c_str());
   return 0;
 }
 
@@ -125,11 +132,13 @@ int check(const Arguments& arguments) {
   std::int64_t off_terrain = 0;
   for (std::int64_t record = 0; record < track.size(); ++record)
     off_terrain += track.footprint(record).on_terrain ? 0 : 1;
-  std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain", arguments.config_file.c_str(),
-              static_cast<long long>(track.size()), static_cast<long long>(off_terrain));
+  std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain",
+              arguments.config_file.c_str(), static_cast<long long>(track.size()),
+              static_cast<long long>(off_terrain));
   // An orbit keeps only the shots on the terrain: say how many it skipped.
   if (track.size() < track.sequence_length())
-    std::printf(" (%lld of the orbit's %lld shots fall on it)", static_cast<long long>(track.size()),
+    std::printf(" (%lld of the orbit's %lld shots fall on it)",
+                static_cast<long long>(track.size()),
                 static_cast<long long>(track.sequence_length()));
   std::printf("\n");
   return 0;
@@ -138,35 +147,45 @@ int check(const Arguments& arguments) {
 }  // namespace
 
 int run_command_line(int argc, char** argv) {
-  CLI::App app{"glaswave: Monte Carlo simulation of satellite waveform lidar over vegetation and terrain"};
+  CLI::App app{
+      "glaswave: Monte Carlo simulation of satellite waveform lidar over vegetation and terrain"};
   app.set_version_flag("--version", std::string("glaswave ") + GLASWAVE_VERSION);
   app.require_subcommand(1);
   Arguments arguments;
 
-  CLI::App* run_command = app.add_subcommand("run", "simulate the track's shots and write the products");
+  CLI::App* run_command =
+      app.add_subcommand("run", "simulate the track's shots and write the products");
   run_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
-  run_command->add_option("--out", arguments.out_dir, "output directory (default out/<config name>)");
-  run_command->add_option("--set", arguments.overrides, "override a configuration key: KEY=VALUE (dotted KEY)");
-  run_command->add_option("--threads", arguments.threads, "threads (0: every core; at most the cores)")->check(CLI::Range(0, 65536));
+  run_command->add_option("--out", arguments.out_dir,
+                          "output directory (default out/<config name>)");
+  run_command->add_option("--set", arguments.overrides,
+                          "override a configuration key: KEY=VALUE (dotted KEY)");
+  run_command
+      ->add_option("--threads", arguments.threads, "threads (0: every core; at most the cores)")
+      ->check(CLI::Range(0, 65536));
   run_command->add_option("--shots", arguments.shots, "simulate shot numbers A to B-1 only (A:B)");
   run_command->add_option("--seed", arguments.seed, "random seed (overrides the configuration's)")
       ->check(CLI::Validator(
           [](std::string& text) {
             // An unsigned option would take -1 as 2^64 - 1.
-            return text.rfind('-', 0) == 0 ? "must be a non-negative integer, got " + text : std::string();
+            return text.rfind('-', 0) == 0 ? "must be a non-negative integer, got " + text
+                                           : std::string();
           },
           "UINT"));
   run_command->add_flag("--resume", arguments.resume, "finish an interrupted run");
   run_command->add_flag("--quiet", arguments.quiet, "no progress bar");
 
-  CLI::App* check_command = app.add_subcommand("check", "validate the configuration and its inputs, run nothing");
+  CLI::App* check_command =
+      app.add_subcommand("check", "validate the configuration and its inputs, run nothing");
   check_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
-  check_command->add_option("--set", arguments.overrides, "override a configuration key: KEY=VALUE");
+  check_command->add_option("--set", arguments.overrides,
+                            "override a configuration key: KEY=VALUE");
 
   // Commands of the contract that a later version brings: named, so that asking for one says so.
   std::vector<CLI::App*> planned;
-  for (const auto& [name, description] : {std::pair{"sweep", "sensitivity study, one key at a time (not available yet)"},
-                                          std::pair{"brf", "scene reflectance under the sun (not available yet)"}}) {
+  for (const auto& [name, description] :
+       {std::pair{"sweep", "sensitivity study, one key at a time (not available yet)"},
+        std::pair{"brf", "scene reflectance under the sun (not available yet)"}}) {
     planned.push_back(app.add_subcommand(name, description));
     planned.back()->allow_extras();
   }
@@ -181,7 +200,9 @@ int run_command_line(int argc, char** argv) {
 
   try {
     for (const CLI::App* command : planned)
-      if (*command) throw config_error(command->get_name(), "this command is not available in this version yet");
+      if (*command)
+        throw config_error(command->get_name(),
+                           "this command is not available in this version yet");
     if (*run_command) return run(arguments, joined(argc, argv));
     return check(arguments);
   } catch (const Error& e) {

@@ -1,13 +1,13 @@
 // The run: shots simulated in batches on a thread pool, written in shot order.
 #include "pipeline/app/run.hpp"
 
-#include <atomic>
-#include <chrono>
-#include <memory>
-
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <memory>
 
 #include "footprints/track.hpp"
 #include "pipeline/app/plots.hpp"
@@ -18,7 +18,8 @@
 
 namespace glaswave {
 
-RunSummary run_simulation(const Config& config, const RunRequest& request, const ProgressCallback& progress) {
+RunSummary run_simulation(const Config& config, const RunRequest& request,
+                          const ProgressCallback& progress) {
   const auto started = std::chrono::steady_clock::now();
   namespace fs = std::filesystem;
 
@@ -26,25 +27,32 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
   // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
   const Track track(config.track, *terrain);
   const std::int64_t length = track.sequence_length();
-  const auto selected = track.records_of_shots(request.first_shot.value_or(0), request.last_shot.value_or(length));
+  const auto selected =
+      track.records_of_shots(request.first_shot.value_or(0), request.last_shot.value_or(length));
   const std::int64_t first = selected.first, last = selected.second;  // records
   if (first >= last)
     throw config_error("--shots", "selects no shot of the track's " + std::to_string(length) +
-                                      (track.size() < length ? " (" + std::to_string(track.size()) + " on the terrain)"
+                                      (track.size() < length ? " (" + std::to_string(track.size()) +
+                                                                   " on the terrain)"
                                                              : std::string()));
 
   if (!config.output.netcdf && !config.output.geojson)
-    throw config_error("/output", "nothing to write: output.netcdf and output.geojson are both false");
+    throw config_error("/output",
+                       "nothing to write: output.netcdf and output.geojson are both false");
   if (config.output.plots && !(config.output.netcdf && config.output.geojson))
-    throw config_error("/output/plots", "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
-                                        "and output.geojson");
+    throw config_error(
+        "/output/plots",
+        "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
+        "and output.geojson");
   std::error_code exists_error;
   if (fs::exists(request.out_dir, exists_error))
-    throw config_error(request.out_dir.string(), "output directory exists; remove it or choose another --out");
+    throw config_error(request.out_dir.string(),
+                       "output directory exists; remove it or choose another --out");
   std::error_code create_error;
   fs::create_directories(request.out_dir, create_error);
   if (create_error)
-    throw config_error(request.out_dir.string(), "cannot create the output directory: " + create_error.message());
+    throw config_error(request.out_dir.string(),
+                       "cannot create the output directory: " + create_error.message());
   // A run that fails leaves no empty output directory behind (the writers remove their parts).
   struct RemoveIfEmpty {
     fs::path dir;
@@ -64,8 +72,10 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
   info.vertical_datum = terrain->vertical_datum().description;
   std::unique_ptr<NetcdfWriter> netcdf;
   std::unique_ptr<GeojsonWriter> geojson;
-  if (config.output.netcdf) netcdf = std::make_unique<NetcdfWriter>(request.out_dir / "shots.nc", info);
-  if (config.output.geojson) geojson = std::make_unique<GeojsonWriter>(request.out_dir / "footprints.geojson", info);
+  if (config.output.netcdf)
+    netcdf = std::make_unique<NetcdfWriter>(request.out_dir / "shots.nc", info);
+  if (config.output.geojson)
+    geojson = std::make_unique<GeojsonWriter>(request.out_dir / "footprints.geojson", info);
 
   // More threads than cores would only wait for each other (and TBB would warn on stderr).
   const int cores = tbb::this_task_arena::max_concurrency();
@@ -98,7 +108,8 @@ RunSummary run_simulation(const Config& config, const RunRequest& request, const
   summary.shots = last - first;
   summary.vertical_datum = terrain->vertical_datum().description;
   summary.ray_queries = ray_queries;
-  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  summary.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   RunStats stats;
   stats.ray_queries = summary.ray_queries;
   stats.wall_s = summary.wall_s;

@@ -13,9 +13,9 @@ namespace glaswave {
 
 struct RunRequest {
   std::filesystem::path out_dir;
-  int threads = 0;  // 0: every core
+  int threads = 0;                                    // 0: every core
   std::optional<std::int64_t> first_shot, last_shot;  // --shots A:B, half-open
-  std::string command_line;                          // for the products' history
+  std::string command_line;                           // for the products' history
 };
 
 struct RunSummary {
@@ -31,6 +31,7 @@ using ProgressCallback = std::function<void(std::int64_t, std::int64_t)>;
 
 // Simulates the shots and writes the products under request.out_dir, which must not exist.
 // On failure nothing is left under a product's final name.
-RunSummary run_simulation(const Config& config, const RunRequest& request, const ProgressCallback& progress);
+RunSummary run_simulation(const Config& config, const RunRequest& request,
+                          const ProgressCallback& progress);
 
 }  // namespace glaswave

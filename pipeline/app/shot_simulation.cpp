@@ -22,8 +22,8 @@ constexpr int outline_vertices = 36;
 
 // Half-width of the ground patch that every sampled ray lands on: the beam's rays at `angle_rad`
 // from its axis traced to the terrain in a few directions, with a margin.
-double patch_half_size_m(const Terrain& terrain, const LidarModel& lidar, const Footprint& footprint,
-                         const LocalFrame& frame, double angle_rad) {
+double patch_half_size_m(const Terrain& terrain, const LidarModel& lidar,
+                         const Footprint& footprint, const LocalFrame& frame, double angle_rad) {
   const BeamSampler beam(lidar, footprint.beam_ecef);
   double reach_m = footprint.range_m * angle_rad;
   for (int k = 0; k < 8; ++k) {
@@ -39,13 +39,15 @@ double patch_half_size_m(const Terrain& terrain, const LidarModel& lidar, const 
 // The beam's 1/e^2 contour (2 sigma from the axis) traced on the scene, counter-clockwise
 // in longitude and latitude, closed.
 std::vector<std::array<double, 2>> beam_outline(const Scene& scene, const LidarModel& lidar,
-                                                const ShotGeometry& geometry, const LocalFrame& frame) {
+                                                const ShotGeometry& geometry,
+                                                const LocalFrame& frame) {
   const BeamSampler beam(lidar, geometry.axis);
   const double angle_rad = std::min(2.0 * lidar.beam_sigma_rad(), 0.5 * lidar.sensor().ifov_rad);
   const double start_height_m = scene.top_m() + 1.0;
   std::vector<std::array<double, 2>> ring;
   for (int k = 0; k < outline_vertices; ++k) {
-    const Vec3 direction = beam.direction_at(angle_rad, 2.0 * std::numbers::pi * k / outline_vertices);
+    const Vec3 direction =
+        beam.direction_at(angle_rad, 2.0 * std::numbers::pi * k / outline_vertices);
     const double start_m = (geometry.sensor_m[2] - start_height_m) / -direction[2];
     const Vec3 origin = geometry.sensor_m + start_m * direction;
     const SurfaceHit hit = scene.intersect(origin, direction, 1.0e5);
@@ -93,8 +95,8 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
 
   // A beam over a hole in the DEM or its edge (3 sigma: 99 % of its energy) gives no waveform
   // worth having: the shot is flagged like one off the terrain.
-  const double data_radius_m =
-      3.0 * footprint.range_m * lidar_.beam_sigma_rad() / std::cos(footprint.off_nadir_deg * std::numbers::pi / 180.0);
+  const double data_radius_m = 3.0 * footprint.range_m * lidar_.beam_sigma_rad() /
+                               std::cos(footprint.off_nadir_deg * std::numbers::pi / 180.0);
   if (!footprint.on_terrain || !terrain_.has_data(LocalFrame(footprint.ground), data_radius_m)) {
     record.quality_flag = quality_no_terrain;
     // The shot keeps a position, as a trajectory's coordinates should: where the beam met the
@@ -106,8 +108,10 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
       record.lon_deg = footprint.ground.lon_deg;
       record.elev_m = footprint.ground.h_m;
       record.range_m = footprint.range_m;
-    } else if (const auto t_m = ellipsoid_crossing(footprint.spacecraft_ecef, footprint.beam_ecef, 0.0)) {
-      const Geodetic aim = geodetic_from_ecef(footprint.spacecraft_ecef + *t_m * footprint.beam_ecef);
+    } else if (const auto t_m =
+                   ellipsoid_crossing(footprint.spacecraft_ecef, footprint.beam_ecef, 0.0)) {
+      const Geodetic aim =
+          geodetic_from_ecef(footprint.spacecraft_ecef + *t_m * footprint.beam_ecef);
       record.lat_deg = aim.lat_deg;
       record.lon_deg = aim.lon_deg;
     }
@@ -117,7 +121,8 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
     record.rx_waveform_canopy_W.assign(bands, fill_bins);
     record.rx_waveform_ground_W.assign(bands, fill_bins);
     if (config_.output.per_order)
-      record.rx_waveform_order_W.assign(bands, std::vector<std::vector<double>>(config_.simulation.max_order, fill_bins));
+      record.rx_waveform_order_W.assign(
+          bands, std::vector<std::vector<double>>(config_.simulation.max_order, fill_bins));
     record.rx_energy_J.assign(bands, fill);
     record.rx_energy_canopy_J.assign(bands, fill);
     record.rx_energy_ground_J.assign(bands, fill);
@@ -138,21 +143,26 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   geometry.range_m = footprint.range_m;
 
   const double beam_sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
-  const SurfaceOrientation orientation = fit_surface_orientation(terrain_, frame, beam_sigma_m, geometry.axis);
+  const SurfaceOrientation orientation =
+      fit_surface_orientation(terrain_, frame, beam_sigma_m, geometry.axis);
 
   // With vegetation, diffuse light wanders beyond the beam: the ground reaches further out.
   const double vegetation_margin_m = config_.canopy ? 100.0 : 0.0;
-  const double half_size_m = patch_half_size_m(terrain_, lidar_, footprint, frame, lidar_.max_angle_rad()) + vegetation_margin_m;
+  const double half_size_m =
+      patch_half_size_m(terrain_, lidar_, footprint, frame, lidar_.max_angle_rad()) +
+      vegetation_margin_m;
   // Roughness is subdivided only where the beam is: beyond 4.5 sigma go 4e-5 of the rays.
   const RoughnessField roughness(config_.terrain.roughness, config_.seed);
   const double rough_half_size_m =
-      roughness.enabled() ? patch_half_size_m(terrain_, lidar_, footprint, frame,
-                                              std::min(lidar_.max_angle_rad(), 4.5 * lidar_.beam_sigma_rad()))
-                          : 0.0;
-  const GroundMesh ground =
-      build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m(), &roughness, rough_half_size_m);
+      roughness.enabled()
+          ? patch_half_size_m(terrain_, lidar_, footprint, frame,
+                              std::min(lidar_.max_angle_rad(), 4.5 * lidar_.beam_sigma_rad()))
+          : 0.0;
+  const GroundMesh ground = build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m(),
+                                              &roughness, rough_half_size_m);
   const Vegetation vegetation =
-      forest_ ? build_vegetation(*forest_, terrain_, frame, half_size_m, orientation) : Vegetation{};
+      forest_ ? build_vegetation(*forest_, terrain_, frame, half_size_m, orientation)
+              : Vegetation{};
   const Scene scene(device_, ground, vegetation);
   record.slope_deg = orientation.slope_deg;
   record.aspect_deg = orientation.aspect_deg;
@@ -186,7 +196,8 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
     foliage.leaf_size_m = canopy.leaf_size_m;
     optics.foliage.push_back(foliage);
   }
-  ShotWaveforms waveforms = simulate_shot(scene, lidar_, geometry, optics, options, footprint.shot_number);
+  ShotWaveforms waveforms =
+      simulate_shot(scene, lidar_, geometry, optics, options, footprint.shot_number);
   if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;
 
   record.rx_waveform_W = std::move(waveforms.total_W);
@@ -202,8 +213,9 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   if (config_.detector.enabled) {
     const Detector detector(config_.detector, config_.seed);
     for (std::size_t band = 0; band < bands; ++band) {
-      record.rx_waveform_W[band] = detector.record(record.rx_waveform_W[band], config_.sensor.bin_ns,
-                                                   config_.sensor.bands[band].wavelength_nm, footprint.shot_number, band);
+      record.rx_waveform_W[band] =
+          detector.record(record.rx_waveform_W[band], config_.sensor.bin_ns,
+                          config_.sensor.bands[band].wavelength_nm, footprint.shot_number, band);
       double sum_W = 0.0;
       for (double p : record.rx_waveform_W[band]) sum_W += p;
       record.rx_energy_J[band] = sum_W * bin_s;
@@ -221,8 +233,10 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
     // signal begin and end (energy_tr), as background and noise summed over the whole window
     // would swamp it.
     const Band& b = config_.sensor.bands[band];
-    const double received_J = config_.detector.enabled ? record.energy_tr_J[band] : record.rx_energy_J[band];
-    record.reflectance.push_back(std::numbers::pi * received_J * footprint.range_m * footprint.range_m /
+    const double received_J =
+        config_.detector.enabled ? record.energy_tr_J[band] : record.rx_energy_J[band];
+    record.reflectance.push_back(std::numbers::pi * received_J * footprint.range_m *
+                                 footprint.range_m /
                                  (b.pulse_energy_mJ * 1e-3 * config_.sensor.telescope_area_m2 *
                                   b.atmos_transmission_roundtrip));
   }
@@ -239,7 +253,8 @@ RunInfo ShotSimulator::run_info(std::int64_t shots, const std::string& command_l
   info.bands = config_.sensor.bands;
   info.bin_time_ns = lidar_.bin_time_ns();
   info.tx_time_ns = lidar_.tx_time_ns();
-  for (std::size_t band = 0; band < lidar_.band_count(); ++band) info.tx_waveform_W.push_back(lidar_.tx_waveform_W(band));
+  for (std::size_t band = 0; band < lidar_.band_count(); ++band)
+    info.tx_waveform_W.push_back(lidar_.tx_waveform_W(band));
   info.orders = config_.output.per_order ? config_.simulation.max_order : 0;
   return info;
 }

@@ -1,13 +1,13 @@
 // Embree scenes of the ground, trunks and crowns in a shot's local frame.
 #include "pipeline/scene/scene.hpp"
 
+#include <embree3/rtcore.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <string>
-
-#include <embree3/rtcore.h>
 
 #include "terrain/error.hpp"
 
@@ -18,15 +18,18 @@ constexpr unsigned ground_geometry = 0;
 
 void check_device(RTCDevice device, const char* what) {
   const RTCError code = rtcGetDeviceError(device);
-  if (code != RTC_ERROR_NONE) throw run_error("Embree", std::string(what) + " failed (error " + std::to_string(code) + ")");
+  if (code != RTC_ERROR_NONE)
+    throw run_error("Embree", std::string(what) + " failed (error " + std::to_string(code) + ")");
 }
 
 void attach_mesh(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsigned id) {
   RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), mesh.vertices_m.size() / 3));
-  auto* triangles = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size() / 3));
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               mesh.vertices_m.size() / 3));
+  auto* triangles = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                              3 * sizeof(unsigned), mesh.triangles.size() / 3));
   check_device(device, "allocating a mesh");
   std::memcpy(vertices, mesh.vertices_m.data(), mesh.vertices_m.size() * sizeof(float));
   std::memcpy(triangles, mesh.triangles.data(), mesh.triangles.size() * sizeof(unsigned));
@@ -45,7 +48,8 @@ struct SpanCollector {
 };
 
 void crown_bounds(const RTCBoundsFunctionArguments* args) {
-  const auto& crown = static_cast<const std::vector<Crown>*>(args->geometryUserPtr)->at(args->primID);
+  const auto& crown =
+      static_cast<const std::vector<Crown>*>(args->geometryUserPtr)->at(args->primID);
   const double r = crown.radius_m;
   args->bounds_o->lower_x = static_cast<float>(crown.base_m[0] - r);
   args->bounds_o->lower_y = static_cast<float>(crown.base_m[1] - r);
@@ -67,10 +71,12 @@ void crown_intersect(const RTCIntersectFunctionNArguments* args) {
 }
 
 // A slab between two heights above a plane: where the ray is inside it.
-void layer_span(const TurbidLayer& layer, const Vec3& origin, const Vec3& direction, double max_distance_m,
-                std::vector<VolumeSpan>& spans) {
-  const double height = origin[2] - layer.ground_slope_x * origin[0] - layer.ground_slope_y * origin[1];
-  const double rate = direction[2] - layer.ground_slope_x * direction[0] - layer.ground_slope_y * direction[1];
+void layer_span(const TurbidLayer& layer, const Vec3& origin, const Vec3& direction,
+                double max_distance_m, std::vector<VolumeSpan>& spans) {
+  const double height =
+      origin[2] - layer.ground_slope_x * origin[0] - layer.ground_slope_y * origin[1];
+  const double rate =
+      direction[2] - layer.ground_slope_x * direction[0] - layer.ground_slope_y * direction[1];
   double t0 = 0.0, t1 = max_distance_m;
   if (rate == 0.0) {
     if (height < layer.bottom_m || height > layer.top_m) return;
@@ -119,13 +125,15 @@ Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation
     rtcReleaseGeometry(geometry);
     rtcCommitScene(crown_scene_);
     check_device(device.handle(), "building the crowns");
-    for (const Crown& crown : crowns_) top_m_ = std::max(top_m_, crown.base_m[2] + 2.0 * crown.half_height_m);
+    for (const Crown& crown : crowns_)
+      top_m_ = std::max(top_m_, crown.base_m[2] + 2.0 * crown.half_height_m);
   }
   if (layer_) {
     // The layer's top plane at the far corners of the ground patch.
     double reach_m = 0.0;
     for (std::size_t i = 0; i + 2 < ground.vertices_m.size(); i += 3)
-      reach_m = std::max({reach_m, std::abs(double{ground.vertices_m[i]}), std::abs(double{ground.vertices_m[i + 1]})});
+      reach_m = std::max({reach_m, std::abs(double{ground.vertices_m[i]}),
+                          std::abs(double{ground.vertices_m[i + 1]})});
     top_m_ = std::max(top_m_, layer_->top_m + reach_m * (std::abs(layer_->ground_slope_x) +
                                                          std::abs(layer_->ground_slope_y)));
   }
@@ -138,7 +146,8 @@ Scene::~Scene() {
 
 namespace {
 
-RTCRay make_ray(const Vec3& origin, const Vec3& direction, double min_distance_m, double max_distance_m) {
+RTCRay make_ray(const Vec3& origin, const Vec3& direction, double min_distance_m,
+                double max_distance_m) {
   RTCRay ray{};
   ray.org_x = static_cast<float>(origin[0]);
   ray.org_y = static_cast<float>(origin[1]);
@@ -176,7 +185,8 @@ SurfaceHit Scene::intersect(const Vec3& origin, const Vec3& direction, double ma
   return hit;
 }
 
-bool Scene::occluded(const Vec3& origin, const Vec3& direction, double max_distance_m, double min_distance_m) const {
+bool Scene::occluded(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                     double min_distance_m) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay ray = make_ray(origin, direction, min_distance_m, max_distance_m);

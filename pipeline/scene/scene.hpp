@@ -40,7 +40,7 @@ struct TurbidLayer {
 // What grows on the ground of one shot.
 struct Vegetation {
   std::vector<Crown> crowns;
-  GroundMesh trunks;  // bark-covered cylinders, triangulated
+  GroundMesh trunks;                 // bark-covered cylinders, triangulated
   std::vector<int> trunk_materials;  // the material of each trunk triangle
   std::optional<TurbidLayer> layer;
 };

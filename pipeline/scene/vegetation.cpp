@@ -11,7 +11,8 @@ namespace {
 constexpr int trunk_sides = 8;
 
 // A vertical prism of `trunk_sides` faces from the ground to the crown base.
-void add_trunk(Vegetation& vegetation, const Vec3& foot, double top_m, double radius_m, int material) {
+void add_trunk(Vegetation& vegetation, const Vec3& foot, double top_m, double radius_m,
+               int material) {
   GroundMesh& mesh = vegetation.trunks;
   const auto first = static_cast<std::uint32_t>(mesh.vertices_m.size() / 3);
   for (int k = 0; k < trunk_sides; ++k) {
@@ -19,11 +20,13 @@ void add_trunk(Vegetation& vegetation, const Vec3& foot, double top_m, double ra
     const double x = foot[0] + radius_m * std::cos(angle), y = foot[1] + radius_m * std::sin(angle);
     // The foot goes a little below the ground so that no gap shows on slopes.
     for (double z : {foot[2] - radius_m, top_m}) {
-      mesh.vertices_m.insert(mesh.vertices_m.end(), {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
+      mesh.vertices_m.insert(mesh.vertices_m.end(),
+                             {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
     }
   }
   for (std::uint32_t k = 0; k < trunk_sides; ++k) {
-    const std::uint32_t a = first + 2 * k, b = a + 1, c = first + 2 * ((k + 1) % trunk_sides), d = c + 1;
+    const std::uint32_t a = first + 2 * k, b = a + 1, c = first + 2 * ((k + 1) % trunk_sides),
+                        d = c + 1;
     mesh.triangles.insert(mesh.triangles.end(), {a, c, d, a, d, b});
     vegetation.trunk_materials.insert(vegetation.trunk_materials.end(), {material, material});
   }
@@ -32,8 +35,8 @@ void add_trunk(Vegetation& vegetation, const Vec3& foot, double top_m, double ra
 
 }  // namespace
 
-Vegetation build_vegetation(const Forest& forest, const Terrain& terrain, const LocalFrame& frame, double half_size_m,
-                            const SurfaceOrientation& ground) {
+Vegetation build_vegetation(const Forest& forest, const Terrain& terrain, const LocalFrame& frame,
+                            double half_size_m, const SurfaceOrientation& ground) {
   Vegetation vegetation;
   vegetation.trunks.max_height_m = -std::numeric_limits<double>::infinity();
   const CanopySettings& scene_canopy = forest.canopy(0);
@@ -52,8 +55,10 @@ Vegetation build_vegetation(const Forest& forest, const Terrain& terrain, const 
   }
   const Geodetic centre = frame.origin();
   double widest_m = 0.0;
-  for (std::size_t k = 0; k < forest.kinds(); ++k) widest_m = std::max(widest_m, forest.canopy(k).crown_radius_m);
-  for (const Tree& tree : forest.trees_near(centre.lat_deg, centre.lon_deg, half_size_m * std::sqrt(2.0) + widest_m)) {
+  for (std::size_t k = 0; k < forest.kinds(); ++k)
+    widest_m = std::max(widest_m, forest.canopy(k).crown_radius_m);
+  for (const Tree& tree :
+       forest.trees_near(centre.lat_deg, centre.lon_deg, half_size_m * std::sqrt(2.0) + widest_m)) {
     const CanopySettings& canopy = forest.canopy(tree.kind);
     if (canopy.pai <= 0.0) continue;
     const double ground_m = terrain.height_m(tree.lat_deg, tree.lon_deg);
@@ -100,7 +105,8 @@ VegetationTruth measure_vegetation(const Scene& scene, double sigma_m) {
       weights += weight;
       truth.pai += weight * plant_area;
       truth.cover += spans.empty() ? 0.0 : weight;
-      if (r_sq <= 4.0 * sigma_m * sigma_m) truth.canopy_height_m = std::max(truth.canopy_height_m, ground.distance_m - first_m);
+      if (r_sq <= 4.0 * sigma_m * sigma_m)
+        truth.canopy_height_m = std::max(truth.canopy_height_m, ground.distance_m - first_m);
     }
   }
   if (weights > 0.0) {

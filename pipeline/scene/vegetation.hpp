@@ -13,15 +13,15 @@ namespace glaswave {
 // ground weighted by the beam's irradiance (a Gaussian of RMS radius sigma_m about the frame's
 // origin, in the horizontal).
 struct VegetationTruth {
-  double cover = 0.0;              // part of the beam's light falling on a crown's shadow from above
-  double pai = 0.0;                // plant area crossed by a vertical line, beam-weighted mean
-  double canopy_height_m = 0.0;    // highest foliage above the ground within 2 sigma of the centre
+  double cover = 0.0;            // part of the beam's light falling on a crown's shadow from above
+  double pai = 0.0;              // plant area crossed by a vertical line, beam-weighted mean
+  double canopy_height_m = 0.0;  // highest foliage above the ground within 2 sigma of the centre
 };
 
 VegetationTruth measure_vegetation(const Scene& scene, double sigma_m);
 
 // Crowns are tagged with their forest kind as material.
-Vegetation build_vegetation(const Forest& forest, const Terrain& terrain, const LocalFrame& frame, double half_size_m,
-                            const SurfaceOrientation& ground);
+Vegetation build_vegetation(const Forest& forest, const Terrain& terrain, const LocalFrame& frame,
+                            double half_size_m, const SurfaceOrientation& ground);
 
 }  // namespace glaswave

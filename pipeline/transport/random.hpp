@@ -4,7 +4,6 @@
 #pragma once
 
 #include <cstdint>
-
 #include <pcg_random.hpp>
 
 #include "terrain/bit_mix.hpp"

@@ -18,8 +18,8 @@ namespace glaswave {
 
 // One shot in its local frame (the footprint's east-north-up frame), double precision.
 struct ShotGeometry {
-  Vec3 sensor_m{};  // spacecraft position
-  Vec3 axis{};      // beam axis, unit, spacecraft -> ground
+  Vec3 sensor_m{};       // spacecraft position
+  Vec3 axis{};           // beam axis, unit, spacecraft -> ground
   double range_m = 0.0;  // to the footprint centre: times are relative to 2 * range_m / c
 };
 
@@ -59,8 +59,8 @@ struct TransportOptions {
 
 // Simulates shot `shot_number`. The result depends only on the inputs, never on how many
 // threads run it: rays are tallied in fixed chunks that are summed in order.
-ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar, const ShotGeometry& geometry,
-                            const SceneOptics& optics, const TransportOptions& options,
-                            std::int64_t shot_number);
+ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
+                            const ShotGeometry& geometry, const SceneOptics& optics,
+                            const TransportOptions& options, std::int64_t shot_number);
 
 }  // namespace glaswave

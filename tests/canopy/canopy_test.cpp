@@ -1,11 +1,11 @@
 // Leaf angle distributions, the leaf scattering phase function, crown envelopes and stands,
 // against closed forms and integrals done here independently.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <map>
 #include <numbers>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "canopy/crown.hpp"
 #include "canopy/leaf_angles.hpp"
@@ -19,18 +19,25 @@ constexpr double pi = std::numbers::pi;
 // de Wit's densities, written again here: g(theta_L) on [0, pi/2].
 double de_wit(LeafAngleDistribution lad, double t) {
   switch (lad) {
-    case LeafAngleDistribution::spherical: return std::sin(t);
-    case LeafAngleDistribution::planophile: return 2 / pi * (1 + std::cos(2 * t));
-    case LeafAngleDistribution::erectophile: return 2 / pi * (1 - std::cos(2 * t));
-    case LeafAngleDistribution::plagiophile: return 2 / pi * (1 - std::cos(4 * t));
-    case LeafAngleDistribution::extremophile: return 2 / pi * (1 + std::cos(4 * t));
-    default: return 2 / pi;
+    case LeafAngleDistribution::spherical:
+      return std::sin(t);
+    case LeafAngleDistribution::planophile:
+      return 2 / pi * (1 + std::cos(2 * t));
+    case LeafAngleDistribution::erectophile:
+      return 2 / pi * (1 - std::cos(2 * t));
+    case LeafAngleDistribution::plagiophile:
+      return 2 / pi * (1 - std::cos(4 * t));
+    case LeafAngleDistribution::extremophile:
+      return 2 / pi * (1 + std::cos(4 * t));
+    default:
+      return 2 / pi;
   }
 }
 
-const LeafAngleDistribution all_de_wit[] = {LeafAngleDistribution::spherical, LeafAngleDistribution::planophile,
-                                            LeafAngleDistribution::erectophile, LeafAngleDistribution::plagiophile,
-                                            LeafAngleDistribution::extremophile, LeafAngleDistribution::uniform};
+const LeafAngleDistribution all_de_wit[] = {
+    LeafAngleDistribution::spherical,    LeafAngleDistribution::planophile,
+    LeafAngleDistribution::erectophile,  LeafAngleDistribution::plagiophile,
+    LeafAngleDistribution::extremophile, LeafAngleDistribution::uniform};
 
 // G(mu) by Monte Carlo over leaf normals: inclination by rejection from g, azimuth uniform.
 double projection_by_monte_carlo(LeafAngleDistribution lad, double mu, std::mt19937_64& engine) {
@@ -50,10 +57,12 @@ double projection_by_monte_carlo(LeafAngleDistribution lad, double mu, std::mt19
 
 TEST(LeafAngles, ProjectionMatchesClosedFormsAndIntegrals) {
   const LeafAngles spherical(LeafAngleDistribution::spherical, 0);
-  for (double mu : {0.0, 0.2, 0.5, 0.9, 1.0}) EXPECT_NEAR(spherical.projection(mu), 0.5, 2e-4) << mu;
+  for (double mu : {0.0, 0.2, 0.5, 0.9, 1.0})
+    EXPECT_NEAR(spherical.projection(mu), 0.5, 2e-4) << mu;
   // At nadir G = E[cos theta_L]: 8 / (3 pi), 4 / (3 pi), 2 / pi.
   EXPECT_NEAR(LeafAngles(LeafAngleDistribution::planophile, 0).projection(1.0), 8 / (3 * pi), 1e-3);
-  EXPECT_NEAR(LeafAngles(LeafAngleDistribution::erectophile, 0).projection(1.0), 4 / (3 * pi), 1e-3);
+  EXPECT_NEAR(LeafAngles(LeafAngleDistribution::erectophile, 0).projection(1.0), 4 / (3 * pi),
+              1e-3);
   EXPECT_NEAR(LeafAngles(LeafAngleDistribution::uniform, 0).projection(1.0), 2 / pi, 1e-3);
   std::mt19937_64 engine(42);
   for (LeafAngleDistribution lad : all_de_wit) {
@@ -97,7 +106,8 @@ TEST(LeafAngles, SphericalPhaseFunctionAndItsIntegral) {
     // The estimator gives Gamma / G, G = 1/2; beta is the angle between the travel directions.
     const double cos_beta = dot(incoming, outgoing);
     const double beta = std::acos(cos_beta);
-    const double gamma = (rho + tau) / (3 * pi) * (std::sin(beta) - beta * cos_beta) + tau / 3 * cos_beta;
+    const double gamma =
+        (rho + tau) / (3 * pi) * (std::sin(beta) - beta * cos_beta) + tau / 3 * cos_beta;
     EXPECT_NEAR(0.5 * sum / n / gamma, 1.0, 0.01) << beta_deg;
   }
   // (1/pi) integral of Gamma(Omega' -> Omega) dOmega = omega G(Omega'), for a non-spherical LAD.
@@ -162,7 +172,8 @@ TEST(Stand, TreesStayPutAndGiveTheCoverAndPai) {
   }
   EXPECT_GT(shared, 100);
   // Cover: the part of a 200 m square under some crown (metres from degrees at 45 N).
-  const double m_lat = 111132.954 - 559.822 * std::cos(2 * 45 * pi / 180), m_lon = 111412.84 * std::cos(45 * pi / 180);
+  const double m_lat = 111132.954 - 559.822 * std::cos(2 * 45 * pi / 180),
+               m_lon = 111412.84 * std::cos(45 * pi / 180);
   std::mt19937_64 engine(3);
   std::uniform_real_distribution<double> u(-100.0, 100.0);
   int covered = 0;
@@ -182,8 +193,10 @@ TEST(Stand, TreesStayPutAndGiveTheCoverAndPai) {
   // the density), per square metre; Poisson counts of ~760 trees: within 4 / sqrt(760) = 15 %.
   int stems = 0;
   for (const Tree& t : near)
-    if (std::abs((t.lon_deg - 7.0) * m_lon) < 100.0 && std::abs((t.lat_deg - 45.0) * m_lat) < 100.0) ++stems;
-  const double pai = stems * (4.0 / 3.0 * pi * 64.0 * 8.0) * stand.area_density_m2_m3() / (200.0 * 200.0);
+    if (std::abs((t.lon_deg - 7.0) * m_lon) < 100.0 && std::abs((t.lat_deg - 45.0) * m_lat) < 100.0)
+      ++stems;
+  const double pai =
+      stems * (4.0 / 3.0 * pi * 64.0 * 8.0) * stand.area_density_m2_m3() / (200.0 * 200.0);
   EXPECT_NEAR(pai / 3.0, 1.0, 4.0 / std::sqrt(stems));
 }
 
@@ -195,10 +208,12 @@ TEST(Stand, SmallCrownsKeepTheirDensity) {
   const Stand stand(canopy, 4);
   const double expected_per_m2 = -std::log(1.0 - 0.7) / (pi * 0.25);
   EXPECT_NEAR(stand.trees_per_m2(), expected_per_m2, 1e-12);
-  const double m_lat = 111132.954 - 559.822 * std::cos(2 * 45 * pi / 180), m_lon = 111412.84 * std::cos(45 * pi / 180);
+  const double m_lat = 111132.954 - 559.822 * std::cos(2 * 45 * pi / 180),
+               m_lon = 111412.84 * std::cos(45 * pi / 180);
   int stems = 0;
   for (const Tree& t : stand.trees_near(45.0, 7.0, 30.0))
-    if (std::abs((t.lon_deg - 7.0) * m_lon) < 20.0 && std::abs((t.lat_deg - 45.0) * m_lat) < 20.0) ++stems;
+    if (std::abs((t.lon_deg - 7.0) * m_lon) < 20.0 && std::abs((t.lat_deg - 45.0) * m_lat) < 20.0)
+      ++stems;
   const double expected = expected_per_m2 * 40.0 * 40.0;
   EXPECT_NEAR(stems, expected, 4.0 * std::sqrt(expected));
 }

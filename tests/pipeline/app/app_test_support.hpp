@@ -28,12 +28,15 @@ inline SimulatedTrack simulate_track(Config config) {
   const auto terrain = make_terrain(run.config.terrain);
   run.footprints = plan_track(run.config.track, *terrain, 0, track_length(run.config.track));
   const ShotSimulator simulator(run.config, *terrain);
-  for (const Footprint& footprint : run.footprints) run.records.push_back(simulator.simulate(footprint));
+  for (const Footprint& footprint : run.footprints)
+    run.records.push_back(simulator.simulate(footprint));
   run.bin_time_ns = simulator.lidar().bin_time_ns();
   return run;
 }
 
-inline SimulatedTrack simulate_track(const nlohmann::json& document) { return simulate_track(parse_config(document)); }
+inline SimulatedTrack simulate_track(const nlohmann::json& document) {
+  return simulate_track(parse_config(document));
+}
 
 struct CommandOutcome {
   int status;
@@ -55,14 +58,16 @@ struct Moments {
 };
 
 // Power-weighted mean time and RMS width of a waveform.
-inline Moments waveform_moments(const std::vector<double>& power_W, const std::vector<double>& time_ns) {
+inline Moments waveform_moments(const std::vector<double>& power_W,
+                                const std::vector<double>& time_ns) {
   double sum = 0, first = 0, second = 0;
   for (std::size_t i = 0; i < power_W.size(); ++i) {
     sum += power_W[i];
     first += power_W[i] * time_ns[i];
   }
   const double mean = first / sum;
-  for (std::size_t i = 0; i < power_W.size(); ++i) second += power_W[i] * (time_ns[i] - mean) * (time_ns[i] - mean);
+  for (std::size_t i = 0; i < power_W.size(); ++i)
+    second += power_W[i] * (time_ns[i] - mean) * (time_ns[i] - mean);
   return {mean, std::sqrt(second / sum)};
 }
 

@@ -1,9 +1,9 @@
 // PHYSICS.md sections 1 and 2: a shot over bare Lambertian ground against closed-form answers.
 // Expected values are computed here from the formulas, independently of the simulation.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <numbers>
-
-#include <gtest/gtest.h>
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
@@ -22,12 +22,19 @@ nlohmann::json plane_shot(double slope_deg, double off_nadir_deg, std::int64_t r
       {"sensor", {{"preset", "north2010"}}},
       {"simulation", {{"rays_per_shot", rays}}},
       {"terrain",
-       {{"plane", {{"origin_lat_deg", 0.0}, {"origin_lon_deg", 0.0}, {"elevation_m", 0.0},
-                   {"slope_deg", slope_deg}, {"aspect_deg", 90.0}}},
+       {{"plane",
+         {{"origin_lat_deg", 0.0},
+          {"origin_lon_deg", 0.0},
+          {"elevation_m", 0.0},
+          {"slope_deg", slope_deg},
+          {"aspect_deg", 90.0}}},
         {"soil_reflectance", 0.15}}},
       {"track",
-       {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}, {"altitude_m", 600000.0},
-        {"off_nadir_deg", off_nadir_deg}, {"pointing_azimuth_deg", 90.0}}},
+       {{"type", "points"},
+        {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}},
+        {"altitude_m", 600000.0},
+        {"off_nadir_deg", off_nadir_deg},
+        {"pointing_azimuth_deg", 90.0}}},
       {"output", {{"netcdf", false}, {"geojson", false}}},
   };
 }
@@ -56,8 +63,8 @@ TEST(BareGround, ReceivedEnergyMatchesLambertianFormulaAtNadir) {
   EXPECT_NEAR(shot.record.range_m, range_m, 0.01);
   const double energy_mJ[] = {32.0, 72.0}, transmission[] = {0.8, 0.9};
   for (int band = 0; band < 2; ++band) {
-    const double expected_J =
-        energy_mJ[band] * 1e-3 * transmission[band] * 0.709 * 0.15 * f_fov / (pi * range_m * range_m);
+    const double expected_J = energy_mJ[band] * 1e-3 * transmission[band] * 0.709 * 0.15 * f_fov /
+                              (pi * range_m * range_m);
     EXPECT_NEAR(shot.record.rx_energy_J[band] / expected_J, 1.0, 0.005) << "band " << band;
     // Seed eq. (1) returns rho_s f_fov.
     EXPECT_NEAR(shot.record.reflectance[band] / (0.15 * f_fov), 1.0, 0.005) << "band " << band;
@@ -101,12 +108,15 @@ TEST(BareGround, SlopeBroadensThePulseAsGardnerAndDimsAsCosine) {
       level_energy_J = shot.record.rx_energy_J[1];
       continue;
     }
-    const double slope_term_ns = 2.0 * range_m * sigma_theta * std::tan(slope_deg * pi / 180.0) / c_m_s * 1e9;
-    const double expected_ns = std::sqrt(sigma_tx_ns * sigma_tx_ns + slope_term_ns * slope_term_ns + 1.0 / 12.0);
+    const double slope_term_ns =
+        2.0 * range_m * sigma_theta * std::tan(slope_deg * pi / 180.0) / c_m_s * 1e9;
+    const double expected_ns =
+        std::sqrt(sigma_tx_ns * sigma_tx_ns + slope_term_ns * slope_term_ns + 1.0 / 12.0);
     EXPECT_NEAR(expected_ns, quoted_ns[k], 0.01) << "formula check at " << slope_deg << " deg";
     const Moments m = waveform_moments(shot.record.rx_waveform_W[1], shot.bin_time_ns);
     EXPECT_NEAR(m.rms_ns / expected_ns, 1.0, 0.02) << slope_deg << " deg";
-    EXPECT_NEAR(shot.record.rx_energy_J[1] / level_energy_J, std::cos(slope_deg * pi / 180.0), 0.005)
+    EXPECT_NEAR(shot.record.rx_energy_J[1] / level_energy_J, std::cos(slope_deg * pi / 180.0),
+                0.005)
         << slope_deg << " deg";
     EXPECT_NEAR(shot.record.slope_deg, slope_deg, 0.01);
     EXPECT_NEAR(shot.record.aspect_deg, 90.0, 0.01);
@@ -127,7 +137,8 @@ TEST(BareGround, OffNadirEnergyFollowsIncidenceAndSlantRange) {
   EXPECT_NEAR(shot.record.range_m / slant_m, 1.0, 1e-4);
   const double range_m = shot.record.range_m;
   const double f_fov = 1.0 - std::exp(-0.0004 * 0.0004 / (8.0 * 0.00011 * 0.00011));
-  const double expected_J = 72e-3 * 0.9 * 0.709 * 0.15 * std::cos(incidence) * f_fov / (pi * range_m * range_m);
+  const double expected_J =
+      72e-3 * 0.9 * 0.709 * 0.15 * std::cos(incidence) * f_fov / (pi * range_m * range_m);
   EXPECT_NEAR(shot.record.rx_energy_J[1] / expected_J, 1.0, 0.005);
 }
 

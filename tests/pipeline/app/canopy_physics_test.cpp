@@ -1,10 +1,10 @@
 // PHYSICS.md sections 3, 4 and 6 for vegetation: a homogeneous turbid layer (the RAMI HOM case)
 // against its closed-form single scattering, the omega^k scaling of scattering orders, the
 // n^-1/2 error law, and the seed's base-case forest. Expected values are computed here.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <numbers>
-
-#include <gtest/gtest.h>
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
@@ -17,18 +17,31 @@ constexpr double pi = std::numbers::pi;
 constexpr double c_m_s = 299792458.0;
 
 // A nadir shot over a layer of PAI `pai` and depth 10 m sitting on level soil.
-nlohmann::json layer_shot(double pai, double leaf_size_m, double rho, double tau, double soil, int max_order,
-                          std::int64_t rays) {
+nlohmann::json layer_shot(double pai, double leaf_size_m, double rho, double tau, double soil,
+                          int max_order, std::int64_t rays) {
   return {
       {"seed", 5},
-      {"sensor", {{"preset", "north2010"}, {"bands", {{{"name", "1064"}, {"wavelength_nm", 1064}, {"pulse_energy_mJ", 72},
-                                                         {"atmos_transmission_roundtrip", 0.9}}}}}},
+      {"sensor",
+       {{"preset", "north2010"},
+        {"bands",
+         {{{"name", "1064"},
+           {"wavelength_nm", 1064},
+           {"pulse_energy_mJ", 72},
+           {"atmos_transmission_roundtrip", 0.9}}}}}},
       {"simulation", {{"rays_per_shot", rays}, {"max_order", max_order}}},
       {"terrain", {{"plane", {{"elevation_m", 0.0}}}, {"soil_reflectance", soil}}},
       {"canopy",
-       {{"crown_shape", "layer"}, {"pai", pai}, {"lad", "spherical"}, {"crown_base_m", {0.0, 0.0}},
-        {"crown_half_height_m", 5.0}, {"green_fraction", 1.0}, {"bark_fraction", 0.0}, {"leaf_size_m", leaf_size_m},
-        {"leaf_reflectance", rho}, {"leaf_transmittance", tau}, {"dbh_m", 0.0}}},
+       {{"crown_shape", "layer"},
+        {"pai", pai},
+        {"lad", "spherical"},
+        {"crown_base_m", {0.0, 0.0}},
+        {"crown_half_height_m", 5.0},
+        {"green_fraction", 1.0},
+        {"bark_fraction", 0.0},
+        {"leaf_size_m", leaf_size_m},
+        {"leaf_reflectance", rho},
+        {"leaf_transmittance", tau},
+        {"dbh_m", 0.0}}},
       {"track", {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}}},
       {"output", {{"netcdf", false}, {"geojson", false}, {"per_order", true}}},
   };
@@ -43,7 +56,8 @@ struct Simulated {
 Simulated simulate(const nlohmann::json& document) {
   test_support::SimulatedTrack run = test_support::simulate_track(document);
   const SensorSettings& s = run.config.sensor;
-  const double f_fov = 1.0 - std::exp(-s.ifov_rad * s.ifov_rad / (8.0 * s.divergence_sigma_rad * s.divergence_sigma_rad));
+  const double f_fov = 1.0 - std::exp(-s.ifov_rad * s.ifov_rad /
+                                      (8.0 * s.divergence_sigma_rad * s.divergence_sigma_rad));
   const double range_m = run.footprints.at(0).range_m;
   const Band& band = s.bands.at(0);
   const double normalisation_J = band.pulse_energy_mJ * 1e-3 * band.atmos_transmission_roundtrip *
@@ -105,7 +119,8 @@ TEST(TurbidLayer, CanopyReturnFollowsItsExponentialLawWithDepth) {
       expected[third] += u * rho / 3.0 / k * (std::exp(-k * a) - std::exp(-k * b));
     }
     for (int third = 0; third < 3; ++third)
-      EXPECT_NEAR(simulated[third] / expected[third], 1.0, 0.03) << "leaf size " << leaf_size_m << ", third " << third;
+      EXPECT_NEAR(simulated[third] / expected[third], 1.0, 0.03)
+          << "leaf size " << leaf_size_m << ", third " << third;
   }
 }
 
@@ -142,7 +157,8 @@ TEST(TurbidLayer, SecondOrderMatchesThePlaneParallelIntegral) {
     const double m = std::abs(mu);
     if (mu < 0) {
       const double a = k * (1 / m - 1);
-      return a > 1e-12 ? (std::exp(-k * z2) - std::exp(-k * z2 / m)) / (a * m) : z2 * std::exp(-k * z2);
+      return a > 1e-12 ? (std::exp(-k * z2) - std::exp(-k * z2 / m)) / (a * m)
+                       : z2 * std::exp(-k * z2);
     }
     const double b = k * (1 + 1 / m);
     return std::exp(-k * z2) * -std::expm1(-b * (depth_m - z2)) / (b * m);
@@ -153,8 +169,8 @@ TEST(TurbidLayer, SecondOrderMatchesThePlaneParallelIntegral) {
     const double mu = -1.0 + (i + 0.5) * 2.0 / steps;
     for (int j = 0; j < steps; ++j) {
       const double z2 = (j + 0.5) * depth_m / steps;
-      r2 += std::exp(-k * z2) * (u / pi) * gamma(mu) * (u / pi) * gamma(-mu) * first_leg(z2, mu) * (2.0 / steps) *
-            (depth_m / steps);
+      r2 += std::exp(-k * z2) * (u / pi) * gamma(mu) * (u / pi) * gamma(-mu) * first_leg(z2, mu) *
+            (2.0 / steps) * (depth_m / steps);
     }
   }
   r2 *= pi * 2 * pi;
@@ -174,7 +190,8 @@ TEST(TurbidLayer, OrdersDoNotDependOnMaxOrderAndSumToTheTotal) {
   for (int k = 0; k < 3; ++k) {
     const auto& a = three.record.rx_waveform_order_W[0][k];
     const auto& b = eight.record.rx_waveform_order_W[0][k];
-    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-9 * (std::abs(a[i]) + 1e-30)) << k;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      EXPECT_NEAR(a[i], b[i], 1e-9 * (std::abs(a[i]) + 1e-30)) << k;
   }
   double total = 0, orders = 0;
   for (double p : eight.record.rx_waveform_W[0]) total += p;
@@ -199,13 +216,15 @@ TEST(TurbidLayer, ErrorFallsAsTheInverseSquareRootOfTheRays) {
     int count = 0;
     for (int seed = 1; seed <= 6; ++seed) {
       const std::vector<double> w = waveform(rays, seed);
-      for (std::size_t i = 0; i < w.size(); ++i, ++count) squares += (w[i] - reference[i]) * (w[i] - reference[i]);
+      for (std::size_t i = 0; i < w.size(); ++i, ++count)
+        squares += (w[i] - reference[i]) * (w[i] - reference[i]);
     }
     log_n.push_back(std::log(static_cast<double>(rays)));
     log_rms.push_back(0.5 * std::log(squares / count));
   }
   // Least-squares slope through the three points.
-  const double mean_x = (log_n[0] + log_n[1] + log_n[2]) / 3, mean_y = (log_rms[0] + log_rms[1] + log_rms[2]) / 3;
+  const double mean_x = (log_n[0] + log_n[1] + log_n[2]) / 3,
+               mean_y = (log_rms[0] + log_rms[1] + log_rms[2]) / 3;
   double sxy = 0, sxx = 0;
   for (int i = 0; i < 3; ++i) {
     sxy += (log_n[i] - mean_x) * (log_rms[i] - mean_y);
@@ -272,7 +291,8 @@ TEST(BaseForest, ScatteringOrdersConvergeByTheEighth) {
     double total = 0, order_J[8] = {};
     for (int k = 0; k < 8; ++k)
       for (double p : shot.record.rx_waveform_order_W[band][k]) order_J[k] += p, total += p;
-    for (int k = 2; k < 8; ++k) EXPECT_LT(order_J[k], order_J[k - 1]) << "band " << band << ", order " << k + 1;
+    for (int k = 2; k < 8; ++k)
+      EXPECT_LT(order_J[k], order_J[k - 1]) << "band " << band << ", order " << k + 1;
     EXPECT_LT(order_J[7] / total, 0.01) << "band " << band;
   }
 }

@@ -1,18 +1,17 @@
 // End to end: the built glaswave command run as a user runs it, its products read back
 // with netCDF-C and GDAL's OGR, and its errors checked against PRODUCT.md sections 2 and 5.
+#include <gdal_priv.h>
+#include <gtest/gtest.h>
+#include <netcdf.h>
+#include <ogrsf_frmts.h>
 #include <sys/wait.h>
 
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <string>
-
-#include <gdal_priv.h>
-#include <netcdf.h>
-#include <ogrsf_frmts.h>
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "tests/pipeline/app/app_test_support.hpp"
 
@@ -26,7 +25,8 @@ class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("glaswave_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("glaswave_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -39,11 +39,19 @@ class Cli : public ::testing::Test {
         {"sensor", {{"preset", "glas"}}},
         {"simulation", {{"rays_per_shot", 3000}}},
         {"terrain",
-         {{"plane", {{"origin_lat_deg", 46.0}, {"origin_lon_deg", 8.0}, {"elevation_m", 900.0}, {"slope_deg", 8.0},
-                     {"aspect_deg", 200.0}}}}},
+         {{"plane",
+           {{"origin_lat_deg", 46.0},
+            {"origin_lon_deg", 8.0},
+            {"elevation_m", 900.0},
+            {"slope_deg", 8.0},
+            {"aspect_deg", 200.0}}}}},
         {"canopy", nullptr},
         {"track",
-         {{"type", "pass"}, {"start_lat_deg", 46.0}, {"start_lon_deg", 8.0}, {"heading_deg", 350.0}, {"shots", 5},
+         {{"type", "pass"},
+          {"start_lat_deg", 46.0},
+          {"start_lon_deg", 8.0},
+          {"heading_deg", 350.0},
+          {"shots", 5},
           {"spacing_m", 172.0}}},
     };
     config.merge_patch(changes);
@@ -75,7 +83,8 @@ std::vector<float> read_waveforms(const fs::path& file, std::size_t* shots = nul
 
 TEST_F(Cli, RunWritesProductsThatReadBack) {
   const std::string config = write_config();
-  const CommandOutcome run = run_glaswave("run " + config + " --out " + (dir_ / "out").string() + " --quiet");
+  const CommandOutcome run =
+      run_glaswave("run " + config + " --out " + (dir_ / "out").string() + " --quiet");
   ASSERT_EQ(run.status, 0) << run.output;
   // The summary line: shots, seconds, shots/s, ray queries/s.
   EXPECT_NE(run.output.find("5 shots in"), std::string::npos) << run.output;
@@ -113,8 +122,8 @@ TEST_F(Cli, RunWritesProductsThatReadBack) {
   }
 
   GDALAllRegister();
-  GDALDataset* geojson = static_cast<GDALDataset*>(
-      GDALOpenEx((dir_ / "out" / "footprints.geojson").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+  GDALDataset* geojson = static_cast<GDALDataset*>(GDALOpenEx(
+      (dir_ / "out" / "footprints.geojson").c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
   ASSERT_NE(geojson, nullptr);
   OGRLayer* layer = geojson->GetLayer(0);
   EXPECT_EQ(layer->GetFeatureCount(), 5);
@@ -128,10 +137,18 @@ TEST_F(Cli, RunWritesProductsThatReadBack) {
 
 TEST_F(Cli, ResultsDoNotDependOnThreadsOrShotSplits) {
   const std::string config = write_config();
-  ASSERT_EQ(run_glaswave("run " + config + " --quiet --threads 1 --out " + (dir_ / "one").string()).status, 0);
-  ASSERT_EQ(run_glaswave("run " + config + " --quiet --threads 2 --out " + (dir_ / "two").string()).status, 0);
-  ASSERT_EQ(run_glaswave("run " + config + " --quiet --shots 0:2 --out " + (dir_ / "a").string()).status, 0);
-  ASSERT_EQ(run_glaswave("run " + config + " --quiet --shots 2:5 --out " + (dir_ / "b").string()).status, 0);
+  ASSERT_EQ(run_glaswave("run " + config + " --quiet --threads 1 --out " + (dir_ / "one").string())
+                .status,
+            0);
+  ASSERT_EQ(run_glaswave("run " + config + " --quiet --threads 2 --out " + (dir_ / "two").string())
+                .status,
+            0);
+  ASSERT_EQ(
+      run_glaswave("run " + config + " --quiet --shots 0:2 --out " + (dir_ / "a").string()).status,
+      0);
+  ASSERT_EQ(
+      run_glaswave("run " + config + " --quiet --shots 2:5 --out " + (dir_ / "b").string()).status,
+      0);
   const std::vector<float> one = read_waveforms(dir_ / "one" / "shots.nc");
   EXPECT_EQ(one, read_waveforms(dir_ / "two" / "shots.nc"));
   std::vector<float> split = read_waveforms(dir_ / "a" / "shots.nc");
@@ -139,7 +156,9 @@ TEST_F(Cli, ResultsDoNotDependOnThreadsOrShotSplits) {
   split.insert(split.end(), rest.begin(), rest.end());
   EXPECT_EQ(one, split);
   // Another seed is another sample.
-  ASSERT_EQ(run_glaswave("run " + config + " --quiet --seed 4 --out " + (dir_ / "seed4").string()).status, 0);
+  ASSERT_EQ(
+      run_glaswave("run " + config + " --quiet --seed 4 --out " + (dir_ / "seed4").string()).status,
+      0);
   EXPECT_NE(one, read_waveforms(dir_ / "seed4" / "shots.nc"));
 }
 
@@ -155,7 +174,8 @@ TEST_F(Cli, BadConfigurationsFailWithOneLineNamingThePlace) {
       {"--set canopy.pia=2", "did you mean \"pai\""},
       {"--set simulation.rays_per_shot=0", "/simulation/rays_per_shot"},
       {"--set canopy.cover=1.5", "/canopy/cover"},
-      {"--set canopy.leaf_reflectance=0.7 --set canopy.leaf_transmittance=0.5", "/canopy/leaf_transmittance"},
+      {"--set canopy.leaf_reflectance=0.7 --set canopy.leaf_transmittance=0.5",
+       "/canopy/leaf_transmittance"},
       {"--set seed=\\\"x\\\"", "/seed"},
       {"--set simulation.rays_per_shot=1e999", "/simulation/rays_per_shot"},
       {"--shots 9:12", "--shots"},
@@ -163,7 +183,8 @@ TEST_F(Cli, BadConfigurationsFailWithOneLineNamingThePlace) {
       {"--set output.netcdf=false --set output.geojson=false", "/output: nothing to write"},
   };
   for (const Case& c : cases) {
-    const CommandOutcome run = run_glaswave("run " + config + " --quiet --out " + (dir_ / "out").string() + " " + c.arguments);
+    const CommandOutcome run = run_glaswave("run " + config + " --quiet --out " +
+                                            (dir_ / "out").string() + " " + c.arguments);
     EXPECT_EQ(run.status, 2) << c.arguments << ": " << run.output;
     EXPECT_EQ(run.output.rfind("glaswave: error: ", 0), 0u) << run.output;
     EXPECT_NE(run.output.find(c.expected), std::string::npos) << c.arguments << ": " << run.output;
@@ -186,7 +207,8 @@ TEST_F(Cli, ExistingOutputDirectoryIsRefusedAndKept) {
   const std::string config = write_config();
   fs::create_directories(dir_ / "out");
   std::ofstream(dir_ / "out" / "mine.txt") << "a user's file";
-  const CommandOutcome run = run_glaswave("run " + config + " --quiet --out " + (dir_ / "out").string());
+  const CommandOutcome run =
+      run_glaswave("run " + config + " --quiet --out " + (dir_ / "out").string());
   EXPECT_EQ(run.status, 2);
   EXPECT_TRUE(fs::exists(dir_ / "out" / "mine.txt"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "shots.nc"));
@@ -206,7 +228,9 @@ TEST_F(Cli, CheckHelpAndVersion) {
   // The contract's later commands are named and refused, not mistaken for typos.
   const CommandOutcome sweep = run_glaswave("sweep " + write_config() + " --vary canopy.pai=1,2");
   EXPECT_EQ(sweep.status, 2);
-  EXPECT_NE(sweep.output.find("glaswave: error: sweep: this command is not available"), std::string::npos) << sweep.output;
+  EXPECT_NE(sweep.output.find("glaswave: error: sweep: this command is not available"),
+            std::string::npos)
+      << sweep.output;
   const CommandOutcome bad = run_glaswave("fly");
   EXPECT_EQ(bad.status, 2);
   EXPECT_EQ(bad.output.rfind("glaswave: error: ", 0), 0u) << bad.output;

@@ -2,6 +2,11 @@
 // coordinates, a DEM plane against terrain.plane, roughness against Gardner's term (PHYSICS.md
 // section 2), and through the built command: bad DEMs (exit status 3, one line), shots over
 // nodata or off the raster (flagged, the run goes on), the vertical datum in summary and products.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <netcdf.h>
+#include <sys/wait.h>
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -10,11 +15,6 @@
 #include <fstream>
 #include <numbers>
 #include <string>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-#include <netcdf.h>
-#include <sys/wait.h>
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
@@ -198,7 +198,8 @@ TEST(DemShots, RoughnessBroadensThePulseAsGardner) {
     const double roughness_term_ns = 2.0 * c.rms_m / c_m_s * 1e9;
     const double expected_ns = std::sqrt(25.0 + roughness_term_ns * roughness_term_ns + 1.0 / 12.0);
     for (int band = 0; band < 2; ++band) {
-      const double width_ns = waveform_moments(shot.records[0].rx_waveform_W[band], shot.bin_time_ns).rms_ns;
+      const double width_ns =
+          waveform_moments(shot.records[0].rx_waveform_W[band], shot.bin_time_ns).rms_ns;
       EXPECT_NEAR(width_ns / expected_ns, 1.0, 0.02) << c.terrain.dump() << " rms " << c.rms_m;
     }
     // The footprint's height is the terrain's, not the relief's.
@@ -348,7 +349,7 @@ TEST(DemCommand, VerticalDatumIsInTheSummaryAndTheProducts) {
   for (const Case& c : cases) {
     const fs::path out = dir / ("out" + std::to_string(n++));
     const CommandOutcome run = run_glaswave("run " + write_pass(dir.path(), c.terrain, 1).string() +
-                                 " --quiet --out " + out.string());
+                                            " --quiet --out " + out.string());
     ASSERT_EQ(run.status, 0) << run.output;
     EXPECT_THAT(run.output, HasSubstr(c.summary));
     int nc = -1;

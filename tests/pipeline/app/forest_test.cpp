@@ -1,16 +1,16 @@
 // Explicit crowns (crowns_file) and stands (GeoJSON polygons overriding canopy keys): their
 // trees where the files put them, with the optics the stands give, and bad files named.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
 
-#include <gtest/gtest.h>
-
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
-#include "tests/pipeline/app/app_test_support.hpp"
 #include "terrain/error.hpp"
+#include "tests/pipeline/app/app_test_support.hpp"
 
 namespace glaswave {
 namespace {
@@ -21,7 +21,8 @@ class Forests : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("glaswave_forest_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("glaswave_forest_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -37,29 +38,39 @@ class Forests : public ::testing::Test {
   fs::path dir_;
 };
 
-std::vector<ShotRecord> simulate(const Config& config) { return test_support::simulate_track(config).records; }
+std::vector<ShotRecord> simulate(const Config& config) {
+  return test_support::simulate_track(config).records;
+}
 
 // One ellipsoid (radius 8 m, half height 8 m, PAI 1 over its 16 m x 16 m bounding box) under
 // a beam much narrower than the crown: the vertical path through its centre crosses 16 m of
 // foliage of density u = 256 / (4/3 pi 8^2 8), optical depth tau = G u 16 with G = 1/2, so the
 // single scattering is (2 rho / 3)(1 - e^-tau) from the crown and rho_s e^-tau from the soil.
 TEST_F(Forests, ExplicitCrownAtNadirMatchesItsOpticalDepth) {
-  const std::string crowns = write("crowns.csv", "x,y,base_m,radius_m,half_height_m\n# one tree\n0,0,5,8,8\n");
+  const std::string crowns =
+      write("crowns.csv", "x,y,base_m,radius_m,half_height_m\n# one tree\n0,0,5,8,8\n");
   const double sigma = 2e-7, ifov = 8 * sigma;
   const Config config = load({
       {"sensor", {{"preset", "north2010"}, {"divergence_sigma_rad", sigma}, {"ifov_rad", ifov}}},
       {"simulation", {{"rays_per_shot", 20000}, {"max_order", 1}}},
       {"terrain", {{"plane", {{"elevation_m", 0.0}}}, {"soil_reflectance", 0.3}}},
       {"canopy",
-       {{"crowns_file", crowns}, {"pai", 1.0}, {"green_fraction", 1.0}, {"leaf_reflectance", 0.45},
-        {"leaf_transmittance", 0.45}, {"dbh_m", 0.0}, {"leaf_size_m", 0.05}}},
+       {{"crowns_file", crowns},
+        {"pai", 1.0},
+        {"green_fraction", 1.0},
+        {"leaf_reflectance", 0.45},
+        {"leaf_transmittance", 0.45},
+        {"dbh_m", 0.0},
+        {"leaf_size_m", 0.05}}},
       {"track", {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}}},
   });
   const ShotRecord shot = simulate(config).at(0);
   const double u = 256.0 / (4.0 / 3.0 * std::numbers::pi * 64.0 * 8.0), tau = 0.5 * u * 16.0;
   const double f_fov = 1.0 - std::exp(-ifov * ifov / (8 * sigma * sigma));
-  const double normalisation = 72e-3 * 0.9 * 0.709 * f_fov / (std::numbers::pi * shot.range_m * shot.range_m);
-  EXPECT_NEAR(shot.rx_energy_canopy_J[1] / normalisation / (2 * 0.45 / 3 * (1 - std::exp(-tau))), 1.0, 0.02);
+  const double normalisation =
+      72e-3 * 0.9 * 0.709 * f_fov / (std::numbers::pi * shot.range_m * shot.range_m);
+  EXPECT_NEAR(shot.rx_energy_canopy_J[1] / normalisation / (2 * 0.45 / 3 * (1 - std::exp(-tau))),
+              1.0, 0.02);
   EXPECT_NEAR(shot.rx_energy_ground_J[1] / normalisation / (0.3 * std::exp(-tau)), 1.0, 0.02);
 }
 
@@ -75,7 +86,9 @@ TEST_F(Forests, StandsOverrideTheCanopyInsideTheirPolygons) {
       {"terrain", {{"plane", {{"elevation_m", 0.0}}}}},
       {"canopy", {{"stands", stands}, {"cover", 0.9}}},
       {"track",
-       {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", -0.002}}, {{"lat_deg", 0.0}, {"lon_deg", 0.002}}}}}},
+       {{"type", "points"},
+        {"points",
+         {{{"lat_deg", 0.0}, {"lon_deg", -0.002}}, {{"lat_deg", 0.0}, {"lon_deg", 0.002}}}}}},
   });
   ASSERT_EQ(config.canopy->stand_areas.size(), 1u);
   EXPECT_EQ(config.canopy->stand_areas[0].canopy.pai, 0.0);
@@ -97,8 +110,10 @@ TEST_F(Forests, BadFilesAreNamedWithTheirPlace) {
     EXPECT_EQ(e.kind(), ErrorKind::input);
     EXPECT_EQ(std::string(e.what()), stands + ": feature 0: property pai: must be >= 0, got -2");
   }
-  const std::string crowns = write("crowns.csv", "lon,lat,base_m,radius_m,half_height_m\n0,0,5,8,8\n0,0,5,eight,8\n");
-  const Config config = load({{"terrain", {{"plane", nlohmann::json::object()}}}, {"canopy", {{"crowns_file", crowns}}}});
+  const std::string crowns =
+      write("crowns.csv", "lon,lat,base_m,radius_m,half_height_m\n0,0,5,8,8\n0,0,5,eight,8\n");
+  const Config config = load(
+      {{"terrain", {{"plane", nlohmann::json::object()}}}, {"canopy", {{"crowns_file", crowns}}}});
   const auto terrain = make_terrain(config.terrain);
   try {
     const ShotSimulator simulator(config, *terrain);

@@ -2,10 +2,10 @@
 // Tables 1 and 2, one parameter at a time, the changes of TR, CR and GR (partitioned by position
 // in the waveform) have the signs the seed reports. Same seed for every case, so the trees and
 // the ray streams are the same and the differences are the parameter's.
+#include <gtest/gtest.h>
+
 #include <array>
 #include <cmath>
-
-#include <gtest/gtest.h>
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
@@ -25,7 +25,12 @@ Returns simulate(const std::string& key, const nlohmann::json& value) {
       {"simulation", {{"rays_per_shot", 4000}}},
       {"terrain", {{"plane", {{"origin_lat_deg", 45.0}, {"origin_lon_deg", 7.0}}}}},
       {"canopy", nlohmann::json::object()},  // Table 1
-      {"track", {{"type", "pass"}, {"start_lat_deg", 45.0}, {"start_lon_deg", 7.0}, {"shots", 6}, {"spacing_m", 172.0}}},
+      {"track",
+       {{"type", "pass"},
+        {"start_lat_deg", 45.0},
+        {"start_lon_deg", 7.0},
+        {"shots", 6},
+        {"spacing_m", 172.0}}},
   };
   if (!key.empty()) apply_override(document, key + "=" + value.dump());
   const std::vector<ShotRecord> records = test_support::simulate_track(document).records;
@@ -58,11 +63,13 @@ TEST(SeedTable3, SignsOfTheChangesAreTheSeeds) {
   };
   for (const Case& c : cases) {
     const Returns r = simulate(c.key, c.value);
-    const std::array<double, 3> change = {percent(r.tr, base.tr), percent(r.cr, base.cr), percent(r.gr, base.gr)};
+    const std::array<double, 3> change = {percent(r.tr, base.tr), percent(r.cr, base.cr),
+                                          percent(r.gr, base.gr)};
     const std::array<int, 3> expected = {c.tr, c.cr, c.gr};
     const char* names[] = {"TR", "CR", "GR"};
     for (int i = 0; i < 3; ++i) {
-      const std::string what = c.key + "=" + c.value.dump() + " " + names[i] + " " + std::to_string(change[i]) + " %";
+      const std::string what =
+          c.key + "=" + c.value.dump() + " " + names[i] + " " + std::to_string(change[i]) + " %";
       if (expected[i] > 0) {
         EXPECT_GT(change[i], 0.5) << what;
       } else if (expected[i] < 0) {

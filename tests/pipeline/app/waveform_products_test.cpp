@@ -39,8 +39,8 @@ nlohmann::json pass_over_plane(int shots) {
   };
 }
 
-using test_support::SimulatedTrack;
 using test_support::simulate_track;
+using test_support::SimulatedTrack;
 
 // The highest crown top (base + 2 half heights) of the trees standing within `radius_m` of the
 // footprint centre, above the ground: what the waveform's leading edge should find.

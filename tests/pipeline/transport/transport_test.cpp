@@ -1,13 +1,13 @@
 // The lidar model (pulse, bins, beam sampling) and the determinism of the shot transport.
-#include <cmath>
-#include <numbers>
-
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <cmath>
+#include <numbers>
+
+#include "canopy/leaf_angles.hpp"
 #include "pipeline/transport/random.hpp"
 #include "pipeline/transport/shot_transport.hpp"
-#include "canopy/leaf_angles.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
@@ -127,7 +127,8 @@ TEST(ShotTransport, SameBitsForAnyThreadCount) {
 struct CrownScene {
   explicit CrownScene(std::vector<Crown> crowns) {
     vegetation.crowns = std::move(crowns);
-    scene = std::make_unique<Scene>(device, build_ground_mesh(plane, frame, 150.0, 1.0e9), vegetation);
+    scene =
+        std::make_unique<Scene>(device, build_ground_mesh(plane, frame, 150.0, 1.0e9), vegetation);
     geometry.sensor_m = {0.0, 0.0, 600000.0};
     geometry.axis = {0.0, 0.0, -1.0};
     geometry.range_m = 600000.0;
@@ -176,9 +177,11 @@ TEST(ShotTransport, ACrownReachingBelowTheGroundKeepsTheGroundReturn) {
   TransportOptions options;
   options.rays = 40000;
   options.max_order = 1;
-  const ShotWaveforms w = simulate_shot(*scene.scene, lidar, scene.geometry, scene.optics, options, 3);
+  const ShotWaveforms w =
+      simulate_shot(*scene.scene, lidar, scene.geometry, scene.optics, options, 3);
   const double f_fov = 1.0 - std::exp(-0.0004 * 0.0004 / (8.0 * 0.00011 * 0.00011));
-  const double normalisation = 32e-3 * 0.8 * 0.709 * f_fov / (std::numbers::pi * 600000.0 * 600000.0);
+  const double normalisation =
+      32e-3 * 0.8 * 0.709 * f_fov / (std::numbers::pi * 600000.0 * 600000.0);
   EXPECT_NEAR(w.ground_energy_J[0] / normalisation / (0.2 * std::exp(-0.5 * u * 8.0)), 1.0, 0.02);
 }
 
@@ -191,7 +194,9 @@ TEST(ShotTransport, SameBitsForAnyThreadCountInAForest) {
   auto run = [&](int threads) {
     tbb::task_arena arena(threads);
     ShotWaveforms waveforms;
-    arena.execute([&] { waveforms = simulate_shot(*forest.scene, lidar, forest.geometry, forest.optics, options, 5); });
+    arena.execute([&] {
+      waveforms = simulate_shot(*forest.scene, lidar, forest.geometry, forest.optics, options, 5);
+    });
     return waveforms;
   };
   const ShotWaveforms one = run(1), two = run(2);
