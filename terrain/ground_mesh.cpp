@@ -1,12 +1,11 @@
 // Ground meshes from terrains (with roughness), and beam-weighted plane fits over them.
 #include "terrain/ground_mesh.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
-
-#include <Eigen/Dense>
 
 #include "terrain/roughness.hpp"
 
@@ -19,7 +18,7 @@ GroundMesh build_ground_mesh(const Terrain& terrain, const LocalFrame& frame, do
   if (!roughness || !roughness->enabled()) return base;
   const double rough_m =
       rough_half_size_m > 0.0 ? std::min(rough_half_size_m, half_size_m) : half_size_m;
-  return roughness->roughen(base, frame, rough_m);
+  return roughness->roughen(base, frame, rough_m, std::min(spacing_m, terrain.detail_m()));
 }
 
 GroundMesh sample_ground_mesh(const Terrain& terrain, const LocalFrame& frame, double half_size_m,

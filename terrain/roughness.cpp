@@ -1,8 +1,8 @@
 // The roughness field and the subdivision of a ground mesh under the beam.
 #include "terrain/roughness.hpp"
 
-#include "terrain/bit_mix.hpp"
-
+#include <Eigen/Dense>
+#include <GeographicLib/UTMUPS.hpp>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,8 +10,7 @@
 #include <numbers>
 #include <optional>
 
-#include <Eigen/Dense>
-#include <GeographicLib/UTMUPS.hpp>
+#include "terrain/bit_mix.hpp"
 
 namespace glaswave {
 namespace {
@@ -255,7 +254,7 @@ double RoughnessField::height_m(double lat_deg, double lon_deg) const {
 }
 
 GroundMesh RoughnessField::roughen(const GroundMesh& base, const LocalFrame& frame,
-                                   double half_size_m) const {
+                                   double half_size_m, double base_spacing_m) const {
   if (!enabled() || base.triangles.empty() || half_size_m <= 0.0) return base;
   const Geodetic& origin = frame.origin();
   const Zone zone = zone_of(origin.lat_deg, origin.lon_deg);
@@ -339,26 +338,43 @@ GroundMesh RoughnessField::roughen(const GroundMesh& base, const LocalFrame& fra
     return static_cast<std::uint32_t>(mesh.vertices_m.size() / 3 - 1);
   };
 
-  // The lattice's nodes on the base surface, raised by the relief.
+  // The mesh's nodes on the base surface, raised by the relief: the lattice's nodes, or r times
+  // finer where the base has finer detail (a DEM of fine cells) so that its own relief stays.
+  // The field varies over a correlation length, three lattice steps: between nodes it is
+  // interpolated bilinearly. At most 1024 nodes a side: finer detail is then smoothed.
+  int r = 1;
+  if (base_spacing_m < h) r = static_cast<int>(std::ceil(h / base_spacing_m - 1e-9));
+  r = std::clamp(r, 1, std::max(1, 1023 / std::max(1, std::max(ni, nj) - 1)));
+  const int fi = (ni - 1) * r + 1, fj = (nj - 1) * r + 1;
+  auto relief_at = [&](int a, int b) {  // fine node (a, b): lattice (a / r, b / r)
+    const int i = std::min(a / r, ni - 2 < 0 ? 0 : ni - 2),
+              j = std::min(b / r, nj - 2 < 0 ? 0 : nj - 2);
+    const double u = static_cast<double>(a - i * r) / r, v = static_cast<double>(b - j * r) / r;
+    auto at = [&](int ii, int jj) {
+      return relief_m[static_cast<std::size_t>(std::min(jj, nj - 1)) * ni + std::min(ii, ni - 1)];
+    };
+    return (1 - u) * (1 - v) * at(i, j) + u * (1 - v) * at(i + 1, j) + (1 - u) * v * at(i, j + 1) +
+           u * v * at(i + 1, j + 1);
+  };
   constexpr std::uint32_t missing = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> node_vertex(static_cast<std::size_t>(ni) * nj, missing);
-  for (int j = 0; j < nj; ++j)
-    for (int i = 0; i < ni; ++i) {
-      const auto [x, y] = to_local((i0 + i) * h - centre.x_m, (j0 + j) * h - centre.y_m);
+  std::vector<std::uint32_t> node_vertex(static_cast<std::size_t>(fi) * fj, missing);
+  for (int b = 0; b < fj; ++b)
+    for (int a = 0; a < fi; ++a) {
+      const auto [x, y] = to_local((i0 + static_cast<double>(a) / r) * h - centre.x_m,
+                                   (j0 + static_cast<double>(b) / r) * h - centre.y_m);
       if (const auto z = ground.height_m(x, y))
-        node_vertex[static_cast<std::size_t>(j) * ni + i] =
-            add_vertex(x, y, *z + relief_m[static_cast<std::size_t>(j) * ni + i]);
+        node_vertex[static_cast<std::size_t>(b) * fi + a] = add_vertex(x, y, *z + relief_at(a, b));
     }
-  for (int j = 0; j + 1 < nj; ++j)
-    for (int i = 0; i + 1 < ni; ++i) {
-      const std::uint32_t a = node_vertex[static_cast<std::size_t>(j) * ni + i],
-                          b = node_vertex[static_cast<std::size_t>(j) * ni + i + 1];
-      const std::uint32_t c = node_vertex[static_cast<std::size_t>(j + 1) * ni + i],
-                          d = node_vertex[static_cast<std::size_t>(j + 1) * ni + i + 1];
-      if (a != missing && b != missing && d != missing)
-        mesh.triangles.insert(mesh.triangles.end(), {a, b, d});
-      if (a != missing && d != missing && c != missing)
-        mesh.triangles.insert(mesh.triangles.end(), {a, d, c});
+  for (int b = 0; b + 1 < fj; ++b)
+    for (int a = 0; a + 1 < fi; ++a) {
+      const std::uint32_t p = node_vertex[static_cast<std::size_t>(b) * fi + a],
+                          q = node_vertex[static_cast<std::size_t>(b) * fi + a + 1];
+      const std::uint32_t c = node_vertex[static_cast<std::size_t>(b + 1) * fi + a],
+                          d = node_vertex[static_cast<std::size_t>(b + 1) * fi + a + 1];
+      if (p != missing && q != missing && d != missing)
+        mesh.triangles.insert(mesh.triangles.end(), {p, q, d});
+      if (p != missing && d != missing && c != missing)
+        mesh.triangles.insert(mesh.triangles.end(), {p, d, c});
     }
 
   // The base outside the lattice's region: its outline in the frame is a convex quadrilateral

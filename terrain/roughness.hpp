@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "terrain/ground_mesh.hpp"
@@ -38,8 +39,10 @@ class RoughnessField {
   // clipped to the rest. The relief tapers to nothing over the region's outer 2 correlation
   // lengths, so that the two meet without a step. At most `max_nodes` lattice nodes: a larger
   // region is shrunk about the origin (the lattice spacing, which defines the field, never
-  // changes).
-  GroundMesh roughen(const GroundMesh& base, const LocalFrame& frame, double half_size_m) const;
+  // changes). Where the base's own spacing `base_spacing_m` is finer than the lattice, the
+  // region is meshed that finely, so that the base's relief is kept.
+  GroundMesh roughen(const GroundMesh& base, const LocalFrame& frame, double half_size_m,
+                     double base_spacing_m = std::numeric_limits<double>::infinity()) const;
 
   static constexpr std::int64_t max_nodes = 512 * 512;
 
