@@ -60,6 +60,47 @@ void append_first_band(std::string& out, const std::vector<double>& values) {
   append_real(out, values.empty() ? std::nan("") : values.front());
 }
 
+using Ring = std::vector<std::array<double, 2>>;
+
+// RFC 7946 section 3.1.9: a ring that crosses the antimeridian is cut there into two polygons,
+// one each side, rather than drawn the long way round the globe. Longitudes are first made
+// continuous from the first vertex; a ring that then stays within [-180, 180] is kept whole.
+std::vector<Ring> split_at_antimeridian(const Ring& ring) {
+  Ring continuous = ring;
+  for (std::size_t i = 1; i < continuous.size(); ++i)
+    continuous[i][0] = continuous[i - 1][0] + std::remainder(ring[i][0] - ring[i - 1][0], 360.0);
+  double west = continuous[0][0], east = west;
+  for (const auto& p : continuous) {
+    west = std::min(west, p[0]);
+    east = std::max(east, p[0]);
+  }
+  if (west >= -180.0 && east <= 180.0) return {ring};
+  const double cut = east > 180.0 ? 180.0 : -180.0;
+  // Sutherland-Hodgman against the meridian `cut`, keeping one side and then the other.
+  auto clip = [&](bool keep_west) {
+    Ring out;
+    for (std::size_t i = 0; i + 1 < continuous.size(); ++i) {
+      const auto& a = continuous[i];
+      const auto& b = continuous[i + 1];
+      const bool a_in = keep_west ? a[0] <= cut : a[0] >= cut,
+                 b_in = keep_west ? b[0] <= cut : b[0] >= cut;
+      if (a_in) out.push_back(a);
+      if (a_in != b_in) out.push_back({cut, a[1] + (b[1] - a[1]) * (cut - a[0]) / (b[0] - a[0])});
+    }
+    if (out.size() >= 3) out.push_back(out.front());
+    // Back into [-180, 180]: the part beyond the cut moves by a turn.
+    const double shift = (keep_west == (cut > 0.0)) ? 0.0 : (cut > 0.0 ? -360.0 : 360.0);
+    for (auto& p : out) p[0] += shift;
+    return out;
+  };
+  std::vector<Ring> parts;
+  for (bool keep_west : {true, false}) {
+    Ring part = clip(keep_west);
+    if (part.size() >= 4) parts.push_back(std::move(part));
+  }
+  return parts;
+}
+
 }  // namespace
 
 struct GeojsonWriter::Impl {
@@ -96,18 +137,24 @@ struct GeojsonWriter::Impl {
         fail(place + ": a Polygon ring must be closed with at least 4 positions, got " +
              std::to_string(ring.size()));
       }
-      text += R"({"type":"Polygon","coordinates":[[)";
-      for (std::size_t i = 0; i < ring.size(); ++i) {
-        const auto [lon, lat] = ring[i];
-        if (!std::isfinite(lon) || !std::isfinite(lat))
+      for (std::size_t i = 0; i < ring.size(); ++i)
+        if (!std::isfinite(ring[i][0]) || !std::isfinite(ring[i][1]))
           fail(place + ": position " + std::to_string(i) + " is not finite");
-        text += i == 0 ? "[" : ",[";
-        append_coordinate(text, lon);
-        text += ',';
-        append_coordinate(text, lat);
-        text += ']';
+      const std::vector<Ring> parts = split_at_antimeridian(ring);
+      text += parts.size() == 1 ? R"({"type":"Polygon","coordinates":)"
+                                : R"({"type":"MultiPolygon","coordinates":[)";
+      for (std::size_t p = 0; p < parts.size(); ++p) {
+        text += p == 0 ? "[[" : ",[[";
+        for (std::size_t i = 0; i < parts[p].size(); ++i) {
+          text += i == 0 ? "[" : ",[";
+          append_coordinate(text, parts[p][i][0]);
+          text += ',';
+          append_coordinate(text, parts[p][i][1]);
+          text += ']';
+        }
+        text += "]]";
       }
-      text += "]]}";
+      text += parts.size() == 1 ? "}" : "]}";
     }
 
     // Names as in shots.nc: per-band metrics without their unit suffix.
@@ -155,7 +202,8 @@ struct GeojsonWriter::Impl {
     text += shot.n_peaks.empty() ? std::string("null") : std::to_string(shot.n_peaks.front());
     // GEDI L2A's usual few of rh0..rh100, named as GEDI names them.
     for (const int k : {25, 50, 75, 98, 100}) {
-      const bool known = !shot.rh_m.empty() && shot.rh_m.front().size() > static_cast<std::size_t>(k);
+      const bool known =
+          !shot.rh_m.empty() && shot.rh_m.front().size() > static_cast<std::size_t>(k);
       real(("rh" + std::to_string(k)).c_str(), known ? shot.rh_m.front()[k] : std::nan(""));
     }
     real("cover_true", shot.cover_true);

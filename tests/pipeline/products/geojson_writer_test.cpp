@@ -102,10 +102,10 @@ ShotRecord make_flagged_record(int record) {
   shot.rx_energy_canopy_J.clear();
   shot.rx_energy_ground_J.clear();
   shot.reflectance.clear();
-  for (auto field : {&ShotRecord::energy_tr_J, &ShotRecord::energy_cr_J, &ShotRecord::energy_gr_J,
-                     &ShotRecord::waveform_index, &ShotRecord::sig_begin_m, &ShotRecord::sig_end_m,
-                     &ShotRecord::centroid_m, &ShotRecord::ground_elev_est_m,
-                     &ShotRecord::canopy_height_est_m})
+  for (auto field :
+       {&ShotRecord::energy_tr_J, &ShotRecord::energy_cr_J, &ShotRecord::energy_gr_J,
+        &ShotRecord::waveform_index, &ShotRecord::sig_begin_m, &ShotRecord::sig_end_m,
+        &ShotRecord::centroid_m, &ShotRecord::ground_elev_est_m, &ShotRecord::canopy_height_est_m})
     (shot.*field).clear();
   shot.n_peaks.clear();
   shot.rh_m.clear();
@@ -194,13 +194,40 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
   EXPECT_TRUE(crs->IsGeographic());
 
   const OGRFeatureDefn* definition = layer->GetLayerDefn();
-  for (const char* name :
-       {"time", "lat", "lon", "elev", "sc_lat", "sc_lon", "sc_alt", "off_nadir_deg", "range_m",
-        "slope_deg", "aspect_deg", "elev_bin0", "elev_lastbin", "rx_energy", "rx_energy_canopy",
-        "rx_energy_ground", "reflectance", "energy_tr", "energy_cr", "energy_gr",
-        "waveform_index", "sig_begin_m", "sig_end_m", "centroid_m", "ground_elev_est",
-        "canopy_height_est", "rh25", "rh50", "rh75", "rh98", "rh100", "cover_true", "pai_true",
-        "canopy_height_true"}) {
+  for (const char* name : {"time",
+                           "lat",
+                           "lon",
+                           "elev",
+                           "sc_lat",
+                           "sc_lon",
+                           "sc_alt",
+                           "off_nadir_deg",
+                           "range_m",
+                           "slope_deg",
+                           "aspect_deg",
+                           "elev_bin0",
+                           "elev_lastbin",
+                           "rx_energy",
+                           "rx_energy_canopy",
+                           "rx_energy_ground",
+                           "reflectance",
+                           "energy_tr",
+                           "energy_cr",
+                           "energy_gr",
+                           "waveform_index",
+                           "sig_begin_m",
+                           "sig_end_m",
+                           "centroid_m",
+                           "ground_elev_est",
+                           "canopy_height_est",
+                           "rh25",
+                           "rh50",
+                           "rh75",
+                           "rh98",
+                           "rh100",
+                           "cover_true",
+                           "pai_true",
+                           "canopy_height_true"}) {
     const int index = definition->GetFieldIndex(name);
     ASSERT_GE(index, 0) << name;
     EXPECT_EQ(definition->GetFieldDefn(index)->GetType(), OFTReal) << name;
@@ -258,10 +285,13 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("sig_end_m"), expected.sig_end_m[0]);
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("centroid_m"), expected.centroid_m[0]);
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("ground_elev_est"), expected.ground_elev_est_m[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("canopy_height_est"), expected.canopy_height_est_m[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("canopy_height_est"),
+                     expected.canopy_height_est_m[0]);
     EXPECT_EQ(feature.GetFieldAsInteger("n_peaks"), expected.n_peaks[0]);
     for (int k : {25, 50, 75, 98, 100})
-      EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble(("rh" + std::to_string(k)).c_str()), expected.rh_m[0][k]) << k;
+      EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble(("rh" + std::to_string(k)).c_str()),
+                       expected.rh_m[0][k])
+          << k;
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("cover_true"), expected.cover_true);
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("pai_true"), expected.pai_true);
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("canopy_height_true"), expected.canopy_height_true_m);
@@ -277,6 +307,47 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
     EXPECT_TRUE(flagged.IsFieldNull(definition->GetFieldIndex(name))) << name;
   }
   EXPECT_FALSE(flagged.IsFieldNull(definition->GetFieldIndex("lat")));
+}
+
+// RFC 7946 section 3.1.9: a footprint across the antimeridian is cut there into a MultiPolygon
+// whose parts lie either side, together the octagon's area; one clear of it stays a Polygon.
+TEST_F(GeojsonWriterTest, FootprintAcrossTheAntimeridianIsCut) {
+  RunInfo info = make_info();
+  info.shots = 2;
+  {
+    GeojsonWriter writer(file(), info);
+    ShotRecord across = make_record(0), clear = make_record(1);
+    across.footprint_lonlat = octagon(179.9998, 12.0);
+    for (auto& p : across.footprint_lonlat)
+      if (p[0] > 180.0) p[0] -= 360.0;  // as the simulation gives it: within [-180, 180]
+    clear.footprint_lonlat = octagon(179.99, 12.0);
+    writer.write(0, across);
+    writer.write(1, clear);
+    writer.finish(RunStats{});
+  }
+  GDALDatasetUniquePtr dataset(GDALDataset::FromHandle(
+      GDALOpenEx(file().c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+  ASSERT_TRUE(dataset);
+  OGRLayer* layer = dataset->GetLayer(0);
+  std::vector<OGRFeatureUniquePtr> features;
+  for (auto& feature : *layer) features.emplace_back(feature.release());
+  ASSERT_EQ(features.size(), 2u);
+  const OGRGeometry* cut = features[0]->GetGeometryRef();
+  ASSERT_EQ(wkbFlatten(cut->getGeometryType()), wkbMultiPolygon);
+  const OGRMultiPolygon* parts = cut->toMultiPolygon();
+  ASSERT_EQ(parts->getNumGeometries(), 2);
+  OGREnvelope west, east;
+  parts->getGeometryRef(0)->getEnvelope(&west);
+  parts->getGeometryRef(1)->getEnvelope(&east);
+  EXPECT_NEAR(west.MaxX, 180.0, 1e-9);
+  EXPECT_NEAR(east.MinX, -180.0, 1e-9);
+  EXPECT_GT(west.MinX, 179.999);
+  EXPECT_LT(east.MaxX, -179.999);
+  // The octagon's area: 8/2 sin(45 deg) a b with its semi-axes.
+  const double area = 4.0 * std::sin(std::numbers::pi / 4.0) * 0.00038123456789 * 0.00031987654321;
+  EXPECT_NEAR(parts->getGeometryRef(0)->get_Area() + parts->getGeometryRef(1)->get_Area(), area,
+              1e-6 * area + 1e-14);
+  EXPECT_EQ(wkbFlatten(features[1]->GetGeometryRef()->getGeometryType()), wkbPolygon);
 }
 
 TEST_F(GeojsonWriterTest, TextIsRfc7946) {
