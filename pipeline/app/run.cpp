@@ -18,10 +18,50 @@
 
 namespace glaswave {
 
+OutputDirectory::OutputDirectory(std::filesystem::path path) : path_(std::move(path)) {
+  std::error_code error;
+  if (std::filesystem::exists(path_, error))
+    throw config_error(path_.string(), "output directory exists; remove it or choose another --out");
+  std::filesystem::create_directories(path_, error);
+  if (error) throw config_error(path_.string(), "cannot create the output directory: " + error.message());
+}
+
+OutputDirectory::~OutputDirectory() {
+  std::error_code ignored;
+  if (!kept_ && std::filesystem::is_empty(path_, ignored)) std::filesystem::remove(path_, ignored);
+}
+
+std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track, std::int64_t first,
+                              std::int64_t last, int threads, const RecordConsumer& consume,
+                              const ProgressCallback& progress) {
+  // More threads than cores would only wait for each other (and TBB would warn on stderr).
+  const int cores = tbb::this_task_arena::max_concurrency();
+  threads = threads > 0 ? std::min(threads, cores) : cores;
+  tbb::task_arena arena(threads);
+  // Batches keep memory bounded on long tracks and hand records on in record order.
+  const std::int64_t batch_size = std::max<std::int64_t>(8, 4 * threads);
+  std::atomic<std::int64_t> ray_queries{0};
+  for (std::int64_t batch_first = first; batch_first < last; batch_first += batch_size) {
+    const std::int64_t batch_last = std::min(batch_first + batch_size, last);
+    const std::vector<Footprint> footprints = track.footprints(batch_first, batch_last);
+    std::vector<ShotRecord> records(footprints.size());
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t{0}, footprints.size(), [&](std::size_t i) {
+        std::int64_t queries = 0;
+        records[i] = simulator.simulate(footprints[i], &queries);
+        ray_queries += queries;
+      });
+    });
+    for (std::size_t i = 0; i < records.size(); ++i)
+      consume(batch_first + static_cast<std::int64_t>(i), records[i]);
+    if (progress) progress(batch_last - first, last - first);
+  }
+  return ray_queries;
+}
+
 RunSummary run_simulation(const Config& config, const RunRequest& request,
                           const ProgressCallback& progress) {
   const auto started = std::chrono::steady_clock::now();
-  namespace fs = std::filesystem;
 
   const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
   // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
@@ -44,24 +84,7 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
         "/output/plots",
         "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
         "and output.geojson");
-  std::error_code exists_error;
-  if (fs::exists(request.out_dir, exists_error))
-    throw config_error(request.out_dir.string(),
-                       "output directory exists; remove it or choose another --out");
-  std::error_code create_error;
-  fs::create_directories(request.out_dir, create_error);
-  if (create_error)
-    throw config_error(request.out_dir.string(),
-                       "cannot create the output directory: " + create_error.message());
-  // A run that fails leaves no empty output directory behind (the writers remove their parts).
-  struct RemoveIfEmpty {
-    fs::path dir;
-    bool keep = false;
-    ~RemoveIfEmpty() {
-      std::error_code ignored;
-      if (!keep && fs::is_empty(dir, ignored)) fs::remove(dir, ignored);
-    }
-  } cleanup{request.out_dir};
+  OutputDirectory directory(request.out_dir);
 
   // The products record what the DEM's heights were measured from, as the terrain chose it (its
   // own vertical CRS wins over terrain.vertical_datum).
@@ -77,37 +100,19 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   if (config.output.geojson)
     geojson = std::make_unique<GeojsonWriter>(request.out_dir / "footprints.geojson", info);
 
-  // More threads than cores would only wait for each other (and TBB would warn on stderr).
-  const int cores = tbb::this_task_arena::max_concurrency();
-  const int threads = request.threads > 0 ? std::min(request.threads, cores) : cores;
-  tbb::task_arena arena(threads);
-  // Batches keep memory bounded on long tracks and let records be written in shot order.
-  const std::int64_t batch_size = std::max<std::int64_t>(8, 4 * threads);
   RunSummary summary;
-  std::atomic<std::int64_t> ray_queries{0};
-  for (std::int64_t batch_first = first; batch_first < last; batch_first += batch_size) {
-    const std::int64_t batch_last = std::min(batch_first + batch_size, last);
-    const std::vector<Footprint> footprints = track.footprints(batch_first, batch_last);
-    std::vector<ShotRecord> records(footprints.size());
-    arena.execute([&] {
-      tbb::parallel_for(std::size_t{0}, footprints.size(), [&](std::size_t i) {
-        std::int64_t queries = 0;
-        records[i] = simulator.simulate(footprints[i], &queries);
-        ray_queries += queries;
-      });
-    });
-    for (std::size_t i = 0; i < records.size(); ++i) {
-      const std::int64_t index = batch_first - first + static_cast<std::int64_t>(i);
-      if (netcdf) netcdf->write(index, records[i]);
-      if (geojson) geojson->write(index, records[i]);
-      if (records[i].quality_flag != quality_good) ++summary.shots_flagged;
-    }
-    if (progress) progress(batch_last - first, last - first);
-  }
+  summary.ray_queries = simulate_records(simulator, track, first, last, request.threads,
+                                         [&](std::int64_t record, const ShotRecord& shot) {
+                                           const std::int64_t index = record - first;
+                                           if (netcdf) netcdf->write(index, shot);
+                                           if (geojson) geojson->write(index, shot);
+                                           if (shot.quality_flag != quality_good)
+                                             ++summary.shots_flagged;
+                                         },
+                                         progress);
 
   summary.shots = last - first;
   summary.vertical_datum = terrain->vertical_datum().description;
-  summary.ray_queries = ray_queries;
   summary.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   RunStats stats;
@@ -116,7 +121,7 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   stats.shots_flagged = summary.shots_flagged;
   if (netcdf) netcdf->finish(stats);
   if (geojson) geojson->finish(stats);
-  cleanup.keep = true;
+  directory.keep();
   // Plots are drawn from the finished products; a failure there leaves the products whole.
   if (config.output.plots) write_plots(request.out_dir);
   return summary;

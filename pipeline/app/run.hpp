@@ -7,6 +7,8 @@
 #include <optional>
 #include <string>
 
+#include "footprints/track.hpp"
+#include "pipeline/app/shot_simulation.hpp"
 #include "pipeline/config/config.hpp"
 
 namespace glaswave {
@@ -28,6 +30,29 @@ struct RunSummary {
 
 // Called after each batch of shots with (shots done, shots in all).
 using ProgressCallback = std::function<void(std::int64_t, std::int64_t)>;
+// Receives each simulated record with its index in the track.
+using RecordConsumer = std::function<void(std::int64_t, const ShotRecord&)>;
+
+// Simulates records [first, last) of the track in batches on `threads` threads (0: every core),
+// handing each record to `consume` in record order. Returns the ray queries made.
+std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track, std::int64_t first,
+                              std::int64_t last, int threads, const RecordConsumer& consume,
+                              const ProgressCallback& progress);
+
+// A run's output directory: refused when it exists, made, and removed again if the run leaves
+// it empty (a run that fails: the writers remove their parts).
+class OutputDirectory {
+ public:
+  explicit OutputDirectory(std::filesystem::path path);
+  ~OutputDirectory();
+  OutputDirectory(const OutputDirectory&) = delete;
+  OutputDirectory& operator=(const OutputDirectory&) = delete;
+  void keep() { kept_ = true; }
+
+ private:
+  std::filesystem::path path_;
+  bool kept_ = false;
+};
 
 // Simulates the shots and writes the products under request.out_dir, which must not exist.
 // On failure nothing is left under a product's final name.
