@@ -12,6 +12,7 @@
 #include "canopy/forest.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/app/run.hpp"
+#include "pipeline/app/sweep.hpp"
 #include "terrain/error.hpp"
 #include "terrain/terrain.hpp"
 
@@ -181,14 +182,25 @@ int run_command_line(int argc, char** argv) {
   check_command->add_option("--set", arguments.overrides,
                             "override a configuration key: KEY=VALUE");
 
-  // Commands of the contract that a later version brings: named, so that asking for one says so.
+  std::vector<std::string> variations;
+  CLI::App* sweep_command = app.add_subcommand(
+      "sweep", "sensitivity study: the base case and each varied value, one key at a time");
+  sweep_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
+  sweep_command->add_option("--vary", variations, "a key and its values: KEY=V1,V2,...")
+      ->required();
+  sweep_command->add_option("--out", arguments.out_dir,
+                            "output directory (default out/<config name>-sweep)");
+  sweep_command->add_option("--set", arguments.overrides,
+                            "override a configuration key in every case");
+  sweep_command
+      ->add_option("--threads", arguments.threads, "threads (0: every core; at most the cores)")
+      ->check(CLI::Range(0, 65536));
+
+  // A command of the contract that a later version brings: named, so that asking for it says so.
   std::vector<CLI::App*> planned;
-  for (const auto& [name, description] :
-       {std::pair{"sweep", "sensitivity study, one key at a time (not available yet)"},
-        std::pair{"brf", "scene reflectance under the sun (not available yet)"}}) {
-    planned.push_back(app.add_subcommand(name, description));
-    planned.back()->allow_extras();
-  }
+  planned.push_back(
+      app.add_subcommand("brf", "scene reflectance under the sun (not available yet)"));
+  planned.back()->allow_extras();
 
   try {
     app.parse(argc, argv);
@@ -204,6 +216,23 @@ int run_command_line(int argc, char** argv) {
         throw config_error(command->get_name(),
                            "this command is not available in this version yet");
     if (*run_command) return run(arguments, joined(argc, argv));
+    if (*sweep_command) {
+      SweepRequest request;
+      request.config_file = arguments.config_file;
+      request.overrides = arguments.overrides;
+      for (const std::string& text : variations)
+        request.variations.push_back(parse_variation(text));
+      request.out_dir =
+          arguments.out_dir.empty()
+              ? std::filesystem::path("out") /
+                    (std::filesystem::path(arguments.config_file).stem().string() + "-sweep")
+              : std::filesystem::path(arguments.out_dir);
+      request.threads = arguments.threads;
+      run_sweep(request);
+      std::printf("glaswave: sensitivity.csv and sensitivity.md in %s\n",
+                  request.out_dir.string().c_str());
+      return 0;
+    }
     return check(arguments);
   } catch (const Error& e) {
     std::fprintf(stderr, "glaswave: error: %s\n", e.what());

@@ -21,9 +21,11 @@ namespace glaswave {
 OutputDirectory::OutputDirectory(std::filesystem::path path) : path_(std::move(path)) {
   std::error_code error;
   if (std::filesystem::exists(path_, error))
-    throw config_error(path_.string(), "output directory exists; remove it or choose another --out");
+    throw config_error(path_.string(),
+                       "output directory exists; remove it or choose another --out");
   std::filesystem::create_directories(path_, error);
-  if (error) throw config_error(path_.string(), "cannot create the output directory: " + error.message());
+  if (error)
+    throw config_error(path_.string(), "cannot create the output directory: " + error.message());
 }
 
 OutputDirectory::~OutputDirectory() {
@@ -31,9 +33,9 @@ OutputDirectory::~OutputDirectory() {
   if (!kept_ && std::filesystem::is_empty(path_, ignored)) std::filesystem::remove(path_, ignored);
 }
 
-std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track, std::int64_t first,
-                              std::int64_t last, int threads, const RecordConsumer& consume,
-                              const ProgressCallback& progress) {
+std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track,
+                              std::int64_t first, std::int64_t last, int threads,
+                              const RecordConsumer& consume, const ProgressCallback& progress) {
   // More threads than cores would only wait for each other (and TBB would warn on stderr).
   const int cores = tbb::this_task_arena::max_concurrency();
   threads = threads > 0 ? std::min(threads, cores) : cores;
@@ -101,15 +103,15 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
     geojson = std::make_unique<GeojsonWriter>(request.out_dir / "footprints.geojson", info);
 
   RunSummary summary;
-  summary.ray_queries = simulate_records(simulator, track, first, last, request.threads,
-                                         [&](std::int64_t record, const ShotRecord& shot) {
-                                           const std::int64_t index = record - first;
-                                           if (netcdf) netcdf->write(index, shot);
-                                           if (geojson) geojson->write(index, shot);
-                                           if (shot.quality_flag != quality_good)
-                                             ++summary.shots_flagged;
-                                         },
-                                         progress);
+  summary.ray_queries = simulate_records(
+      simulator, track, first, last, request.threads,
+      [&](std::int64_t record, const ShotRecord& shot) {
+        const std::int64_t index = record - first;
+        if (netcdf) netcdf->write(index, shot);
+        if (geojson) geojson->write(index, shot);
+        if (shot.quality_flag != quality_good) ++summary.shots_flagged;
+      },
+      progress);
 
   summary.shots = last - first;
   summary.vertical_datum = terrain->vertical_datum().description;

@@ -35,9 +35,9 @@ using RecordConsumer = std::function<void(std::int64_t, const ShotRecord&)>;
 
 // Simulates records [first, last) of the track in batches on `threads` threads (0: every core),
 // handing each record to `consume` in record order. Returns the ray queries made.
-std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track, std::int64_t first,
-                              std::int64_t last, int threads, const RecordConsumer& consume,
-                              const ProgressCallback& progress);
+std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track,
+                              std::int64_t first, std::int64_t last, int threads,
+                              const RecordConsumer& consume, const ProgressCallback& progress);
 
 // A run's output directory: refused when it exists, made, and removed again if the run leaves
 // it empty (a run that fails: the writers remove their parts).

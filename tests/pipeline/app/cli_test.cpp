@@ -10,7 +10,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 #include "tests/pipeline/app/app_test_support.hpp"
@@ -137,9 +139,10 @@ TEST_F(Cli, RunWritesProductsThatReadBack) {
 
 // In a forest with rough ground and every scattering order, the hardest case for determinism.
 TEST_F(Cli, ResultsDoNotDependOnThreadsOrShotSplits) {
-  const std::string config = write_config({{"canopy", {{"cover", 0.6}}},
-                                           {"terrain", {{"roughness", {{"rms_m", 0.3}, {"correlation_m", 3.0}}}}},
-                                           {"output", {{"per_order", true}}}});
+  const std::string config =
+      write_config({{"canopy", {{"cover", 0.6}}},
+                    {"terrain", {{"roughness", {{"rms_m", 0.3}, {"correlation_m", 3.0}}}}},
+                    {"output", {{"per_order", true}}}});
   ASSERT_EQ(run_glaswave("run " + config + " --quiet --threads 1 --out " + (dir_ / "one").string())
                 .status,
             0);
@@ -217,6 +220,63 @@ TEST_F(Cli, ExistingOutputDirectoryIsRefusedAndKept) {
   EXPECT_FALSE(fs::exists(dir_ / "out" / "shots.nc"));
 }
 
+// PRODUCT.md section 2's sweep: sensitivity.csv with its columns, a base row per band with
+// empty percentages, a row per value and band; the seed's signs (PHYSICS.md section 7) for PAI
+// and soil reflectance over a homogeneous layer 10 m above the ground (canopy and ground apart
+// in the waveform, as the seed's crowns are); sensitivity.md as the seed's Table 3.
+TEST_F(Cli, SweepWritesTheSensitivityTable) {
+  const std::string config = write_config({{"canopy",
+                                            {{"crown_shape", "layer"},
+                                             {"crown_base_m", {10.0, 10.0}},
+                                             {"crown_half_height_m", 6.0},
+                                             {"dbh_m", 0.0}}},
+                                           {"track", {{"shots", 2}}}});
+  const CommandOutcome sweep = run_glaswave(
+      "sweep " + config + " --vary canopy.pai=1,5 --vary terrain.soil_reflectance=0.3 --out " +
+      (dir_ / "sweep").string());
+  ASSERT_EQ(sweep.status, 0) << sweep.output;
+  std::ifstream csv(dir_ / "sweep" / "sensitivity.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "key,value,band,tr,cr,gr,tr_pct,cr_pct,gr_pct");
+  std::map<std::string, std::array<double, 3>> change_1064;  // "key=value" -> TR, CR, GR %
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    std::vector<std::string> fields;
+    std::stringstream split(line);
+    for (std::string field; std::getline(split, field, ',');) fields.push_back(field);
+    if (fields[0] == "base") {
+      EXPECT_EQ(line.substr(line.size() - 3), ",,,") << line;
+      continue;
+    }
+    ASSERT_EQ(fields.size(), 9u) << line;
+    if (fields[2] == "1064")
+      change_1064[fields[0] + "=" + fields[1]] = {std::stod(fields[6]), std::stod(fields[7]),
+                                                  std::stod(fields[8])};
+  }
+  EXPECT_EQ(rows, 2 * (1 + 3));                    // two bands: the base and three cases
+  EXPECT_LT(change_1064["canopy.pai=1"][1], 0.0);  // less foliage: less canopy return...
+  EXPECT_GT(change_1064["canopy.pai=1"][2], 0.0);  // ... more ground return
+  EXPECT_GT(change_1064["canopy.pai=5"][1], 0.0);
+  EXPECT_LT(change_1064["canopy.pai=5"][2], 0.0);
+  EXPECT_GT(change_1064["terrain.soil_reflectance=0.3"][2], 50.0);  // brighter soil: GR up
+  EXPECT_GT(change_1064["terrain.soil_reflectance=0.3"][0], 0.0);
+  std::ifstream md(dir_ / "sweep" / "sensitivity.md");
+  std::stringstream table;
+  table << md.rdbuf();
+  EXPECT_NE(table.str().find("| Parameter | Value | TR (%) | CR (%) | GR (%) |"),
+            std::string::npos);
+  EXPECT_NE(table.str().find("| canopy.pai | 3.0 (base) | - | - | - |"), std::string::npos)
+      << table.str();
+  // A bad value is refused before anything is simulated.
+  const CommandOutcome bad =
+      run_glaswave("sweep " + config + " --vary canopy.pai=1,-2 --out " + (dir_ / "bad").string());
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.output.find("/canopy/pai: must be >= 0, got -2"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
+
 TEST_F(Cli, CheckHelpAndVersion) {
   const CommandOutcome check = run_glaswave("check " + write_config());
   EXPECT_EQ(check.status, 0) << check.output;
@@ -229,11 +289,11 @@ TEST_F(Cli, CheckHelpAndVersion) {
   EXPECT_EQ(version.status, 0);
   EXPECT_NE(version.output.find("glaswave " GLASWAVE_VERSION), std::string::npos) << version.output;
   // The contract's later commands are named and refused, not mistaken for typos.
-  const CommandOutcome sweep = run_glaswave("sweep " + write_config() + " --vary canopy.pai=1,2");
-  EXPECT_EQ(sweep.status, 2);
-  EXPECT_NE(sweep.output.find("glaswave: error: sweep: this command is not available"),
+  const CommandOutcome brf = run_glaswave("brf " + write_config());
+  EXPECT_EQ(brf.status, 2);
+  EXPECT_NE(brf.output.find("glaswave: error: brf: this command is not available"),
             std::string::npos)
-      << sweep.output;
+      << brf.output;
   const CommandOutcome bad = run_glaswave("fly");
   EXPECT_EQ(bad.status, 2);
   EXPECT_EQ(bad.output.rfind("glaswave: error: ", 0), 0u) << bad.output;

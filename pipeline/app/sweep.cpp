@@ -1,0 +1,182 @@
+// The sensitivity sweep: cases simulated in turn, their mean returns written as CSV and Markdown.
+#include "pipeline/app/sweep.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+#include "pipeline/app/run.hpp"
+#include "pipeline/products/atomic_file.hpp"
+#include "terrain/error.hpp"
+
+namespace glaswave {
+namespace {
+
+struct CaseReturns {
+  std::string key, value;          // empty key: the base case
+  std::vector<double> tr, cr, gr;  // per band, mean over the track's good shots (J)
+};
+
+CaseReturns simulate_case(const SweepRequest& request, const std::string& key,
+                          const std::string& value) {
+  std::vector<std::string> overrides = request.overrides;
+  if (!key.empty()) overrides.push_back(key + "=" + value);
+  const Config config = load_config(request.config_file, overrides);
+  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
+  const Track track(config.track, *terrain);
+  const ShotSimulator simulator(config, *terrain);
+  const std::size_t bands = config.sensor.bands.size();
+  CaseReturns returns{key, value, std::vector<double>(bands, 0.0), std::vector<double>(bands, 0.0),
+                      std::vector<double>(bands, 0.0)};
+  std::vector<std::int64_t> counted(bands, 0);
+  simulate_records(
+      simulator, track, 0, track.size(), request.threads,
+      [&](std::int64_t, const ShotRecord& shot) {
+        for (std::size_t b = 0; b < bands; ++b) {
+          if (shot.quality_flag != quality_good || !std::isfinite(shot.energy_cr_J[b]) ||
+              !std::isfinite(shot.energy_gr_J[b]))
+            continue;
+          returns.tr[b] += shot.energy_tr_J[b];
+          returns.cr[b] += shot.energy_cr_J[b];
+          returns.gr[b] += shot.energy_gr_J[b];
+          ++counted[b];
+        }
+      },
+      nullptr);
+  for (std::size_t b = 0; b < bands; ++b) {
+    const double n = counted[b] > 0 ? static_cast<double>(counted[b]) : std::nan("");
+    returns.tr[b] /= n;
+    returns.cr[b] /= n;
+    returns.gr[b] /= n;
+  }
+  return returns;
+}
+
+// The % deviation from the base case, one decimal; signed as the seed's table is for `signed_`.
+std::string percent(double value, double base, bool signed_ = false) {
+  double change = 100.0 * (value / base - 1.0);
+  if (std::abs(change) < 0.05) change = 0.0;  // no "-0.0"
+  char text[32];
+  std::snprintf(text, sizeof text, signed_ && change != 0.0 ? "%+.1f" : "%.1f", change);
+  return text;
+}
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+// A CSV field: quoted when it holds a comma or a quote.
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  AtomicFile file(path);
+  std::FILE* out = std::fopen(file.part_path().c_str(), "w");
+  if (!out) throw run_error(path.string(), "cannot write");
+  const bool written = std::fwrite(text.data(), 1, text.size(), out) == text.size();
+  if (std::fclose(out) != 0 || !written) throw run_error(path.string(), "cannot write");
+  file.commit();
+}
+
+}  // namespace
+
+Variation parse_variation(const std::string& text) {
+  const auto equals = text.find('=');
+  if (equals == std::string::npos || equals == 0)
+    throw config_error("--vary", "expected KEY=V1,V2,..., got \"" + text + "\"");
+  Variation variation{text.substr(0, equals), {}};
+  std::string value;
+  int depth = 0;
+  bool quoted = false;
+  for (char c : text.substr(equals + 1)) {
+    if (c == '"') quoted = !quoted;
+    if (!quoted && (c == '[' || c == '{')) ++depth;
+    if (!quoted && (c == ']' || c == '}')) --depth;
+    if (c == ',' && depth == 0 && !quoted) {
+      variation.values.push_back(value);
+      value.clear();
+    } else {
+      value += c;
+    }
+  }
+  variation.values.push_back(value);
+  for (const std::string& v : variation.values)
+    if (v.empty()) throw config_error("--vary", "an empty value in \"" + text + "\"");
+  return variation;
+}
+
+void run_sweep(const SweepRequest& request) {
+  if (request.variations.empty()) throw config_error("--vary", "give at least one KEY=V1,V2,...");
+  // Every case is checked before any is simulated: a typo in the last value costs nothing.
+  const Config base_config = load_config(request.config_file, request.overrides);
+  for (const Variation& variation : request.variations)
+    for (const std::string& value : variation.values) {
+      std::vector<std::string> overrides = request.overrides;
+      overrides.push_back(variation.key + "=" + value);
+      load_config(request.config_file, overrides);
+    }
+
+  OutputDirectory directory(request.out_dir);
+  const CaseReturns base = simulate_case(request, "", "");
+  std::vector<CaseReturns> cases;
+  for (const Variation& variation : request.variations)
+    for (const std::string& value : variation.values)
+      cases.push_back(simulate_case(request, variation.key, value));
+
+  const std::vector<Band>& bands = base_config.sensor.bands;
+  std::ostringstream csv;
+  csv << "key,value,band,tr,cr,gr,tr_pct,cr_pct,gr_pct\n";
+  for (std::size_t b = 0; b < bands.size(); ++b)
+    csv << "base,," << csv_field(bands[b].name) << ',' << number(base.tr[b]) << ','
+        << number(base.cr[b]) << ',' << number(base.gr[b]) << ",,,\n";
+  for (const CaseReturns& c : cases)
+    for (std::size_t b = 0; b < bands.size(); ++b)
+      csv << csv_field(c.key) << ',' << csv_field(c.value) << ',' << csv_field(bands[b].name) << ','
+          << number(c.tr[b]) << ',' << number(c.cr[b]) << ',' << number(c.gr[b]) << ','
+          << percent(c.tr[b], base.tr[b]) << ',' << percent(c.cr[b], base.cr[b]) << ','
+          << percent(c.gr[b], base.gr[b]) << '\n';
+
+  // The seed's Table 3: per band, each key's values with the base case's own value as "-".
+  std::ostringstream md;
+  for (std::size_t b = 0; b < bands.size(); ++b) {
+    md << "## Band " << bands[b].name << "\n\n"
+       << "Variation from the base case, mean over the track's shots; returns partitioned by "
+          "position in the "
+          "waveform.\n\n"
+       << "| Parameter | Value | TR (%) | CR (%) | GR (%) |\n|---|---|---|---|---|\n";
+    for (const Variation& variation : request.variations) {
+      std::string path = variation.key;
+      std::replace(path.begin(), path.end(), '.', '/');
+      path.insert(path.begin(), '/');
+      const nlohmann::json::json_pointer pointer(path);
+      const std::string base_value =
+          base_config.resolved.contains(pointer) ? base_config.resolved.at(pointer).dump() : "base";
+      bool first_row = true;
+      auto row = [&](const std::string& value, const std::string& tr, const std::string& cr,
+                     const std::string& gr) {
+        md << "| " << (first_row ? variation.key : "") << " | " << value << " | " << tr << " | "
+           << cr << " | " << gr << " |\n";
+        first_row = false;
+      };
+      row(base_value + " (base)", "-", "-", "-");
+      for (const CaseReturns& c : cases)
+        if (c.key == variation.key)
+          row(c.value, percent(c.tr[b], base.tr[b], true), percent(c.cr[b], base.cr[b], true),
+              percent(c.gr[b], base.gr[b], true));
+    }
+    md << "\n";
+  }
+  write_text(request.out_dir / "sensitivity.csv", csv.str());
+  write_text(request.out_dir / "sensitivity.md", md.str());
+  directory.keep();
+}
+
+}  // namespace glaswave
