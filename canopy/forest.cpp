@@ -16,7 +16,7 @@
 namespace glaswave {
 namespace {
 
-constexpr double metres_per_degree = 111132.954;  // along the meridian; ample for a search radius
+constexpr double metres_per_degree = metres_per_degree_latitude;  // ample for a search radius
 
 std::uint64_t kind_seed(std::uint64_t seed, std::size_t kind) {
   return seed + 0x9e3779b97f4a7c15ULL * kind;

@@ -1,6 +1,7 @@
 // Deterministic random stands, tile by tile.
 #include "canopy/stand.hpp"
 
+#include <GeographicLib/Constants.hpp>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -15,9 +16,7 @@ namespace {
 
 constexpr double pi = std::numbers::pi;
 constexpr double tile_m = 50.0;
-constexpr double wgs84_a_m = 6378137.0;
-constexpr double wgs84_e2 = 6.69437999014e-3;
-constexpr double metres_per_degree = 111132.954;  // along the meridian, mean
+constexpr double metres_per_degree = metres_per_degree_latitude;
 
 constexpr auto mix = mix_bits;
 
@@ -75,8 +74,11 @@ std::vector<Tree> Stand::trees_near(double lat_deg, double lon_deg, double radiu
     const double reach_lon_deg = radius_m / (metres_per_degree * cos_lat) + tile_lon_deg;
     // The tile's true area, from the ellipsoid's radii of curvature at its centre.
     const double s2 = std::sin(row_lat_deg * deg) * std::sin(row_lat_deg * deg);
-    const double meridian_m = wgs84_a_m * (1.0 - wgs84_e2) / std::pow(1.0 - wgs84_e2 * s2, 1.5);
-    const double normal_m = wgs84_a_m / std::sqrt(1.0 - wgs84_e2 * s2);
+    const double a_m = GeographicLib::Constants::WGS84_a();
+    const double e2 =
+        GeographicLib::Constants::WGS84_f() * (2.0 - GeographicLib::Constants::WGS84_f());
+    const double meridian_m = a_m * (1.0 - e2) / std::pow(1.0 - e2 * s2, 1.5);
+    const double normal_m = a_m / std::sqrt(1.0 - e2 * s2);
     const double tile_area_m2 =
         meridian_m * tile_lat_deg * deg * normal_m * cos_lat * tile_lon_deg * deg;
     const auto col_first =

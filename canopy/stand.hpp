@@ -11,6 +11,9 @@
 
 namespace glaswave {
 
+// Mean length of a degree of latitude along the meridian (m): tiles and search radii in degrees.
+constexpr double metres_per_degree_latitude = 111132.954;
+
 struct Tree {
   double lat_deg = 0.0;
   double lon_deg = 0.0;

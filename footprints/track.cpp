@@ -206,22 +206,4 @@ Footprint Track::locate_shot(std::int64_t shot) const {
   return f;
 }
 
-std::int64_t track_length(const TrackSettings& track) {
-  switch (track.type) {
-    case TrackType::points:
-      return static_cast<std::int64_t>(track.points.size());
-    case TrackType::ephemeris:
-      return static_cast<std::int64_t>(read_ephemeris(track.ephemeris).size());
-    case TrackType::pass:
-    case TrackType::orbit:
-      break;
-  }
-  return track.shots;
-}
-
-std::vector<Footprint> plan_track(const TrackSettings& track, const Terrain& terrain,
-                                  std::int64_t first, std::int64_t last) {
-  return Track(track, terrain).footprints(first, last);
-}
-
 }  // namespace glaswave

@@ -81,14 +81,4 @@ class Track {
   double pass_spacing_m_ = 0.0;           // pass
 };
 
-// The footprints of records [first, last) of Track(track, terrain) (last clamped to its size).
-// A convenience for a few shots: it plans the whole track at each call.
-std::vector<Footprint> plan_track(const TrackSettings& track, const Terrain& terrain,
-                                  std::int64_t first, std::int64_t last);
-
-// The length of the track's shot sequence, Track::sequence_length(), known without a terrain:
-// an upper bound on its records (an orbit keeps only the shots on the terrain). An ephemeris
-// file is read to count its rows.
-std::int64_t track_length(const TrackSettings& track);
-
 }  // namespace glaswave

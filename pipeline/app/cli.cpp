@@ -154,16 +154,24 @@ int run_command_line(int argc, char** argv) {
   app.require_subcommand(1);
   Arguments arguments;
 
+  // The options the commands share.
+  const auto add_config = [&](CLI::App* command) {
+    command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
+    command->add_option("--set", arguments.overrides,
+                        "override a configuration key: KEY=VALUE (dotted KEY)");
+  };
+  const auto add_threads = [&](CLI::App* command) {
+    command
+        ->add_option("--threads", arguments.threads, "threads (0: every core; at most the cores)")
+        ->check(CLI::Range(0, 65536));
+  };
+
   CLI::App* run_command =
       app.add_subcommand("run", "simulate the track's shots and write the products");
-  run_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
+  add_config(run_command);
   run_command->add_option("--out", arguments.out_dir,
                           "output directory (default out/<config name>)");
-  run_command->add_option("--set", arguments.overrides,
-                          "override a configuration key: KEY=VALUE (dotted KEY)");
-  run_command
-      ->add_option("--threads", arguments.threads, "threads (0: every core; at most the cores)")
-      ->check(CLI::Range(0, 65536));
+  add_threads(run_command);
   run_command->add_option("--shots", arguments.shots, "simulate shot numbers A to B-1 only (A:B)");
   run_command->add_option("--seed", arguments.seed, "random seed (overrides the configuration's)")
       ->check(CLI::Validator(
@@ -178,23 +186,17 @@ int run_command_line(int argc, char** argv) {
 
   CLI::App* check_command =
       app.add_subcommand("check", "validate the configuration and its inputs, run nothing");
-  check_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
-  check_command->add_option("--set", arguments.overrides,
-                            "override a configuration key: KEY=VALUE");
+  add_config(check_command);
 
   std::vector<std::string> variations;
   CLI::App* sweep_command = app.add_subcommand(
       "sweep", "sensitivity study: the base case and each varied value, one key at a time");
-  sweep_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
+  add_config(sweep_command);
   sweep_command->add_option("--vary", variations, "a key and its values: KEY=V1,V2,...")
       ->required();
   sweep_command->add_option("--out", arguments.out_dir,
                             "output directory (default out/<config name>-sweep)");
-  sweep_command->add_option("--set", arguments.overrides,
-                            "override a configuration key in every case");
-  sweep_command
-      ->add_option("--threads", arguments.threads, "threads (0: every core; at most the cores)")
-      ->check(CLI::Range(0, 65536));
+  add_threads(sweep_command);
 
   // A command of the contract that a later version brings: named, so that asking for it says so.
   std::vector<CLI::App*> planned;

@@ -54,9 +54,9 @@ struct SurfaceHit {
   int material = 0;         // of a trunk
 };
 
-// A stretch [t0, t1] of a ray inside turbid foliage of the given plant area density.
+// A stretch [start_m, end_m] of a ray inside turbid foliage of the given plant area density.
 struct VolumeSpan {
-  double t0 = 0.0, t1 = 0.0;
+  double start_m = 0.0, end_m = 0.0;  // distances along the ray
   double area_density_m2_m3 = 0.0;
   int material = 0;
 };

@@ -98,8 +98,8 @@ VegetationTruth measure_vegetation(const Scene& scene, double sigma_m) {
       scene.volume_spans(origin, down, ground.distance_m, spans);
       double plant_area = 0.0, first_m = ground.distance_m;
       for (const VolumeSpan& span : spans) {
-        plant_area += span.area_density_m2_m3 * (span.t1 - span.t0);
-        first_m = std::min(first_m, span.t0);
+        plant_area += span.area_density_m2_m3 * (span.end_m - span.start_m);
+        first_m = std::min(first_m, span.start_m);
       }
       const double weight = std::exp(-r_sq / (2.0 * sigma_m * sigma_m));
       weights += weight;

@@ -64,8 +64,8 @@ std::optional<Interaction> free_path(const std::vector<VolumeSpan>& spans,
   events.clear();
   for (const VolumeSpan& span : spans) {
     const double extinction = span.area_density_m2_m3 * projection[span.material];
-    events.emplace_back(span.t0, extinction);
-    events.emplace_back(span.t1, -extinction);
+    events.emplace_back(span.start_m, extinction);
+    events.emplace_back(span.end_m, -extinction);
   }
   std::sort(events.begin(), events.end());
   double extinction = 0.0, depth = 0.0, t_previous = events.front().first;
@@ -78,7 +78,7 @@ std::optional<Interaction> free_path(const std::vector<VolumeSpan>& spans,
         double pick = uniform() * extinction;
         int material = spans.front().material;
         for (const VolumeSpan& span : spans) {
-          if (span.t0 > at || span.t1 <= at) continue;
+          if (span.start_m > at || span.end_m <= at) continue;
           material = span.material;
           pick -= span.area_density_m2_m3 * projection[span.material];
           if (pick < 0.0) break;
@@ -105,8 +105,9 @@ double connection_depth(const std::vector<VolumeSpan>& spans, const std::vector<
     const double leaf_size_m = foliage[span.material].leaf_size_m;
     const double rate =
         leaf_size_m > 0.0 ? separation_rad / leaf_size_m : std::numeric_limits<double>::infinity();
-    const double a = span.t0, b = std::min(span.t1, shared_m);
-    double length = std::max(0.0, span.t1 - std::max(span.t0, shared_m));  // beyond the shared part
+    const double a = span.start_m, b = std::min(span.end_m, shared_m);
+    double length =
+        std::max(0.0, span.end_m - std::max(span.start_m, shared_m));  // beyond the shared part
     if (b > a) {
       if (std::isinf(rate))
         length += b - a;
@@ -178,8 +179,10 @@ void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry
       const double u1 = random.uniform(), u2 = random.uniform();
       const Vec3 first_direction =
           by_beam ? beam.direction(u1, u2) : beam.uniform_direction(u1, u2);
-      // Density the path's first direction was drawn with (the second path's mixture).
-      const double path_density = 0.5 * beam_density(first_direction) + 0.5 * uniform_density;
+      // Density the second path's first direction was drawn with (the mixture); the beam path
+      // scores only its first interaction and never needs it.
+      const double path_density =
+          beam_path ? 0.0 : 0.5 * beam_density(first_direction) + 0.5 * uniform_density;
       const double start_m = (geometry.sensor_m[2] - start_height_m) / -first_direction[2];
 
       Vec3 position = geometry.sensor_m + start_m * first_direction;

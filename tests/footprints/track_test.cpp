@@ -92,7 +92,7 @@ TEST(PassTrack, ShotsAreSpacedAlongTheGeodesicAndInTime) {
   }
   EXPECT_DOUBLE_EQ(footprints[0].time_s, 1000.0);
   // A shard of the track is the same shots.
-  const auto shard = plan_track(track, terrain, 3, 5);
+  const auto shard = Track(track, terrain).footprints(3, 5);
   ASSERT_EQ(shard.size(), 2u);
   EXPECT_EQ(shard[0].shot_number, 3);
   EXPECT_DOUBLE_EQ(shard[0].ground.lat_deg, footprints[3].ground.lat_deg);

@@ -15,6 +15,33 @@
 
 namespace glaswave::test_support {
 
+// One shot of a points track aiming at the origin (0, 0) from 600 km, tilted off nadir toward
+// the east, over bare Lambertian soil (0.15) on a plane facing east with the given slope.
+inline nlohmann::json plane_shot(const std::string& preset, double slope_deg, double off_nadir_deg,
+                                 std::int64_t rays) {
+  return {
+      {"seed", 7},
+      {"sensor", {{"preset", preset}}},
+      {"simulation", {{"rays_per_shot", rays}}},
+      {"terrain",
+       {{"plane",
+         {{"origin_lat_deg", 0.0},
+          {"origin_lon_deg", 0.0},
+          {"elevation_m", 0.0},
+          {"slope_deg", slope_deg},
+          {"aspect_deg", 90.0}}},
+        {"soil_reflectance", 0.15}}},
+      {"canopy", nullptr},
+      {"track",
+       {{"type", "points"},
+        {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}},
+        {"altitude_m", 600000.0},
+        {"off_nadir_deg", off_nadir_deg},
+        {"pointing_azimuth_deg", 90.0}}},
+      {"output", {{"netcdf", false}, {"geojson", false}}},
+  };
+}
+
 struct SimulatedTrack {
   Config config;
   std::vector<Footprint> footprints;
@@ -26,7 +53,8 @@ struct SimulatedTrack {
 inline SimulatedTrack simulate_track(Config config) {
   SimulatedTrack run{std::move(config), {}, {}, {}};
   const auto terrain = make_terrain(run.config.terrain);
-  run.footprints = plan_track(run.config.track, *terrain, 0, track_length(run.config.track));
+  const Track track(run.config.track, *terrain);
+  run.footprints = track.footprints(0, track.size());
   const ShotSimulator simulator(run.config, *terrain);
   for (const Footprint& footprint : run.footprints)
     run.records.push_back(simulator.simulate(footprint));

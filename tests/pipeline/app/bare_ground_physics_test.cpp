@@ -15,30 +15,6 @@ namespace {
 constexpr double c_m_s = 299792458.0;
 constexpr double pi = std::numbers::pi;
 
-// A points track aiming at the plane's origin, over a plane with the given slope.
-nlohmann::json plane_shot(double slope_deg, double off_nadir_deg, std::int64_t rays) {
-  return {
-      {"seed", 7},
-      {"sensor", {{"preset", "north2010"}}},
-      {"simulation", {{"rays_per_shot", rays}}},
-      {"terrain",
-       {{"plane",
-         {{"origin_lat_deg", 0.0},
-          {"origin_lon_deg", 0.0},
-          {"elevation_m", 0.0},
-          {"slope_deg", slope_deg},
-          {"aspect_deg", 90.0}}},
-        {"soil_reflectance", 0.15}}},
-      {"track",
-       {{"type", "points"},
-        {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}},
-        {"altitude_m", 600000.0},
-        {"off_nadir_deg", off_nadir_deg},
-        {"pointing_azimuth_deg", 90.0}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
-  };
-}
-
 struct Simulated {
   ShotRecord record;
   std::vector<double> bin_time_ns;
@@ -56,7 +32,7 @@ using test_support::waveform_moments;
 // PHYSICS.md section 1: E_rec = E_t T A_T rho_s cos(alpha) f_fov / (pi R^2),
 // f_fov = 1 - exp(-ifov^2 / (8 sigma^2)); Table 2 of the seed at nadir over level ground.
 TEST(BareGround, ReceivedEnergyMatchesLambertianFormulaAtNadir) {
-  const Simulated shot = simulate(plane_shot(0.0, 0.0, 10000));
+  const Simulated shot = simulate(test_support::plane_shot("north2010", 0.0, 0.0, 10000));
   const double f_fov = 1.0 - std::exp(-0.0004 * 0.0004 / (8.0 * 0.00011 * 0.00011));
   EXPECT_NEAR(f_fov, 0.808, 0.001);  // the number PHYSICS.md quotes, to its three digits
   const double range_m = 600000.0;
@@ -77,7 +53,7 @@ TEST(BareGround, ReceivedEnergyMatchesLambertianFormulaAtNadir) {
 // A level surface at nadir returns the transmitted pulse (RMS 5 ns, plus the bin's 1/12),
 // centred on 2R/c.
 TEST(BareGround, LevelSurfaceReturnsThePulseAtTwoRangeOverC) {
-  const Simulated shot = simulate(plane_shot(0.0, 0.0, 10000));
+  const Simulated shot = simulate(test_support::plane_shot("north2010", 0.0, 0.0, 10000));
   for (int band = 0; band < 2; ++band) {
     const Moments m = waveform_moments(shot.record.rx_waveform_W[band], shot.bin_time_ns);
     EXPECT_NEAR(m.rms_ns, std::sqrt(25.0 + 1.0 / 12.0), 0.02);
@@ -99,7 +75,7 @@ TEST(BareGround, SlopeBroadensThePulseAsGardnerAndDimsAsCosine) {
   double level_energy_J = 0.0;
   for (int k = -1; k < 5; ++k) {
     const double slope_deg = k < 0 ? 0.0 : slopes_deg[k];
-    nlohmann::json document = plane_shot(slope_deg, 0.0, 40000);
+    nlohmann::json document = test_support::plane_shot("north2010", slope_deg, 0.0, 40000);
     document["sensor"]["divergence_sigma_rad"] = sigma_theta;
     document["sensor"]["ifov_rad"] = 0.002;
     document["sensor"]["bins"] = 1200;
@@ -127,7 +103,7 @@ TEST(BareGround, SlopeBroadensThePulseAsGardnerAndDimsAsCosine) {
 // at the ground), energy cos(alpha) / R^2 with the slant range.
 TEST(BareGround, OffNadirEnergyFollowsIncidenceAndSlantRange) {
   const double off_nadir_deg = 5.0;
-  nlohmann::json document = plane_shot(0.0, off_nadir_deg, 10000);
+  nlohmann::json document = test_support::plane_shot("north2010", 0.0, off_nadir_deg, 10000);
   const Simulated shot = simulate(document);
   // Spherical-Earth geometry, independent of the ellipsoidal code: law of sines.
   const double earth_m = 6378137.0, altitude_m = 600000.0;

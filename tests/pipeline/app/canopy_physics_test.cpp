@@ -125,7 +125,9 @@ TEST(TurbidLayer, CanopyReturnFollowsItsExponentialLawWithDepth) {
 }
 
 // PHYSICS.md section 4: over black soil with rho : tau fixed, the energy of scattering order k
-// scales as omega^k. One run per omega, to 3 %.
+// scales as omega^k. One run per omega, to 3 %. With one seed and one rho : tau the two runs
+// trace the same paths up to order 5 (no roulette yet), so this checks the weights each order
+// carries, not the sampling; the sampling is checked against the integral below.
 TEST(TurbidLayer, OrderEnergiesScaleAsOmegaToTheK) {
   const Simulated white = simulate(layer_shot(3.0, 0.05, 0.5, 0.5, 0.0, 5, 20000));
   const Simulated grey = simulate(layer_shot(3.0, 0.05, 0.3, 0.3, 0.0, 5, 20000));

@@ -82,7 +82,8 @@ Located locate(const json& document) {
   const Config config = parse_config(document);
   const auto terrain = make_terrain(config.terrain);
   Located out;
-  out.footprints = plan_track(config.track, *terrain, 0, 1000);
+  const Track track(config.track, *terrain);
+  out.footprints = track.footprints(0, track.size());
   for (const Footprint& footprint : out.footprints) {
     const LocalFrame frame(footprint.ground);
     out.orientations.push_back(fit_surface_orientation(

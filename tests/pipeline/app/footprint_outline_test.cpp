@@ -11,6 +11,7 @@
 
 #include "footprints/track.hpp"
 #include "pipeline/app/shot_simulation.hpp"
+#include "tests/pipeline/app/app_test_support.hpp"
 
 namespace glaswave {
 namespace {
@@ -24,26 +25,7 @@ struct Outline {
 // One shot aimed at the plane's origin, tilted toward the east; its polygon measured on the
 // plane: the longest chord (the ellipse's major axis) and the width north-south.
 Outline outline(double off_nadir_deg, double slope_deg) {
-  const nlohmann::json document = {
-      {"seed", 5},
-      {"sensor", {{"preset", "glas"}}},
-      {"simulation", {{"rays_per_shot", 200}}},
-      {"terrain",
-       {{"plane",
-         {{"origin_lat_deg", 0.0},
-          {"origin_lon_deg", 0.0},
-          {"elevation_m", 0.0},
-          {"slope_deg", slope_deg},
-          {"aspect_deg", 90.0}}}}},
-      {"canopy", nullptr},
-      {"track",
-       {{"type", "points"},
-        {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}},
-        {"altitude_m", 600000.0},
-        {"off_nadir_deg", off_nadir_deg},
-        {"pointing_azimuth_deg", 90.0}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
-  };
+  const nlohmann::json document = test_support::plane_shot("glas", slope_deg, off_nadir_deg, 200);
   const Config config = parse_config(document);
   const auto terrain = make_terrain(config.terrain);
   const Footprint footprint = Track(config.track, *terrain).footprint(0);
