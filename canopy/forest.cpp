@@ -11,7 +11,7 @@
 #include <string>
 
 #include "canopy/crown.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {

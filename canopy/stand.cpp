@@ -8,8 +8,8 @@
 #include <pcg_random.hpp>
 
 #include "canopy/crown.hpp"
-#include "terrain/bit_mix.hpp"
-#include "terrain/error.hpp"
+#include "core/bit_mix.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {

@@ -11,7 +11,7 @@
 #include <string_view>
 
 #include "footprints/glas_time.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {

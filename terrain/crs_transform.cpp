@@ -9,7 +9,7 @@
 #include <proj.h>
 #include <proj_experimental.h>
 
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {

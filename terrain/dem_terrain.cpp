@@ -21,7 +21,7 @@
 #include <ogr_spatialref.h>
 
 #include "terrain/crs_transform.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {

@@ -65,12 +65,4 @@ std::array<Vec3, 3> enu_axes(double lat_deg, double lon_deg) {
           Vec3{cos_lat * cos_lon, cos_lat * sin_lon, sin_lat}};
 }
 
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
-double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
-
-Vec3 normalized(const Vec3& a) { return (1.0 / norm(a)) * a; }
-
 }  // namespace glaswave

@@ -5,9 +5,9 @@
 #include <GeographicLib/LocalCartesian.hpp>
 #include <array>
 
-namespace glaswave {
+#include "core/vec3.hpp"
 
-using Vec3 = std::array<double, 3>;
+namespace glaswave {
 
 struct Geodetic {
   double lat_deg = 0.0;
@@ -43,16 +43,5 @@ Geodetic geodetic_from_ecef(const Vec3& ecef);
 // East, north and up unit vectors (ECEF) at a geodetic position.
 std::array<Vec3, 3> enu_axes(double lat_deg, double lon_deg);
 
-inline double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-inline Vec3 operator+(const Vec3& a, const Vec3& b) {
-  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-inline Vec3 operator-(const Vec3& a, const Vec3& b) {
-  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-inline Vec3 operator*(double s, const Vec3& a) { return {s * a[0], s * a[1], s * a[2]}; }
-Vec3 cross(const Vec3& a, const Vec3& b);
-double norm(const Vec3& a);
-Vec3 normalized(const Vec3& a);
 
 }  // namespace glaswave

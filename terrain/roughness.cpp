@@ -10,7 +10,7 @@
 #include <numbers>
 #include <optional>
 
-#include "terrain/bit_mix.hpp"
+#include "core/bit_mix.hpp"
 
 namespace glaswave {
 namespace {

@@ -9,7 +9,7 @@
 #include <GeographicLib/LocalCartesian.hpp>
 
 #include "terrain/dem_terrain.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {

@@ -11,9 +11,10 @@
 
 #include "canopy/forest.hpp"
 #include "footprints/track.hpp"
-#include "pipeline/app/run.hpp"
-#include "pipeline/app/sweep.hpp"
-#include "terrain/error.hpp"
+#include "pipeline/app/plots.hpp"
+#include "pipeline/engine/run.hpp"
+#include "pipeline/engine/sweep.hpp"
+#include "core/error.hpp"
 #include "terrain/terrain.hpp"
 
 namespace glaswave {
@@ -114,6 +115,8 @@ int run(const Arguments& arguments, const std::string& command_line) {
     ProgressBar bar(!arguments.quiet);
     summary = run_simulation(config, request, std::ref(bar));
   }
+  // Plots are drawn from the finished products; a failure there leaves the products whole.
+  if (config.output.plots) write_plots(request.out_dir);
   const double wall_s = std::max(summary.wall_s, 1e-9);
   std::printf(
       "glaswave: %lld shots in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; %s; "

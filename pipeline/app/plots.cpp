@@ -13,7 +13,7 @@
 #include <system_error>
 #include <vector>
 
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 extern char** environ;
 

@@ -13,7 +13,7 @@
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/presets.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 

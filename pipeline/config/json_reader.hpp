@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/names.hpp"
+
 namespace glaswave {
 
 // The allowed interval of a number; open or closed at each end, either end optional.
@@ -43,13 +45,6 @@ std::string describe(const nlohmann::json& value);
 // A number for an error message: no trailing zeros, no binary noise ("1.2", not
 // "1.2000000000000002").
 std::string format_number(double x);
-
-// Levenshtein edit distance between two strings.
-std::size_t edit_distance(const std::string& a, const std::string& b);
-
-// The known name that `name` is most likely a typo of, if any is close enough to say so.
-std::optional<std::string> nearest_name(const std::string& name,
-                                        const std::vector<std::string>& known);
 
 // The message for an unknown key: the nearest known key when it is close enough to be a typo,
 // else the list of known keys.

@@ -15,8 +15,8 @@
 #include <string_view>
 #include <utility>
 
-#include "pipeline/products/atomic_file.hpp"
-#include "terrain/error.hpp"
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {

@@ -15,8 +15,8 @@
 #include <variant>
 #include <vector>
 
-#include "pipeline/products/atomic_file.hpp"
-#include "terrain/error.hpp"
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {
@@ -423,7 +423,7 @@ struct NetcdfWriter::Impl {
     check(nc_put_var_string(nc.id(), trajectory, &trajectory_id), "writing variable 'trajectory'");
     std::vector<double> wavelengths;
     std::vector<const char*> names;
-    for (const Band& band : info.bands) {
+    for (const ProductBand& band : info.bands) {
       wavelengths.push_back(band.wavelength_nm);
       names.push_back(band.name.c_str());
     }

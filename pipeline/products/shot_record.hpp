@@ -9,9 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/config/config.hpp"
-
 namespace glaswave {
+
+// A band as the products name it.
+struct ProductBand {
+  std::string name;
+  double wavelength_nm = 0.0;
+};
 
 // quality_flag values (flag_values / flag_meanings in shots.nc).
 enum QualityFlag : std::uint8_t {
@@ -67,7 +71,7 @@ struct RunInfo {
   std::string vertical_datum;  // what the terrain's heights were measured from, in words
   std::uint64_t seed = 0;
   std::int64_t shots = 0;  // records the products will hold
-  std::vector<Band> bands;
+  std::vector<ProductBand> bands;
   std::vector<double> bin_time_ns;                    // [bin] centre, after the return from range_m
   std::vector<double> tx_time_ns;                     // [tx_bin] centre, about the pulse peak
   std::vector<std::vector<double>> tx_waveform_W;     // [band][tx_bin]

@@ -9,7 +9,7 @@
 #include <limits>
 #include <string>
 
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {

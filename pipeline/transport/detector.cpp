@@ -6,7 +6,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "pipeline/transport/random.hpp"
+#include "core/random.hpp"
 
 namespace glaswave {
 namespace {
@@ -58,7 +58,7 @@ double poisson(RayRandom& random, double mean) {
 
 }  // namespace
 
-Detector::Detector(const DetectorSettings& settings, std::uint64_t seed)
+Detector::Detector(const Settings& settings, std::uint64_t seed)
     : settings_(settings), seed_(seed) {}
 
 std::vector<double> Detector::record(std::span<const double> power_W, double bin_ns,
@@ -66,7 +66,7 @@ std::vector<double> Detector::record(std::span<const double> power_W, double bin
                                      std::size_t band) const {
   if (band >= max_bands || power_W.size() > max_bins)
     throw std::invalid_argument("detector: at most 256 bands and 2^24 bins");
-  const DetectorSettings& s = settings_;
+  const Settings& s = settings_;
   const double photon_J = planck_J_s * light_m_s / (wavelength_nm * 1e-9);
   const double bin_s = bin_ns * 1e-9;
   const double levels = s.bits > 0 ? std::ldexp(1.0, s.bits) - 1.0 : 0.0;

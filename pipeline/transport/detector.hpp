@@ -6,18 +6,30 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
-
-#include "pipeline/config/config.hpp"
 
 namespace glaswave {
 
 class Detector {
  public:
-  Detector(const DetectorSettings& settings, std::uint64_t seed);
+  // The signal chain, every level in W of received light at the detector's input except
+  // saturation_W, the digitiser's full scale after the gain. The engine fills it from the
+  // configuration's detector.
+  struct Settings {
+    double background_W = 0.0;        // mean background light in the field of view
+    bool photon_noise = false;        // Poisson statistics of signal and background photons
+    double quantum_efficiency = 1.0;  // photoelectrons per photon, for photon_noise
+    double noise_rms_W = 0.0;         // Gaussian detector (dark and amplifier) noise, RMS
+    double gain = 1.0;                // amplification before the digitiser
+    int bits = 0;                     // digitiser resolution; 0: not digitised
+    std::optional<double> saturation_W;  // full scale; absent: no saturation
+  };
 
-  const DetectorSettings& settings() const { return settings_; }
+  Detector(const Settings& settings, std::uint64_t seed);
+
+  const Settings& settings() const { return settings_; }
 
   // The recorded waveform for the received power of one band (W per bin of `bin_ns`), in W
   // referred to the detector's input. In order, for each bin:
@@ -32,7 +44,7 @@ class Detector {
                              std::int64_t shot, std::size_t band) const;
 
  private:
-  DetectorSettings settings_;
+  Settings settings_;
   std::uint64_t seed_;
 };
 

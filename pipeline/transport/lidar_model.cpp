@@ -7,7 +7,7 @@
 
 namespace glaswave {
 
-LidarModel::LidarModel(const SensorSettings& sensor) : sensor_(sensor) {
+LidarModel::LidarModel(const LidarSettings& sensor) : sensor_(sensor) {
   const double sigma = sensor.divergence_sigma_rad;
   const double half_fov = 0.5 * sensor.ifov_rad;
   fov_fraction_ = -std::expm1(-half_fov * half_fov / (2.0 * sigma * sigma));

@@ -4,18 +4,36 @@
 
 #include <vector>
 
-#include "pipeline/config/config.hpp"
-#include "terrain/local_frame.hpp"
+#include "core/vec3.hpp"
 
 namespace glaswave {
 
 constexpr double speed_of_light_m_s = 299792458.0;
 
+// One band of the lidar as the transport needs it.
+struct LidarBand {
+  double wavelength_nm = 0.0;
+  double pulse_energy_mJ = 0.0;
+  double atmos_transmission_roundtrip = 1.0;
+};
+
+// The lidar's beam, field of view, pulse and digitiser window (the seed's Table 2; these defaults
+// are its values). The engine fills it from the configuration's sensor.
+struct LidarSettings {
+  double pulse_sigma_ns = 5.0;
+  double divergence_sigma_rad = 0.00011;  // beam angular RMS width per axis
+  double ifov_rad = 0.0004;               // detector full field of view (top-hat cone)
+  double telescope_area_m2 = 0.709;
+  double bin_ns = 1.0;
+  int bins = 544;
+  std::vector<LidarBand> bands;
+};
+
 class LidarModel {
  public:
-  explicit LidarModel(const SensorSettings& sensor);
+  explicit LidarModel(const LidarSettings& sensor);
 
-  const SensorSettings& sensor() const { return sensor_; }
+  const LidarSettings& sensor() const { return sensor_; }
   std::size_t band_count() const { return sensor_.bands.size(); }
 
   // Part of the beam's energy inside the field of view: 1 - exp(-ifov^2 / (8 sigma^2)).
@@ -43,7 +61,7 @@ class LidarModel {
   std::vector<double> tx_waveform_W(std::size_t band) const;
 
  private:
-  SensorSettings sensor_;
+  LidarSettings sensor_;
   double fov_fraction_;
   double max_angle_rad_;
   double lead_ns_;              // time from the centre of bin 0 to the reference return

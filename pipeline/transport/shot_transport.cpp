@@ -9,7 +9,7 @@
 #include <numbers>
 #include <optional>
 
-#include "pipeline/transport/random.hpp"
+#include "core/random.hpp"
 
 namespace glaswave {
 namespace {
@@ -356,7 +356,7 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
     return sum;
   };
   for (std::size_t band = 0; band < bands; ++band) {
-    const Band& b = lidar.sensor().bands[band];
+    const LidarBand& b = lidar.sensor().bands[band];
     // Section 1 of PHYSICS.md: E_t T A_T f_fov / (pi R^2), shared by the rays.
     const double scale = b.pulse_energy_mJ * 1e-3 * b.atmos_transmission_roundtrip *
                          lidar.sensor().telescope_area_m2 * lidar.fov_fraction() /

@@ -10,7 +10,6 @@
 #include <vector>
 
 #include "canopy/leaf_angles.hpp"
-#include "pipeline/config/config.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"
 

@@ -10,7 +10,7 @@
 #include <cstdlib>
 
 #include "footprints/track.hpp"
-#include "pipeline/app/shot_simulation.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
 
 namespace {
 

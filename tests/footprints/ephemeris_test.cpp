@@ -11,7 +11,7 @@
 
 #include "footprints/glas_time.hpp"
 #include "footprints/track.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 #include "tests/footprints/test_terrains.hpp"
 
 namespace glaswave {

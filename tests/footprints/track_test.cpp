@@ -11,7 +11,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 #include "tests/footprints/test_terrains.hpp"
 
 namespace glaswave {

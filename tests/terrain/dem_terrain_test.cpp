@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "terrain/dem_terrain.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 #include "terrain/ground_mesh.hpp"
 #include "tests/terrain/dem_fixture.hpp"
 

@@ -15,7 +15,7 @@
 #include <sstream>
 #include <string>
 
-#include "tests/pipeline/app/app_test_support.hpp"
+#include "tests/pipeline/engine/engine_test_support.hpp"
 
 namespace glaswave {
 namespace {

@@ -17,8 +17,8 @@
 #include <string>
 
 #include "footprints/track.hpp"
-#include "pipeline/app/shot_simulation.hpp"
-#include "tests/pipeline/app/app_test_support.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
+#include "tests/pipeline/engine/engine_test_support.hpp"
 #include "tests/terrain/dem_fixture.hpp"
 
 namespace glaswave {

@@ -23,7 +23,7 @@
 #include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 #include "tests/terrain/dem_fixture.hpp"
 
 namespace glaswave {
@@ -42,7 +42,7 @@ RunInfo make_info(const std::string& config_json) {
   info.config_json = config_json;
   info.seed = 1;
   info.shots = kShots;
-  info.bands = {Band{"532", 532.0, 32.0, 0.8}, Band{"1064", 1064.0, 72.0, 0.9}};
+  info.bands = {ProductBand{"532", 532.0}, ProductBand{"1064", 1064.0}};
   for (int b = 0; b < kBins; ++b) info.bin_time_ns.push_back(kBinNs * (b - kBins / 2));
   info.tx_time_ns = {-1.0, 0.0, 1.0};
   info.tx_waveform_W = {{1.0e6, 2.0e6, 1.0e6}, {3.0e6, 4.0e6, 3.0e6}};

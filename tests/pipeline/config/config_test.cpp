@@ -14,7 +14,7 @@
 
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/presets.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {
@@ -34,7 +34,7 @@ RunInfo make_info() {
   info.config_json = "{}";
   info.seed = 7;
   info.shots = kShots;
-  info.bands = {Band{"532", 532.0, 32.0, 0.8}, Band{"1064", 1064.0, 72.0, 0.9}};
+  info.bands = {ProductBand{"532", 532.0}, ProductBand{"1064", 1064.0}};
   info.bin_time_ns = {0.0, 1.0, 2.0};
   info.tx_time_ns = {-1.0, 0.0, 1.0};
   info.tx_waveform_W = {{1.0, 2.0, 1.0}, {1.0, 2.0, 1.0}};

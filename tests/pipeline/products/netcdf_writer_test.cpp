@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {
@@ -35,7 +35,7 @@ RunInfo make_info(int orders) {
   info.config_json = R"({"seed": 18000000000000000001})";
   info.seed = kSeed;
   info.shots = kShots;
-  info.bands = {Band{"532", 532.0, 32.0, 0.8}, Band{"1064", 1064.0, 72.0, 0.9}};
+  info.bands = {ProductBand{"532", 532.0}, ProductBand{"1064", 1064.0}};
   for (int b = 0; b < kBins; ++b) info.bin_time_ns.push_back(-2.0 + b);
   for (int b = 0; b < kTxBins; ++b) info.tx_time_ns.push_back(-1.0 + b);
   info.tx_waveform_W = {{1.0e6, 2.0e6, 1.0e6}, {3.0e6, 4.0e6, 3.0e6}};

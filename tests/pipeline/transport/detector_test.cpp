@@ -31,9 +31,8 @@ Moments moments(const std::vector<double>& values) {
   return m;
 }
 
-DetectorSettings enabled() {
-  DetectorSettings s;
-  s.enabled = true;
+Detector::Settings enabled() {
+  Detector::Settings s;
   return s;
 }
 
@@ -45,7 +44,7 @@ TEST(Detector, WithoutNoiseOrDigitiserTheWaveformPassesUnchanged) {
 // Background plus Gaussian noise on a constant: mean P + background to 4 standard errors,
 // RMS to 4 % (20 000 bins: the RMS's standard error is 0.5 %).
 TEST(Detector, ConstantInputGivesTheExpectedMeanAndRms) {
-  DetectorSettings s = enabled();
+  Detector::Settings s = enabled();
   s.background_W = 2e-7;
   s.noise_rms_W = 5e-8;
   const std::vector<double> power(20000, 1e-6);
@@ -59,7 +58,7 @@ TEST(Detector, ConstantInputGivesTheExpectedMeanAndRms) {
 TEST(Detector, PhotonNoiseIsPoisson) {
   for (const double photons : {3.0, 400.0}) {
     for (const double efficiency : {1.0, 0.5}) {
-      DetectorSettings s = enabled();
+      Detector::Settings s = enabled();
       s.photon_noise = true;
       s.quantum_efficiency = efficiency;
       const double power_W = photons * kPhotonJ / (kBinNs * 1e-9);
@@ -83,7 +82,7 @@ TEST(Detector, PhotonNoiseIsPoisson) {
 }
 
 TEST(Detector, DigitiserHasTwoToTheBitsLevelsAndClipsAtSaturation) {
-  DetectorSettings s = enabled();
+  Detector::Settings s = enabled();
   s.bits = 4;
   s.saturation_W = 15e-6;  // lsb 1e-6
   std::vector<double> ramp;
@@ -105,7 +104,7 @@ TEST(Detector, DigitiserHasTwoToTheBitsLevelsAndClipsAtSaturation) {
 }
 
 TEST(Detector, SaturationWithoutDigitiserClips) {
-  DetectorSettings s = enabled();
+  Detector::Settings s = enabled();
   s.saturation_W = 2e-6;
   const std::vector<double> out = Detector(s, 1).record(
       std::vector<double>{1e-6, 2e-6, 5e-6, -1e-6}, kBinNs, kWavelengthNm, 0, 0);
@@ -115,7 +114,7 @@ TEST(Detector, SaturationWithoutDigitiserClips) {
 // The digitiser's scale sits after the gain: gain 4 saturates at a quarter of the input power
 // and steps a quarter as finely; the product stays in W at the input.
 TEST(Detector, GainMovesSaturationAndStep) {
-  DetectorSettings s = enabled();
+  Detector::Settings s = enabled();
   s.bits = 8;
   s.saturation_W = 255e-6;  // lsb 1e-6 at the digitiser
   s.gain = 4.0;
@@ -127,7 +126,7 @@ TEST(Detector, GainMovesSaturationAndStep) {
 }
 
 TEST(Detector, NoiseIsKeyedBySeedShotBandAndBinAlone) {
-  DetectorSettings s = enabled();
+  Detector::Settings s = enabled();
   s.noise_rms_W = 1e-7;
   s.background_W = 1e-7;
   s.photon_noise = true;

@@ -6,16 +6,16 @@
 #include <numbers>
 
 #include "canopy/leaf_angles.hpp"
-#include "pipeline/transport/random.hpp"
+#include "core/random.hpp"
 #include "pipeline/transport/shot_transport.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
 namespace {
 
-SensorSettings table2_sensor() {
-  SensorSettings sensor;  // defaults are the seed's Table 2
-  sensor.bands = {{"532", 532.0, 32.0, 0.8}, {"1064", 1064.0, 72.0, 0.9}};
+LidarSettings table2_sensor() {
+  LidarSettings sensor;  // defaults are the seed's Table 2
+  sensor.bands = {{532.0, 32.0, 0.8}, {1064.0, 72.0, 0.9}};
   return sensor;
 }
 
@@ -37,7 +37,7 @@ TEST(LidarModel, PulseConvolutionKeepsEnergyAndHasTheTransmittedWidth) {
 }
 
 TEST(LidarModel, BinsAreOneBinWidthApartAndCoverTheWindow) {
-  SensorSettings sensor = table2_sensor();
+  LidarSettings sensor = table2_sensor();
   sensor.bin_ns = 0.5;
   sensor.bins = 300;
   const LidarModel lidar(sensor);

@@ -1,5 +1,5 @@
 // Simulation of one footprint into a product record.
-#include "pipeline/app/shot_simulation.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -78,8 +78,34 @@ WaveformProcessing waveform_processing(const Config& config) {
 
 }  // namespace
 
+LidarSettings lidar_settings(const SensorSettings& sensor) {
+  LidarSettings lidar;
+  lidar.pulse_sigma_ns = sensor.pulse_sigma_ns;
+  lidar.divergence_sigma_rad = sensor.divergence_sigma_rad;
+  lidar.ifov_rad = sensor.ifov_rad;
+  lidar.telescope_area_m2 = sensor.telescope_area_m2;
+  lidar.bin_ns = sensor.bin_ns;
+  lidar.bins = sensor.bins;
+  for (const Band& band : sensor.bands)
+    lidar.bands.push_back(
+        {band.wavelength_nm, band.pulse_energy_mJ, band.atmos_transmission_roundtrip});
+  return lidar;
+}
+
+Detector::Settings detector_settings(const DetectorSettings& detector) {
+  Detector::Settings chain;
+  chain.background_W = detector.background_W;
+  chain.photon_noise = detector.photon_noise;
+  chain.quantum_efficiency = detector.quantum_efficiency;
+  chain.noise_rms_W = detector.noise_rms_W;
+  chain.gain = detector.gain;
+  chain.bits = detector.bits;
+  chain.saturation_W = detector.saturation_W;
+  return chain;
+}
+
 ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
-    : config_(config), terrain_(terrain), lidar_(config.sensor) {
+    : config_(config), terrain_(terrain), lidar_(lidar_settings(config.sensor)) {
   if (config.canopy) forest_.emplace(*config.canopy, config.seed, config.terrain.plane);
 }
 
@@ -211,7 +237,7 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   // parts stay the noise-free truth); rx_energy stays the integral of rx_waveform.
   const double bin_s = config_.sensor.bin_ns * 1e-9;
   if (config_.detector.enabled) {
-    const Detector detector(config_.detector, config_.seed);
+    const Detector detector(detector_settings(config_.detector), config_.seed);
     for (std::size_t band = 0; band < bands; ++band) {
       record.rx_waveform_W[band] =
           detector.record(record.rx_waveform_W[band], config_.sensor.bin_ns,
@@ -250,7 +276,7 @@ RunInfo ShotSimulator::run_info(std::int64_t shots, const std::string& command_l
   info.config_json = config_.resolved.dump();
   info.seed = config_.seed;
   info.shots = shots;
-  info.bands = config_.sensor.bands;
+  for (const Band& band : config_.sensor.bands) info.bands.push_back({band.name, band.wavelength_nm});
   info.bin_time_ns = lidar_.bin_time_ns();
   info.tx_time_ns = lidar_.tx_time_ns();
   for (std::size_t band = 0; band < lidar_.band_count(); ++band)

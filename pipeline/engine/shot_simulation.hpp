@@ -9,10 +9,15 @@
 #include "pipeline/config/config.hpp"
 #include "pipeline/products/shot_record.hpp"
 #include "pipeline/scene/scene.hpp"
+#include "pipeline/transport/detector.hpp"
 #include "pipeline/transport/lidar_model.hpp"
 #include "terrain/terrain.hpp"
 
 namespace glaswave {
+
+// The transport's and the detector's settings from the configuration's.
+LidarSettings lidar_settings(const SensorSettings& sensor);
+Detector::Settings detector_settings(const DetectorSettings& detector);
 
 class ShotSimulator {
  public:

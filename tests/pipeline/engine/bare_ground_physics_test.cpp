@@ -6,8 +6,8 @@
 #include <numbers>
 
 #include "footprints/track.hpp"
-#include "pipeline/app/shot_simulation.hpp"
-#include "tests/pipeline/app/app_test_support.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
+#include "tests/pipeline/engine/engine_test_support.hpp"
 
 namespace glaswave {
 namespace {

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <pcg_random.hpp>
 
-#include "terrain/bit_mix.hpp"
+#include "core/bit_mix.hpp"
 
 namespace glaswave {
 

@@ -1,5 +1,5 @@
 // The run: shots simulated in batches on a thread pool, written in shot order.
-#include "pipeline/app/run.hpp"
+#include "pipeline/engine/run.hpp"
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -10,11 +10,10 @@
 #include <memory>
 
 #include "footprints/track.hpp"
-#include "pipeline/app/plots.hpp"
-#include "pipeline/app/shot_simulation.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 
@@ -124,8 +123,6 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   if (netcdf) netcdf->finish(stats);
   if (geojson) geojson->finish(stats);
   directory.keep();
-  // Plots are drawn from the finished products; a failure there leaves the products whole.
-  if (config.output.plots) write_plots(request.out_dir);
   return summary;
 }
 

@@ -1,6 +1,6 @@
 // SplitMix64's finaliser: a bijective mix of 64 bits. Counter-based randomness keys its streams
 // with it (seed, shot, ray; seed, ground tile; seed, lattice node), so neighbouring keys get
-// unrelated numbers. In terrain/, the lowest library, so that every library can share it.
+// unrelated numbers.
 #pragma once
 
 #include <cstdint>

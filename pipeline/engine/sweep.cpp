@@ -1,5 +1,5 @@
 // The sensitivity sweep: cases simulated in turn, their mean returns written as CSV and Markdown.
-#include "pipeline/app/sweep.hpp"
+#include "pipeline/engine/sweep.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,9 +7,9 @@
 #include <memory>
 #include <sstream>
 
-#include "pipeline/app/run.hpp"
-#include "pipeline/products/atomic_file.hpp"
-#include "terrain/error.hpp"
+#include "pipeline/engine/run.hpp"
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 namespace {

@@ -1,5 +1,5 @@
-// The one exception type of glaswave. It lives in terrain/, the lowest library of the house,
-// so that every library can throw it; the CLI turns its kind into the exit status.
+// The one exception type of glaswave, in core/ so that every library can throw it; the faces
+// (command line, Python) turn its kind into an exit status or an exception class.
 #pragma once
 
 #include <stdexcept>

@@ -1,4 +1,4 @@
-// What the app tests share: a track simulated shot by shot through ShotSimulator, the built
+// What the engine and app tests share: a track simulated shot by shot through ShotSimulator, the built
 // glaswave command run as a user runs it, and the moments of a waveform.
 #pragma once
 
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "footprints/track.hpp"
-#include "pipeline/app/shot_simulation.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
 
 namespace glaswave::test_support {
 

@@ -1,4 +1,5 @@
-// `glaswave run`: a track planned, its shots simulated in parallel, products written.
+// The engine: a track planned, its shots simulated in parallel and handed in shot order to the
+// product writers, progress reported through a callback. The command line and Python call it.
 #pragma once
 
 #include <cstdint>
@@ -8,7 +9,7 @@
 #include <string>
 
 #include "footprints/track.hpp"
-#include "pipeline/app/shot_simulation.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/config/config.hpp"
 
 namespace glaswave {

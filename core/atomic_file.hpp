@@ -7,7 +7,7 @@
 #include <string>
 #include <system_error>
 
-#include "terrain/error.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 

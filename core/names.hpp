@@ -1,0 +1,18 @@
+// "Did you mean": the nearest known name to a mistyped key, preset or choice, for error messages.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace glaswave {
+
+// Levenshtein edit distance between two strings.
+std::size_t edit_distance(const std::string& a, const std::string& b);
+
+// The known name that `name` is most likely a typo of, if any is close enough to say so.
+std::optional<std::string> nearest_name(const std::string& name,
+                                        const std::vector<std::string>& known);
+
+}  // namespace glaswave
