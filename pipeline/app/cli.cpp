@@ -9,13 +9,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "canopy/forest.hpp"
-#include "footprints/track.hpp"
+#include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/engine/run.hpp"
 #include "pipeline/engine/sweep.hpp"
-#include "core/error.hpp"
-#include "terrain/terrain.hpp"
 
 namespace glaswave {
 namespace {
@@ -128,22 +125,15 @@ int run(const Arguments& arguments, const std::string& command_line) {
 }
 
 int check(const Arguments& arguments) {
-  const Config config = load(arguments);
-  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
-  // The forest reads its crowns file and checks what the configuration cannot alone.
-  if (config.canopy) const Forest forest(*config.canopy, config.seed, config.terrain.plane);
-  const Track track(config.track, *terrain);
-  std::int64_t off_terrain = 0;
-  for (std::int64_t record = 0; record < track.size(); ++record)
-    off_terrain += track.footprint(record).on_terrain ? 0 : 1;
+  const CheckSummary summary = check_inputs(load(arguments));
   std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain",
-              arguments.config_file.c_str(), static_cast<long long>(track.size()),
-              static_cast<long long>(off_terrain));
+              arguments.config_file.c_str(), static_cast<long long>(summary.shots),
+              static_cast<long long>(summary.shots_off_terrain));
   // An orbit keeps only the shots on the terrain: say how many it skipped.
-  if (track.size() < track.sequence_length())
+  if (summary.shots < summary.sequence_length)
     std::printf(" (%lld of the orbit's %lld shots fall on it)",
-                static_cast<long long>(track.size()),
-                static_cast<long long>(track.sequence_length()));
+                static_cast<long long>(summary.shots),
+                static_cast<long long>(summary.sequence_length));
   std::printf("\n");
   return 0;
 }

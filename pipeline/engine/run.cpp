@@ -9,11 +9,12 @@
 #include <chrono>
 #include <memory>
 
+#include "canopy/forest.hpp"
+#include "core/error.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
-#include "core/error.hpp"
 
 namespace glaswave {
 
@@ -58,6 +59,19 @@ std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track
     if (progress) progress(batch_last - first, last - first);
   }
   return ray_queries;
+}
+
+CheckSummary check_inputs(const Config& config) {
+  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
+  // The forest reads its crowns file and checks what the configuration cannot alone.
+  if (config.canopy) const Forest forest(*config.canopy, config.seed, config.terrain.plane);
+  const Track track(config.track, *terrain);
+  CheckSummary summary;
+  summary.shots = track.size();
+  summary.sequence_length = track.sequence_length();
+  for (std::int64_t record = 0; record < track.size(); ++record)
+    summary.shots_off_terrain += track.footprint(record).on_terrain ? 0 : 1;
+  return summary;
 }
 
 RunSummary run_simulation(const Config& config, const RunRequest& request,

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "footprints/track.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/config/config.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
 
 namespace glaswave {
 
@@ -54,6 +54,17 @@ class OutputDirectory {
   std::filesystem::path path_;
   bool kept_ = false;
 };
+
+// What `check` found: the configuration's inputs opened and its track planned.
+struct CheckSummary {
+  std::int64_t shots = 0;              // records of the track (an orbit's: those on the terrain)
+  std::int64_t sequence_length = 0;    // shot numbers of the track
+  std::int64_t shots_off_terrain = 0;  // records whose beam misses the terrain
+};
+
+// Opens every input of the configuration (DEM, crowns and stands, ephemeris) and plans the
+// track, simulating nothing: what `check` does. Throws Error as a run would.
+CheckSummary check_inputs(const Config& config);
 
 // Simulates the shots and writes the products under request.out_dir, which must not exist.
 // On failure nothing is left under a product's final name.

@@ -276,7 +276,8 @@ RunInfo ShotSimulator::run_info(std::int64_t shots, const std::string& command_l
   info.config_json = config_.resolved.dump();
   info.seed = config_.seed;
   info.shots = shots;
-  for (const Band& band : config_.sensor.bands) info.bands.push_back({band.name, band.wavelength_nm});
+  for (const Band& band : config_.sensor.bands)
+    info.bands.push_back({band.name, band.wavelength_nm});
   info.bin_time_ns = lidar_.bin_time_ns();
   info.tx_time_ns = lidar_.tx_time_ns();
   for (std::size_t band = 0; band < lidar_.band_count(); ++band)
