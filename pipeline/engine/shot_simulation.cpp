@@ -104,13 +104,44 @@ Detector::Settings detector_settings(const DetectorSettings& detector) {
   return chain;
 }
 
+// The scene of one shot, built in its footprint's local frame: the ground patch the beam and
+// its diffuse light reach and the trees standing on it, as Embree sees them (the scene keeps
+// copies of the meshes).
+struct ShotSimulator::ShotScene {
+  LocalFrame frame;
+  ShotGeometry geometry;
+  SurfaceOrientation orientation;
+  std::unique_ptr<Scene> scene;
+};
+
 ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
     : config_(config), terrain_(terrain), lidar_(lidar_settings(config.sensor)) {
   if (config.canopy) forest_.emplace(*config.canopy, config.seed, config.terrain.plane);
+  optics_ = scene_optics();
+}
+
+ShotSimulator::~ShotSimulator() = default;
+
+SceneOptics ShotSimulator::scene_optics() const {
+  SceneOptics optics;
+  optics.soil_reflectance = config_.terrain.soil_reflectance;
+  for (std::size_t kind = 0; forest_ && kind < forest_->kinds(); ++kind) {
+    const CanopySettings& canopy = forest_->canopy(kind);
+    Foliage foliage;
+    for (std::size_t band = 0; band < lidar_.band_count(); ++band) {
+      foliage.reflectance.push_back(canopy.green_fraction * canopy.leaf_reflectance[band] +
+                                    canopy.bark_fraction * canopy.bark_reflectance[band]);
+      foliage.transmittance.push_back(canopy.green_fraction * canopy.leaf_transmittance[band]);
+    }
+    foliage.trunk_reflectance = canopy.bark_reflectance;
+    foliage.leaf_angles = &forest_->leaf_angles(kind);
+    foliage.leaf_size_m = canopy.leaf_size_m;
+    optics.foliage.push_back(foliage);
+  }
+  return optics;
 }
 
 ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray_queries) const {
-  const std::size_t bands = lidar_.band_count();
   ShotRecord record;
   record.shot_number = footprint.shot_number;
   record.time_s = footprint.time_s;
@@ -124,80 +155,22 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   const double data_radius_m = 3.0 * footprint.range_m * lidar_.beam_sigma_rad() /
                                std::cos(footprint.off_nadir_deg * std::numbers::pi / 180.0);
   if (!footprint.on_terrain || !terrain_.has_data(LocalFrame(footprint.ground), data_radius_m)) {
-    record.quality_flag = quality_no_terrain;
-    // The shot keeps a position, as a trajectory's coordinates should: where the beam met the
-    // terrain (over nodata), or else where it crosses the ellipsoid; no height when it met none.
-    record.lat_deg = record.lon_deg = record.elev_m = fill;
-    record.range_m = record.slope_deg = record.aspect_deg = fill;
-    if (footprint.on_terrain) {
-      record.lat_deg = footprint.ground.lat_deg;
-      record.lon_deg = footprint.ground.lon_deg;
-      record.elev_m = footprint.ground.h_m;
-      record.range_m = footprint.range_m;
-    } else if (const auto t_m =
-                   ellipsoid_crossing(footprint.spacecraft_ecef, footprint.beam_ecef, 0.0)) {
-      const Geodetic aim =
-          geodetic_from_ecef(footprint.spacecraft_ecef + *t_m * footprint.beam_ecef);
-      record.lat_deg = aim.lat_deg;
-      record.lon_deg = aim.lon_deg;
-    }
-    record.elev_bin0_m = record.elev_lastbin_m = fill;
-    const std::vector<double> fill_bins(lidar_.bins(), fill);
-    record.rx_waveform_W.assign(bands, fill_bins);
-    record.rx_waveform_canopy_W.assign(bands, fill_bins);
-    record.rx_waveform_ground_W.assign(bands, fill_bins);
-    if (config_.output.per_order)
-      record.rx_waveform_order_W.assign(
-          bands, std::vector<std::vector<double>>(config_.simulation.max_order, fill_bins));
-    record.rx_energy_J.assign(bands, fill);
-    record.rx_energy_canopy_J.assign(bands, fill);
-    record.rx_energy_ground_J.assign(bands, fill);
-    record.reflectance.assign(bands, fill);
-    process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
+    flag_off_terrain(record, footprint);
     return record;
   }
-
   record.lat_deg = footprint.ground.lat_deg;
   record.lon_deg = footprint.ground.lon_deg;
   record.elev_m = footprint.ground.h_m;
   record.range_m = footprint.range_m;
 
-  const LocalFrame frame(footprint.ground);
-  ShotGeometry geometry;
-  geometry.sensor_m = frame.local_from_ecef(footprint.spacecraft_ecef);
-  geometry.axis = frame.local_direction(footprint.beam_ecef);
-  geometry.range_m = footprint.range_m;
-
-  const double beam_sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
-  const SurfaceOrientation orientation =
-      fit_surface_orientation(terrain_, frame, beam_sigma_m, geometry.axis);
-
-  // With vegetation, diffuse light wanders beyond the beam: the ground reaches further out.
-  const double vegetation_margin_m = config_.canopy ? 100.0 : 0.0;
-  const double half_size_m =
-      patch_half_size_m(terrain_, lidar_, footprint, frame, lidar_.max_angle_rad()) +
-      vegetation_margin_m;
-  // Roughness is subdivided only where the beam is: beyond 4.5 sigma go 4e-5 of the rays.
-  const RoughnessField roughness(config_.terrain.roughness, config_.seed);
-  const double rough_half_size_m =
-      roughness.enabled()
-          ? patch_half_size_m(terrain_, lidar_, footprint, frame,
-                              std::min(lidar_.max_angle_rad(), 4.5 * lidar_.beam_sigma_rad()))
-          : 0.0;
-  const GroundMesh ground = build_ground_mesh(terrain_, frame, half_size_m, terrain_.detail_m(),
-                                              &roughness, rough_half_size_m);
-  const Vegetation vegetation =
-      forest_ ? build_vegetation(*forest_, terrain_, frame, half_size_m, orientation)
-              : Vegetation{};
-  const Scene scene(device_, ground, vegetation);
-  record.slope_deg = orientation.slope_deg;
-  record.aspect_deg = orientation.aspect_deg;
-
+  const ShotScene shot = build_scene(footprint);
+  record.slope_deg = shot.orientation.slope_deg;
+  record.aspect_deg = shot.orientation.aspect_deg;
   // Bin elevations along the beam axis, from the footprint centre.
   const std::vector<double> bin_time_ns = lidar_.bin_time_ns();
   auto elevation_at = [&](double time_ns) {
     const double along_m = 0.5 * speed_of_light_m_s * time_ns * 1e-9;
-    return frame.to_geodetic(along_m * geometry.axis).h_m;
+    return shot.frame.to_geodetic(along_m * shot.geometry.axis).h_m;
   };
   record.elev_bin0_m = elevation_at(bin_time_ns.front());
   record.elev_lastbin_m = elevation_at(bin_time_ns.back());
@@ -207,25 +180,87 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   options.max_order = config_.simulation.max_order;
   options.per_order = config_.output.per_order;
   options.seed = config_.seed;
-  SceneOptics optics;
-  optics.soil_reflectance = config_.terrain.soil_reflectance;
-  for (std::size_t kind = 0; forest_ && kind < forest_->kinds(); ++kind) {
-    const CanopySettings& canopy = forest_->canopy(kind);
-    Foliage foliage;
-    for (std::size_t band = 0; band < bands; ++band) {
-      foliage.reflectance.push_back(canopy.green_fraction * canopy.leaf_reflectance[band] +
-                                    canopy.bark_fraction * canopy.bark_reflectance[band]);
-      foliage.transmittance.push_back(canopy.green_fraction * canopy.leaf_transmittance[band]);
-    }
-    foliage.trunk_reflectance = canopy.bark_reflectance;
-    foliage.leaf_angles = &forest_->leaf_angles(kind);
-    foliage.leaf_size_m = canopy.leaf_size_m;
-    optics.foliage.push_back(foliage);
-  }
   ShotWaveforms waveforms =
-      simulate_shot(scene, lidar_, geometry, optics, options, footprint.shot_number);
+      simulate_shot(*shot.scene, lidar_, shot.geometry, optics_, options, footprint.shot_number);
   if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;
+  record_waveforms(record, std::move(waveforms), footprint.shot_number);
+  process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
+  // The truth over the footprint, beside the estimates: what the beam really fell on.
+  const VegetationTruth truth =
+      measure_vegetation(*shot.scene, footprint.range_m * lidar_.beam_sigma_rad());
+  record.cover_true = truth.cover;
+  record.pai_true = truth.pai;
+  record.canopy_height_true_m = truth.canopy_height_m;
+  record.reflectance = surface_reflectance(record, footprint.range_m);
+  record.footprint_lonlat = beam_outline(*shot.scene, lidar_, shot.geometry, shot.frame);
+  return record;
+}
 
+void ShotSimulator::flag_off_terrain(ShotRecord& record, const Footprint& footprint) const {
+  const std::size_t bands = lidar_.band_count();
+  record.quality_flag = quality_no_terrain;
+  // The shot keeps a position, as a trajectory's coordinates should: where the beam met the
+  // terrain (over nodata), or else where it crosses the ellipsoid; no height when it met none.
+  record.lat_deg = record.lon_deg = record.elev_m = fill;
+  record.range_m = record.slope_deg = record.aspect_deg = fill;
+  if (footprint.on_terrain) {
+    record.lat_deg = footprint.ground.lat_deg;
+    record.lon_deg = footprint.ground.lon_deg;
+    record.elev_m = footprint.ground.h_m;
+    record.range_m = footprint.range_m;
+  } else if (const auto t_m =
+                 ellipsoid_crossing(footprint.spacecraft_ecef, footprint.beam_ecef, 0.0)) {
+    const Geodetic aim = geodetic_from_ecef(footprint.spacecraft_ecef + *t_m * footprint.beam_ecef);
+    record.lat_deg = aim.lat_deg;
+    record.lon_deg = aim.lon_deg;
+  }
+  record.elev_bin0_m = record.elev_lastbin_m = fill;
+  const std::vector<double> fill_bins(lidar_.bins(), fill);
+  record.rx_waveform_W.assign(bands, fill_bins);
+  record.rx_waveform_canopy_W.assign(bands, fill_bins);
+  record.rx_waveform_ground_W.assign(bands, fill_bins);
+  if (config_.output.per_order)
+    record.rx_waveform_order_W.assign(
+        bands, std::vector<std::vector<double>>(config_.simulation.max_order, fill_bins));
+  record.rx_energy_J.assign(bands, fill);
+  record.rx_energy_canopy_J.assign(bands, fill);
+  record.rx_energy_ground_J.assign(bands, fill);
+  record.reflectance.assign(bands, fill);
+  process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
+}
+
+ShotSimulator::ShotScene ShotSimulator::build_scene(const Footprint& footprint) const {
+  ShotScene shot{LocalFrame(footprint.ground), {}, {}, nullptr};
+  shot.geometry.sensor_m = shot.frame.local_from_ecef(footprint.spacecraft_ecef);
+  shot.geometry.axis = shot.frame.local_direction(footprint.beam_ecef);
+  shot.geometry.range_m = footprint.range_m;
+  const double beam_sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
+  shot.orientation =
+      fit_surface_orientation(terrain_, shot.frame, beam_sigma_m, shot.geometry.axis);
+
+  // With vegetation, diffuse light wanders beyond the beam: the ground reaches further out.
+  const double vegetation_margin_m = config_.canopy ? 100.0 : 0.0;
+  const double half_size_m =
+      patch_half_size_m(terrain_, lidar_, footprint, shot.frame, lidar_.max_angle_rad()) +
+      vegetation_margin_m;
+  // Roughness is subdivided only where the beam is: beyond 4.5 sigma go 4e-5 of the rays.
+  const RoughnessField roughness(config_.terrain.roughness, config_.seed);
+  const double rough_half_size_m =
+      roughness.enabled()
+          ? patch_half_size_m(terrain_, lidar_, footprint, shot.frame,
+                              std::min(lidar_.max_angle_rad(), 4.5 * lidar_.beam_sigma_rad()))
+          : 0.0;
+  const GroundMesh ground = build_ground_mesh(terrain_, shot.frame, half_size_m,
+                                              terrain_.detail_m(), &roughness, rough_half_size_m);
+  const Vegetation vegetation =
+      forest_ ? build_vegetation(*forest_, terrain_, shot.frame, half_size_m, shot.orientation)
+              : Vegetation{};
+  shot.scene = std::make_unique<Scene>(device_, ground, vegetation);
+  return shot;
+}
+
+void ShotSimulator::record_waveforms(ShotRecord& record, ShotWaveforms waveforms,
+                                     std::int64_t shot_number) const {
   record.rx_waveform_W = std::move(waveforms.total_W);
   record.rx_waveform_canopy_W = std::move(waveforms.canopy_W);
   record.rx_waveform_ground_W = std::move(waveforms.ground_W);
@@ -233,41 +268,37 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   record.rx_energy_J = waveforms.energy_J;
   record.rx_energy_canopy_J = waveforms.canopy_energy_J;
   record.rx_energy_ground_J = waveforms.ground_energy_J;
+  if (!config_.detector.enabled) return;
   // The detector turns the received power into the recorded waveform (its canopy and ground
   // parts stay the noise-free truth); rx_energy stays the integral of rx_waveform.
   const double bin_s = config_.sensor.bin_ns * 1e-9;
-  if (config_.detector.enabled) {
-    const Detector detector(detector_settings(config_.detector), config_.seed);
-    for (std::size_t band = 0; band < bands; ++band) {
-      record.rx_waveform_W[band] =
-          detector.record(record.rx_waveform_W[band], config_.sensor.bin_ns,
-                          config_.sensor.bands[band].wavelength_nm, footprint.shot_number, band);
-      double sum_W = 0.0;
-      for (double p : record.rx_waveform_W[band]) sum_W += p;
-      record.rx_energy_J[band] = sum_W * bin_s;
-    }
+  const Detector detector(detector_settings(config_.detector), config_.seed);
+  for (std::size_t band = 0; band < lidar_.band_count(); ++band) {
+    record.rx_waveform_W[band] =
+        detector.record(record.rx_waveform_W[band], config_.sensor.bin_ns,
+                        config_.sensor.bands[band].wavelength_nm, shot_number, band);
+    double sum_W = 0.0;
+    for (double p : record.rx_waveform_W[band]) sum_W += p;
+    record.rx_energy_J[band] = sum_W * bin_s;
   }
-  process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
-  // The truth over the footprint, beside the estimates: what the beam really fell on.
-  const VegetationTruth truth = measure_vegetation(scene, beam_sigma_m);
-  record.cover_true = truth.cover;
-  record.pai_true = truth.pai;
-  record.canopy_height_true_m = truth.canopy_height_m;
-  for (std::size_t band = 0; band < bands; ++band) {
-    // The seed's eq. (1): rho = pi E_rec R^2 / (E_t A_T T). E_rec is all of the received energy;
-    // from a detected waveform it is what a user would take: the energy above the noise between
-    // signal begin and end (energy_tr), as background and noise summed over the whole window
-    // would swamp it.
+}
+
+std::vector<double> ShotSimulator::surface_reflectance(const ShotRecord& record,
+                                                       double range_m) const {
+  // The seed's eq. (1): rho = pi E_rec R^2 / (E_t A_T T). E_rec is all of the received energy;
+  // from a detected waveform it is what a user would take: the energy above the noise between
+  // signal begin and end (energy_tr), as background and noise summed over the whole window
+  // would swamp it.
+  std::vector<double> reflectance;
+  for (std::size_t band = 0; band < lidar_.band_count(); ++band) {
     const Band& b = config_.sensor.bands[band];
     const double received_J =
         config_.detector.enabled ? record.energy_tr_J[band] : record.rx_energy_J[band];
-    record.reflectance.push_back(std::numbers::pi * received_J * footprint.range_m *
-                                 footprint.range_m /
-                                 (b.pulse_energy_mJ * 1e-3 * config_.sensor.telescope_area_m2 *
-                                  b.atmos_transmission_roundtrip));
+    reflectance.push_back(std::numbers::pi * received_J * range_m * range_m /
+                          (b.pulse_energy_mJ * 1e-3 * config_.sensor.telescope_area_m2 *
+                           b.atmos_transmission_roundtrip));
   }
-  record.footprint_lonlat = beam_outline(scene, lidar_, geometry, frame);
-  return record;
+  return reflectance;
 }
 
 RunInfo ShotSimulator::run_info(std::int64_t shots, const std::string& command_line) const {

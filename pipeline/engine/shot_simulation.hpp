@@ -11,6 +11,7 @@
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/detector.hpp"
 #include "pipeline/transport/lidar_model.hpp"
+#include "pipeline/transport/shot_transport.hpp"
 #include "terrain/terrain.hpp"
 
 namespace glaswave {
@@ -22,6 +23,7 @@ Detector::Settings detector_settings(const DetectorSettings& detector);
 class ShotSimulator {
  public:
   ShotSimulator(const Config& config, const Terrain& terrain);
+  ~ShotSimulator();
 
   // Thread-safe; the record depends only on the configuration and the footprint.
   ShotRecord simulate(const Footprint& footprint, std::int64_t* ray_queries = nullptr) const;
@@ -32,11 +34,21 @@ class ShotSimulator {
   const LidarModel& lidar() const { return lidar_; }
 
  private:
+  struct ShotScene;
+  SceneOptics scene_optics() const;
+  // The steps of simulate(), in their order.
+  void flag_off_terrain(ShotRecord& record, const Footprint& footprint) const;
+  ShotScene build_scene(const Footprint& footprint) const;
+  void record_waveforms(ShotRecord& record, ShotWaveforms waveforms,
+                        std::int64_t shot_number) const;
+  std::vector<double> surface_reflectance(const ShotRecord& record, double range_m) const;
+
   const Config& config_;
   const Terrain& terrain_;
   LidarModel lidar_;
   RayDevice device_;
   std::optional<Forest> forest_;  // when there is vegetation
+  SceneOptics optics_;            // the same for every shot
 };
 
 }  // namespace glaswave

@@ -7,9 +7,9 @@
 #include <memory>
 #include <sstream>
 
-#include "pipeline/engine/run.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "pipeline/engine/run.hpp"
 
 namespace glaswave {
 namespace {
@@ -113,25 +113,11 @@ Variation parse_variation(const std::string& text) {
   return variation;
 }
 
-void run_sweep(const SweepRequest& request) {
-  if (request.variations.empty()) throw config_error("--vary", "give at least one KEY=V1,V2,...");
-  // Every case is checked before any is simulated: a typo in the last value costs nothing.
-  const Config base_config = load_config(request.config_file, request.overrides);
-  for (const Variation& variation : request.variations)
-    for (const std::string& value : variation.values) {
-      std::vector<std::string> overrides = request.overrides;
-      overrides.push_back(variation.key + "=" + value);
-      load_config(request.config_file, overrides);
-    }
+namespace {
 
-  OutputDirectory directory(request.out_dir);
-  const CaseReturns base = simulate_case(request, "", "");
-  std::vector<CaseReturns> cases;
-  for (const Variation& variation : request.variations)
-    for (const std::string& value : variation.values)
-      cases.push_back(simulate_case(request, variation.key, value));
-
-  const std::vector<Band>& bands = base_config.sensor.bands;
+// sensitivity.csv: one row per case and band, deviations from the base case in percent.
+std::string sensitivity_csv(const std::vector<Band>& bands, const CaseReturns& base,
+                            const std::vector<CaseReturns>& cases) {
   std::ostringstream csv;
   csv << "key,value,band,tr,cr,gr,tr_pct,cr_pct,gr_pct\n";
   for (std::size_t b = 0; b < bands.size(); ++b)
@@ -143,16 +129,22 @@ void run_sweep(const SweepRequest& request) {
           << number(c.tr[b]) << ',' << number(c.cr[b]) << ',' << number(c.gr[b]) << ','
           << percent(c.tr[b], base.tr[b]) << ',' << percent(c.cr[b], base.cr[b]) << ','
           << percent(c.gr[b], base.gr[b]) << '\n';
+  return csv.str();
+}
 
-  // The seed's Table 3: per band, each key's values with the base case's own value as "-".
+// sensitivity.md: the seed's Table 3, per band, each key's values with the base case's own
+// value as "-".
+std::string sensitivity_markdown(const Config& base_config,
+                                 const std::vector<Variation>& variations, const CaseReturns& base,
+                                 const std::vector<CaseReturns>& cases) {
+  const std::vector<Band>& bands = base_config.sensor.bands;
   std::ostringstream md;
   for (std::size_t b = 0; b < bands.size(); ++b) {
     md << "## Band " << bands[b].name << "\n\n"
        << "Variation from the base case, mean over the track's shots; returns partitioned by "
-          "position in the "
-          "waveform.\n\n"
+          "position in the waveform.\n\n"
        << "| Parameter | Value | TR (%) | CR (%) | GR (%) |\n|---|---|---|---|---|\n";
-    for (const Variation& variation : request.variations) {
+    for (const Variation& variation : variations) {
       std::string path = variation.key;
       std::replace(path.begin(), path.end(), '.', '/');
       path.insert(path.begin(), '/');
@@ -174,8 +166,33 @@ void run_sweep(const SweepRequest& request) {
     }
     md << "\n";
   }
-  write_text(request.out_dir / "sensitivity.csv", csv.str());
-  write_text(request.out_dir / "sensitivity.md", md.str());
+  return md.str();
+}
+
+}  // namespace
+
+void run_sweep(const SweepRequest& request) {
+  if (request.variations.empty()) throw config_error("--vary", "give at least one KEY=V1,V2,...");
+  // Every case is checked before any is simulated: a typo in the last value costs nothing.
+  const Config base_config = load_config(request.config_file, request.overrides);
+  for (const Variation& variation : request.variations)
+    for (const std::string& value : variation.values) {
+      std::vector<std::string> overrides = request.overrides;
+      overrides.push_back(variation.key + "=" + value);
+      load_config(request.config_file, overrides);
+    }
+
+  OutputDirectory directory(request.out_dir);
+  const CaseReturns base = simulate_case(request, "", "");
+  std::vector<CaseReturns> cases;
+  for (const Variation& variation : request.variations)
+    for (const std::string& value : variation.values)
+      cases.push_back(simulate_case(request, variation.key, value));
+
+  write_text(request.out_dir / "sensitivity.csv",
+             sensitivity_csv(base_config.sensor.bands, base, cases));
+  write_text(request.out_dir / "sensitivity.md",
+             sensitivity_markdown(base_config, request.variations, base, cases));
   directory.keep();
 }
 
