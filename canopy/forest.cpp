@@ -50,7 +50,7 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
     kind.settings.stand_areas.clear();
     if (s.crown_shape == CrownShape::layer) {
       if (!canopy.stand_areas.empty())
-        throw config_error("/canopy/crown_shape",
+        throw setting_error(ErrorKind::config, "crown_shape",
                            "a layer covers the whole scene: it cannot be used with stands");
       kind.area_density_m2_m3 = s.pai / (2.0 * s.crown_half_height_m);
     } else if (k == 0 && !s.crowns_file.empty()) {

@@ -23,6 +23,16 @@ class Error : public std::runtime_error {
         message_(message) {}
 
   ErrorKind kind() const { return kind_; }
+  // Whether the place is a member of the settings the thrower was given ("vertical_datum"; empty
+  // for the settings as a whole) rather than a JSON path or a file: the floors below the
+  // configuration know their settings, not the JSON they came from.
+  bool names_setting() const { return names_setting_; }
+  // The same error placed at `section` (a JSON pointer such as "/terrain") when it names a
+  // setting: "/terrain/vertical_datum". Other errors come back as they are.
+  Error in_section(const std::string& section) const {
+    if (!names_setting_) return *this;
+    return Error(kind_, place_.empty() ? section : section + "/" + place_, message_);
+  }
   const std::string& place() const { return place_; }
   const std::string& message() const { return message_; }  // what() without the place
   int exit_status() const { return static_cast<int>(kind_); }
@@ -31,7 +41,18 @@ class Error : public std::runtime_error {
   ErrorKind kind_;
   std::string place_;
   std::string message_;
+  bool names_setting_ = false;
+
+  friend Error setting_error(ErrorKind kind, std::string setting, const std::string& message);
 };
+
+// An error about one of the settings a floor below the configuration was given, named as its
+// member ("vertical_datum"), or empty for the settings as a whole.
+inline Error setting_error(ErrorKind kind, std::string setting, const std::string& message) {
+  Error error(kind, std::move(setting), message);
+  error.names_setting_ = true;
+  return error;
+}
 
 inline Error config_error(std::string place, const std::string& message) {
   return Error(ErrorKind::config, std::move(place), message);

@@ -155,7 +155,7 @@ CrsTransform::CrsTransform(const std::string& crs_wkt, const std::string& vertic
     const std::string definition = vertical_datum == "egm96" ? "EPSG:5773" : vertical_datum;
     vertical.reset(proj_create(context, definition.c_str()));
     if (!vertical || proj_get_type(vertical.get()) != PJ_TYPE_VERTICAL_CRS)
-      throw config_error("/terrain/vertical_datum",
+      throw setting_error(ErrorKind::config, "vertical_datum",
                          "must be \"ellipsoid\", \"egm96\" or a vertical CRS PROJ knows, got \"" +
                              vertical_datum + "\"");
     source.reset(proj_create_compound_crs(

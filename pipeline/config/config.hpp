@@ -4,13 +4,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "canopy/canopy_settings.hpp"
+#include "core/error.hpp"
 #include "footprints/track_settings.hpp"
 #include "terrain/terrain_settings.hpp"
 
@@ -52,12 +52,12 @@ struct OutputSettings {
 // to the detector's input (W of received light), so rx_waveform keeps its unit whatever the gain.
 struct DetectorSettings {
   bool enabled = false;
-  double background_W = 0.0;       // mean background light in the field of view (sunlit scene)
-  bool photon_noise = false;       // Poisson statistics of signal and background photons
-  double quantum_efficiency = 1.0; // photoelectrons per photon, for photon_noise
-  double noise_rms_W = 0.0;        // Gaussian detector (dark and amplifier) noise, RMS
-  double gain = 1.0;               // amplification before the digitiser
-  int bits = 0;                    // digitiser resolution; 0: not digitised
+  double background_W = 0.0;        // mean background light in the field of view (sunlit scene)
+  bool photon_noise = false;        // Poisson statistics of signal and background photons
+  double quantum_efficiency = 1.0;  // photoelectrons per photon, for photon_noise
+  double noise_rms_W = 0.0;         // Gaussian detector (dark and amplifier) noise, RMS
+  double gain = 1.0;                // amplification before the digitiser
+  int bits = 0;                     // digitiser resolution; 0: not digitised
   // Full scale at the digitiser (its input-referred level is saturation_W / gain): output above
   // it clips. Required when bits > 0; absent: no saturation.
   std::optional<double> saturation_W;
@@ -90,6 +90,19 @@ struct Config {
   // The configuration as used, presets expanded and defaults filled in; written into products.
   nlohmann::json resolved;
 };
+
+// Calls `open`, which builds a floor below the configuration from the settings of `section` (a
+// JSON pointer such as "/terrain"), and turns an error that names one of those settings into one
+// at its JSON path: the floors below never see JSON.
+template <typename Open>
+auto at_section(const std::string& section, Open&& open) -> decltype(open()) {
+  try {
+    return open();
+  } catch (const Error& e) {
+    if (e.names_setting()) throw e.in_section(section);
+    throw;
+  }
+}
 
 // Reads a JSON file; malformed JSON is an error naming the file, line and column.
 nlohmann::json read_json_file(const std::filesystem::path& file);

@@ -9,9 +9,9 @@
 #include <chrono>
 #include <memory>
 
-#include "canopy/forest.hpp"
 #include "core/error.hpp"
 #include "footprints/track.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
@@ -62,15 +62,15 @@ std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track
 }
 
 CheckSummary check_inputs(const Config& config) {
-  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
+  const std::unique_ptr<Terrain> terrain = open_terrain(config);
   // The forest reads its crowns file and checks what the configuration cannot alone.
-  if (config.canopy) const Forest forest(*config.canopy, config.seed, config.terrain.plane);
-  const Track track(config.track, *terrain);
+  grow_forest(config);
+  const std::unique_ptr<Track> track = plan_track(config, *terrain);
   CheckSummary summary;
-  summary.shots = track.size();
-  summary.sequence_length = track.sequence_length();
-  for (std::int64_t record = 0; record < track.size(); ++record)
-    summary.shots_off_terrain += track.footprint(record).on_terrain ? 0 : 1;
+  summary.shots = track->size();
+  summary.sequence_length = track->sequence_length();
+  for (std::int64_t record = 0; record < track->size(); ++record)
+    summary.shots_off_terrain += track->footprint(record).on_terrain ? 0 : 1;
   return summary;
 }
 
@@ -78,9 +78,10 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
                           const ProgressCallback& progress) {
   const auto started = std::chrono::steady_clock::now();
 
-  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
+  const std::unique_ptr<Terrain> terrain = open_terrain(config);
   // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
-  const Track track(config.track, *terrain);
+  const std::unique_ptr<Track> planned = plan_track(config, *terrain);
+  const Track& track = *planned;
   const std::int64_t length = track.sequence_length();
   const auto selected =
       track.records_of_shots(request.first_shot.value_or(0), request.last_shot.value_or(length));

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "footprints/terrain_intersection.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
 #include "pipeline/scene/vegetation.hpp"
 #include "pipeline/transport/detector.hpp"
@@ -116,7 +117,7 @@ struct ShotSimulator::ShotScene {
 
 ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
     : config_(config), terrain_(terrain), lidar_(lidar_settings(config.sensor)) {
-  if (config.canopy) forest_.emplace(*config.canopy, config.seed, config.terrain.plane);
+  forest_ = grow_forest(config);
   optics_ = scene_optics();
 }
 

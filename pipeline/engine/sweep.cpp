@@ -9,6 +9,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/run.hpp"
 
 namespace glaswave {
@@ -24,8 +25,9 @@ CaseReturns simulate_case(const SweepRequest& request, const std::string& key,
   std::vector<std::string> overrides = request.overrides;
   if (!key.empty()) overrides.push_back(key + "=" + value);
   const Config config = load_config(request.config_file, overrides);
-  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
-  const Track track(config.track, *terrain);
+  const std::unique_ptr<Terrain> terrain = open_terrain(config);
+  const std::unique_ptr<Track> planned = plan_track(config, *terrain);
+  const Track& track = *planned;
   const ShotSimulator simulator(config, *terrain);
   const std::size_t bands = config.sensor.bands.size();
   CaseReturns returns{key, value, std::vector<double>(bands, 0.0), std::vector<double>(bands, 0.0),

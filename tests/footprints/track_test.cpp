@@ -125,7 +125,7 @@ TEST(Track, ATrackThatNeverMeetsTheTerrainIsAnInputError) {
     FAIL() << "expected an error";
   } catch (const Error& e) {
     EXPECT_EQ(e.exit_status(), 3);
-    EXPECT_EQ(e.place(), "/track");
+    EXPECT_EQ(e.in_section("/track").place(), "/track");
     EXPECT_NE(std::string(e.what()).find("never meets the terrain"), std::string::npos) << e.what();
   }
   // A pass that leaves the ground keeps every shot, flagged where it misses.

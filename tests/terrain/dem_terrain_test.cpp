@@ -287,7 +287,9 @@ TEST(DemTerrain, BadFilesAreInputErrorsNamingFileAndCause) {
     ADD_FAILURE() << "EPSG:4326 was taken for a vertical datum";
   } catch (const Error& e) {
     EXPECT_EQ(e.exit_status(), 2);
-    EXPECT_EQ(e.place(), "/terrain/vertical_datum");
+    EXPECT_EQ(e.place(), "vertical_datum");
+    EXPECT_TRUE(e.names_setting());
+    EXPECT_EQ(e.in_section("/terrain").place(), "/terrain/vertical_datum");
   }
 }
 
