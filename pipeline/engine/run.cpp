@@ -13,8 +13,7 @@
 #include "footprints/track.hpp"
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
-#include "pipeline/products/geojson_writer.hpp"
-#include "pipeline/products/netcdf_writer.hpp"
+#include "pipeline/products/product_writer.hpp"
 
 namespace glaswave {
 
@@ -109,20 +108,15 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   const ShotSimulator simulator(used, *terrain);
   RunInfo info = simulator.run_info(last - first, request.command_line);
   info.vertical_datum = terrain->vertical_datum().description;
-  std::unique_ptr<NetcdfWriter> netcdf;
-  std::unique_ptr<GeojsonWriter> geojson;
-  if (config.output.netcdf)
-    netcdf = std::make_unique<NetcdfWriter>(request.out_dir / "shots.nc", info);
-  if (config.output.geojson)
-    geojson = std::make_unique<GeojsonWriter>(request.out_dir / "footprints.geojson", info);
+  const std::vector<std::unique_ptr<ProductWriter>> writers = make_writers(
+      request.out_dir, ProductSettings{config.output.netcdf, config.output.geojson}, info);
 
   RunSummary summary;
   summary.ray_queries = simulate_records(
       simulator, track, first, last, request.threads,
       [&](std::int64_t record, const ShotRecord& shot) {
         const std::int64_t index = record - first;
-        if (netcdf) netcdf->write(index, shot);
-        if (geojson) geojson->write(index, shot);
+        for (const auto& writer : writers) writer->write(index, shot);
         if (shot.quality_flag != quality_good) ++summary.shots_flagged;
       },
       progress);
@@ -135,8 +129,7 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   stats.ray_queries = summary.ray_queries;
   stats.wall_s = summary.wall_s;
   stats.shots_flagged = summary.shots_flagged;
-  if (netcdf) netcdf->finish(stats);
-  if (geojson) geojson->finish(stats);
+  for (const auto& writer : writers) writer->finish(stats);
   directory.keep();
   return summary;
 }

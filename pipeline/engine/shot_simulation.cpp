@@ -8,6 +8,7 @@
 
 #include "footprints/terrain_intersection.hpp"
 #include "pipeline/engine/inputs.hpp"
+#include "pipeline/products/product_fields.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
 #include "pipeline/scene/vegetation.hpp"
 #include "pipeline/transport/detector.hpp"
@@ -18,7 +19,6 @@
 namespace glaswave {
 namespace {
 
-constexpr double fill = std::numeric_limits<double>::quiet_NaN();
 constexpr int outline_vertices = 36;
 
 // Half-width of the ground patch that every sampled ray lands on: the beam's rays at `angle_rad`
@@ -198,12 +198,14 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
 }
 
 void ShotSimulator::flag_off_terrain(ShotRecord& record, const Footprint& footprint) const {
-  const std::size_t bands = lidar_.band_count();
   record.quality_flag = quality_no_terrain;
+  const std::size_t orders =
+      config_.output.per_order ? static_cast<std::size_t>(config_.simulation.max_order) : 0;
+  fill_flagged(record, {.bands = lidar_.band_count(),
+                        .bins = static_cast<std::size_t>(lidar_.bins()),
+                        .orders = orders});
   // The shot keeps a position, as a trajectory's coordinates should: where the beam met the
   // terrain (over nodata), or else where it crosses the ellipsoid; no height when it met none.
-  record.lat_deg = record.lon_deg = record.elev_m = fill;
-  record.range_m = record.slope_deg = record.aspect_deg = fill;
   if (footprint.on_terrain) {
     record.lat_deg = footprint.ground.lat_deg;
     record.lon_deg = footprint.ground.lon_deg;
@@ -215,19 +217,6 @@ void ShotSimulator::flag_off_terrain(ShotRecord& record, const Footprint& footpr
     record.lat_deg = aim.lat_deg;
     record.lon_deg = aim.lon_deg;
   }
-  record.elev_bin0_m = record.elev_lastbin_m = fill;
-  const std::vector<double> fill_bins(lidar_.bins(), fill);
-  record.rx_waveform_W.assign(bands, fill_bins);
-  record.rx_waveform_canopy_W.assign(bands, fill_bins);
-  record.rx_waveform_ground_W.assign(bands, fill_bins);
-  if (config_.output.per_order)
-    record.rx_waveform_order_W.assign(
-        bands, std::vector<std::vector<double>>(config_.simulation.max_order, fill_bins));
-  record.rx_energy_J.assign(bands, fill);
-  record.rx_energy_canopy_J.assign(bands, fill);
-  record.rx_energy_ground_J.assign(bands, fill);
-  record.reflectance.assign(bands, fill);
-  process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
 }
 
 ShotSimulator::ShotScene ShotSimulator::build_scene(const Footprint& footprint) const {

@@ -13,10 +13,13 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
+#include <variant>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "pipeline/products/product_fields.hpp"
 
 namespace glaswave {
 namespace {
@@ -56,8 +59,31 @@ void append_real(std::string& out, double value) {
   if (text.find_first_of(".e") == std::string_view::npos) out += ".0";
 }
 
-void append_first_band(std::string& out, const std::vector<double>& values) {
-  append_real(out, values.empty() ? std::nan("") : values.front());
+// Property `k` of `field` (product_fields.hpp): a scalar, or the first band's value of a
+// per-band field, or its level kGeojsonLevels[k]; null where the shot has none (fill).
+void append_property(std::string& out, const ShotRecord& shot, const ProductField& field,
+                     std::size_t k) {
+  std::visit(
+      [&](auto member) {
+        const auto& value = shot.*member;
+        using T = std::remove_cvref_t<decltype(value)>;
+        if constexpr (std::is_same_v<T, double>) {
+          append_real(out, value);
+        } else if constexpr (std::is_integral_v<T>) {
+          out += std::to_string(static_cast<std::int64_t>(value));
+        } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+          append_real(out, value.empty() ? std::nan("") : value.front());
+        } else if constexpr (std::is_same_v<T, std::vector<std::int32_t>>) {
+          out += value.empty() ? std::string("null") : std::to_string(value.front());
+        } else if constexpr (std::is_same_v<T, std::vector<std::vector<double>>>) {
+          const auto level = static_cast<std::size_t>(kGeojsonLevels[k]);
+          const bool known = !value.empty() && value.front().size() > level;
+          append_real(out, known ? value.front()[level] : std::nan(""));
+        } else {
+          out += "null";  // arrays over orders are never properties
+        }
+      },
+      field.field);
 }
 
 using Ring = std::vector<std::array<double, 2>>;
@@ -125,90 +151,56 @@ struct GeojsonWriter::Impl {
     }
   }
 
-  std::string feature(std::int64_t index, const ShotRecord& shot) const {
-    std::string text = R"({"type":"Feature","geometry":)";
+  // The geometry member's value: the footprint as a Polygon (a MultiPolygon where it crosses
+  // the antimeridian), or null for a shot without one.
+  void append_geometry(std::string& text, std::int64_t index, const ShotRecord& shot) const {
     const auto& ring = shot.footprint_lonlat;
     if (ring.empty()) {
       text += "null";
-    } else {
-      const std::string place = "footprint ring of record " + std::to_string(index) + " (shot " +
-                                std::to_string(shot.shot_number) + ")";
-      if (ring.size() < 4 || ring.front() != ring.back()) {
-        fail(place + ": a Polygon ring must be closed with at least 4 positions, got " +
-             std::to_string(ring.size()));
-      }
-      for (std::size_t i = 0; i < ring.size(); ++i)
-        if (!std::isfinite(ring[i][0]) || !std::isfinite(ring[i][1]))
-          fail(place + ": position " + std::to_string(i) + " is not finite");
-      const std::vector<Ring> parts = split_at_antimeridian(ring);
-      text += parts.size() == 1 ? R"({"type":"Polygon","coordinates":)"
-                                : R"({"type":"MultiPolygon","coordinates":[)";
-      for (std::size_t p = 0; p < parts.size(); ++p) {
-        text += p == 0 ? "[[" : ",[[";
-        for (std::size_t i = 0; i < parts[p].size(); ++i) {
-          text += i == 0 ? "[" : ",[";
-          append_coordinate(text, parts[p][i][0]);
-          text += ',';
-          append_coordinate(text, parts[p][i][1]);
-          text += ']';
-        }
-        text += "]]";
-      }
-      text += parts.size() == 1 ? "}" : "]}";
+      return;
     }
+    const std::string place = "footprint ring of record " + std::to_string(index) + " (shot " +
+                              std::to_string(shot.shot_number) + ")";
+    if (ring.size() < 4 || ring.front() != ring.back()) {
+      fail(place + ": a Polygon ring must be closed with at least 4 positions, got " +
+           std::to_string(ring.size()));
+    }
+    for (std::size_t i = 0; i < ring.size(); ++i)
+      if (!std::isfinite(ring[i][0]) || !std::isfinite(ring[i][1]))
+        fail(place + ": position " + std::to_string(i) + " is not finite");
+    const std::vector<Ring> parts = split_at_antimeridian(ring);
+    text += parts.size() == 1 ? R"({"type":"Polygon","coordinates":)"
+                              : R"({"type":"MultiPolygon","coordinates":[)";
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+      text += p == 0 ? "[[" : ",[[";
+      for (std::size_t i = 0; i < parts[p].size(); ++i) {
+        text += i == 0 ? "[" : ",[";
+        append_coordinate(text, parts[p][i][0]);
+        text += ',';
+        append_coordinate(text, parts[p][i][1]);
+        text += ']';
+      }
+      text += "]]";
+    }
+    text += parts.size() == 1 ? "}" : "]}";
+  }
 
-    // Names as in shots.nc: per-band metrics without their unit suffix.
-    const auto real = [&text](const char* name, double value) {
-      text += ",\"";
-      text += name;
-      text += "\":";
-      append_real(text, value);
-    };
-    const auto first_band = [&text](const char* name, const std::vector<double>& values) {
-      text += ",\"";
-      text += name;
-      text += "\":";
-      append_first_band(text, values);
-    };
-    text += R"(,"properties":{"shot_number":)" + std::to_string(shot.shot_number);
-    real("time", shot.time_s);
-    real("lat", shot.lat_deg);
-    real("lon", shot.lon_deg);
-    real("elev", shot.elev_m);
-    real("sc_lat", shot.sc_lat_deg);
-    real("sc_lon", shot.sc_lon_deg);
-    real("sc_alt", shot.sc_alt_m);
-    real("off_nadir_deg", shot.off_nadir_deg);
-    real("range_m", shot.range_m);
-    real("slope_deg", shot.slope_deg);
-    real("aspect_deg", shot.aspect_deg);
-    real("elev_bin0", shot.elev_bin0_m);
-    real("elev_lastbin", shot.elev_lastbin_m);
-    text += ",\"quality_flag\":" + std::to_string(static_cast<int>(shot.quality_flag));
-    first_band("rx_energy", shot.rx_energy_J);
-    first_band("rx_energy_canopy", shot.rx_energy_canopy_J);
-    first_band("rx_energy_ground", shot.rx_energy_ground_J);
-    first_band("reflectance", shot.reflectance);
-    first_band("energy_tr", shot.energy_tr_J);
-    first_band("energy_cr", shot.energy_cr_J);
-    first_band("energy_gr", shot.energy_gr_J);
-    first_band("waveform_index", shot.waveform_index);
-    first_band("sig_begin_m", shot.sig_begin_m);
-    first_band("sig_end_m", shot.sig_end_m);
-    first_band("centroid_m", shot.centroid_m);
-    first_band("ground_elev_est", shot.ground_elev_est_m);
-    first_band("canopy_height_est", shot.canopy_height_est_m);
-    text += ",\"n_peaks\":";
-    text += shot.n_peaks.empty() ? std::string("null") : std::to_string(shot.n_peaks.front());
-    // GEDI L2A's usual few of rh0..rh100, named as GEDI names them.
-    for (const int k : {25, 50, 75, 98, 100}) {
-      const bool known =
-          !shot.rh_m.empty() && shot.rh_m.front().size() > static_cast<std::size_t>(k);
-      real(("rh" + std::to_string(k)).c_str(), known ? shot.rh_m.front()[k] : std::nan(""));
+  std::string feature(std::int64_t index, const ShotRecord& shot) const {
+    std::string text = R"({"type":"Feature","geometry":)";
+    append_geometry(text, index, shot);
+    text += R"(,"properties":{)";
+    bool first = true;
+    for (const ProductField& field : product_fields()) {
+      if (field.geojson == GeojsonProperty::none) continue;
+      const std::vector<std::string> names = geojson_property_names(field);
+      for (std::size_t k = 0; k < names.size(); ++k) {
+        text += first ? "\"" : ",\"";
+        text += names[k];
+        text += "\":";
+        append_property(text, shot, field, k);
+        first = false;
+      }
     }
-    real("cover_true", shot.cover_true);
-    real("pai_true", shot.pai_true);
-    real("canopy_height_true", shot.canopy_height_true_m);
     text += "}}";
     return text;
   }
@@ -220,7 +212,7 @@ struct GeojsonWriter::Impl {
 };
 
 GeojsonWriter::GeojsonWriter(std::filesystem::path final_path, const RunInfo& info)
-    : impl_(std::make_unique<Impl>(std::move(final_path))) {
+    : final_path_(std::move(final_path)), impl_(std::make_unique<Impl>(final_path_)) {
   Impl& impl = *impl_;
   if (info.shots < 1)
     impl.fail("a product needs at least one shot, got " + std::to_string(info.shots));
@@ -233,8 +225,13 @@ GeojsonWriter::GeojsonWriter(std::filesystem::path final_path, const RunInfo& in
 
 GeojsonWriter::~GeojsonWriter() = default;
 
+GeojsonWriter::Impl& GeojsonWriter::impl() {
+  if (!impl_) throw run_error(final_path_.string(), "the product was aborted");
+  return *impl_;
+}
+
 void GeojsonWriter::write(std::int64_t index, const ShotRecord& shot) {
-  Impl& impl = *impl_;
+  Impl& impl = this->impl();
   if (impl.finished) impl.fail("write after finish");
   if (index < 0 || index >= impl.shots) {
     impl.fail("record index " + std::to_string(index) + " outside [0, " +
@@ -255,7 +252,7 @@ void GeojsonWriter::write(std::int64_t index, const ShotRecord& shot) {
 }
 
 void GeojsonWriter::finish(const RunStats& /*stats*/) {
-  Impl& impl = *impl_;
+  Impl& impl = this->impl();
   if (impl.finished) impl.fail("finished twice");
   if (impl.next != impl.shots)
     impl.fail("record " + std::to_string(impl.next) + " was never written");
@@ -266,6 +263,11 @@ void GeojsonWriter::finish(const RunStats& /*stats*/) {
     impl.fail("cannot write " + impl.file.part_path().string() + ": " + std::strerror(errno));
   impl.file.commit();
   impl.finished = true;
+}
+
+void GeojsonWriter::abort() noexcept {
+  // A finished product stays: only an unfinished one has a .part to give up.
+  if (impl_ && !impl_->finished) impl_.reset();
 }
 
 }  // namespace glaswave

@@ -1,23 +1,24 @@
 // footprints.geojson: one RFC 7946 Feature per shot, the footprint's 1/e^2 contour on the
-// terrain as a Polygon with the shot's scalars and its first band's metrics as properties
-// (PRODUCT.md section 4). Shots may come in any order; Features come out in record order.
+// terrain as a Polygon with the properties product_fields.hpp gives it (the shot's scalars and
+// its first band's values; PRODUCT.md section 4). Shots may come in any order; Features come out in record order.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <memory>
 
+#include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/shot_record.hpp"
 
 namespace glaswave {
 
-class GeojsonWriter {
+class GeojsonWriter final : public ProductWriter {
  public:
   // Creates final_path + ".part". Throws Error (run) when it cannot be created.
   GeojsonWriter(std::filesystem::path final_path, const RunInfo& info);
 
-  // An unfinished writer closes and removes its .part file.
-  ~GeojsonWriter();
+  // An unfinished writer is aborted.
+  ~GeojsonWriter() override;
 
   GeojsonWriter(const GeojsonWriter&) = delete;
   GeojsonWriter& operator=(const GeojsonWriter&) = delete;
@@ -27,15 +28,20 @@ class GeojsonWriter {
   // as all those before them have come, so only shots that arrive early are held in memory.
   // An empty footprint ring (a flagged shot) gives a null geometry; a non-empty one must be
   // closed, with at least 4 positions, all finite.
-  void write(std::int64_t index, const ShotRecord& shot);
+  void write(std::int64_t index, const ShotRecord& shot) override;
 
   // Closes the collection and renames the file to its final name. Throws Error (run) if a
   // record was never written or the file cannot be completed. The statistics are not part
   // of this product; the parameter keeps the writers interchangeable.
-  void finish(const RunStats& stats);
+  void finish(const RunStats& stats) override;
+
+  // Closes the file and removes the .part.
+  void abort() noexcept override;
 
  private:
   struct Impl;
+  Impl& impl();  // throws Error (run) after abort()
+  std::filesystem::path final_path_;
   std::unique_ptr<Impl> impl_;
 };
 

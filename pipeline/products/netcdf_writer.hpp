@@ -7,19 +7,20 @@
 #include <filesystem>
 #include <memory>
 
+#include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/shot_record.hpp"
 
 namespace glaswave {
 
-class NetcdfWriter {
+class NetcdfWriter final : public ProductWriter {
  public:
   // Creates final_path + ".part" with every dimension and variable defined and the
   // shot-independent variables (bands, bin times, transmitted pulse) written.
   // Throws Error (run) when the file cannot be created or `info` is inconsistent.
   NetcdfWriter(std::filesystem::path final_path, const RunInfo& info);
 
-  // An unfinished writer closes and removes its .part file.
-  ~NetcdfWriter();
+  // An unfinished writer is aborted.
+  ~NetcdfWriter() override;
 
   NetcdfWriter(const NetcdfWriter&) = delete;
   NetcdfWriter& operator=(const NetcdfWriter&) = delete;
@@ -28,14 +29,19 @@ class NetcdfWriter {
   // Not thread-safe: calls must come one at a time. Per-band arrays must match the run's
   // bands and bins; a flagged shot (quality_flag != good) may leave them empty, which
   // leaves fill (NaN) in the file.
-  void write(std::int64_t index, const ShotRecord& shot);
+  void write(std::int64_t index, const ShotRecord& shot) override;
 
   // Writes the run statistics attributes, closes the file and renames it to the final
   // name. Throws Error (run) if a record was never written or the file cannot be completed.
-  void finish(const RunStats& stats);
+  void finish(const RunStats& stats) override;
+
+  // Closes the file without flushing it and removes the .part.
+  void abort() noexcept override;
 
  private:
   struct Impl;
+  Impl& impl();  // throws Error (run) after abort()
+  std::filesystem::path final_path_;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "pipeline/products/product_fields.hpp"
+
 namespace glaswave {
 namespace {
 
@@ -51,6 +53,173 @@ double overlap(int i, double a, double b) {
   return std::max(0.0, std::min(i + 0.5, b) - std::max(i - 0.5, a));
 }
 
+// Noise level from the quieter end of the window: the return sits inside it, but tall canopy
+// on steep ground may reach one end. The sd is that of the smoothed waveform.
+Statistics measure_noise(std::span<const double> power_W, const WaveformProcessing& settings,
+                         double pulse_bins) {
+  Statistics noise;
+  if (settings.noise_free) return noise;
+  const int n = static_cast<int>(power_W.size());
+  const int end_bins = std::clamp(static_cast<int>(settings.noise_fraction * n), 2, n);
+  const Statistics head = statistics(power_W.subspan(0, end_bins));
+  const Statistics tail = statistics(power_W.subspan(n - end_bins));
+  const bool use_head = head.mean <= tail.mean;
+  noise.mean = use_head ? head.mean : tail.mean;
+  noise.sd = (use_head ? head.sd : tail.sd) * filter_noise_gain(pulse_bins);
+  return noise;
+}
+
+// Signal begin and end (fractional bins): the first and last crossings of the threshold,
+// interpolated between bins. The smoothed waveform must exceed the threshold somewhere.
+struct Extent {
+  double begin = 0.0, end = 0.0;
+};
+
+Extent signal_extent(const std::vector<double>& smoothed, double threshold) {
+  const int n = static_cast<int>(smoothed.size());
+  int first = 0;
+  while (smoothed[first] <= threshold) ++first;
+  int last = n - 1;
+  while (smoothed[last] <= threshold) --last;
+  const double t = threshold;
+  const double begin =
+      first == 0 ? 0.0
+                 : first - 1 + (t - smoothed[first - 1]) / (smoothed[first] - smoothed[first - 1]);
+  const double end =
+      last == n - 1 ? n - 1.0 : last + (smoothed[last] - t) / (smoothed[last] - smoothed[last + 1]);
+  return {begin, end};
+}
+
+// The Gaussians fitted over the signal's extent and the pulse's tails beyond it, and their
+// slots in the metrics as elevations, times and energies.
+void decompose(const std::vector<double>& signal, Extent extent, double pulse_bins,
+               double significance_level, const WaveformProcessing& settings,
+               const WaveformAxis& axis, WaveformMetrics& m) {
+  const std::size_t bins = signal.size();
+  DecompositionSettings decomposition;
+  decomposition.max_components = kMaxGaussians;
+  decomposition.min_sigma_bins = pulse_bins;
+  decomposition.smooth_sigma_bins = pulse_bins;
+  decomposition.significance_level = significance_level;
+  decomposition.min_area_fraction = settings.min_gaussian_area_fraction;
+  const int margin = static_cast<int>(std::ceil(3.0 * pulse_bins));
+  m.gaussians = decompose_waveform(signal, static_cast<int>(std::floor(extent.begin)) - margin,
+                                   static_cast<int>(std::ceil(extent.end)) + margin, decomposition);
+  m.n_peaks = static_cast<int>(m.gaussians.size());
+  for (int k = 0; k < m.n_peaks && k < kMaxGaussians; ++k) {
+    const GaussianComponent& g = m.gaussians[k];
+    m.gauss_amp_W[k] = g.amplitude;
+    m.gauss_center_m[k] = axis.elevation_m(g.center_bin, bins);
+    m.gauss_sigma_ns[k] = g.sigma_bins * axis.bin_ns;
+    m.gauss_area_J[k] = g.area() * axis.bin_ns * 1e-9;
+  }
+}
+
+// The ground (m.ground_elev_m) and the split between canopy and ground, as a fractional bin
+// (larger is lower), from at least one Gaussian. The ground is the lowest Gaussian that is a
+// peak of its own, as strong as a surface return is. Light scattered many times in the crowns
+// arrives late and trails below the ground as a faint, broad tail, which a fit covers with a
+// broad Gaussian of a few % of the peak; a ground return, pulse-wide, stands far higher even
+// under dense crowns.
+double split_at_ground(const WaveformAxis& axis, std::size_t bins, WaveformMetrics& m) {
+  double strongest = 0.0;
+  for (const GaussianComponent& g : m.gaussians) strongest = std::max(strongest, g.amplitude);
+  std::size_t ground_index = m.gaussians.size() - 1;
+  while (ground_index > 0 && m.gaussians[ground_index].amplitude < kGroundMinAmplitude * strongest)
+    --ground_index;
+  const GaussianComponent& ground = m.gaussians[ground_index];
+  m.ground_elev_m = axis.elevation_m(ground.center_bin, bins);
+  double split = ground.center_bin - kSplitSigmas * ground.sigma_bins;
+  // Where the canopy's Gaussians outweigh the ground's before that, the split comes down.
+  for (double x = ground.center_bin; x > split; x -= 0.05) {
+    double others = 0.0;
+    for (std::size_t k = 0; k < ground_index; ++k) others += m.gaussians[k].value_at(x);
+    if (others > ground.value_at(x)) {
+      split = x;
+      break;
+    }
+  }
+  return split;
+}
+
+// The signal's energy between begin and end, by part of each bin, above and below the split.
+struct Partition {
+  double canopy = 0.0, ground = 0.0, moment = 0.0;
+  std::vector<double> energy;  // per bin, within [begin, end]
+};
+
+Partition partition_energy(const std::vector<double>& signal, Extent extent, double split) {
+  const int n = static_cast<int>(signal.size());
+  const double begin = extent.begin, end = extent.end;
+  Partition p;
+  p.energy.assign(n, 0.0);
+  for (int i = static_cast<int>(std::floor(begin)); i <= static_cast<int>(std::ceil(end)) && i < n;
+       ++i) {
+    if (i < 0) continue;
+    p.energy[i] = signal[i] * overlap(i, begin, end);
+    p.moment += p.energy[i] * i;
+    p.canopy += signal[i] * overlap(i, begin, std::min(split, end));
+    p.ground += signal[i] * overlap(i, std::max(split, begin), end);
+  }
+  return p;
+}
+
+// rh: counted up from signal end, each bin's energy spread evenly over its part in [begin, end];
+// `total` > 0 is the energy between them.
+void relative_heights(const std::vector<double>& energy, double total, Extent extent,
+                      const WaveformAxis& axis, WaveformMetrics& m) {
+  const int n = static_cast<int>(energy.size());
+  const double begin = extent.begin, end = extent.end;
+  std::array<double, kRhLevels> position{};
+  int level = 0;
+  double cumulative = 0.0;
+  for (int i = static_cast<int>(std::ceil(end));
+       i >= static_cast<int>(std::floor(begin)) && level < kRhLevels; --i) {
+    if (i < 0 || i >= n) continue;
+    const double lo = std::max(i - 0.5, begin), hi = std::min(i + 0.5, end);  // lo is higher
+    if (hi <= lo) continue;
+    while (level < kRhLevels) {
+      // Slightly short of the exact share, so that round-off cannot push rh100 past the top.
+      const double target = total * (level / 100.0 - 1e-12);
+      if (energy[i] > 0.0 && cumulative + energy[i] >= target) {
+        const double along = std::clamp((target - cumulative) / energy[i], 0.0, 1.0);
+        position[level++] = hi - along * (hi - lo);
+      } else {
+        break;
+      }
+    }
+    cumulative += energy[i];
+  }
+  for (; level < kRhLevels; ++level) position[level] = begin;  // round-off at the top
+  for (int k = 0; k < kRhLevels; ++k)
+    m.rh_m[k] = axis.elevation_m(position[k], static_cast<std::size_t>(n)) - m.ground_elev_m;
+}
+
+// TR, CR, GR, the waveform index, the centroid, rh and the canopy height from the partition.
+// Without a Gaussian there is no ground to split at: CR and GR are NaN, and so is what
+// needs the ground.
+void store_partition(const Partition& p, Extent extent, const WaveformAxis& axis,
+                     WaveformMetrics& m) {
+  const std::size_t bins = p.energy.size();
+  const double joules_per_bin = axis.bin_ns * 1e-9;
+  const double total = p.canopy + p.ground;
+  if (total > 0.0) m.centroid_m = axis.elevation_m(p.moment / total, bins);
+  if (m.gaussians.empty()) {
+    m.energy_tr_J = total * joules_per_bin;
+    m.energy_cr_J = m.energy_gr_J = nan;
+    return;
+  }
+  m.energy_cr_J = p.canopy * joules_per_bin;
+  m.energy_gr_J = p.ground * joules_per_bin;
+  m.energy_tr_J = m.energy_cr_J + m.energy_gr_J;
+  if (m.energy_tr_J > 0.0) m.waveform_index = (m.energy_cr_J - m.energy_gr_J) / m.energy_tr_J;
+  if (total > 0.0) relative_heights(p.energy, total, extent, axis, m);
+  // Canopy height as the product contract and GLA14 define it: signal begin above the ground.
+  // It includes the pulse's own rise to the threshold (about 3 m for a 5 ns pulse over bare
+  // ground with no noise), as the instrument's products do.
+  m.canopy_height_m = m.sig_begin_m - m.ground_elev_m;
+}
+
 }  // namespace
 
 double WaveformAxis::elevation_m(double bin, std::size_t bins) const {
@@ -69,7 +238,7 @@ WaveformMetrics WaveformMetrics::none() {
   m.gauss_center_m.fill(nan);
   m.gauss_sigma_ns.fill(nan);
   m.gauss_area_J.fill(nan);
-  m.ground_elev_m = m.canopy_height_m = m.split_elev_m = nan;
+  m.ground_elev_m = m.canopy_height_m = nan;
   m.rh_m.fill(nan);
   return m;
 }
@@ -85,149 +254,28 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
   const double pulse_bins = settings.pulse_sigma_ns / axis.bin_ns;
   const std::vector<double> smoothed = gaussian_smooth(power_W, pulse_bins);
 
-  // Noise level from the quieter end of the window: the return sits inside it, but tall canopy
-  // on steep ground may reach one end.
-  double noise_mean = 0.0, noise_sd = 0.0;
-  if (!settings.noise_free) {
-    const int end_bins = std::clamp(static_cast<int>(settings.noise_fraction * n), 2, n);
-    const Statistics head = statistics(power_W.subspan(0, end_bins));
-    const Statistics tail = statistics(power_W.subspan(n - end_bins));
-    const bool use_head = head.mean <= tail.mean;
-    noise_mean = use_head ? head.mean : tail.mean;
-    noise_sd = (use_head ? head.sd : tail.sd) * filter_noise_gain(pulse_bins);
-  }
-  m.noise_mean_W = noise_mean;
-  m.noise_sd_W = noise_sd;
+  const Statistics noise = measure_noise(power_W, settings, pulse_bins);
+  m.noise_mean_W = noise.mean;
+  m.noise_sd_W = noise.sd;
   const double peak = *std::max_element(smoothed.begin(), smoothed.end());
   const double above =
-      std::max(settings.noise_sigmas * noise_sd, settings.peak_fraction * (peak - noise_mean));
-  m.threshold_W = noise_mean + above;
+      std::max(settings.noise_sigmas * noise.sd, settings.peak_fraction * (peak - noise.mean));
+  m.threshold_W = noise.mean + above;
   m.energy_tr_J = m.energy_cr_J = m.energy_gr_J = 0.0;
   if (!(peak > m.threshold_W) || !(above > 0.0)) return m;  // no signal
 
-  // Signal begin and end: the first and last crossings of the threshold, between bins.
-  int first = 0;
-  while (smoothed[first] <= m.threshold_W) ++first;
-  int last = n - 1;
-  while (smoothed[last] <= m.threshold_W) --last;
-  const double t = m.threshold_W;
-  const double begin =
-      first == 0 ? 0.0
-                 : first - 1 + (t - smoothed[first - 1]) / (smoothed[first] - smoothed[first - 1]);
-  const double end =
-      last == n - 1 ? n - 1.0 : last + (smoothed[last] - t) / (smoothed[last] - smoothed[last + 1]);
-  m.sig_begin_bin = begin;
-  m.sig_end_bin = end;
-  m.sig_begin_m = axis.elevation_m(begin, bins);
-  m.sig_end_m = axis.elevation_m(end, bins);
+  const Extent extent = signal_extent(smoothed, m.threshold_W);
+  m.sig_begin_bin = extent.begin;
+  m.sig_end_bin = extent.end;
+  m.sig_begin_m = axis.elevation_m(extent.begin, bins);
+  m.sig_end_m = axis.elevation_m(extent.end, bins);
 
   // Everything below works on the waveform above the noise level.
   std::vector<double> signal(power_W.begin(), power_W.end());
-  for (double& v : signal) v -= noise_mean;
-
-  DecompositionSettings decomposition;
-  decomposition.max_components = kMaxGaussians;
-  decomposition.min_sigma_bins = pulse_bins;
-  decomposition.smooth_sigma_bins = pulse_bins;
-  decomposition.significance_level = above;
-  decomposition.min_area_fraction = settings.min_gaussian_area_fraction;
-  // The fit sees the pulse's tails beyond the threshold crossings too.
-  const int margin = static_cast<int>(std::ceil(3.0 * pulse_bins));
-  m.gaussians = decompose_waveform(signal, static_cast<int>(std::floor(begin)) - margin,
-                                   static_cast<int>(std::ceil(end)) + margin, decomposition);
-  m.n_peaks = static_cast<int>(m.gaussians.size());
-  for (int k = 0; k < m.n_peaks && k < kMaxGaussians; ++k) {
-    const GaussianComponent& g = m.gaussians[k];
-    m.gauss_amp_W[k] = g.amplitude;
-    m.gauss_center_m[k] = axis.elevation_m(g.center_bin, bins);
-    m.gauss_sigma_ns[k] = g.sigma_bins * axis.bin_ns;
-    m.gauss_area_J[k] = g.area() * axis.bin_ns * 1e-9;
-  }
-
-  // The split between canopy and ground, as a fractional bin (larger is lower). Without a
-  // Gaussian there is no ground to split at: CR and GR are then left NaN below.
-  double split = begin;
-  if (!m.gaussians.empty()) {
-    // The ground: the lowest Gaussian that is a peak of its own, as strong as a surface return
-    // is. Light scattered many times in the crowns arrives late and trails below the ground as a
-    // faint, broad tail, which a fit covers with a broad Gaussian of a few % of the peak; a
-    // ground return, pulse-wide, stands far higher even under dense crowns.
-    double strongest = 0.0;
-    for (const GaussianComponent& g : m.gaussians) strongest = std::max(strongest, g.amplitude);
-    std::size_t ground_index = m.gaussians.size() - 1;
-    while (ground_index > 0 &&
-           m.gaussians[ground_index].amplitude < kGroundMinAmplitude * strongest)
-      --ground_index;
-    const GaussianComponent& ground = m.gaussians[ground_index];
-    m.ground_elev_m = axis.elevation_m(ground.center_bin, bins);
-    split = ground.center_bin - kSplitSigmas * ground.sigma_bins;
-    // Where the canopy's Gaussians outweigh the ground's before that, the split comes down.
-    for (double x = ground.center_bin; x > split; x -= 0.05) {
-      double others = 0.0;
-      for (std::size_t k = 0; k < ground_index; ++k) others += m.gaussians[k].value_at(x);
-      if (others > ground.value_at(x)) {
-        split = x;
-        break;
-      }
-    }
-    m.split_elev_m = axis.elevation_m(split, bins);
-  }
-
-  // Energies between signal begin and end, by part of each bin.
-  const double joules_per_bin = axis.bin_ns * 1e-9;
-  double canopy = 0.0, ground = 0.0, moment = 0.0;
-  std::vector<double> energy(n, 0.0);  // per bin, within [begin, end]
-  for (int i = static_cast<int>(std::floor(begin)); i <= static_cast<int>(std::ceil(end)) && i < n;
-       ++i) {
-    if (i < 0) continue;
-    energy[i] = signal[i] * overlap(i, begin, end);
-    moment += energy[i] * i;
-    canopy += signal[i] * overlap(i, begin, std::min(split, end));
-    ground += signal[i] * overlap(i, std::max(split, begin), end);
-  }
-  const double total = canopy + ground;
-  if (total > 0.0) m.centroid_m = axis.elevation_m(moment / total, bins);
-  if (m.gaussians.empty()) {
-    m.energy_tr_J = total * joules_per_bin;
-    m.energy_cr_J = m.energy_gr_J = nan;
-    return m;
-  }
-  m.energy_cr_J = canopy * joules_per_bin;
-  m.energy_gr_J = ground * joules_per_bin;
-  m.energy_tr_J = m.energy_cr_J + m.energy_gr_J;
-  if (m.energy_tr_J > 0.0) m.waveform_index = (m.energy_cr_J - m.energy_gr_J) / m.energy_tr_J;
-
-  // rh: counted up from signal end, each bin's energy spread evenly over its part in [begin, end].
-  if (total > 0.0) {
-    std::array<double, kRhLevels> position{};
-    int level = 0;
-    double cumulative = 0.0;
-    for (int i = static_cast<int>(std::ceil(end));
-         i >= static_cast<int>(std::floor(begin)) && level < kRhLevels; --i) {
-      if (i < 0 || i >= n) continue;
-      const double lo = std::max(i - 0.5, begin), hi = std::min(i + 0.5, end);  // lo is higher
-      if (hi <= lo) continue;
-      while (level < kRhLevels) {
-        // Slightly short of the exact share, so that round-off cannot push rh100 past the top.
-        const double target = total * (level / 100.0 - 1e-12);
-        if (energy[i] > 0.0 && cumulative + energy[i] >= target) {
-          const double along = std::clamp((target - cumulative) / energy[i], 0.0, 1.0);
-          position[level++] = hi - along * (hi - lo);
-        } else {
-          break;
-        }
-      }
-      cumulative += energy[i];
-    }
-    for (; level < kRhLevels; ++level) position[level] = begin;  // round-off at the top
-    for (int k = 0; k < kRhLevels; ++k)
-      m.rh_m[k] = axis.elevation_m(position[k], bins) - m.ground_elev_m;
-  }
-
-  // Canopy height as the product contract and GLA14 define it: signal begin above the ground.
-  // It includes the pulse's own rise to the threshold (about 3 m for a 5 ns pulse over bare
-  // ground with no noise), as the instrument's products do.
-  m.canopy_height_m = m.sig_begin_m - m.ground_elev_m;
+  for (double& v : signal) v -= noise.mean;
+  decompose(signal, extent, pulse_bins, above, settings, axis, m);
+  const double split = m.gaussians.empty() ? extent.begin : split_at_ground(axis, bins, m);
+  store_partition(partition_energy(signal, extent, split), extent, axis, m);
   return m;
 }
 
@@ -235,35 +283,12 @@ std::vector<double> process_shot_waveforms(ShotRecord& record, double bin_ns,
                                            const WaveformProcessing& settings) {
   const WaveformAxis axis{bin_ns, record.elev_bin0_m, record.elev_lastbin_m};
   const std::size_t bands = record.rx_waveform_W.size();
-  for (auto field :
-       {&ShotRecord::energy_tr_J, &ShotRecord::energy_cr_J, &ShotRecord::energy_gr_J,
-        &ShotRecord::waveform_index, &ShotRecord::sig_begin_m, &ShotRecord::sig_end_m,
-        &ShotRecord::centroid_m, &ShotRecord::ground_elev_est_m, &ShotRecord::canopy_height_est_m})
-    (record.*field).assign(bands, nan);
-  record.n_peaks.assign(bands, 0);
-  for (auto field : {&ShotRecord::gauss_amp_W, &ShotRecord::gauss_center_m,
-                     &ShotRecord::gauss_sigma_ns, &ShotRecord::gauss_area_J})
-    (record.*field).assign(bands, std::vector<double>(kMaxGaussians, nan));
-  record.rh_m.assign(bands, std::vector<double>(kRhLevels, nan));
+  fill_fields(record, FieldSource::metrics, ProductShape{.bands = bands});
   std::vector<double> noise_mean_W(bands, nan);
   if (record.quality_flag != quality_good) return noise_mean_W;
   for (std::size_t band = 0; band < bands; ++band) {
     const WaveformMetrics m = process_waveform(record.rx_waveform_W[band], axis, settings);
-    record.energy_tr_J[band] = m.energy_tr_J;
-    record.energy_cr_J[band] = m.energy_cr_J;
-    record.energy_gr_J[band] = m.energy_gr_J;
-    record.waveform_index[band] = m.waveform_index;
-    record.sig_begin_m[band] = m.sig_begin_m;
-    record.sig_end_m[band] = m.sig_end_m;
-    record.centroid_m[band] = m.centroid_m;
-    record.ground_elev_est_m[band] = m.ground_elev_m;
-    record.canopy_height_est_m[band] = m.canopy_height_m;
-    record.n_peaks[band] = m.n_peaks;
-    record.gauss_amp_W[band].assign(m.gauss_amp_W.begin(), m.gauss_amp_W.end());
-    record.gauss_center_m[band].assign(m.gauss_center_m.begin(), m.gauss_center_m.end());
-    record.gauss_sigma_ns[band].assign(m.gauss_sigma_ns.begin(), m.gauss_sigma_ns.end());
-    record.gauss_area_J[band].assign(m.gauss_area_J.begin(), m.gauss_area_J.end());
-    record.rh_m[band].assign(m.rh_m.begin(), m.rh_m.end());
+    store_metrics(record, band, m);
     noise_mean_W[band] = m.noise_mean_W;
   }
   return noise_mean_W;

@@ -76,7 +76,6 @@ struct WaveformMetrics {
       gauss_area_J{};
   double ground_elev_m = 0.0;
   double canopy_height_m = 0.0;
-  double split_elev_m = 0.0;  // where CR ends and GR begins
   std::array<double, kRhLevels> rh_m{};
 
   // Every value NaN (n_peaks 0): a waveform with no signal above the threshold, or fill.

@@ -1,0 +1,460 @@
+// The product field table and what it drives outside the writers: the shapes of a run's
+// fields, the fill of a flagged shot, and the copy of the waveform metrics into the record.
+#include "pipeline/products/product_fields.hpp"
+
+#include <stdexcept>
+#include <type_traits>
+
+namespace glaswave {
+namespace {
+
+using S = StorageType;
+using F = FieldSource;
+using R = ShotRecord;
+using M = WaveformMetrics;
+
+// Spacecraft latitude/longitude carry no standard_name on purpose: tools that find the
+// geolocation by standard_name must find the footprint, not the spacecraft.
+const ProductField kProductFields[] = {
+    {.name = "shot_number",
+     .type = S::int64,
+     .field = &R::shot_number,
+     .source = F::shot,
+     .units = "1",
+     .long_name = "shot number in the track, from 0"},
+    {.name = "time",
+     .type = S::float64,
+     .field = &R::time_s,
+     .source = F::shot,
+     .units = "seconds since 2000-01-01 12:00:00",
+     .long_name = "time of the shot (seconds since the GLAS epoch)",
+     .standard_name = "time"},
+    {.name = "lat",
+     .type = S::float64,
+     .field = &R::lat_deg,
+     .source = F::geolocation,
+     .units = "degrees_north",
+     .long_name = "latitude of the footprint centre on the terrain",
+     .standard_name = "latitude"},
+    {.name = "lon",
+     .type = S::float64,
+     .field = &R::lon_deg,
+     .source = F::geolocation,
+     .units = "degrees_east",
+     .long_name = "longitude of the footprint centre on the terrain",
+     .standard_name = "longitude"},
+    {.name = "elev",
+     .type = S::float64,
+     .field = &R::elev_m,
+     .source = F::geolocation,
+     .units = "m",
+     .long_name = "elevation of the footprint centre above the WGS84 ellipsoid",
+     .standard_name = "height_above_reference_ellipsoid"},
+    {.name = "sc_lat",
+     .type = S::float64,
+     .field = &R::sc_lat_deg,
+     .source = F::shot,
+     .units = "degrees_north",
+     .long_name = "latitude of the spacecraft"},
+    {.name = "sc_lon",
+     .type = S::float64,
+     .field = &R::sc_lon_deg,
+     .source = F::shot,
+     .units = "degrees_east",
+     .long_name = "longitude of the spacecraft"},
+    {.name = "sc_alt",
+     .type = S::float64,
+     .field = &R::sc_alt_m,
+     .source = F::shot,
+     .units = "m",
+     .long_name = "altitude of the spacecraft above the WGS84 ellipsoid"},
+    {.name = "off_nadir_deg",
+     .type = S::float64,
+     .field = &R::off_nadir_deg,
+     .source = F::shot,
+     .units = "degree",
+     .long_name = "angle between the laser pointing and geodetic nadir"},
+    {.name = "range_m",
+     .type = S::float64,
+     .field = &R::range_m,
+     .source = F::geolocation,
+     .units = "m",
+     .long_name = "range from the spacecraft to the footprint centre"},
+    {.name = "slope_deg",
+     .type = S::float64,
+     .field = &R::slope_deg,
+     .source = F::geolocation,
+     .units = "degree",
+     .long_name = "terrain slope over the footprint"},
+    {.name = "aspect_deg",
+     .type = S::float64,
+     .field = &R::aspect_deg,
+     .source = F::geolocation,
+     .units = "degree",
+     .long_name =
+         "terrain aspect over the footprint (direction the slope faces, clockwise from north)"},
+    {.name = "elev_bin0",
+     .type = S::float64,
+     .field = &R::elev_bin0_m,
+     .source = F::geolocation,
+     .units = "m",
+     .long_name =
+         "elevation of the first waveform bin (nearest the spacecraft) above the WGS84 ellipsoid"},
+    {.name = "elev_lastbin",
+     .type = S::float64,
+     .field = &R::elev_lastbin_m,
+     .source = F::geolocation,
+     .units = "m",
+     .long_name = "elevation of the last waveform bin above the WGS84 ellipsoid"},
+    {.name = "quality_flag",
+     .type = S::uint8,
+     .field = &R::quality_flag,
+     .source = F::shot,
+     .units = "1",
+     .long_name = "quality flag of the shot"},
+    {.name = "rx_waveform",
+     .type = S::float32,
+     .field = &R::rx_waveform_W,
+     .source = F::simulation,
+     .units = "W",
+     .long_name = "received power",
+     .inner_dims = {"bin"},
+     .geojson = GeojsonProperty::none},
+    {.name = "rx_waveform_canopy",
+     .type = S::float32,
+     .field = &R::rx_waveform_canopy_W,
+     .source = F::simulation,
+     .units = "W",
+     .long_name = "received power whose last scattering was on vegetation",
+     .inner_dims = {"bin"},
+     .geojson = GeojsonProperty::none},
+    {.name = "rx_waveform_ground",
+     .type = S::float32,
+     .field = &R::rx_waveform_ground_W,
+     .source = F::simulation,
+     .units = "W",
+     .long_name = "received power whose last scattering was on the ground",
+     .inner_dims = {"bin"},
+     .geojson = GeojsonProperty::none},
+    {.name = "rx_waveform_order",
+     .type = S::float32,
+     .field = &R::rx_waveform_order_W,
+     .source = F::simulation,
+     .units = "W",
+     .long_name = "received power by scattering order",
+     .inner_dims = {"order", "bin"},
+     .geojson = GeojsonProperty::none},
+    {.name = "rx_energy",
+     .type = S::float64,
+     .field = &R::rx_energy_J,
+     .source = F::simulation,
+     .units = "J",
+     .long_name = "received energy (integral of rx_waveform)"},
+    {.name = "rx_energy_canopy",
+     .type = S::float64,
+     .field = &R::rx_energy_canopy_J,
+     .source = F::simulation,
+     .units = "J",
+     .long_name = "received energy whose last scattering was on vegetation (integral of "
+                  "rx_waveform_canopy)"},
+    {.name = "rx_energy_ground",
+     .type = S::float64,
+     .field = &R::rx_energy_ground_J,
+     .source = F::simulation,
+     .units = "J",
+     .long_name = "received energy whose last scattering was on the ground (integral of "
+                  "rx_waveform_ground)"},
+    {.name = "reflectance",
+     .type = S::float64,
+     .field = &R::reflectance,
+     .source = F::simulation,
+     .units = "1",
+     .long_name = "surface reflectance from the waveform, pi E_rec R^2 / (E_trans A_t T_atm) "
+                  "(North et al. 2010, eq. 1)"},
+    // Waveform processing (pipeline/products/waveform_metrics.hpp states the rules).
+    {.name = "energy_tr",
+     .type = S::float64,
+     .field = &R::energy_tr_J,
+     .source = F::metrics,
+     .units = "J",
+     .long_name = "total return: energy above the noise between signal begin and end (seed TR)",
+     .comment = "energy_tr = energy_cr + energy_gr",
+     .metric = &M::energy_tr_J},
+    {.name = "energy_cr",
+     .type = S::float64,
+     .field = &R::energy_cr_J,
+     .source = F::metrics,
+     .units = "J",
+     .long_name = "canopy return: the part of energy_tr above the canopy/ground split (seed CR)",
+     .comment = "split 4 sigma of the lowest Gaussian above its centre, or lower where the other "
+                "Gaussians outweigh it",
+     .metric = &M::energy_cr_J},
+    {.name = "energy_gr",
+     .type = S::float64,
+     .field = &R::energy_gr_J,
+     .source = F::metrics,
+     .units = "J",
+     .long_name = "ground return: the part of energy_tr below the canopy/ground split (seed GR)",
+     .metric = &M::energy_gr_J},
+    {.name = "waveform_index",
+     .type = S::float64,
+     .field = &R::waveform_index,
+     .source = F::metrics,
+     .units = "1",
+     .long_name = "waveform index (CR - GR) / (CR + GR) (North et al. 2010, eq. 3)",
+     .metric = &M::waveform_index},
+    {.name = "sig_begin_m",
+     .type = S::float64,
+     .field = &R::sig_begin_m,
+     .source = F::metrics,
+     .units = "m",
+     .long_name =
+         "elevation of signal begin: first crossing of the threshold by the smoothed waveform",
+     .standard_name = "height_above_reference_ellipsoid",
+     .comment = "threshold = noise mean + max(4 noise sd, 0.01 (peak - noise mean)) on the "
+                "waveform smoothed with the pulse's width",
+     .metric = &M::sig_begin_m},
+    {.name = "sig_end_m",
+     .type = S::float64,
+     .field = &R::sig_end_m,
+     .source = F::metrics,
+     .units = "m",
+     .long_name = "elevation of signal end: last crossing of the threshold by the smoothed waveform",
+     .standard_name = "height_above_reference_ellipsoid",
+     .metric = &M::sig_end_m},
+    {.name = "centroid_m",
+     .type = S::float64,
+     .field = &R::centroid_m,
+     .source = F::metrics,
+     .units = "m",
+     .long_name = "elevation of the waveform's centroid between signal begin and end",
+     .standard_name = "height_above_reference_ellipsoid",
+     .metric = &M::centroid_m},
+    // No peaks, not fill, on a flagged shot: the count is known to be none.
+    {.name = "n_peaks",
+     .type = S::int32,
+     .field = &R::n_peaks,
+     .source = F::metrics,
+     .units = "1",
+     .long_name = "number of Gaussians fitted to the waveform",
+     .fill = 0.0,
+     .metric = &M::n_peaks},
+    {.name = "gauss_amp",
+     .type = S::float64,
+     .field = &R::gauss_amp_W,
+     .source = F::metrics,
+     .units = "W",
+     .long_name = "amplitude of each fitted Gaussian",
+     .inner_dims = {"gaussian"},
+     .metric = &M::gauss_amp_W,
+     .geojson = GeojsonProperty::none},
+    {.name = "gauss_center_m",
+     .type = S::float64,
+     .field = &R::gauss_center_m,
+     .source = F::metrics,
+     .units = "m",
+     .long_name =
+         "elevation of the centre of each fitted Gaussian (in waveform order, highest first)",
+     .standard_name = "height_above_reference_ellipsoid",
+     .inner_dims = {"gaussian"},
+     .metric = &M::gauss_center_m,
+     .geojson = GeojsonProperty::none},
+    {.name = "gauss_sigma_ns",
+     .type = S::float64,
+     .field = &R::gauss_sigma_ns,
+     .source = F::metrics,
+     .units = "ns",
+     .long_name = "standard deviation of each fitted Gaussian",
+     .inner_dims = {"gaussian"},
+     .metric = &M::gauss_sigma_ns,
+     .geojson = GeojsonProperty::none},
+    {.name = "gauss_area",
+     .type = S::float64,
+     .field = &R::gauss_area_J,
+     .source = F::metrics,
+     .units = "J",
+     .long_name = "energy of each fitted Gaussian (its integral)",
+     .inner_dims = {"gaussian"},
+     .metric = &M::gauss_area_J,
+     .geojson = GeojsonProperty::none},
+    {.name = "ground_elev_est",
+     .type = S::float64,
+     .field = &R::ground_elev_est_m,
+     .source = F::metrics,
+     .units = "m",
+     .long_name = "ground elevation estimated from the waveform: centre of the lowest Gaussian",
+     .standard_name = "height_above_reference_ellipsoid",
+     .metric = &M::ground_elev_m},
+    {.name = "canopy_height_est",
+     .type = S::float64,
+     .field = &R::canopy_height_est_m,
+     .source = F::metrics,
+     .units = "m",
+     .long_name = "canopy height estimated from the waveform: signal begin above ground_elev_est",
+     .standard_name = "canopy_height",
+     .comment = "as GLA14: it includes the pulse's own rise to the threshold (about 3.2 m over "
+                "bare ground for a 5 ns pulse without noise); equal to rh100",
+     .metric = &M::canopy_height_m},
+    {.name = "rh",
+     .type = S::float32,
+     .field = &R::rh_m,
+     .source = F::metrics,
+     .units = "m",
+     .long_name = "relative height above ground_elev_est at which the energy counted up from "
+                  "signal end reaches percentile % of energy_tr (GEDI L2A)",
+     .inner_dims = {"percentile"},
+     .metric = &M::rh_m,
+     .geojson = GeojsonProperty::levels},
+    {.name = "cover_true",
+     .type = S::float64,
+     .field = &R::cover_true,
+     .source = F::truth,
+     .units = "1",
+     .long_name = "crown cover over the footprint, weighted by the beam (simulation truth)",
+     .standard_name = "vegetation_area_fraction"},
+    {.name = "pai_true",
+     .type = S::float64,
+     .field = &R::pai_true,
+     .source = F::truth,
+     .units = "1",
+     .long_name = "plant area index over the footprint, weighted by the beam (simulation truth)"},
+    {.name = "canopy_height_true",
+     .type = S::float64,
+     .field = &R::canopy_height_true_m,
+     .source = F::truth,
+     .units = "m",
+     .long_name = "highest vegetation above the ground over the footprint (simulation truth)",
+     .standard_name = "canopy_height"},
+};
+
+template <class T>
+constexpr bool is_scalar_member = std::is_arithmetic_v<T>;
+
+// Resizes a [band][...] field to `shape` with every value `fill`.
+void shape_fill(std::vector<double>& values, std::span<const std::size_t> shape, double fill) {
+  values.assign(shape[0], fill);
+}
+void shape_fill(std::vector<std::int32_t>& values, std::span<const std::size_t> shape,
+                double fill) {
+  values.assign(shape[0], static_cast<std::int32_t>(fill));
+}
+template <class T>
+void shape_fill(std::vector<std::vector<T>>& values, std::span<const std::size_t> shape,
+                double fill) {
+  values.resize(shape[0]);
+  for (auto& inner : values) shape_fill(inner, shape.subspan(1), fill);
+}
+
+}  // namespace
+
+bool ProductField::per_band() const {
+  return std::visit(
+      [](auto member) {
+        using T = std::remove_cvref_t<decltype(std::declval<ShotRecord>().*member)>;
+        return !is_scalar_member<T>;
+      },
+      field);
+}
+
+std::span<const ProductField> product_fields() { return kProductFields; }
+
+const ProductField* find_product_field(std::string_view name) {
+  for (const ProductField& field : kProductFields)
+    if (name == field.name) return &field;
+  return nullptr;
+}
+
+std::vector<std::string> geojson_property_names(const ProductField& field) {
+  switch (field.geojson) {
+    case GeojsonProperty::none:
+      return {};
+    case GeojsonProperty::value:
+      return {field.name};
+    case GeojsonProperty::levels: {
+      std::vector<std::string> names;
+      for (const int level : kGeojsonLevels) names.push_back(field.name + std::to_string(level));
+      return names;
+    }
+  }
+  return {};
+}
+
+std::size_t ProductShape::length(std::string_view name) const {
+  if (name == "bin") return bins;
+  if (name == "order") return orders;
+  if (name == "gaussian") return kMaxGaussians;
+  if (name == "percentile") return kRhLevels;
+  throw std::logic_error("internal: unknown product dimension '" + std::string(name) + "'");
+}
+
+std::vector<std::size_t> ProductShape::of(const ProductField& field) const {
+  if (!field.per_band()) return {};
+  std::vector<std::size_t> shape = {bands};
+  for (const char* inner : field.inner_dims) {
+    if (inner == nullptr) continue;
+    const std::size_t n = length(inner);
+    if (n == 0) return {};
+    shape.push_back(n);
+  }
+  return shape;
+}
+
+void fill_fields(ShotRecord& record, FieldSource source, const ProductShape& shape) {
+  for (const ProductField& field : kProductFields) {
+    if (field.source != source) continue;
+    const std::vector<std::size_t> lengths = shape.of(field);
+    std::visit(
+        [&](auto member) {
+          auto& value = record.*member;
+          using T = std::remove_cvref_t<decltype(value)>;
+          if constexpr (is_scalar_member<T>) {
+            value = static_cast<T>(field.fill);
+          } else if (lengths.empty()) {
+            value.clear();  // a dimension this run does not have
+          } else {
+            shape_fill(value, lengths, field.fill);
+          }
+        },
+        field.field);
+  }
+}
+
+void fill_flagged(ShotRecord& record, const ProductShape& shape) {
+  for (const FieldSource source :
+       {FieldSource::geolocation, FieldSource::simulation, FieldSource::metrics, FieldSource::truth})
+    fill_fields(record, source, shape);
+}
+
+void store_metrics(ShotRecord& record, std::size_t band, const WaveformMetrics& metrics) {
+  for (const ProductField& field : kProductFields) {
+    if (field.source != FieldSource::metrics) continue;
+    std::visit(
+        [&](auto to, auto from) {
+          using From = decltype(from);
+          if constexpr (std::is_same_v<From, std::monostate>) {
+            throw std::logic_error(std::string("internal: metrics field '") + field.name +
+                                   "' names no metric");
+          } else {
+            auto& target = record.*to;
+            const auto& value = metrics.*from;
+            using T = std::remove_cvref_t<decltype(target)>;
+            using V = std::remove_cvref_t<decltype(value)>;
+            if constexpr (std::is_same_v<T, std::vector<double>> && std::is_same_v<V, double>) {
+              target[band] = value;
+            } else if constexpr (std::is_same_v<T, std::vector<std::int32_t>> &&
+                                 std::is_same_v<V, int>) {
+              target[band] = value;
+            } else if constexpr (std::is_same_v<T, std::vector<std::vector<double>>> &&
+                                 !std::is_arithmetic_v<V>) {
+              target[band].assign(value.begin(), value.end());
+            } else {
+              throw std::logic_error(std::string("internal: metrics field '") + field.name +
+                                     "' does not match its metric");
+            }
+          }
+        },
+        field.field, field.metric);
+  }
+}
+
+}  // namespace glaswave

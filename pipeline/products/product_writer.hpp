@@ -1,0 +1,46 @@
+// The one interface every product writer implements (shots.nc, footprints.geojson, and the
+// GPKG and HDF5 granules to come), and the factory that makes a run's writers. A writer begins
+// when it is made (from its final path and the RunInfo), takes records by index, then finishes
+// or is aborted; its product appears under its final name only when finish() succeeds.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+#include "pipeline/products/shot_record.hpp"
+
+namespace glaswave {
+
+class ProductWriter {
+ public:
+  virtual ~ProductWriter() = default;
+
+  // Writes record `index` (0 <= index < RunInfo::shots), each index exactly once, in any order.
+  // Not thread-safe: calls must come one at a time. Throws Error (run) on a bad record or a
+  // failed write; a refused record can be written again.
+  virtual void write(std::int64_t index, const ShotRecord& shot) = 0;
+
+  // Completes the product and moves it to its final name. Throws Error (run) if a record was
+  // never written or the file cannot be completed.
+  virtual void finish(const RunStats& stats) = 0;
+
+  // Gives the product up: the file is closed without being flushed and its .part removed.
+  // Nothing is written after it; destroying an unfinished writer does the same.
+  virtual void abort() noexcept = 0;
+};
+
+// Which products a run writes (the engine fills it from the configuration's `output`).
+struct ProductSettings {
+  bool netcdf = true;   // DIR/shots.nc
+  bool geojson = true;  // DIR/footprints.geojson
+};
+
+// The writers of a run, each begun under `out_dir` (which must exist). Empty when `settings`
+// asks for nothing. Throws Error (run) when a product cannot be created.
+std::vector<std::unique_ptr<ProductWriter>> make_writers(const std::filesystem::path& out_dir,
+                                                         const ProductSettings& settings,
+                                                         const RunInfo& info);
+
+}  // namespace glaswave
