@@ -9,6 +9,7 @@
 #include <ogrsf_frmts.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "pipeline/products/product_fields.hpp"
 
 namespace glaswave {
 namespace {
@@ -307,6 +309,45 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
     EXPECT_TRUE(flagged.IsFieldNull(definition->GetFieldIndex(name))) << name;
   }
   EXPECT_FALSE(flagged.IsFieldNull(definition->GetFieldIndex("lat")));
+}
+
+// The properties of every Feature are those the product field table gives, in its order, and
+// each is a field of shots.nc's table (or a level of one).
+TEST_F(GeojsonWriterTest, PropertiesAreThoseOfTheFieldTable) {
+  write_product();
+  const nlohmann::json document = nlohmann::json::parse(text());
+  std::vector<std::string> expected;
+  for (const ProductField& field : product_fields()) {
+    for (const std::string& name : geojson_property_names(field)) expected.push_back(name);
+    if (field.geojson == GeojsonProperty::value) {
+      EXPECT_EQ(geojson_property_names(field), (std::vector<std::string>{field.name}));
+    }
+  }
+  EXPECT_EQ(expected.size(), 37u);
+  for (const auto& feature : document.at("features")) {
+    std::vector<std::string> names;
+    for (const auto& [name, value] : feature.at("properties").items()) names.push_back(name);
+    // nlohmann::json sorts object keys; the file's order is checked on the text below.
+    std::vector<std::string> sorted = expected;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(names, sorted);
+  }
+  // Order in the text of the first Feature: each property after the one before it.
+  const std::string content = text();
+  const std::size_t end_of_first = content.find("}}");
+  std::size_t at = 0;
+  for (const std::string& name : expected) {
+    const std::size_t found = content.find("\"" + name + "\":", at);
+    ASSERT_LT(found, end_of_first) << name << " out of order";
+    at = found;
+  }
+  // Per-shot scalars and the first band's values: shots.nc's rows that are not arrays over
+  // bins, orders or Gaussians, typed here.
+  for (const char* name : {"shot_number", "quality_flag", "elev", "reflectance", "n_peaks",
+                           "canopy_height_true"})
+    EXPECT_NE(std::find(expected.begin(), expected.end(), name), expected.end()) << name;
+  for (const char* name : {"rx_waveform", "rx_waveform_order", "gauss_amp", "rh"})
+    EXPECT_EQ(std::find(expected.begin(), expected.end(), name), expected.end()) << name;
 }
 
 // RFC 7946 section 3.1.9: a footprint across the antimeridian is cut there into a MultiPolygon

@@ -1,7 +1,7 @@
 // Tests of the waveform metrics on waveforms with known answers: a lone pulse (begin and end
 // where its smoothed shape crosses the threshold, rh50 at its centre, no canopy height), a
-// uniform block (rh linear), canopy over ground (ground at the lowest Gaussian, TR = CR + GR with
-// each part the energy of its Gaussians), noise (threshold above the noise), and the record-level
+// uniform block (rh linear), canopy over ground (ground at the lowest Gaussian, CR and GR each
+// the energy of its Gaussians), noise (threshold above the noise), and the record-level
 // processing with its fill for flagged shots.
 #include "pipeline/products/waveform_metrics.hpp"
 
@@ -85,9 +85,10 @@ TEST(WaveformMetrics, LonePulse) {
   // rh84 - rh16 is two sigma of the pulse in metres, nearly (the window cuts the tails).
   EXPECT_NEAR(m.rh_m[84] - m.rh_m[16], 2.0 * kPulseNs * kBinM, 0.02);
 
-  // All ground: TR = CR + GR, with only the smoothed reach above 4 sigma in CR.
-  EXPECT_DOUBLE_EQ(m.energy_tr_J, m.energy_cr_J + m.energy_gr_J);
+  // All ground: TR and GR are the pulse's energy, with only the smoothed reach above 4 sigma
+  // in CR.
   EXPECT_NEAR(m.energy_tr_J / area_J, 1.0, 1e-3);
+  EXPECT_NEAR(m.energy_gr_J / area_J, 1.0, 1e-3);
   EXPECT_LT(m.energy_cr_J / m.energy_tr_J, 1e-4);
   EXPECT_NEAR(m.waveform_index, -1.0, 2e-4);
 }
@@ -105,7 +106,6 @@ TEST(WaveformMetrics, UniformBlockHasLinearRh) {
     EXPECT_NEAR(m.rh_m[k], expected_m, 1e-6) << "rh" << k;
   }
   EXPECT_NEAR(m.energy_tr_J, 100 * 1e-6 * kBinNs * 1e-9, 1e-20);
-  EXPECT_DOUBLE_EQ(m.energy_tr_J, m.energy_cr_J + m.energy_gr_J);
   EXPECT_NEAR(m.centroid_m, elevation(199.5), 1e-9);
 }
 
@@ -122,7 +122,7 @@ TEST(WaveformMetrics, CanopyOverGround) {
   const double to_J = kBinNs * 1e-9;
   EXPECT_NEAR(m.energy_gr_J / (ground.area() * to_J), 1.0, 1e-3);
   EXPECT_NEAR(m.energy_cr_J / (canopy.area() * to_J), 1.0, 5e-3);  // less the tails beyond begin
-  EXPECT_DOUBLE_EQ(m.energy_tr_J, m.energy_cr_J + m.energy_gr_J);
+  EXPECT_NEAR(m.energy_tr_J / ((canopy.area() + ground.area()) * to_J), 1.0, 5e-3);
   EXPECT_NEAR(m.waveform_index, (canopy.area() - ground.area()) / (canopy.area() + ground.area()),
               5e-3);
   // Signal begin: where the smoothed canopy (12 and 5 -> 13 bins wide) crosses 1 % of the
@@ -166,7 +166,9 @@ TEST(WaveformMetrics, ThresholdAboveTheNoise) {
   EXPECT_NEAR(m.rh_m[50], 0.0, 0.05);
   const double area_J = 1.0e-6 * kPulseNs * 1e-9 * std::sqrt(2.0 * std::numbers::pi);
   EXPECT_NEAR(m.energy_tr_J / area_J, 1.0, 0.03);
-  EXPECT_DOUBLE_EQ(m.energy_tr_J, m.energy_cr_J + m.energy_gr_J);
+  // Signal begin (about 21 bins above the centre) barely reaches past the split 4 sigma
+  // (20 bins) above it: nearly all of TR is ground.
+  EXPECT_NEAR(m.energy_gr_J / area_J, 1.0, 0.03);
 }
 
 TEST(WaveformMetrics, NoSignal) {

@@ -1,0 +1,272 @@
+// Tests of the product field table and what it drives outside the writers: the table's own
+// consistency, the fill of a flagged shot (shapes and values typed here, not taken from the
+// table), the copy of the waveform metrics, and the writer interface with its factory (abort
+// leaves nothing behind).
+#include "pipeline/products/product_fields.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "pipeline/products/product_writer.hpp"
+#include "core/error.hpp"
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool all_nan(const std::vector<double>& values) {
+  for (double v : values)
+    if (!std::isnan(v)) return false;
+  return true;
+}
+
+// How many dimensions a member has after the shot: 0 for a scalar, 1 for [band], ...
+std::size_t rank_of(const ProductField& field) {
+  return std::visit(
+      [](auto member) -> std::size_t {
+        using T = std::remove_cvref_t<decltype(std::declval<ShotRecord>().*member)>;
+        if constexpr (std::is_arithmetic_v<T>) return 0;
+        else if constexpr (std::is_same_v<T, std::vector<std::vector<std::vector<double>>>>)
+          return 3;
+        else if constexpr (std::is_same_v<T, std::vector<std::vector<double>>>) return 2;
+        else return 1;
+      },
+      field.field);
+}
+
+TEST(ProductFields, TableIsConsistent) {
+  std::set<std::string> names;
+  for (const ProductField& field : product_fields()) {
+    EXPECT_TRUE(names.insert(field.name).second) << field.name << " twice";
+    EXPECT_NE(std::string(field.units), "") << field.name;
+    EXPECT_NE(std::string(field.long_name), "") << field.name;
+    std::size_t inner = 0;
+    for (const char* dim : field.inner_dims) inner += dim != nullptr;
+    EXPECT_EQ(rank_of(field), field.per_band() ? 1 + inner : 0) << field.name;
+    EXPECT_EQ(field.per_band(), rank_of(field) > 0) << field.name;
+    // Only metrics come from the waveform processing, and every one names its metric.
+    EXPECT_EQ(field.source == FieldSource::metrics,
+              !std::holds_alternative<std::monostate>(field.metric))
+        << field.name;
+    // Integer storage holds no NaN: an integer field a flagged shot fills must fill with a number.
+    const bool integer = field.type == StorageType::int64 || field.type == StorageType::uint8 ||
+                         field.type == StorageType::int32;
+    if (integer && field.source != FieldSource::shot) {
+      EXPECT_FALSE(std::isnan(field.fill)) << field.name;
+    }
+  }
+  EXPECT_EQ(find_product_field("rx_waveform")->name, std::string("rx_waveform"));
+  EXPECT_EQ(find_product_field("no_such_field"), nullptr);
+}
+
+TEST(ProductFields, GeojsonNames) {
+  EXPECT_EQ(geojson_property_names(*find_product_field("energy_tr")),
+            (std::vector<std::string>{"energy_tr"}));
+  EXPECT_EQ(geojson_property_names(*find_product_field("rh")),
+            (std::vector<std::string>{"rh25", "rh50", "rh75", "rh98", "rh100"}));
+  EXPECT_TRUE(geojson_property_names(*find_product_field("rx_waveform")).empty());
+  EXPECT_TRUE(geojson_property_names(*find_product_field("gauss_amp")).empty());
+}
+
+ShotRecord shot_known_values() {
+  ShotRecord record;
+  record.shot_number = 42;
+  record.time_s = 1000.5;
+  record.sc_lat_deg = 34.0;
+  record.sc_lon_deg = -118.0;
+  record.sc_alt_m = 600000.0;
+  record.off_nadir_deg = 0.3;
+  record.lat_deg = 34.1;
+  record.elev_m = 1200.0;
+  record.slope_deg = 10.0;
+  record.elev_bin0_m = 1250.0;
+  record.cover_true = 0.5;
+  record.rx_energy_J = {1.0, 2.0};
+  record.n_peaks = {3, 4};
+  record.quality_flag = quality_no_terrain;
+  return record;
+}
+
+// What PRODUCT.md section 5 asks of a shot with no waveform: its waveform and everything derived
+// from it is fill, it keeps what the track says of it, and it has no peaks.
+TEST(FillFlagged, FillsWhatTheShotCannotKnowAndKeepsTheRest) {
+  ShotRecord record = shot_known_values();
+  fill_flagged(record, {.bands = 2, .bins = 5, .orders = 3});
+  EXPECT_EQ(record.shot_number, 42);
+  EXPECT_EQ(record.time_s, 1000.5);
+  EXPECT_EQ(record.sc_lat_deg, 34.0);
+  EXPECT_EQ(record.sc_lon_deg, -118.0);
+  EXPECT_EQ(record.sc_alt_m, 600000.0);
+  EXPECT_EQ(record.off_nadir_deg, 0.3);
+  EXPECT_EQ(record.quality_flag, quality_no_terrain);
+  for (double v : {record.lat_deg, record.lon_deg, record.elev_m, record.range_m,
+                   record.slope_deg, record.aspect_deg, record.elev_bin0_m, record.elev_lastbin_m,
+                   record.cover_true, record.pai_true, record.canopy_height_true_m})
+    EXPECT_TRUE(std::isnan(v));
+
+  for (const auto* waveforms :
+       {&record.rx_waveform_W, &record.rx_waveform_canopy_W, &record.rx_waveform_ground_W}) {
+    ASSERT_EQ(waveforms->size(), 2u);
+    for (const auto& band : *waveforms) {
+      EXPECT_EQ(band.size(), 5u);
+      EXPECT_TRUE(all_nan(band));
+    }
+  }
+  ASSERT_EQ(record.rx_waveform_order_W.size(), 2u);
+  for (const auto& band : record.rx_waveform_order_W) {
+    ASSERT_EQ(band.size(), 3u);
+    for (const auto& order : band) {
+      EXPECT_EQ(order.size(), 5u);
+      EXPECT_TRUE(all_nan(order));
+    }
+  }
+  for (const auto* values :
+       {&record.rx_energy_J, &record.rx_energy_canopy_J, &record.rx_energy_ground_J,
+        &record.reflectance, &record.energy_tr_J, &record.energy_cr_J, &record.energy_gr_J,
+        &record.waveform_index, &record.sig_begin_m, &record.sig_end_m, &record.centroid_m,
+        &record.ground_elev_est_m, &record.canopy_height_est_m}) {
+    EXPECT_EQ(values->size(), 2u);
+    EXPECT_TRUE(all_nan(*values));
+  }
+  EXPECT_EQ(record.n_peaks, (std::vector<std::int32_t>{0, 0}));
+  for (const auto* slots : {&record.gauss_amp_W, &record.gauss_center_m, &record.gauss_sigma_ns,
+                            &record.gauss_area_J}) {
+    ASSERT_EQ(slots->size(), 2u);
+    for (const auto& band : *slots) {
+      EXPECT_EQ(band.size(), 6u);  // PRODUCT.md: up to 6 Gaussians
+      EXPECT_TRUE(all_nan(band));
+    }
+  }
+  ASSERT_EQ(record.rh_m.size(), 2u);
+  EXPECT_EQ(record.rh_m[1].size(), 101u);  // rh0 .. rh100
+  EXPECT_TRUE(all_nan(record.rh_m[1]));
+}
+
+TEST(FillFlagged, NoOrdersWithoutPerOrderOutput) {
+  ShotRecord record = shot_known_values();
+  record.rx_waveform_order_W = {{{1.0}}};
+  fill_flagged(record, {.bands = 1, .bins = 4, .orders = 0});
+  EXPECT_TRUE(record.rx_waveform_order_W.empty());
+  ASSERT_EQ(record.rx_waveform_W.size(), 1u);
+  EXPECT_EQ(record.rx_waveform_W[0].size(), 4u);
+}
+
+// Every metric lands in the record field of the same meaning, in its own band only.
+TEST(StoreMetrics, CopiesEachMetricToItsField) {
+  WaveformMetrics m = WaveformMetrics::none();
+  m.energy_tr_J = 1.0;
+  m.energy_cr_J = 2.0;
+  m.energy_gr_J = 3.0;
+  m.waveform_index = 4.0;
+  m.sig_begin_m = 5.0;
+  m.sig_end_m = 6.0;
+  m.centroid_m = 7.0;
+  m.n_peaks = 2;
+  m.gauss_amp_W[0] = 8.0;
+  m.gauss_center_m[1] = 9.0;
+  m.gauss_sigma_ns[0] = 10.0;
+  m.gauss_area_J[1] = 11.0;
+  m.ground_elev_m = 12.0;
+  m.canopy_height_m = 13.0;
+  m.rh_m[98] = 14.0;
+
+  ShotRecord record;
+  fill_fields(record, FieldSource::metrics, {.bands = 2});
+  store_metrics(record, 1, m);
+  const std::vector<std::pair<const std::vector<double>*, double>> per_band = {
+      {&record.energy_tr_J, 1.0},    {&record.energy_cr_J, 2.0},         {&record.energy_gr_J, 3.0},
+      {&record.waveform_index, 4.0}, {&record.sig_begin_m, 5.0},         {&record.sig_end_m, 6.0},
+      {&record.centroid_m, 7.0},     {&record.ground_elev_est_m, 12.0},  {&record.canopy_height_est_m, 13.0}};
+  for (const auto& [values, want] : per_band) {
+    EXPECT_TRUE(std::isnan((*values)[0]));
+    EXPECT_EQ((*values)[1], want);
+  }
+  EXPECT_EQ(record.n_peaks, (std::vector<std::int32_t>{0, 2}));
+  EXPECT_EQ(record.gauss_amp_W[1][0], 8.0);
+  EXPECT_EQ(record.gauss_center_m[1][1], 9.0);
+  EXPECT_EQ(record.gauss_sigma_ns[1][0], 10.0);
+  EXPECT_EQ(record.gauss_area_J[1][1], 11.0);
+  EXPECT_TRUE(std::isnan(record.gauss_area_J[1][0]));
+  EXPECT_EQ(record.rh_m[1][98], 14.0);
+  EXPECT_TRUE(std::isnan(record.rh_m[0][98]));
+  EXPECT_TRUE(std::isnan(record.rh_m[1][97]));
+}
+
+class ProductWritersTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("glaswave_writers_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  static RunInfo info() {
+    RunInfo info;
+    info.shots = 2;
+    info.bands = {ProductBand{"1064", 1064.0}};
+    info.bin_time_ns = {0.0, 1.0, 2.0};
+    info.tx_time_ns = {0.0};
+    info.tx_waveform_W = {{1.0}};
+    return info;
+  }
+  // A flagged shot: valid for every writer, with no footprint and fill everywhere.
+  static ShotRecord flagged(std::int64_t shot) {
+    ShotRecord record;
+    record.shot_number = shot;
+    record.quality_flag = quality_no_terrain;
+    fill_flagged(record, {.bands = 1, .bins = 3, .orders = 0});
+    return record;
+  }
+  std::set<std::string> files() const {
+    std::set<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir_))
+      names.insert(entry.path().filename().string());
+    return names;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(ProductWritersTest, MakesTheWritersAskedFor) {
+  EXPECT_EQ(make_writers(dir_, {.netcdf = true, .geojson = true}, info()).size(), 2u);
+  EXPECT_EQ(make_writers(dir_, {.netcdf = false, .geojson = true}, info()).size(), 1u);
+  EXPECT_TRUE(make_writers(dir_, {.netcdf = false, .geojson = false}, info()).empty());
+  EXPECT_TRUE(files().empty()) << "writers destroyed unfinished leave nothing";
+}
+
+TEST_F(ProductWritersTest, FinishedWritersLeaveTheirProducts) {
+  auto writers = make_writers(dir_, {}, info());
+  for (std::int64_t i : {1, 0})
+    for (const auto& writer : writers) writer->write(i, flagged(i));
+  for (const auto& writer : writers) writer->finish(RunStats{});
+  for (const auto& writer : writers) writer->abort();  // too late: the products stay
+  EXPECT_EQ(files(), (std::set<std::string>{"footprints.geojson", "shots.nc"}));
+}
+
+TEST_F(ProductWritersTest, AbortRemovesThePartAndRefusesMore) {
+  auto writers = make_writers(dir_, {}, info());
+  for (const auto& writer : writers) writer->write(0, flagged(0));
+  EXPECT_EQ(files(), (std::set<std::string>{"footprints.geojson.part", "shots.nc.part"}));
+  for (const auto& writer : writers) {
+    writer->abort();
+    writer->abort();  // twice is harmless
+    EXPECT_THROW(writer->write(1, flagged(1)), Error);
+    EXPECT_THROW(writer->finish(RunStats{}), Error);
+  }
+  EXPECT_TRUE(files().empty());
+}
+
+}  // namespace
+}  // namespace glaswave
