@@ -224,23 +224,21 @@ std::vector<GaussianComponent> fit_gaussians(std::span<const double> values, int
   return fitted;
 }
 
-std::vector<GaussianComponent> decompose_waveform(std::span<const double> values, int first,
-                                                  int last, const DecompositionSettings& settings) {
-  const int n = static_cast<int>(values.size());
-  first = std::max(first, 0);
-  last = std::min(last, n - 1);
-  if (last - first < 2 || settings.max_components < 1) return {};
-  const std::vector<double> smoothed = gaussian_smooth(values, settings.smooth_sigma_bins);
-  const double level = settings.significance_level;
+namespace {
 
-  // Initial guesses: the local maxima of the smoothed waveform above the level, strongest first.
+// Initial guesses: the local maxima of the smoothed waveform above the level, strongest first,
+// at most max_components. A monotonic signal (cut by the window's edge) gives its highest bin;
+// none above the level gives none.
+std::vector<int> initial_peaks(std::span<const double> smoothed, int first, int last,
+                               const DecompositionSettings& settings) {
+  const int n = static_cast<int>(smoothed.size());
+  const double level = settings.significance_level;
   std::vector<int> peaks;
   for (int i = std::max(first, 1); i <= std::min(last, n - 2); ++i) {
     if (smoothed[i] > level && smoothed[i] > smoothed[i - 1] && smoothed[i] >= smoothed[i + 1])
       peaks.push_back(i);
   }
   if (peaks.empty()) {
-    // A monotonic signal (cut by the window's edge): its highest bin.
     int best = first;
     for (int i = first; i <= last; ++i)
       if (smoothed[i] > smoothed[best]) best = i;
@@ -250,12 +248,16 @@ std::vector<GaussianComponent> decompose_waveform(std::span<const double> values
   std::sort(peaks.begin(), peaks.end(), [&](int a, int b) { return smoothed[a] > smoothed[b]; });
   if (static_cast<int>(peaks.size()) > settings.max_components)
     peaks.resize(settings.max_components);
-  std::vector<GaussianComponent> components;
-  for (int peak : peaks) components.push_back(guess(values, smoothed, peak, first, last, settings));
-  components = fit_gaussians(values, first, last, components);
+  return peaks;
+}
 
-  // Signal the fit leaves in the residual (a peak hidden in its neighbour's flank, most often)
-  // gets a component of its own, as long as it makes the fit better.
+// Signal the fit leaves in the residual (a peak hidden in its neighbour's flank, most often)
+// gets a component of its own, as long as it makes the fit better.
+std::vector<GaussianComponent> add_residual_components(std::span<const double> values, int first,
+                                                       int last,
+                                                       std::vector<GaussianComponent> components,
+                                                       const DecompositionSettings& settings) {
+  const int n = static_cast<int>(values.size());
   double misfit = sum_of_squares(values, first, last, components);
   std::vector<double> residual(n, 0.0);
   while (static_cast<int>(components.size()) < settings.max_components) {
@@ -265,7 +267,7 @@ std::vector<GaussianComponent> decompose_waveform(std::span<const double> values
     int best = first;
     for (int i = first; i <= last; ++i)
       if (smooth_residual[i] > smooth_residual[best]) best = i;
-    if (!(smooth_residual[best] > level)) break;
+    if (!(smooth_residual[best] > settings.significance_level)) break;
     std::vector<GaussianComponent> trial = components;
     trial.push_back(guess(residual, smooth_residual, best, first, last, settings));
     trial = fit_gaussians(values, first, last, trial);
@@ -274,36 +276,69 @@ std::vector<GaussianComponent> decompose_waveform(std::span<const double> values
     components = std::move(trial);
     misfit = trial_misfit;
   }
+  return components;
+}
 
-  // Components that are not significant go, and the rest are fitted again without them:
-  // negative or tiny ones, those whose peak would not clear the signal threshold, and those
-  // that wandered off the signal.
+// A component is significant when it is positive, its peak through the smoothing filter clears
+// the level, it holds its share of the energy, and it stays on the signal.
+bool significant(const GaussianComponent& g, double total_area, int first, int last,
+                 const DecompositionSettings& settings) {
+  return g.amplitude > 0.0 &&
+         smoothed_peak(g, settings.smooth_sigma_bins) > settings.significance_level &&
+         g.area() >= settings.min_area_fraction * total_area && g.center_bin >= first &&
+         g.center_bin <= last && g.sigma_bins >= 0.5 * settings.min_sigma_bins &&
+         g.sigma_bins < (last - first + 1);
+}
+
+// Components that are not significant go, and the rest are fitted again without them, until
+// all that are left are significant. When none passes on its own (a noisy return the components
+// shared out between them), the signal is still there: it is described by the one Gaussian of
+// its strongest peak.
+std::vector<GaussianComponent> drop_insignificant(std::span<const double> values,
+                                                  std::span<const double> smoothed, int first,
+                                                  int last, int strongest_peak,
+                                                  std::vector<GaussianComponent> components,
+                                                  const DecompositionSettings& settings) {
   for (int round = 0; round < settings.max_components && !components.empty(); ++round) {
     double total_area = 0.0;
     for (const GaussianComponent& g : components) total_area += std::max(g.area(), 0.0);
     std::vector<GaussianComponent> kept;
-    for (const GaussianComponent& g : components) {
-      const bool significant =
-          g.amplitude > 0.0 && smoothed_peak(g, settings.smooth_sigma_bins) > level &&
-          g.area() >= settings.min_area_fraction * total_area && g.center_bin >= first &&
-          g.center_bin <= last && g.sigma_bins >= 0.5 * settings.min_sigma_bins &&
-          g.sigma_bins < (last - first + 1);
-      if (significant) kept.push_back(g);
-    }
+    for (const GaussianComponent& g : components)
+      if (significant(g, total_area, first, last, settings)) kept.push_back(g);
     if (kept.size() == components.size()) break;
     if (kept.empty()) {
-      // Nothing passed on its own (a noisy return the components shared out between them): the
-      // signal is still there, so it is described by the one Gaussian of its strongest peak.
-      std::vector<GaussianComponent> single =
-          fit_gaussians(values, first, last, {guess(values, smoothed, peaks.front(), first, last, settings)});
+      std::vector<GaussianComponent> single = fit_gaussians(
+          values, first, last, {guess(values, smoothed, strongest_peak, first, last, settings)});
       components.clear();
-      if (!single.empty() && single.front().amplitude > 0.0 && std::isfinite(single.front().sigma_bins) &&
-          single.front().center_bin >= first && single.front().center_bin <= last)
+      if (!single.empty() && single.front().amplitude > 0.0 &&
+          std::isfinite(single.front().sigma_bins) && single.front().center_bin >= first &&
+          single.front().center_bin <= last)
         components = std::move(single);
       break;
     }
     components = fit_gaussians(values, first, last, kept);
   }
+  return components;
+}
+
+}  // namespace
+
+std::vector<GaussianComponent> decompose_waveform(std::span<const double> values, int first,
+                                                  int last, const DecompositionSettings& settings) {
+  const int n = static_cast<int>(values.size());
+  first = std::max(first, 0);
+  last = std::min(last, n - 1);
+  if (last - first < 2 || settings.max_components < 1) return {};
+  const std::vector<double> smoothed = gaussian_smooth(values, settings.smooth_sigma_bins);
+  const std::vector<int> peaks = initial_peaks(smoothed, first, last, settings);
+  if (peaks.empty()) return {};
+  std::vector<GaussianComponent> components;
+  for (int peak : peaks) components.push_back(guess(values, smoothed, peak, first, last, settings));
+  components = fit_gaussians(values, first, last, components);
+  components = add_residual_components(values, first, last, std::move(components), settings);
+  components =
+      drop_insignificant(values, smoothed, first, last, peaks.front(), std::move(components),
+                         settings);
   std::sort(components.begin(), components.end(),
             [](const GaussianComponent& a, const GaussianComponent& b) {
               return a.center_bin < b.center_bin;
