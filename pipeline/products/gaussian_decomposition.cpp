@@ -336,9 +336,8 @@ std::vector<GaussianComponent> decompose_waveform(std::span<const double> values
   for (int peak : peaks) components.push_back(guess(values, smoothed, peak, first, last, settings));
   components = fit_gaussians(values, first, last, components);
   components = add_residual_components(values, first, last, std::move(components), settings);
-  components =
-      drop_insignificant(values, smoothed, first, last, peaks.front(), std::move(components),
-                         settings);
+  components = drop_insignificant(values, smoothed, first, last, peaks.front(),
+                                  std::move(components), settings);
   std::sort(components.begin(), components.end(),
             [](const GaussianComponent& a, const GaussianComponent& b) {
               return a.center_bin < b.center_bin;

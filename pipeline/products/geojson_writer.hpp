@@ -1,6 +1,7 @@
 // footprints.geojson: one RFC 7946 Feature per shot, the footprint's 1/e^2 contour on the
 // terrain as a Polygon with the properties product_fields.hpp gives it (the shot's scalars and
-// its first band's values; PRODUCT.md section 4). Shots may come in any order; Features come out in record order.
+// its first band's values; PRODUCT.md section 4). Shots may come in any order; Features come out in
+// record order.
 #pragma once
 
 #include <cstdint>

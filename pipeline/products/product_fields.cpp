@@ -219,7 +219,8 @@ const ProductField kProductFields[] = {
      .field = &R::sig_end_m,
      .source = F::metrics,
      .units = "m",
-     .long_name = "elevation of signal end: last crossing of the threshold by the smoothed waveform",
+     .long_name =
+         "elevation of signal end: last crossing of the threshold by the smoothed waveform",
      .standard_name = "height_above_reference_ellipsoid",
      .metric = &M::sig_end_m},
     {.name = "centroid_m",
@@ -420,8 +421,8 @@ void fill_fields(ShotRecord& record, FieldSource source, const ProductShape& sha
 }
 
 void fill_flagged(ShotRecord& record, const ProductShape& shape) {
-  for (const FieldSource source :
-       {FieldSource::geolocation, FieldSource::simulation, FieldSource::metrics, FieldSource::truth})
+  for (const FieldSource source : {FieldSource::geolocation, FieldSource::simulation,
+                                   FieldSource::metrics, FieldSource::truth})
     fill_fields(record, source, shape);
 }
 

@@ -47,10 +47,9 @@ using RecordField =
                  std::vector<std::vector<std::vector<double>>> ShotRecord::*>;
 
 // The WaveformMetrics member a per-band metrics field is copied from.
-using MetricField =
-    std::variant<std::monostate, double WaveformMetrics::*, int WaveformMetrics::*,
-                 std::array<double, kMaxGaussians> WaveformMetrics::*,
-                 std::array<double, kRhLevels> WaveformMetrics::*>;
+using MetricField = std::variant<std::monostate, double WaveformMetrics::*, int WaveformMetrics::*,
+                                 std::array<double, kMaxGaussians> WaveformMetrics::*,
+                                 std::array<double, kRhLevels> WaveformMetrics::*>;
 
 struct ProductField {
   const char* name;

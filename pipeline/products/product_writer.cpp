@@ -10,7 +10,8 @@ std::vector<std::unique_ptr<ProductWriter>> make_writers(const std::filesystem::
                                                          const ProductSettings& settings,
                                                          const RunInfo& info) {
   std::vector<std::unique_ptr<ProductWriter>> writers;
-  if (settings.netcdf) writers.push_back(std::make_unique<NetcdfWriter>(out_dir / "shots.nc", info));
+  if (settings.netcdf)
+    writers.push_back(std::make_unique<NetcdfWriter>(out_dir / "shots.nc", info));
   if (settings.geojson)
     writers.push_back(std::make_unique<GeojsonWriter>(out_dir / "footprints.geojson", info));
   return writers;

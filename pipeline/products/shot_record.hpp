@@ -25,9 +25,9 @@ enum QualityFlag : std::uint8_t {
 
 struct ShotRecord {
   std::int64_t shot_number = 0;
-  double time_s = 0.0;  // seconds since 2000-01-01T12:00:00Z
-  double lat_deg = 0.0, lon_deg = 0.0, elev_m = 0.0;            // footprint centre
-  double sc_lat_deg = 0.0, sc_lon_deg = 0.0, sc_alt_m = 0.0;    // spacecraft
+  double time_s = 0.0;                                        // seconds since 2000-01-01T12:00:00Z
+  double lat_deg = 0.0, lon_deg = 0.0, elev_m = 0.0;          // footprint centre
+  double sc_lat_deg = 0.0, sc_lon_deg = 0.0, sc_alt_m = 0.0;  // spacecraft
   double off_nadir_deg = 0.0, range_m = 0.0;
   double slope_deg = 0.0, aspect_deg = 0.0;
   double elev_bin0_m = 0.0, elev_lastbin_m = 0.0;
@@ -47,7 +47,7 @@ struct ShotRecord {
   // Waveform processing of rx_waveform (pipeline/products/waveform_metrics.hpp), [band].
   // Elevations are m above WGS84; NaN where the waveform has no signal.
   std::vector<double> energy_tr_J, energy_cr_J, energy_gr_J;  // the seed's TR, CR, GR
-  std::vector<double> waveform_index;                          // seed eq. (3)
+  std::vector<double> waveform_index;                         // seed eq. (3)
   std::vector<double> sig_begin_m, sig_end_m, centroid_m;
   std::vector<std::int32_t> n_peaks;
   // [band][gaussian], 6 slots in waveform order, NaN where unused.
@@ -66,16 +66,16 @@ struct ShotRecord {
 
 // What every shot of a run shares.
 struct RunInfo {
-  std::string command_line;  // the `history` attribute
-  std::string config_json;   // resolved configuration
+  std::string command_line;    // the `history` attribute
+  std::string config_json;     // resolved configuration
   std::string vertical_datum;  // what the terrain's heights were measured from, in words
   std::uint64_t seed = 0;
   std::int64_t shots = 0;  // records the products will hold
   std::vector<ProductBand> bands;
-  std::vector<double> bin_time_ns;                    // [bin] centre, after the return from range_m
-  std::vector<double> tx_time_ns;                     // [tx_bin] centre, about the pulse peak
-  std::vector<std::vector<double>> tx_waveform_W;     // [band][tx_bin]
-  int orders = 0;  // per-order output: orders 1..orders; 0 when off
+  std::vector<double> bin_time_ns;                 // [bin] centre, after the return from range_m
+  std::vector<double> tx_time_ns;                  // [tx_bin] centre, about the pulse peak
+  std::vector<std::vector<double>> tx_waveform_W;  // [band][tx_bin]
+  int orders = 0;                                  // per-order output: orders 1..orders; 0 when off
 };
 
 struct RunStats {

@@ -343,8 +343,8 @@ TEST_F(GeojsonWriterTest, PropertiesAreThoseOfTheFieldTable) {
   }
   // Per-shot scalars and the first band's values: shots.nc's rows that are not arrays over
   // bins, orders or Gaussians, typed here.
-  for (const char* name : {"shot_number", "quality_flag", "elev", "reflectance", "n_peaks",
-                           "canopy_height_true"})
+  for (const char* name :
+       {"shot_number", "quality_flag", "elev", "reflectance", "n_peaks", "canopy_height_true"})
     EXPECT_NE(std::find(expected.begin(), expected.end(), name), expected.end()) << name;
   for (const char* name : {"rx_waveform", "rx_waveform_order", "gauss_amp", "rh"})
     EXPECT_EQ(std::find(expected.begin(), expected.end(), name), expected.end()) << name;

@@ -134,10 +134,10 @@ ShotRecord make_flagged_record(int record) {
   shot.rx_energy_canopy_J.clear();
   shot.rx_energy_ground_J.clear();
   shot.reflectance.clear();
-  for (auto field : {&ShotRecord::energy_tr_J, &ShotRecord::energy_cr_J, &ShotRecord::energy_gr_J,
-                     &ShotRecord::waveform_index, &ShotRecord::sig_begin_m, &ShotRecord::sig_end_m,
-                     &ShotRecord::centroid_m, &ShotRecord::ground_elev_est_m,
-                     &ShotRecord::canopy_height_est_m})
+  for (auto field :
+       {&ShotRecord::energy_tr_J, &ShotRecord::energy_cr_J, &ShotRecord::energy_gr_J,
+        &ShotRecord::waveform_index, &ShotRecord::sig_begin_m, &ShotRecord::sig_end_m,
+        &ShotRecord::centroid_m, &ShotRecord::ground_elev_est_m, &ShotRecord::canopy_height_est_m})
     (shot.*field).clear();
   shot.n_peaks = {0, 0};  // what the simulation hands over for a flagged shot
   for (auto field : {&ShotRecord::gauss_amp_W, &ShotRecord::gauss_center_m,
@@ -594,12 +594,12 @@ TEST_F(NetcdfWriterTest, WaveformMetricsComeBackWithTheirUnits) {
   Reader nc(file());
   EXPECT_EQ(nc.dim("percentile"), 101u);
   const std::map<std::string, std::string> units = {
-      {"energy_tr", "J"},          {"energy_cr", "J"},        {"energy_gr", "J"},
-      {"waveform_index", "1"},     {"sig_begin_m", "m"},      {"sig_end_m", "m"},
-      {"centroid_m", "m"},         {"n_peaks", "1"},          {"gauss_amp", "W"},
-      {"gauss_center_m", "m"},     {"gauss_sigma_ns", "ns"},  {"gauss_area", "J"},
-      {"ground_elev_est", "m"},    {"canopy_height_est", "m"}, {"rh", "m"},
-      {"cover_true", "1"},         {"pai_true", "1"},         {"canopy_height_true", "m"},
+      {"energy_tr", "J"},       {"energy_cr", "J"},         {"energy_gr", "J"},
+      {"waveform_index", "1"},  {"sig_begin_m", "m"},       {"sig_end_m", "m"},
+      {"centroid_m", "m"},      {"n_peaks", "1"},           {"gauss_amp", "W"},
+      {"gauss_center_m", "m"},  {"gauss_sigma_ns", "ns"},   {"gauss_area", "J"},
+      {"ground_elev_est", "m"}, {"canopy_height_est", "m"}, {"rh", "m"},
+      {"cover_true", "1"},      {"pai_true", "1"},          {"canopy_height_true", "m"},
       {"percentile", "percent"}};
   for (const auto& [name, unit] : units) {
     EXPECT_EQ(nc.text(name, "units"), unit) << name;
@@ -635,10 +635,14 @@ TEST_F(NetcdfWriterTest, WaveformMetricsComeBackWithTheirUnits) {
   EXPECT_EQ(nc.doubles("percentile"), percentiles);
 
   const std::map<std::string, std::vector<double> ShotRecord::*> per_band = {
-      {"energy_tr", &ShotRecord::energy_tr_J},           {"energy_cr", &ShotRecord::energy_cr_J},
-      {"energy_gr", &ShotRecord::energy_gr_J},           {"waveform_index", &ShotRecord::waveform_index},
-      {"sig_begin_m", &ShotRecord::sig_begin_m},         {"sig_end_m", &ShotRecord::sig_end_m},
-      {"centroid_m", &ShotRecord::centroid_m},           {"ground_elev_est", &ShotRecord::ground_elev_est_m},
+      {"energy_tr", &ShotRecord::energy_tr_J},
+      {"energy_cr", &ShotRecord::energy_cr_J},
+      {"energy_gr", &ShotRecord::energy_gr_J},
+      {"waveform_index", &ShotRecord::waveform_index},
+      {"sig_begin_m", &ShotRecord::sig_begin_m},
+      {"sig_end_m", &ShotRecord::sig_end_m},
+      {"centroid_m", &ShotRecord::centroid_m},
+      {"ground_elev_est", &ShotRecord::ground_elev_est_m},
       {"canopy_height_est", &ShotRecord::canopy_height_est_m}};
   const std::map<std::string, std::vector<std::vector<double>> ShotRecord::*> per_gaussian = {
       {"gauss_amp", &ShotRecord::gauss_amp_W},
@@ -670,7 +674,8 @@ TEST_F(NetcdfWriterTest, WaveformMetricsComeBackWithTheirUnits) {
       for (int k = 0; k <= 100; ++k)
         EXPECT_FLOAT_EQ(rh[(record * 2 + band) * 101 + k], expected.rh_m[band][k]) << "rh" << k;
     }
-    for (const auto& [name, field] : truth) EXPECT_EQ(nc.doubles(name)[record], expected.*field) << name;
+    for (const auto& [name, field] : truth)
+      EXPECT_EQ(nc.doubles(name)[record], expected.*field) << name;
   }
   // The flagged shot (record 1): fill, and no peaks.
   EXPECT_TRUE(std::isnan(nc.doubles("energy_tr")[2]));

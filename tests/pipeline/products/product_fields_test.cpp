@@ -33,11 +33,14 @@ std::size_t rank_of(const ProductField& field) {
   return std::visit(
       [](auto member) -> std::size_t {
         using T = std::remove_cvref_t<decltype(std::declval<ShotRecord>().*member)>;
-        if constexpr (std::is_arithmetic_v<T>) return 0;
+        if constexpr (std::is_arithmetic_v<T>)
+          return 0;
         else if constexpr (std::is_same_v<T, std::vector<std::vector<std::vector<double>>>>)
           return 3;
-        else if constexpr (std::is_same_v<T, std::vector<std::vector<double>>>) return 2;
-        else return 1;
+        else if constexpr (std::is_same_v<T, std::vector<std::vector<double>>>)
+          return 2;
+        else
+          return 1;
       },
       field.field);
 }
@@ -107,9 +110,9 @@ TEST(FillFlagged, FillsWhatTheShotCannotKnowAndKeepsTheRest) {
   EXPECT_EQ(record.sc_alt_m, 600000.0);
   EXPECT_EQ(record.off_nadir_deg, 0.3);
   EXPECT_EQ(record.quality_flag, quality_no_terrain);
-  for (double v : {record.lat_deg, record.lon_deg, record.elev_m, record.range_m,
-                   record.slope_deg, record.aspect_deg, record.elev_bin0_m, record.elev_lastbin_m,
-                   record.cover_true, record.pai_true, record.canopy_height_true_m})
+  for (double v : {record.lat_deg, record.lon_deg, record.elev_m, record.range_m, record.slope_deg,
+                   record.aspect_deg, record.elev_bin0_m, record.elev_lastbin_m, record.cover_true,
+                   record.pai_true, record.canopy_height_true_m})
     EXPECT_TRUE(std::isnan(v));
 
   for (const auto* waveforms :
@@ -182,9 +185,11 @@ TEST(StoreMetrics, CopiesEachMetricToItsField) {
   fill_fields(record, FieldSource::metrics, {.bands = 2});
   store_metrics(record, 1, m);
   const std::vector<std::pair<const std::vector<double>*, double>> per_band = {
-      {&record.energy_tr_J, 1.0},    {&record.energy_cr_J, 2.0},         {&record.energy_gr_J, 3.0},
-      {&record.waveform_index, 4.0}, {&record.sig_begin_m, 5.0},         {&record.sig_end_m, 6.0},
-      {&record.centroid_m, 7.0},     {&record.ground_elev_est_m, 12.0},  {&record.canopy_height_est_m, 13.0}};
+      {&record.energy_tr_J, 1.0},         {&record.energy_cr_J, 2.0},
+      {&record.energy_gr_J, 3.0},         {&record.waveform_index, 4.0},
+      {&record.sig_begin_m, 5.0},         {&record.sig_end_m, 6.0},
+      {&record.centroid_m, 7.0},          {&record.ground_elev_est_m, 12.0},
+      {&record.canopy_height_est_m, 13.0}};
   for (const auto& [values, want] : per_band) {
     EXPECT_TRUE(std::isnan((*values)[0]));
     EXPECT_EQ((*values)[1], want);
