@@ -14,8 +14,8 @@
 #include <type_traits>
 #include <vector>
 
-#include "pipeline/products/product_writer.hpp"
 #include "core/error.hpp"
+#include "pipeline/products/product_writer.hpp"
 
 namespace glaswave {
 namespace {
