@@ -2,6 +2,7 @@
 // with netCDF-C and GDAL's OGR, and its errors checked against PRODUCT.md sections 2 and 5.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <netcdf.h>
 #include <ogrsf_frmts.h>
 #include <sys/wait.h>
@@ -28,7 +29,8 @@ class Cli : public ::testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
            ("glaswave_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }

@@ -1,6 +1,7 @@
 // Explicit crowns (crowns_file) and stands (GeoJSON polygons overriding canopy keys): their
 // trees where the files put them, with the optics the stands give, and bad files named.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -22,7 +23,8 @@ class Forests : public ::testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
            ("glaswave_forest_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
