@@ -44,10 +44,14 @@ struct RayEvent {
   // From the detector to the position along the path; for a score, the whole way detector ->
   // path -> element -> laser, whose length sets the return's time.
   double path_m = 0.0;
-  // A score's two-way time after the reference return and its tally bin (LidarModel's tally:
-  // the window's bins plus a margin of pulse width on each side), -1 outside the tally.
+  // A score's two-way time after the reference return, and where it is binned: its tally bin
+  // (LidarModel's tally: the window's bins plus a margin of pulse width on each side; -1 outside
+  // the tally, so not scored), and the window's bin that is (tally_bin - LidarModel::margin_bins,
+  // an index into bin_time_ns; below 0 or past the last bin within the margin, from where the
+  // pulse still spreads it into the window).
   double time_ns = std::numeric_limits<double>::quiet_NaN();
   int tally_bin = -1;
+  int bin = -1;
 };
 
 const char* to_string(RayEventKind kind);

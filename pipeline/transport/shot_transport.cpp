@@ -179,6 +179,8 @@ class PathTracer {
   bool survives_roulette(const Path& path, RayRandom& random);
   void project(const Vec3& direction);
   double beam_density(const Vec3& direction) const;
+  RayEvent event_at(RayEventKind kind, const Path& path, const Vec3& position,
+                    const Vertex* vertex) const;
   void emit(RayEventKind kind, const Path& path, const Vec3& position, const Vertex* vertex) const;
 
   const Scene& scene_;
@@ -341,9 +343,12 @@ void PathTracer::score_direct(const Path& path, const Vertex& vertex, int order,
                       scale;
   if (tally_bin >= 0) bin(path, order, tally_bin, tally);
   if (observer_) {
-    RayEvent event{RayEventKind::score, path.beam_path,        order,          vertex.point,
-                   path.direction,      vertex.element,        vertex.foliage, vertex.crown,
-                   response_,           laser_m + path.path_m, time_ns,        tally_bin};
+    RayEvent event = event_at(RayEventKind::score, path, vertex.point, &vertex);
+    event.weight = response_;
+    event.path_m = laser_m + path.path_m;
+    event.time_ns = time_ns;
+    event.tally_bin = tally_bin;
+    event.bin = tally_bin - lidar_.margin_bins();
     (*observer_)(event);
   }
 }
@@ -460,10 +465,9 @@ double PathTracer::beam_density(const Vec3& direction) const {
          (std::numbers::pi * two_sigma_sq_ * lidar_.fov_fraction());
 }
 
-// Tells the observer, if any, of an event that carries the path's throughput.
-void PathTracer::emit(RayEventKind kind, const Path& path, const Vec3& position,
-                      const Vertex* vertex) const {
-  if (!observer_) return;
+// An event at `position` that carries the path's throughput.
+RayEvent PathTracer::event_at(RayEventKind kind, const Path& path, const Vec3& position,
+                              const Vertex* vertex) const {
   RayEvent event;
   event.kind = kind;
   event.single_scattering_path = path.beam_path;
@@ -477,7 +481,13 @@ void PathTracer::emit(RayEventKind kind, const Path& path, const Vec3& position,
   }
   event.weight = throughput_;
   event.path_m = path.path_m;
-  (*observer_)(event);
+  return event;
+}
+
+// Tells the observer, if any: without one no event is built.
+void PathTracer::emit(RayEventKind kind, const Path& path, const Vec3& position,
+                      const Vertex* vertex) const {
+  if (observer_) (*observer_)(event_at(kind, path, position, vertex));
 }
 
 // The shot's waveforms from its tally of normalised returns: each band's scale (section 1 of

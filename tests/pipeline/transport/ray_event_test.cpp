@@ -169,6 +169,9 @@ TEST(SimulateRay, ALevelPlaneTellsItsStory) {
   EXPECT_NEAR(score.path_m, 2.0 * 600000.0, 0.05);
   EXPECT_NEAR(score.time_ns, 0.0, 0.2);
   EXPECT_EQ(score.tally_bin, lidar.tally_index(0.0));
+  // The window's bin is the one whose centre is nearest the return's time.
+  ASSERT_GE(score.bin, 0);
+  EXPECT_NEAR(lidar.bin_time_ns()[score.bin], score.time_ns, 0.5 * lidar.sensor().bin_ns);
   EXPECT_GT(events[6].direction[2], 0.0);  // the scattered path goes up
   EXPECT_EQ(weights[6], optics.soil_reflectance);
 }
