@@ -5,14 +5,16 @@
 
 #include "core/error.hpp"
 #include "footprints/track.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
 
 namespace glaswave {
 
 RayDebug debug_ray(const Config& config, std::int64_t shot_number, std::int64_t ray,
                    const RayObserver& observer) {
-  const std::unique_ptr<Terrain> terrain = make_terrain(config.terrain);
-  const Track track(config.track, *terrain);
+  const std::unique_ptr<Terrain> terrain = open_terrain(config);
+  const std::unique_ptr<Track> planned = plan_track(config, *terrain);
+  const Track& track = *planned;
   const auto [first, last] = track.records_of_shots(shot_number, shot_number + 1);
   if (shot_number < 0 || first >= last)
     throw config_error(
