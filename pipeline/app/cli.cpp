@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
+#include "pipeline/engine/ray_debug.hpp"
 #include "pipeline/engine/run.hpp"
 #include "pipeline/engine/sweep.hpp"
 
@@ -26,6 +27,7 @@ struct Arguments {
   std::optional<std::uint64_t> seed;
   bool resume = false;
   bool quiet = false;
+  std::string debug_ray;  // SHOT:RAY
 };
 
 // "A:B" -> [A, B); either side may be empty.
@@ -48,6 +50,26 @@ void parse_shot_range(const std::string& text, RunRequest& request) {
     throw config_error("--shots", "expected A:B, got \"" + text + "\"");
   request.first_shot = number(text.substr(0, colon));
   request.last_shot = number(text.substr(colon + 1));
+}
+
+// "SHOT:RAY" -> the two numbers.
+std::pair<std::int64_t, std::int64_t> parse_shot_and_ray(const std::string& text) {
+  const auto colon = text.find(':');
+  auto number = [&](const std::string& part) {
+    std::size_t used = 0;
+    std::int64_t value = -1;
+    try {
+      value = std::stoll(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (part.empty() || used != part.size() || value < 0)
+      throw config_error("--debug-ray",
+                         "expected SHOT:RAY, a shot number and a ray number, got \"" + text + "\"");
+    return value;
+  };
+  if (colon == std::string::npos) number("");  // throws: both numbers are needed
+  return {number(text.substr(0, colon)), number(text.substr(colon + 1))};
 }
 
 Config load(const Arguments& arguments) {
@@ -94,9 +116,51 @@ class ProgressBar {
   double started_;
 };
 
+// An element as --debug-ray prints it, in one word: ground, trunk/foliage=K,
+// leaf/crown=N/foliage=K (N: the crown's index among the shot's crowns), leaf/layer/foliage=K.
+std::string element_word(const RayEvent& event) {
+  std::string word = to_string(event.element);
+  if (event.element == RayElement::leaf)
+    word += event.crown >= 0 ? "/crown=" + std::to_string(event.crown) : std::string("/layer");
+  if (event.foliage >= 0) word += "/foliage=" + std::to_string(event.foliage);
+  return word;
+}
+
+// --debug-ray SHOT:RAY: one line per event on stdout, columns as README.md describes them.
+int debug_ray_command(const Arguments& arguments) {
+  const auto [shot, ray] = parse_shot_and_ray(arguments.debug_ray);
+  const Config config = load(arguments);
+  std::printf("# glaswave --debug-ray %lld:%lld: ray %lld of shot %lld, re-run alone as in a run\n",
+              static_cast<long long>(shot), static_cast<long long>(ray),
+              static_cast<long long>(ray), static_cast<long long>(shot));
+  std::printf("%-6s %-11s %5s %12s %12s %12s %-24s", "path", "event", "order", "east_m", "north_m",
+              "up_m", "element");
+  for (const Band& band : config.sensor.bands)
+    std::printf(" %14s", ("weight_" + band.name).c_str());
+  std::printf(" %16s %6s\n", "path_m", "bin");
+  const RayDebug debug = debug_ray(config, shot, ray, [](const RayEvent& event) {
+    std::printf("%-6s %-11s %5d %12.4f %12.4f %12.4f %-24s",
+                event.single_scattering_path ? "single" : "multi", to_string(event.kind),
+                event.order, event.position_m[0], event.position_m[1], event.position_m[2],
+                element_word(event).c_str());
+    for (double weight : event.weight) std::printf(" %14.6e", weight);
+    const bool scored = event.kind == RayEventKind::score;
+    const std::string bin = !scored               ? "-"
+                            : event.tally_bin < 0 ? "outside"
+                                                  : std::to_string(event.bin);
+    std::printf(" %16.4f %6s\n", event.path_m, bin.c_str());
+  });
+  std::printf("# the ray's part of the shot's received energy (J):");
+  for (std::size_t band = 0; band < debug.band_names.size(); ++band)
+    std::printf(" %s %.6e", debug.band_names[band].c_str(), debug.waveforms.energy_J[band]);
+  std::printf(" (of %lld rays)\n", static_cast<long long>(debug.rays_per_shot));
+  return 0;
+}
+
 int run(const Arguments& arguments, const std::string& command_line) {
   if (arguments.resume)
     throw config_error("--resume", "resuming a run is not available in this version yet");
+  if (!arguments.debug_ray.empty()) return debug_ray_command(arguments);
   const Config config = load(arguments);
   RunRequest request;
   request.threads = arguments.threads;
@@ -176,6 +240,9 @@ int run_command_line(int argc, char** argv) {
           "UINT"));
   run_command->add_flag("--resume", arguments.resume, "finish an interrupted run");
   run_command->add_flag("--quiet", arguments.quiet, "no progress bar");
+  run_command->add_option("--debug-ray", arguments.debug_ray,
+                          "re-run ray RAY of shot SHOT alone and print its events, one a line; "
+                          "writes no products (SHOT:RAY)");
 
   CLI::App* check_command =
       app.add_subcommand("check", "validate the configuration and its inputs, run nothing");

@@ -151,11 +151,7 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   record.sc_alt_m = footprint.spacecraft.h_m;
   record.off_nadir_deg = footprint.off_nadir_deg;
 
-  // A beam over a hole in the DEM or its edge (3 sigma: 99 % of its energy) gives no waveform
-  // worth having: the shot is flagged like one off the terrain.
-  const double data_radius_m = 3.0 * footprint.range_m * lidar_.beam_sigma_rad() /
-                               std::cos(footprint.off_nadir_deg * std::numbers::pi / 180.0);
-  if (!footprint.on_terrain || !terrain_.has_data(LocalFrame(footprint.ground), data_radius_m)) {
+  if (!has_terrain(footprint)) {
     flag_off_terrain(record, footprint);
     return record;
   }
@@ -176,11 +172,7 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   record.elev_bin0_m = elevation_at(bin_time_ns.front());
   record.elev_lastbin_m = elevation_at(bin_time_ns.back());
 
-  TransportOptions options;
-  options.rays = config_.simulation.rays_per_shot;
-  options.max_order = config_.simulation.max_order;
-  options.per_order = config_.output.per_order;
-  options.seed = config_.seed;
+  const TransportOptions options = transport_options();
   ShotWaveforms waveforms =
       simulate_shot(*shot.scene, lidar_, shot.geometry, optics_, options, footprint.shot_number);
   if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;
@@ -195,6 +187,32 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   record.reflectance = surface_reflectance(record, footprint.range_m);
   record.footprint_lonlat = beam_outline(*shot.scene, lidar_, shot.geometry, shot.frame);
   return record;
+}
+
+std::optional<ShotWaveforms> ShotSimulator::simulate_ray(const Footprint& footprint,
+                                                         std::int64_t ray,
+                                                         const RayObserver& observer) const {
+  if (!has_terrain(footprint)) return std::nullopt;
+  const ShotScene shot = build_scene(footprint);
+  return glaswave::simulate_ray(*shot.scene, lidar_, shot.geometry, optics_, transport_options(),
+                                footprint.shot_number, ray, observer);
+}
+
+// A beam over a hole in the DEM or its edge (3 sigma: 99 % of its energy) gives no waveform
+// worth having: the shot is flagged like one off the terrain.
+bool ShotSimulator::has_terrain(const Footprint& footprint) const {
+  const double data_radius_m = 3.0 * footprint.range_m * lidar_.beam_sigma_rad() /
+                               std::cos(footprint.off_nadir_deg * std::numbers::pi / 180.0);
+  return footprint.on_terrain && terrain_.has_data(LocalFrame(footprint.ground), data_radius_m);
+}
+
+TransportOptions ShotSimulator::transport_options() const {
+  TransportOptions options;
+  options.rays = config_.simulation.rays_per_shot;
+  options.max_order = config_.simulation.max_order;
+  options.per_order = config_.output.per_order;
+  options.seed = config_.seed;
+  return options;
 }
 
 void ShotSimulator::flag_off_terrain(ShotRecord& record, const Footprint& footprint) const {

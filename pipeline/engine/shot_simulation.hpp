@@ -28,6 +28,12 @@ class ShotSimulator {
   // Thread-safe; the record depends only on the configuration and the footprint.
   ShotRecord simulate(const Footprint& footprint, std::int64_t* ray_queries = nullptr) const;
 
+  // Ray `ray` of the footprint's shot alone, as it runs in simulate(), its events told to
+  // `observer` (--debug-ray): the ray's part of the shot's waveforms, before the detector.
+  // Nothing for a shot that simulate() flags (no terrain under the beam).
+  std::optional<ShotWaveforms> simulate_ray(const Footprint& footprint, std::int64_t ray,
+                                            const RayObserver& observer) const;
+
   // What the products need to know besides the shots.
   RunInfo run_info(std::int64_t shots, const std::string& command_line) const;
 
@@ -36,6 +42,8 @@ class ShotSimulator {
  private:
   struct ShotScene;
   SceneOptics scene_optics() const;
+  bool has_terrain(const Footprint& footprint) const;
+  TransportOptions transport_options() const;
   // The steps of simulate(), in their order.
   void flag_off_terrain(ShotRecord& record, const Footprint& footprint) const;
   ShotScene build_scene(const Footprint& footprint) const;

@@ -67,7 +67,9 @@ void crown_intersect(const RTCIntersectFunctionNArguments* args) {
   if (!interval) return;
   const double t0 = std::max(interval->first, static_cast<double>(ray->tnear));
   const double t1 = std::min(interval->second, static_cast<double>(ray->tfar));
-  if (t0 < t1) collector->spans->push_back({t0, t1, crown.area_density_m2_m3, crown.material});
+  if (t0 < t1)
+    collector->spans->push_back(
+        {t0, t1, crown.area_density_m2_m3, crown.material, static_cast<int>(args->primID)});
 }
 
 // A slab between two heights above a plane: where the ray is inside it.

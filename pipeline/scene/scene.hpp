@@ -59,6 +59,7 @@ struct VolumeSpan {
   double start_m = 0.0, end_m = 0.0;  // distances along the ray
   double area_density_m2_m3 = 0.0;
   int material = 0;
+  int crown = -1;  // index of the crown in Vegetation::crowns; -1 for the layer
 };
 
 class Scene {

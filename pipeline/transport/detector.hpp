@@ -18,12 +18,12 @@ class Detector {
   // saturation_W, the digitiser's full scale after the gain. The engine fills it from the
   // configuration's detector.
   struct Settings {
-    double background_W = 0.0;        // mean background light in the field of view
-    bool photon_noise = false;        // Poisson statistics of signal and background photons
-    double quantum_efficiency = 1.0;  // photoelectrons per photon, for photon_noise
-    double noise_rms_W = 0.0;         // Gaussian detector (dark and amplifier) noise, RMS
-    double gain = 1.0;                // amplification before the digitiser
-    int bits = 0;                     // digitiser resolution; 0: not digitised
+    double background_W = 0.0;           // mean background light in the field of view
+    bool photon_noise = false;           // Poisson statistics of signal and background photons
+    double quantum_efficiency = 1.0;     // photoelectrons per photon, for photon_noise
+    double noise_rms_W = 0.0;            // Gaussian detector (dark and amplifier) noise, RMS
+    double gain = 1.0;                   // amplification before the digitiser
+    int bits = 0;                        // digitiser resolution; 0: not digitised
     std::optional<double> saturation_W;  // full scale; absent: no saturation
   };
 

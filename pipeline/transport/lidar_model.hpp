@@ -52,6 +52,7 @@ class LidarModel {
   // outside the window still spreads into it. Index for a two-way time after the reference
   // return, or -1 outside the tally.
   int tally_size() const { return sensor_.bins + 2 * margin_bins_; }
+  int margin_bins() const { return margin_bins_; }
   int tally_index(double time_ns) const;
   // An energy tally (J per bin) convolved with the pulse: power (W) in each window bin.
   std::vector<double> power_W(const std::vector<double>& tally_J) const;

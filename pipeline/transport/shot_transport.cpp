@@ -44,11 +44,11 @@ struct Tally {
   std::int64_t ray_queries = 0;
 };
 
-enum class Vertex { leaf, ground, trunk };
-
+// A leaf met by free-path sampling: how far along the ray, and in which foliage.
 struct Interaction {
   double distance_m;
   int material;
+  int crown;  // -1 for the layer
 };
 
 // Where the accumulated optical depth along the ray reaches `target`, within the spans
@@ -76,14 +76,14 @@ std::optional<Interaction> free_path(const std::vector<VolumeSpan>& spans,
         const double at = t_previous + (target - depth) / extinction;
         // The spans covering the point share the interaction by their extinction.
         double pick = uniform() * extinction;
-        int material = spans.front().material;
+        const VolumeSpan* met = &spans.front();
         for (const VolumeSpan& span : spans) {
           if (span.start_m > at || span.end_m <= at) continue;
-          material = span.material;
+          met = &span;
           pick -= span.area_density_m2_m3 * projection[span.material];
           if (pick < 0.0) break;
         }
-        return Interaction{at, material};
+        return Interaction{at, met->material, met->crown};
       }
       depth += step;
     }
@@ -129,221 +129,374 @@ Vec3 cosine_direction(const Vec3& normal, double u1, double u2) {
          std::sqrt(std::max(0.0, 1.0 - u1)) * normal;
 }
 
-void trace_chunk(const Scene& scene, const LidarModel& lidar, const ShotGeometry& geometry,
-                 const SceneOptics& optics, const TransportOptions& options,
-                 std::int64_t shot_number, std::int64_t first_ray, std::int64_t last_ray,
-                 Tally& tally) {
-  const BeamSampler beam(lidar, geometry.axis);
-  const std::size_t bands = lidar.band_count();
-  const double two_sigma_sq = 2.0 * lidar.beam_sigma_rad() * lidar.beam_sigma_rad();
-  const double range_m = geometry.range_m;
+// Embree's float geometry needs a path leaving a surface to start a little off it.
+constexpr double surface_offset_m = 1e-4;
+// Farther than anything in a shot's scene.
+constexpr double far_m = 1.0e5;
+
+// One path of a ray, between two interactions.
+struct Path {
+  bool beam_path = true;  // the first path: drawn by the beam, scores the single scattering
+  double density = 0.0;   // of the second path's first direction (the mixture), per sr
+  Vec3 position{}, direction{};
+  double path_m = 0.0;  // from the detector to `position` along the path
+  double min_distance_m = 0.0;
+  bool canopy_return = false;  // whether the first element met is foliage or a trunk
+  int order = 0;               // of the last element met
+};
+
+// The element a path meets.
+struct Vertex {
+  RayElement element = RayElement::none;
+  const Foliage* material = nullptr;  // of a leaf or a trunk
+  int foliage = -1, crown = -1;
+  double segment_m = 0.0;  // from the path's position
+  Vec3 point{}, normal{};  // a leaf's normal is drawn for the arriving direction
+};
+
+// The steps of one ray's paths, in the way pbrt splits an integrator: sample the beam, find
+// the next element (a free path through the foliage, or the next surface), score the direct
+// return toward the detector, bin it, scatter. One tracer serves a group of rays in turn and
+// keeps their scratch space; the ray's random numbers are drawn in the order the steps run.
+class PathTracer {
+ public:
+  PathTracer(const Scene& scene, const LidarModel& lidar, const ShotGeometry& geometry,
+             const SceneOptics& optics, const TransportOptions& options, std::int64_t shot_number,
+             const RayObserver* observer);
+  void trace_ray(std::int64_t ray, Tally& tally);
+
+ private:
+  void trace_path(bool beam_path, RayRandom& random, Tally& tally);
+  Path sample_beam(bool beam_path, RayRandom& random);
+  std::optional<Vertex> find_vertex(const Path& path, RayRandom& random, Tally& tally);
+  void score_direct(const Path& path, const Vertex& vertex, int order, Tally& tally);
+  double laser_transmission(const Path& path, const Vertex& vertex, int order,
+                            const Vec3& up_to_laser, Tally& tally);
+  double element_response(const Vertex& vertex, std::size_t band, const Vec3& laser_light,
+                          const Vec3& toward_detector, const Vec3& up_to_laser) const;
+  void bin(const Path& path, int order, int bin, Tally& tally) const;
+  bool scatter(Path& path, const Vertex& vertex, RayRandom& random);
+  bool survives_roulette(const Path& path, RayRandom& random);
+  void project(const Vec3& direction);
+  double beam_density(const Vec3& direction) const;
+  RayEvent event_at(RayEventKind kind, const Path& path, const Vec3& position,
+                    const Vertex* vertex) const;
+  void emit(RayEventKind kind, const Path& path, const Vec3& position, const Vertex* vertex) const;
+
+  const Scene& scene_;
+  const LidarModel& lidar_;
+  const ShotGeometry& geometry_;
+  const SceneOptics& optics_;
+  const TransportOptions& options_;
+  const std::int64_t shot_number_;
+  const RayObserver* observer_;  // null: no events are built
+  const BeamSampler beam_;
+  const std::size_t bands_;
+  const double two_sigma_sq_;
+  const double uniform_density_;  // over the field of view, per sr
   // Rays start just above the scene, so Embree's float coordinates stay small.
-  const double start_height_m = scene.top_m() + 1.0;
-  const bool foliage = scene.has_volumes();
-  constexpr double surface_offset_m = 1e-4;
-  constexpr double far_m = 1.0e5;
-  std::vector<VolumeSpan> spans;
-  std::vector<double> throughput(bands), response(bands);
-  std::vector<double> projection(optics.foliage.size());  // G of each foliage for one direction
-  bool any_point_leaves = false;
+  const double start_height_m_;
+  const bool foliage_;
+  bool any_point_leaves_ = false;
+  std::vector<VolumeSpan> spans_;
+  std::vector<double> throughput_, response_;
+  std::vector<double> projection_;  // G of each foliage for one direction
+};
+
+PathTracer::PathTracer(const Scene& scene, const LidarModel& lidar, const ShotGeometry& geometry,
+                       const SceneOptics& optics, const TransportOptions& options,
+                       std::int64_t shot_number, const RayObserver* observer)
+    : scene_(scene),
+      lidar_(lidar),
+      geometry_(geometry),
+      optics_(optics),
+      options_(options),
+      shot_number_(shot_number),
+      observer_(observer),
+      beam_(lidar, geometry.axis),
+      bands_(lidar.band_count()),
+      two_sigma_sq_(2.0 * lidar.beam_sigma_rad() * lidar.beam_sigma_rad()),
+      uniform_density_(1.0 / lidar.fov_solid_angle_sr()),
+      start_height_m_(scene.top_m() + 1.0),
+      foliage_(scene.has_volumes()),
+      throughput_(bands_),
+      response_(bands_),
+      projection_(optics.foliage.size()) {
   for (const Foliage& f : optics.foliage)
-    any_point_leaves = any_point_leaves || f.leaf_size_m == 0.0;
-  auto project = [&](const Vec3& d) {
-    for (std::size_t m = 0; m < optics.foliage.size(); ++m)
-      projection[m] = optics.foliage[m].leaf_angles->projection(d[2]);
-  };
-  auto angle_from_axis = [&](const Vec3& d) {
-    return std::atan2(norm(cross(d, geometry.axis)), dot(d, geometry.axis));
-  };
-  // The beam's irradiance in a direction, as a density over the field of view (per sr):
-  // exp(-theta^2 / 2 sigma^2) / (2 pi sigma^2 f_fov). The beam path's rays are drawn by it.
-  auto beam_density = [&](const Vec3& d) {
-    return std::exp(-std::pow(angle_from_axis(d), 2) / two_sigma_sq) /
-           (std::numbers::pi * two_sigma_sq * lidar.fov_fraction());
-  };
-  const double uniform_density = 1.0 / lidar.fov_solid_angle_sr();
+    any_point_leaves_ = any_point_leaves_ || f.leaf_size_m == 0.0;
+}
 
-  // Each ray traces two paths. The first, drawn by the beam's irradiance, scores the single
-  // scattering: the laser lights its first interaction down the very path sampled, so every ray
-  // carries the same weight and a bare surface's energy comes out to round-off. The second
-  // scores orders 2 and up: multiply scattered light reaches the detector from anywhere in its
-  // view, so it is drawn half by the beam and half uniformly over the field of view. Drawn by
-  // the beam alone, a ray in the beam's tail would weigh exp(theta^2 / 2 sigma^2), without
-  // bound (e^23 at the edge of GLAS's view); the mixture bounds the weight by 2 Omega_fov.
-  for (std::int64_t ray = first_ray; ray < last_ray; ++ray) {
-    RayRandom random(options.seed, shot_number, ray);
-    auto uniform = [&random] { return random.uniform(); };
-    for (const bool beam_path : {true, false}) {
-      if (!beam_path && options.max_order < 2) break;
-      const bool by_beam = beam_path || random.uniform() < 0.5;
-      const double u1 = random.uniform(), u2 = random.uniform();
-      const Vec3 first_direction =
-          by_beam ? beam.direction(u1, u2) : beam.uniform_direction(u1, u2);
-      // Density the second path's first direction was drawn with (the mixture); the beam path
-      // scores only its first interaction and never needs it.
-      const double path_density =
-          beam_path ? 0.0 : 0.5 * beam_density(first_direction) + 0.5 * uniform_density;
-      const double start_m = (geometry.sensor_m[2] - start_height_m) / -first_direction[2];
+// Each ray traces two paths. The first, drawn by the beam's irradiance, scores the single
+// scattering: the laser lights its first interaction down the very path sampled, so every ray
+// carries the same weight and a bare surface's energy comes out to round-off. The second
+// scores orders 2 and up: multiply scattered light reaches the detector from anywhere in its
+// view, so it is drawn half by the beam and half uniformly over the field of view. Drawn by
+// the beam alone, a ray in the beam's tail would weigh exp(theta^2 / 2 sigma^2), without
+// bound (e^23 at the edge of GLAS's view); the mixture bounds the weight by 2 Omega_fov.
+void PathTracer::trace_ray(std::int64_t ray, Tally& tally) {
+  RayRandom random(options_.seed, shot_number_, ray);
+  trace_path(true, random, tally);
+  if (options_.max_order >= 2) trace_path(false, random, tally);
+}
 
-      Vec3 position = geometry.sensor_m + start_m * first_direction;
-      Vec3 direction = first_direction;
-      double path_m = start_m;  // from the detector to `position` along the path
-      double min_distance_m = 0.0;
-      std::fill(throughput.begin(), throughput.end(), 1.0);
-      bool canopy_return = false;
-
-      for (int order = 1; order <= options.max_order; ++order) {
-        // The next interaction: foliage by free-path sampling, but never beyond the nearest
-        // surface.
-        const SurfaceHit hit = scene.intersect(position, direction, far_m, min_distance_m);
-        ++tally.ray_queries;
-        std::optional<Interaction> leaf;
-        if (foliage) {
-          scene.volume_spans(position, direction,
-                             hit.kind == SurfaceKind::none ? far_m : hit.distance_m, spans);
-          ++tally.ray_queries;
-          project(direction);
-          leaf = free_path(spans, projection, -std::log1p(-random.uniform()), uniform);
-        }
-        if (!leaf && hit.kind == SurfaceKind::none) break;  // left the scene
-        const Vertex vertex = leaf                              ? Vertex::leaf
-                              : hit.kind == SurfaceKind::ground ? Vertex::ground
-                                                                : Vertex::trunk;
-        const double segment_m = leaf ? leaf->distance_m : hit.distance_m;
-        const Foliage* material = leaf                      ? &optics.foliage[leaf->material]
-                                  : vertex == Vertex::trunk ? &optics.foliage[hit.material]
-                                                            : nullptr;
-        const Vec3 point = position + segment_m * direction;
-        path_m += segment_m;
-        if (order == 1) canopy_return = vertex != Vertex::ground;
-
-        // The element met: a leaf normal drawn for this direction, or the surface's.
-        const Vec3 normal =
-            leaf ? material->leaf_angles->sample_normal(direction, uniform) : hit.normal;
-
-        // Direct laser light at the point, scored toward the detector. The laser sits with the
-        // detector: at the first interaction its light comes down the very path sampled, and with
-        // finite leaves it finds the same gaps (the hotspot, PHYSICS.md section 3).
-        const Vec3 to_laser = geometry.sensor_m - point;
-        const double laser_m = norm(to_laser);
-        const Vec3 up_to_laser = (1.0 / laser_m) * to_laser;
-        const Vec3 laser_light = -1.0 * up_to_laser;  // travel direction of the laser's light
-        double transmission = 1.0, beam_ratio = 1.0;
-        const bool scored = beam_path || order > 1;
-        if (order > 1) {
-          // Surfaces between the point and the laser block it.
-          const double exit_m = (start_height_m - point[2]) / up_to_laser[2];
-          if (scene.occluded(point, up_to_laser, exit_m, surface_offset_m)) transmission = 0.0;
-          ++tally.ray_queries;
-          // The laser's light at the point, over the density of the detector ray that found it.
-          beam_ratio = beam_density(laser_light) / path_density;
-        }
-        // At the first interaction with finite leaves only, the way out needs no second look.
-        if (scored && foliage && transmission > 0.0 && (order > 1 || any_point_leaves)) {
-          const double exit_m = (start_height_m - point[2]) / up_to_laser[2];
-          scene.volume_spans(point, up_to_laser, exit_m, spans);
-          ++tally.ray_queries;
-          // The connection runs beside the segment just sampled (traced back from the point).
-          const double separation_rad =
-              std::acos(std::clamp(dot(up_to_laser, -1.0 * direction), -1.0, 1.0));
-          const double shared_m = order == 1 ? std::numeric_limits<double>::infinity() : segment_m;
-          project(up_to_laser);
-          transmission *= std::exp(-connection_depth(spans, projection, optics.foliage, shared_m,
-                                                     order == 1 ? 0.0 : separation_rad));
-        }
-        if (scored && transmission > 0.0) {
-          const double scale =
-              transmission * beam_ratio * (range_m / laser_m) * (range_m / laser_m);
-          const double time_ns = (laser_m + path_m - 2.0 * range_m) / speed_of_light_m_s * 1e9;
-          const int bin = lidar.tally_index(time_ns);
-          const Vec3 toward_detector = -1.0 * direction;
-          for (std::size_t band = 0; band < bands; ++band) {
-            double element = 0.0;
-            if (vertex == Vertex::leaf) {
-              element =
-                  bilambertian_response(normal, laser_light, toward_detector,
-                                        material->reflectance[band], material->transmittance[band]);
-            } else {
-              const double reflectance = vertex == Vertex::ground
-                                             ? optics.soil_reflectance[band]
-                                             : material->trunk_reflectance[band];
-              element = reflectance * std::max(0.0, dot(normal, up_to_laser));
-            }
-            response[band] = throughput[band] * element * scale;
-          }
-          if (bin >= 0) {
-            for (std::size_t band = 0; band < bands; ++band) {
-              const std::size_t at = band * tally.size + bin;
-              tally.total[at] += response[band];
-              (canopy_return ? tally.canopy : tally.ground)[at] += response[band];
-              if (order <= tally.orders)
-                tally.order[(band * tally.orders + order - 1) * tally.size + bin] += response[band];
-            }
-          }
-        }
-        if (beam_path || order == options.max_order) break;
-
-        // The diffuse light: where the light scattered here toward the detector came from.
-        const Vec3 back = -1.0 * direction;  // the side the path arrived from
-        if (vertex == Vertex::leaf) {
-          // Reflection sends the path back to the side it came from, transmission through.
-          double reflected = 0.0, transmitted = 0.0;
-          for (std::size_t band = 0; band < bands; ++band) {
-            reflected += throughput[band] * material->reflectance[band];
-            transmitted += throughput[band] * material->transmittance[band];
-          }
-          if (reflected + transmitted <= 0.0) break;
-          const double p_reflect = reflected / (reflected + transmitted);
-          const bool reflect = random.uniform() < p_reflect;
-          const Vec3 facing = dot(normal, back) >= 0.0 ? normal : -1.0 * normal;
-          const double v1 = random.uniform(), v2 = random.uniform();
-          direction = cosine_direction(reflect ? facing : -1.0 * facing, v1, v2);
-          for (std::size_t band = 0; band < bands; ++band)
-            throughput[band] *= reflect ? material->reflectance[band] / p_reflect
-                                        : material->transmittance[band] / (1.0 - p_reflect);
-          position = point;
-          min_distance_m = 0.0;
-        } else {
-          const double v1 = random.uniform(), v2 = random.uniform();
-          direction = cosine_direction(normal, v1, v2);
-          for (std::size_t band = 0; band < bands; ++band)
-            throughput[band] *= vertex == Vertex::ground ? optics.soil_reflectance[band]
-                                                         : material->trunk_reflectance[band];
-          position = point;
-          min_distance_m = surface_offset_m;
-        }
-        // Russian roulette on faint paths keeps the estimate unbiased and the work bounded.
-        const double strongest = *std::max_element(throughput.begin(), throughput.end());
-        if (strongest <= 0.0) break;
-        if (strongest < 0.05) {
-          if (random.uniform() >= 0.5) break;
-          for (double& weight : throughput) weight *= 2.0;
-        }
-      }
+void PathTracer::trace_path(bool beam_path, RayRandom& random, Tally& tally) {
+  Path path = sample_beam(beam_path, random);
+  emit(RayEventKind::enter, path, path.position, nullptr);
+  for (int order = 1; order <= options_.max_order; ++order) {
+    const std::optional<Vertex> vertex = find_vertex(path, random, tally);
+    if (!vertex) {
+      emit(RayEventKind::leave, path, path.position, nullptr);
+      return;
+    }
+    path.path_m += vertex->segment_m;
+    path.order = order;
+    if (order == 1) path.canopy_return = vertex->element != RayElement::ground;
+    emit(RayEventKind::interaction, path, vertex->point, &*vertex);
+    // The second path's first interaction is the beam path's to score.
+    if (beam_path || order > 1) score_direct(path, *vertex, order, tally);
+    if (beam_path || order == options_.max_order) {
+      emit(RayEventKind::end, path, vertex->point, &*vertex);
+      return;
+    }
+    if (!scatter(path, *vertex, random) || !survives_roulette(path, random)) {
+      emit(RayEventKind::absorbed, path, vertex->point, &*vertex);
+      return;
     }
   }
 }
 
-}  // namespace
+// The path's first direction, and where it crosses the top of the scene.
+Path PathTracer::sample_beam(bool beam_path, RayRandom& random) {
+  const bool by_beam = beam_path || random.uniform() < 0.5;
+  const double u1 = random.uniform(), u2 = random.uniform();
+  const Vec3 first_direction = by_beam ? beam_.direction(u1, u2) : beam_.uniform_direction(u1, u2);
+  Path path;
+  path.beam_path = beam_path;
+  // The beam path scores only its first interaction and never needs the density.
+  path.density = beam_path ? 0.0 : 0.5 * beam_density(first_direction) + 0.5 * uniform_density_;
+  const double start_m = (geometry_.sensor_m[2] - start_height_m_) / -first_direction[2];
+  path.position = geometry_.sensor_m + start_m * first_direction;
+  path.direction = first_direction;
+  path.path_m = start_m;
+  std::fill(throughput_.begin(), throughput_.end(), 1.0);
+  return path;
+}
 
-ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
-                            const ShotGeometry& geometry, const SceneOptics& optics,
-                            const TransportOptions& options, std::int64_t shot_number) {
-  const std::size_t bands = lidar.band_count();
-  const int orders = options.per_order ? options.max_order : 0;
-  const std::int64_t groups = std::min(ray_groups, options.rays);
-  std::vector<Tally> chunk_tallies(groups, Tally(bands, lidar.tally_size(), orders));
-  tbb::parallel_for(std::int64_t{0}, groups, [&](std::int64_t group) {
-    trace_chunk(scene, lidar, geometry, optics, options, shot_number, group * options.rays / groups,
-                (group + 1) * options.rays / groups, chunk_tallies[group]);
-  });
-  Tally tally(bands, lidar.tally_size(), orders);
-  for (const Tally& chunk : chunk_tallies) tally += chunk;
+// The next element along the path: a leaf by free-path sampling through the foliage, but never
+// beyond the nearest surface (PHYSICS.md section 8); empty when the path leaves the scene.
+std::optional<Vertex> PathTracer::find_vertex(const Path& path, RayRandom& random, Tally& tally) {
+  auto uniform = [&random] { return random.uniform(); };
+  const SurfaceHit hit =
+      scene_.intersect(path.position, path.direction, far_m, path.min_distance_m);
+  ++tally.ray_queries;
+  std::optional<Interaction> leaf;
+  if (foliage_) {
+    scene_.volume_spans(path.position, path.direction,
+                        hit.kind == SurfaceKind::none ? far_m : hit.distance_m, spans_);
+    ++tally.ray_queries;
+    project(path.direction);
+    leaf = free_path(spans_, projection_, -std::log1p(-random.uniform()), uniform);
+  }
+  if (!leaf && hit.kind == SurfaceKind::none) return std::nullopt;
+  Vertex vertex;
+  if (leaf) {
+    vertex.element = RayElement::leaf;
+    vertex.foliage = leaf->material;
+    vertex.crown = leaf->crown;
+    vertex.segment_m = leaf->distance_m;
+  } else {
+    vertex.element = hit.kind == SurfaceKind::ground ? RayElement::ground : RayElement::trunk;
+    vertex.foliage = vertex.element == RayElement::trunk ? hit.material : -1;
+    vertex.segment_m = hit.distance_m;
+  }
+  if (vertex.foliage >= 0) vertex.material = &optics_.foliage[vertex.foliage];
+  vertex.point = path.position + vertex.segment_m * path.direction;
+  vertex.normal =
+      leaf ? vertex.material->leaf_angles->sample_normal(path.direction, uniform) : hit.normal;
+  return vertex;
+}
 
+// Direct laser light at the element, scored toward the detector. The laser sits with the
+// detector: at the first interaction its light comes down the very path sampled, and with
+// finite leaves it finds the same gaps (the hotspot, PHYSICS.md section 3).
+void PathTracer::score_direct(const Path& path, const Vertex& vertex, int order, Tally& tally) {
+  const Vec3 to_laser = geometry_.sensor_m - vertex.point;
+  const double laser_m = norm(to_laser);
+  const Vec3 up_to_laser = (1.0 / laser_m) * to_laser;
+  const Vec3 laser_light = -1.0 * up_to_laser;  // travel direction of the laser's light
+  const double transmission = laser_transmission(path, vertex, order, up_to_laser, tally);
+  if (!(transmission > 0.0)) {
+    emit(RayEventKind::blocked, path, vertex.point, &vertex);
+    return;
+  }
+  // Beyond the first order, the laser's light at the point over the density of the detector
+  // ray that found it.
+  const double beam_ratio = order > 1 ? beam_density(laser_light) / path.density : 1.0;
+  const double range_m = geometry_.range_m;
+  const double scale = transmission * beam_ratio * (range_m / laser_m) * (range_m / laser_m);
+  const double time_ns = (laser_m + path.path_m - 2.0 * range_m) / speed_of_light_m_s * 1e9;
+  const int tally_bin = lidar_.tally_index(time_ns);
+  const Vec3 toward_detector = -1.0 * path.direction;
+  for (std::size_t band = 0; band < bands_; ++band)
+    response_[band] = throughput_[band] *
+                      element_response(vertex, band, laser_light, toward_detector, up_to_laser) *
+                      scale;
+  if (tally_bin >= 0) bin(path, order, tally_bin, tally);
+  if (observer_) {
+    RayEvent event = event_at(RayEventKind::score, path, vertex.point, &vertex);
+    event.weight = response_;
+    event.path_m = laser_m + path.path_m;
+    event.time_ns = time_ns;
+    event.tally_bin = tally_bin;
+    event.bin = tally_bin - lidar_.margin_bins();
+    (*observer_)(event);
+  }
+}
+
+// Part of the laser's light that reaches the element: surfaces block it (beyond the first
+// order: the first interaction is lit down the path that found it), foliage attenuates it.
+double PathTracer::laser_transmission(const Path& path, const Vertex& vertex, int order,
+                                      const Vec3& up_to_laser, Tally& tally) {
+  const double exit_m = (start_height_m_ - vertex.point[2]) / up_to_laser[2];
+  double transmission = 1.0;
+  if (order > 1) {
+    if (scene_.occluded(vertex.point, up_to_laser, exit_m, surface_offset_m)) transmission = 0.0;
+    ++tally.ray_queries;
+  }
+  // At the first interaction with finite leaves only, the way out needs no second look: the
+  // light returns through the very gaps it came down.
+  if (!foliage_ || !(transmission > 0.0) || (order == 1 && !any_point_leaves_)) return transmission;
+  scene_.volume_spans(vertex.point, up_to_laser, exit_m, spans_);
+  ++tally.ray_queries;
+  // The connection runs beside the segment just sampled (traced back from the point).
+  const double separation_rad =
+      std::acos(std::clamp(dot(up_to_laser, -1.0 * path.direction), -1.0, 1.0));
+  const double shared_m = order == 1 ? std::numeric_limits<double>::infinity() : vertex.segment_m;
+  project(up_to_laser);
+  return transmission * std::exp(-connection_depth(spans_, projection_, optics_.foliage, shared_m,
+                                                   order == 1 ? 0.0 : separation_rad));
+}
+
+// What the element sends toward the detector of the laser's light, per unit throughput:
+// bi-Lambertian leaves, Lambertian soil and bark.
+double PathTracer::element_response(const Vertex& vertex, std::size_t band, const Vec3& laser_light,
+                                    const Vec3& toward_detector, const Vec3& up_to_laser) const {
+  if (vertex.element == RayElement::leaf)
+    return bilambertian_response(vertex.normal, laser_light, toward_detector,
+                                 vertex.material->reflectance[band],
+                                 vertex.material->transmittance[band]);
+  const double reflectance = vertex.element == RayElement::ground
+                                 ? optics_.soil_reflectance[band]
+                                 : vertex.material->trunk_reflectance[band];
+  return reflectance * std::max(0.0, dot(vertex.normal, up_to_laser));
+}
+
+// The scored return into its time bin: the total, the canopy or ground part (by the first
+// element the path met), and its scattering order when orders are kept apart.
+void PathTracer::bin(const Path& path, int order, int bin, Tally& tally) const {
+  for (std::size_t band = 0; band < bands_; ++band) {
+    const std::size_t at = band * tally.size + bin;
+    tally.total[at] += response_[band];
+    (path.canopy_return ? tally.canopy : tally.ground)[at] += response_[band];
+    if (order <= tally.orders)
+      tally.order[(band * tally.orders + order - 1) * tally.size + bin] += response_[band];
+  }
+}
+
+// The diffuse light: where the light scattered here toward the detector came from. The next
+// direction is drawn by the element's scattering, the throughput carrying the rest; false when
+// the element scatters nothing.
+bool PathTracer::scatter(Path& path, const Vertex& vertex, RayRandom& random) {
+  const Foliage* material = vertex.material;
+  if (vertex.element == RayElement::leaf) {
+    // Reflection sends the path back to the side it came from, transmission through.
+    double reflected = 0.0, transmitted = 0.0;
+    for (std::size_t band = 0; band < bands_; ++band) {
+      reflected += throughput_[band] * material->reflectance[band];
+      transmitted += throughput_[band] * material->transmittance[band];
+    }
+    if (reflected + transmitted <= 0.0) return false;
+    const double p_reflect = reflected / (reflected + transmitted);
+    const bool reflect = random.uniform() < p_reflect;
+    const Vec3 back = -1.0 * path.direction;  // the side the path arrived from
+    const Vec3 facing = dot(vertex.normal, back) >= 0.0 ? vertex.normal : -1.0 * vertex.normal;
+    const double v1 = random.uniform(), v2 = random.uniform();
+    path.direction = cosine_direction(reflect ? facing : -1.0 * facing, v1, v2);
+    for (std::size_t band = 0; band < bands_; ++band)
+      throughput_[band] *= reflect ? material->reflectance[band] / p_reflect
+                                   : material->transmittance[band] / (1.0 - p_reflect);
+    path.min_distance_m = 0.0;
+  } else {
+    const double v1 = random.uniform(), v2 = random.uniform();
+    path.direction = cosine_direction(vertex.normal, v1, v2);
+    for (std::size_t band = 0; band < bands_; ++band)
+      throughput_[band] *= vertex.element == RayElement::ground ? optics_.soil_reflectance[band]
+                                                                : material->trunk_reflectance[band];
+    path.min_distance_m = surface_offset_m;  // off the surface it leaves
+  }
+  path.position = vertex.point;
+  emit(RayEventKind::scatter, path, path.position, &vertex);
+  return true;
+}
+
+// Russian roulette on faint paths keeps the estimate unbiased and the work bounded.
+bool PathTracer::survives_roulette(const Path& path, RayRandom& random) {
+  const double strongest = *std::max_element(throughput_.begin(), throughput_.end());
+  if (strongest <= 0.0) return false;
+  if (strongest < 0.05) {
+    if (random.uniform() >= 0.5) return false;
+    for (double& weight : throughput_) weight *= 2.0;
+    emit(RayEventKind::roulette, path, path.position, nullptr);
+  }
+  return true;
+}
+
+void PathTracer::project(const Vec3& direction) {
+  for (std::size_t m = 0; m < optics_.foliage.size(); ++m)
+    projection_[m] = optics_.foliage[m].leaf_angles->projection(direction[2]);
+}
+
+// The beam's irradiance in a direction, as a density over the field of view (per sr):
+// exp(-theta^2 / 2 sigma^2) / (2 pi sigma^2 f_fov). The beam path's rays are drawn by it.
+double PathTracer::beam_density(const Vec3& direction) const {
+  const double angle_from_axis =
+      std::atan2(norm(cross(direction, geometry_.axis)), dot(direction, geometry_.axis));
+  return std::exp(-std::pow(angle_from_axis, 2) / two_sigma_sq_) /
+         (std::numbers::pi * two_sigma_sq_ * lidar_.fov_fraction());
+}
+
+// An event at `position` that carries the path's throughput.
+RayEvent PathTracer::event_at(RayEventKind kind, const Path& path, const Vec3& position,
+                              const Vertex* vertex) const {
+  RayEvent event;
+  event.kind = kind;
+  event.single_scattering_path = path.beam_path;
+  event.order = path.order;
+  event.position_m = position;
+  event.direction = path.direction;
+  if (vertex) {
+    event.element = vertex->element;
+    event.foliage = vertex->foliage;
+    event.crown = vertex->crown;
+  }
+  event.weight = throughput_;
+  event.path_m = path.path_m;
+  return event;
+}
+
+// Tells the observer, if any: without one no event is built.
+void PathTracer::emit(RayEventKind kind, const Path& path, const Vec3& position,
+                      const Vertex* vertex) const {
+  if (observer_) (*observer_)(event_at(kind, path, position, vertex));
+}
+
+// The shot's waveforms from its tally of normalised returns: each band's scale (section 1 of
+// PHYSICS.md: E_t T A_T f_fov / (pi R^2), shared by the rays), the pulse, the energies.
+ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double range_m,
+                             std::int64_t rays) {
   ShotWaveforms waveforms;
   waveforms.ray_queries = tally.ray_queries;
   const double bin_s = lidar.sensor().bin_ns * 1e-9;
-  const double range_m = geometry.range_m;
   auto slice = [&](const std::vector<double>& flat, std::size_t row, double scale) {
     std::vector<double> energy_J(flat.begin() + row * tally.size,
                                  flat.begin() + (row + 1) * tally.size);
@@ -355,25 +508,93 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
     for (double value : power_W) sum += value * bin_s;
     return sum;
   };
-  for (std::size_t band = 0; band < bands; ++band) {
+  for (std::size_t band = 0; band < lidar.band_count(); ++band) {
     const LidarBand& b = lidar.sensor().bands[band];
-    // Section 1 of PHYSICS.md: E_t T A_T f_fov / (pi R^2), shared by the rays.
     const double scale = b.pulse_energy_mJ * 1e-3 * b.atmos_transmission_roundtrip *
                          lidar.sensor().telescope_area_m2 * lidar.fov_fraction() /
-                         (std::numbers::pi * range_m * range_m) / static_cast<double>(options.rays);
+                         (std::numbers::pi * range_m * range_m) / static_cast<double>(rays);
     waveforms.total_W.push_back(slice(tally.total, band, scale));
     waveforms.canopy_W.push_back(slice(tally.canopy, band, scale));
     waveforms.ground_W.push_back(slice(tally.ground, band, scale));
     waveforms.energy_J.push_back(integral_J(waveforms.total_W.back()));
     waveforms.canopy_energy_J.push_back(integral_J(waveforms.canopy_W.back()));
     waveforms.ground_energy_J.push_back(integral_J(waveforms.ground_W.back()));
-    if (orders > 0) {
+    if (tally.orders > 0) {
       waveforms.order_W.emplace_back();
-      for (int k = 0; k < orders; ++k)
-        waveforms.order_W.back().push_back(slice(tally.order, band * orders + k, scale));
+      for (int k = 0; k < tally.orders; ++k)
+        waveforms.order_W.back().push_back(slice(tally.order, band * tally.orders + k, scale));
     }
   }
   return waveforms;
+}
+
+}  // namespace
+
+const char* to_string(RayEventKind kind) {
+  switch (kind) {
+    case RayEventKind::enter:
+      return "enter";
+    case RayEventKind::interaction:
+      return "interaction";
+    case RayEventKind::score:
+      return "score";
+    case RayEventKind::blocked:
+      return "blocked";
+    case RayEventKind::scatter:
+      return "scatter";
+    case RayEventKind::roulette:
+      return "roulette";
+    case RayEventKind::absorbed:
+      return "absorbed";
+    case RayEventKind::leave:
+      return "leave";
+    case RayEventKind::end:
+      return "end";
+  }
+  return "?";
+}
+
+const char* to_string(RayElement element) {
+  switch (element) {
+    case RayElement::none:
+      return "none";
+    case RayElement::ground:
+      return "ground";
+    case RayElement::leaf:
+      return "leaf";
+    case RayElement::trunk:
+      return "trunk";
+  }
+  return "?";
+}
+
+ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
+                            const ShotGeometry& geometry, const SceneOptics& optics,
+                            const TransportOptions& options, std::int64_t shot_number) {
+  const int orders = options.per_order ? options.max_order : 0;
+  const std::int64_t groups = std::min(ray_groups, options.rays);
+  std::vector<Tally> group_tallies(groups, Tally(lidar.band_count(), lidar.tally_size(), orders));
+  tbb::parallel_for(std::int64_t{0}, groups, [&](std::int64_t group) {
+    PathTracer tracer(scene, lidar, geometry, optics, options, shot_number, nullptr);
+    const std::int64_t first_ray = group * options.rays / groups;
+    const std::int64_t last_ray = (group + 1) * options.rays / groups;
+    for (std::int64_t ray = first_ray; ray < last_ray; ++ray)
+      tracer.trace_ray(ray, group_tallies[group]);
+  });
+  Tally tally(lidar.band_count(), lidar.tally_size(), orders);
+  for (const Tally& group : group_tallies) tally += group;
+  return shot_waveforms(tally, lidar, geometry.range_m, options.rays);
+}
+
+ShotWaveforms simulate_ray(const Scene& scene, const LidarModel& lidar,
+                           const ShotGeometry& geometry, const SceneOptics& optics,
+                           const TransportOptions& options, std::int64_t shot_number,
+                           std::int64_t ray, const RayObserver& observer) {
+  Tally tally(lidar.band_count(), lidar.tally_size(), options.per_order ? options.max_order : 0);
+  PathTracer tracer(scene, lidar, geometry, optics, options, shot_number,
+                    observer ? &observer : nullptr);
+  tracer.trace_ray(ray, tally);
+  return shot_waveforms(tally, lidar, geometry.range_m, options.rays);
 }
 
 }  // namespace glaswave

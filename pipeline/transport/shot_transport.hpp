@@ -12,6 +12,7 @@
 #include "canopy/leaf_angles.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"
+#include "pipeline/transport/ray_event.hpp"
 
 namespace glaswave {
 
@@ -61,5 +62,14 @@ struct TransportOptions {
 ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
                             const ShotGeometry& geometry, const SceneOptics& optics,
                             const TransportOptions& options, std::int64_t shot_number);
+
+// Ray `ray` of shot `shot_number` alone, exactly as it runs inside the shot of options.rays
+// rays (a ray's random numbers depend only on (seed, shot, ray)): the waveforms are that ray's
+// part of the shot's, which the shot's are the sum of. `observer`, when set, is told each event
+// of the ray's paths, in order (pbrt's flag that re-runs one failing sample).
+ShotWaveforms simulate_ray(const Scene& scene, const LidarModel& lidar,
+                           const ShotGeometry& geometry, const SceneOptics& optics,
+                           const TransportOptions& options, std::int64_t shot_number,
+                           std::int64_t ray, const RayObserver& observer = {});
 
 }  // namespace glaswave
