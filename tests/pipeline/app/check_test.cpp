@@ -2,6 +2,7 @@
 // configurations, so each bad configuration here ends both with the same status and the same
 // one-line message, and run leaves nothing behind. And `check --schema` prints the schema.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -9,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "tests/pipeline/app/app_test_support.hpp"
+#include "tests/pipeline/engine/engine_test_support.hpp"
 
 namespace glaswave {
 namespace {
@@ -21,8 +22,9 @@ using namespace test_support;
 class Check : public ::testing::Test {
  protected:
   void SetUp() override {
+    // The process id keeps runs of the suite in other checkouts on this machine apart.
     dir_ = fs::temp_directory_path() /
-           ("glaswave_check_" +
+           ("glaswave_check_" + std::to_string(::getpid()) + "_" +
             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
