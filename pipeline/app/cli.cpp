@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
+#include "pipeline/config/keys.hpp"
 #include "pipeline/engine/ray_debug.hpp"
 #include "pipeline/engine/run.hpp"
 #include "pipeline/engine/sweep.hpp"
@@ -27,7 +28,9 @@ struct Arguments {
   std::optional<std::uint64_t> seed;
   bool resume = false;
   bool quiet = false;
-  std::string debug_ray;  // SHOT:RAY
+  std::string debug_ray;       // SHOT:RAY
+  bool schema = false;         // check --schema
+  bool keys_markdown = false;  // check --keys-markdown (hidden: scripts/readme-keys)
 };
 
 // "A:B" -> [A, B); either side may be empty.
@@ -189,6 +192,16 @@ int run(const Arguments& arguments, const std::string& command_line) {
 }
 
 int check(const Arguments& arguments) {
+  if (arguments.schema) {
+    std::printf("%s\n", configuration_schema().dump(2).c_str());
+    return 0;
+  }
+  if (arguments.keys_markdown) {
+    std::printf("%s", configuration_keys_markdown().c_str());
+    return 0;
+  }
+  if (arguments.config_file.empty())
+    throw config_error("check", "give CONFIG, or --schema for the configuration's JSON Schema");
   const CheckSummary summary = check_inputs(load(arguments));
   std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain",
               arguments.config_file.c_str(), static_cast<long long>(summary.shots),
@@ -246,7 +259,13 @@ int run_command_line(int argc, char** argv) {
 
   CLI::App* check_command =
       app.add_subcommand("check", "validate the configuration and its inputs, run nothing");
-  add_config(check_command);
+  check_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)");
+  check_command->add_option("--set", arguments.overrides,
+                            "override a configuration key: KEY=VALUE (dotted KEY)");
+  check_command->add_flag("--schema", arguments.schema,
+                          "print the configuration's JSON Schema (draft 2020-12) and exit");
+  // The README's table of keys, for scripts/readme-keys.
+  check_command->add_flag("--keys-markdown", arguments.keys_markdown)->group("");
 
   std::vector<std::string> variations;
   CLI::App* sweep_command = app.add_subcommand(

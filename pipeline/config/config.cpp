@@ -12,6 +12,7 @@
 
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/json_reader.hpp"
+#include "pipeline/config/keys.hpp"
 #include "pipeline/config/presets.hpp"
 #include "core/error.hpp"
 
@@ -21,10 +22,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr std::int64_t int_max = std::numeric_limits<int>::max();
 constexpr double wgs84_equatorial_radius_m = 6378137.0;
-constexpr const char* default_preset = "north2010";
-constexpr const char* glas_epoch_text = "2000-01-01T12:00:00Z";
 
 // ---- numbers nlohmann-json refuses ---------------------------------------------------------
 
@@ -139,8 +137,11 @@ std::string band_list(const std::vector<Band>& bands) {
 
 // A per-band optical property: one number for every band, or an object keyed by band name that
 // gives every band its own value. Resolved in band order; written to `resolved` as given.
-std::vector<double> spectral(JsonReader& reader, const std::string& key, double fallback,
-                             const Range& range, const std::vector<Band>& bands) {
+std::vector<double> spectral(JsonReader& reader, const std::string& key,
+                             const std::vector<Band>& bands) {
+  const Key& declared = reader.declared(key, KeyType::spectral);
+  const double fallback = declared.default_value.get<double>();
+  const Range& range = declared.range;
   const json& value = reader.raw(key);
   const std::string place = reader.place(key);
   if (value.is_null()) {
@@ -202,7 +203,7 @@ SensorSettings read_sensor(JsonReader& root) {
 
   SensorSettings s;
   // A preset is the base; keys given beside it replace the preset's ("bands" as a whole).
-  std::string preset = default_preset;
+  std::string preset = default_sensor_preset;
   if (given.is_object() && given.contains("preset") && !given["preset"].is_null()) {
     const json& name = given["preset"];
     if (!name.is_string())
@@ -217,7 +218,8 @@ SensorSettings read_sensor(JsonReader& root) {
       }
       const auto nearest = nearest_name(preset, names);
       throw config_error("/sensor/preset", "unknown preset \"" + preset + "\"; " +
-                                               (nearest ? "did you mean \"" + *nearest + "\"?" : "the presets are " + known));
+                                               (nearest ? "did you mean \"" + *nearest + "\"?"
+                                                        : "the presets are " + known));
     }
   }
   const auto preset_text = sensor_presets().find(preset);
@@ -226,15 +228,16 @@ SensorSettings read_sensor(JsonReader& root) {
   if (given.is_object())
     for (const auto& [key, value] : given.items()) merged[key] = value;
 
-  JsonReader r(merged, "/sensor", root.resolved()["sensor"]);
+  JsonReader r(merged, "/sensor", root.resolved()["sensor"],
+               root.declared("sensor", KeyType::object));
   s.preset = r.optional_string("preset").value_or("");
-  s.pulse_sigma_ns = r.number("pulse_sigma_ns", s.pulse_sigma_ns, above(0));
-  s.divergence_sigma_rad = r.number("divergence_sigma_rad", s.divergence_sigma_rad, above(0));
-  s.ifov_rad = r.number("ifov_rad", s.ifov_rad, above(0));
-  s.telescope_area_m2 = r.number("telescope_area_m2", s.telescope_area_m2, above(0));
-  s.bin_ns = r.number("bin_ns", s.bin_ns, above(0));
-  s.bins = static_cast<int>(r.integer("bins", s.bins, 1, int_max));
-  for (JsonReader& b : r.object_array("bands", true, true)) {
+  s.pulse_sigma_ns = r.number("pulse_sigma_ns");
+  s.divergence_sigma_rad = r.number("divergence_sigma_rad");
+  s.ifov_rad = r.number("ifov_rad");
+  s.telescope_area_m2 = r.number("telescope_area_m2");
+  s.bin_ns = r.number("bin_ns");
+  s.bins = static_cast<int>(r.integer("bins"));
+  for (JsonReader& b : r.object_array("bands", true)) {
     Band band;
     for (const char* key :
          {"name", "wavelength_nm", "pulse_energy_mJ", "atmos_transmission_roundtrip"})
@@ -243,10 +246,9 @@ SensorSettings read_sensor(JsonReader& root) {
     if (band.name.empty()) b.fail("name", "must not be empty");
     for (const Band& other : s.bands)
       if (other.name == band.name) b.fail("name", "duplicate band name \"" + band.name + "\"");
-    band.wavelength_nm = b.number("wavelength_nm", 0.0, above(0));
-    band.pulse_energy_mJ = b.number("pulse_energy_mJ", 0.0, above(0));
-    band.atmos_transmission_roundtrip =
-        b.number("atmos_transmission_roundtrip", 1.0, open_closed(0, 1));
+    band.wavelength_nm = b.number("wavelength_nm");
+    band.pulse_energy_mJ = b.number("pulse_energy_mJ");
+    band.atmos_transmission_roundtrip = b.number("atmos_transmission_roundtrip");
     b.finish();
     s.bands.push_back(band);
   }
@@ -257,8 +259,8 @@ SensorSettings read_sensor(JsonReader& root) {
 SimulationSettings read_simulation(JsonReader& root) {
   SimulationSettings s;
   JsonReader r = root.object("simulation");
-  s.rays_per_shot = r.integer("rays_per_shot", s.rays_per_shot, 1);
-  s.max_order = static_cast<int>(r.integer("max_order", s.max_order, 1, int_max));
+  s.rays_per_shot = r.integer("rays_per_shot");
+  s.max_order = static_cast<int>(r.integer("max_order"));
   r.finish();
   return s;
 }
@@ -278,11 +280,11 @@ TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
   } else {
     PlaneSettings plane;
     JsonReader p = r.object("plane");
-    plane.origin_lat_deg = p.number("origin_lat_deg", plane.origin_lat_deg, closed(-90, 90));
-    plane.origin_lon_deg = p.number("origin_lon_deg", plane.origin_lon_deg, closed(-180, 360));
-    plane.elevation_m = p.number("elevation_m", plane.elevation_m, any_finite());
-    plane.slope_deg = p.number("slope_deg", plane.slope_deg, closed(0, 89));
-    plane.aspect_deg = p.number("aspect_deg", plane.aspect_deg, any_finite());
+    plane.origin_lat_deg = p.number("origin_lat_deg");
+    plane.origin_lon_deg = p.number("origin_lon_deg");
+    plane.elevation_m = p.number("elevation_m");
+    plane.slope_deg = p.number("slope_deg");
+    plane.aspect_deg = p.number("aspect_deg");
     p.finish();
     t.plane = plane;
   }
@@ -290,24 +292,29 @@ TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
   // are measured from when its CRS does not say; a plane's heights are above the ellipsoid.
   if (r.has("dem_band")) {
     if (!dem) r.fail("dem_band", "applies to terrain.dem only");
-    t.dem_band = static_cast<int>(r.integer("dem_band", 1, 1, int_max));
+    t.dem_band = static_cast<int>(*r.optional_integer("dem_band"));
   }
-  t.vertical_datum = r.string("vertical_datum", t.vertical_datum);
-  if (t.vertical_datum != "ellipsoid" && t.vertical_datum != "egm96" &&
-      t.vertical_datum.find(':') == std::string::npos) {
-    std::string message = "must be \"ellipsoid\", \"egm96\" or a vertical CRS such as \"EPSG:3855\", got \"" +
-                          t.vertical_datum + "\"";
-    if (const auto suggestion = nearest_name(t.vertical_datum, {"ellipsoid", "egm96"}))
+  const Key& datum = r.declared("vertical_datum", KeyType::string);
+  t.vertical_datum = r.string("vertical_datum");
+  if (std::find(datum.choices.begin(), datum.choices.end(), t.vertical_datum) ==
+          datum.choices.end() &&
+      t.vertical_datum.find(datum.pattern) == std::string::npos) {
+    std::string message = "must be ";
+    for (const std::string& name : datum.choices) message += "\"" + name + "\", ";
+    message.resize(message.size() - 2);
+    message += " or a vertical CRS such as \"EPSG:3855\", got \"" + t.vertical_datum + "\"";
+    if (const auto suggestion = nearest_name(t.vertical_datum, datum.choices))
       message += "; did you mean \"" + *suggestion + "\"?";
     r.fail("vertical_datum", message);
   }
-  if (!dem && t.vertical_datum != "ellipsoid")
-    r.fail("vertical_datum", "applies to terrain.dem only: a plane's elevation_m is above the WGS84 ellipsoid");
+  if (!dem && t.vertical_datum != datum.default_value.get<std::string>())
+    r.fail("vertical_datum",
+           "applies to terrain.dem only: a plane's elevation_m is above the WGS84 ellipsoid");
   JsonReader g = r.object("roughness");
-  t.roughness.rms_m = g.number("rms_m", t.roughness.rms_m, at_least(0));
-  t.roughness.correlation_m = g.number("correlation_m", t.roughness.correlation_m, above(0));
+  t.roughness.rms_m = g.number("rms_m");
+  t.roughness.correlation_m = g.number("correlation_m");
   g.finish();
-  t.soil_reflectance = spectral(r, "soil_reflectance", 0.15, closed(0, 1), bands);
+  t.soil_reflectance = spectral(r, "soil_reflectance", bands);
   r.finish();
   return t;
 }
@@ -322,33 +329,33 @@ void read_lad(JsonReader& r, CanopySettings& c) {
       {"uniform", LeafAngleDistribution::uniform}};
   const json& value = r.raw("lad");
   if (value.is_object()) {
-    JsonReader e(value, r.place("lad"), r.resolved()["lad"]);
-    e.require("ellipsoidal_mean_deg");
+    JsonReader e(value, r.place("lad"), r.resolved()["lad"],
+                 r.declared("lad", KeyType::choice_or_object));
     c.lad = LeafAngleDistribution::ellipsoidal;
-    c.lad_mean_deg = e.number("ellipsoidal_mean_deg", c.lad_mean_deg, open(0, 90));
+    c.lad_mean_deg = e.number("ellipsoidal_mean_deg");
     e.finish();
     return;
   }
   if (!value.is_null() && !value.is_string()) {
     r.fail("lad", "must be a name or {\"ellipsoidal_mean_deg\": X}, got " + describe(value));
   }
-  const std::string name = value.is_string() ? value.get<std::string>() : "spherical";
-  for (const auto& [known, lad] : names) {
-    if (known == name) {
-      c.lad = lad;
-      r.resolved()["lad"] = name;
-      return;
+  const Key& declared = r.declared("lad", KeyType::choice_or_object);
+  const std::string name =
+      value.is_string() ? value.get<std::string>() : declared.default_value.get<std::string>();
+  if (std::find(declared.choices.begin(), declared.choices.end(), name) != declared.choices.end()) {
+    for (const auto& [known, lad] : names) {
+      if (known == name) {
+        c.lad = lad;
+        r.resolved()["lad"] = name;
+        return;
+      }
     }
   }
   std::string list;
-  std::vector<std::string> known_names;
-  for (const auto& [known, lad] : names) {
-    list += known + ", ";
-    known_names.push_back(known);
-  }
+  for (const std::string& known : declared.choices) list += known + ", ";
   std::string message =
       "must be one of " + list + "or {\"ellipsoidal_mean_deg\": X}, got " + describe(value);
-  if (const auto suggestion = nearest_name(name, known_names))
+  if (const auto suggestion = nearest_name(name, declared.choices))
     message += "; did you mean \"" + *suggestion + "\"?";
   r.fail("lad", message);
 }
@@ -364,33 +371,33 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
   }
   CanopySettings c;
   JsonReader r = root.object("canopy");
-  c.pai = r.number("pai", c.pai, at_least(0));
+  c.pai = r.number("pai");
   read_lad(r, c);
-  c.cover = r.number("cover", c.cover, closed(0, 1));
+  c.cover = r.number("cover");
   // Giving one fraction implies the other; giving both asks that they add up.
   if (r.has("bark_fraction") && !r.has("green_fraction")) {
-    c.bark_fraction = r.number("bark_fraction", c.bark_fraction, closed(0, 1));
-    c.green_fraction = r.number("green_fraction", complement(c.bark_fraction), closed(0, 1));
+    c.bark_fraction = r.number("bark_fraction");
+    c.green_fraction = r.number("green_fraction", complement(c.bark_fraction));
   } else {
     const bool green_given = r.has("green_fraction");
-    c.green_fraction = r.number("green_fraction", c.green_fraction, closed(0, 1));
-    c.bark_fraction =
-        r.number("bark_fraction", green_given ? complement(c.green_fraction) : c.bark_fraction,
-                 closed(0, 1));
+    c.green_fraction = r.number("green_fraction");
+    c.bark_fraction = green_given ? r.number("bark_fraction", complement(c.green_fraction))
+                                  : r.number("bark_fraction");
   }
   const double fraction_sum = c.green_fraction + c.bark_fraction;
   if (std::fabs(fraction_sum - 1.0) > 1e-9)
     r.fail("bark_fraction",
            "green_fraction + bark_fraction must be 1, got " + format_number(fraction_sum));
-  c.crown_shape = r.choice<CrownShape>("crown_shape", c.crown_shape,
-                                       {{"ellipsoid", CrownShape::ellipsoid},
-                                        {"cone", CrownShape::cone},
-                                        {"layer", CrownShape::layer}});
+  c.crown_shape = r.choice<CrownShape>("crown_shape", {{"ellipsoid", CrownShape::ellipsoid},
+                                                       {"cone", CrownShape::cone},
+                                                       {"layer", CrownShape::layer}});
   // Crowns placed at random overlap: their cover 1 - exp(-n pi r^2) never reaches 1.
   if (c.crown_shape != CrownShape::layer && c.cover >= 1.0)
-    r.fail("cover", "must be < 1 for randomly placed crowns, got 1; a closed canopy is crown_shape \"layer\"");
-  c.crown_radius_m = r.number("crown_radius_m", c.crown_radius_m, above(0));
-  c.crown_half_height_m = r.number("crown_half_height_m", c.crown_half_height_m, above(0));
+    r.fail(
+        "cover",
+        "must be < 1 for randomly placed crowns, got 1; a closed canopy is crown_shape \"layer\"");
+  c.crown_radius_m = r.number("crown_radius_m");
+  c.crown_half_height_m = r.number("crown_half_height_m");
   const json& base = r.raw("crown_base_m");
   if (!base.is_null()) {
     if (!base.is_array() || base.size() != 2)
@@ -402,10 +409,10 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
       r.fail("crown_base_m", "min must be <= max, got " + describe(base));
   }
   r.resolved()["crown_base_m"] = base.is_null() ? json(c.crown_base_m) : base;
-  c.leaf_size_m = r.number("leaf_size_m", c.leaf_size_m, at_least(0));
-  c.dbh_m = r.number("dbh_m", c.dbh_m, at_least(0));
-  c.leaf_reflectance = spectral(r, "leaf_reflectance", 0.4, closed(0, 1), bands);
-  c.leaf_transmittance = spectral(r, "leaf_transmittance", 0.4, closed(0, 1), bands);
+  c.leaf_size_m = r.number("leaf_size_m");
+  c.dbh_m = r.number("dbh_m");
+  c.leaf_reflectance = spectral(r, "leaf_reflectance", bands);
+  c.leaf_transmittance = spectral(r, "leaf_transmittance", bands);
   // Energy conservation of a bi-Lambertian leaf: what is not reflected or transmitted is absorbed.
   for (std::size_t i = 0; i < bands.size(); ++i) {
     const double sum = c.leaf_reflectance[i] + c.leaf_transmittance[i];
@@ -414,7 +421,7 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
                                        bands[i].name + ", got " + format_number(sum));
     }
   }
-  c.bark_reflectance = spectral(r, "bark_reflectance", 0.3, closed(0, 1), bands);
+  c.bark_reflectance = spectral(r, "bark_reflectance", bands);
   c.crowns_file = non_empty_path(r, "crowns_file");
   c.stands = non_empty_path(r, "stands");
   r.finish();
@@ -424,31 +431,28 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
 TrackSettings read_track(JsonReader& root) {
   TrackSettings t;
   JsonReader r = root.object("track");
-  t.type = r.choice<TrackType>("type", t.type,
-                               {{"pass", TrackType::pass},
-                                {"points", TrackType::points},
-                                {"orbit", TrackType::orbit},
-                                {"ephemeris", TrackType::ephemeris}});
-  t.start_lat_deg = r.number("start_lat_deg", t.start_lat_deg, closed(-90, 90));
-  t.start_lon_deg = r.number("start_lon_deg", t.start_lon_deg, closed(-180, 360));
-  t.heading_deg = r.number("heading_deg", t.heading_deg, any_finite());
+  t.type = r.choice<TrackType>("type", {{"pass", TrackType::pass},
+                                        {"points", TrackType::points},
+                                        {"orbit", TrackType::orbit},
+                                        {"ephemeris", TrackType::ephemeris}});
+  t.start_lat_deg = r.number("start_lat_deg");
+  t.start_lon_deg = r.number("start_lon_deg");
+  t.heading_deg = r.number("heading_deg");
   const bool shots_given = r.has("shots");
-  t.shots = r.integer("shots", t.shots, 1);
-  t.rate_hz = r.number("rate_hz", t.rate_hz, above(0));
-  t.spacing_m = r.optional_number("spacing_m", above(0));
-  t.altitude_m = r.number("altitude_m", t.altitude_m, above(0));
-  const std::string start_time = r.string("start_time", glas_epoch_text);
+  t.shots = r.integer("shots");
+  t.rate_hz = r.number("rate_hz");
+  t.spacing_m = r.optional_number("spacing_m");
+  t.altitude_m = r.number("altitude_m");
+  const std::string start_time = r.string("start_time");
   t.start_time_s = time_s(r, "start_time", start_time);
-  t.off_nadir_deg = r.number("off_nadir_deg", t.off_nadir_deg, half_open(0, 45));
-  t.pointing_azimuth_deg = r.number("pointing_azimuth_deg", t.pointing_azimuth_deg, any_finite());
+  t.off_nadir_deg = r.number("off_nadir_deg");
+  t.pointing_azimuth_deg = r.number("pointing_azimuth_deg");
 
   const bool points_type = t.type == TrackType::points;
-  for (JsonReader& p : r.object_array("points", points_type, points_type)) {
+  for (JsonReader& p : r.object_array("points", points_type)) {
     GroundPoint point;
-    p.require("lat_deg");
-    p.require("lon_deg");
-    point.lat_deg = p.number("lat_deg", 0.0, closed(-90, 90));
-    point.lon_deg = p.number("lon_deg", 0.0, closed(-180, 360));
+    point.lat_deg = p.number("lat_deg");
+    point.lon_deg = p.number("lon_deg");
     p.finish();
     t.points.push_back(point);
   }
@@ -464,13 +468,12 @@ TrackSettings read_track(JsonReader& root) {
 
   // Keplerian elements sit flat in `track`, as the product contract lists them.
   OrbitElements& o = t.orbit;
-  o.semi_major_axis_m =
-      r.number("semi_major_axis_m", o.semi_major_axis_m, above(wgs84_equatorial_radius_m));
-  o.eccentricity = r.number("eccentricity", o.eccentricity, half_open(0, 1));
-  o.inclination_deg = r.number("inclination_deg", o.inclination_deg, closed(0, 180));
-  o.raan_deg = r.number("raan_deg", o.raan_deg, any_finite());
-  o.arg_perigee_deg = r.number("arg_perigee_deg", o.arg_perigee_deg, any_finite());
-  o.mean_anomaly_deg = r.number("mean_anomaly_deg", o.mean_anomaly_deg, any_finite());
+  o.semi_major_axis_m = r.number("semi_major_axis_m");
+  o.eccentricity = r.number("eccentricity");
+  o.inclination_deg = r.number("inclination_deg");
+  o.raan_deg = r.number("raan_deg");
+  o.arg_perigee_deg = r.number("arg_perigee_deg");
+  o.mean_anomaly_deg = r.number("mean_anomaly_deg");
   // Elements without an epoch are taken to hold at the first shot.
   const std::string epoch = r.string("epoch", start_time);
   o.epoch_s = time_s(r, "epoch", epoch);
@@ -492,10 +495,12 @@ TrackSettings read_track(JsonReader& root) {
 OutputSettings read_output(JsonReader& root) {
   OutputSettings o;
   JsonReader r = root.object("output");
-  o.netcdf = r.boolean("netcdf", o.netcdf);
-  o.geojson = r.boolean("geojson", o.geojson);
-  o.plots = r.boolean("plots", o.plots);
-  o.per_order = r.boolean("per_order", o.per_order);
+  o.netcdf = r.boolean("netcdf");
+  o.geojson = r.boolean("geojson");
+  o.plots = r.boolean("plots");
+  o.per_order = r.boolean("per_order");
+  o.footprints_format =
+      r.choice<std::string>("footprints_format", {{"GeoJSON", "GeoJSON"}, {"GPKG", "GPKG"}});
   r.finish();
   return o;
 }
@@ -507,14 +512,14 @@ OutputSettings read_output(JsonReader& root) {
 DetectorSettings read_detector(JsonReader& root) {
   DetectorSettings d;
   JsonReader r = root.object("detector");
-  d.enabled = r.boolean("enabled", d.enabled);
-  d.background_W = r.number("background_W", d.background_W, at_least(0));
-  d.photon_noise = r.boolean("photon_noise", d.photon_noise);
-  d.quantum_efficiency = r.number("quantum_efficiency", d.quantum_efficiency, open_closed(0, 1));
-  d.noise_rms_W = r.number("noise_rms_W", d.noise_rms_W, at_least(0));
-  d.gain = r.number("gain", d.gain, above(0));
-  d.bits = static_cast<int>(r.integer("bits", d.bits, 0, 32));
-  d.saturation_W = r.optional_number("saturation_W", above(0));
+  d.enabled = r.boolean("enabled");
+  d.background_W = r.number("background_W");
+  d.photon_noise = r.boolean("photon_noise");
+  d.quantum_efficiency = r.number("quantum_efficiency");
+  d.noise_rms_W = r.number("noise_rms_W");
+  d.gain = r.number("gain");
+  d.bits = static_cast<int>(r.integer("bits"));
+  d.saturation_W = r.optional_number("saturation_W");
   if (!d.saturation_W) r.resolved()["saturation_W"] = nullptr;
   if (d.bits > 0 && !d.saturation_W)
     r.fail("saturation_W", "is required when bits > 0: the digitiser's full scale");
@@ -525,9 +530,9 @@ DetectorSettings read_detector(JsonReader& root) {
 BrfSettings read_brf(JsonReader& root) {
   BrfSettings b;
   JsonReader r = root.object("brf");
-  b.sun_zenith_deg = r.number("sun_zenith_deg", b.sun_zenith_deg, half_open(0, 90));
-  b.sun_azimuth_deg = r.number("sun_azimuth_deg", b.sun_azimuth_deg, any_finite());
-  std::vector<JsonReader> views = r.object_array("views", false, true);
+  b.sun_zenith_deg = r.number("sun_zenith_deg");
+  b.sun_azimuth_deg = r.number("sun_azimuth_deg");
+  std::vector<JsonReader> views = r.object_array("views");
   if (views.empty()) {
     json& out = r.resolved()["views"] = json::array();
     for (const BrfView& view : b.views)
@@ -536,16 +541,57 @@ BrfSettings read_brf(JsonReader& root) {
     b.views.clear();
     for (JsonReader& v : views) {
       BrfView view;
-      view.zenith_deg = v.number("zenith_deg", view.zenith_deg, half_open(0, 90));
-      view.azimuth_deg = v.number("azimuth_deg", view.azimuth_deg, any_finite());
+      view.zenith_deg = v.number("zenith_deg");
+      view.azimuth_deg = v.number("azimuth_deg");
       v.finish();
       b.views.push_back(view);
     }
   }
-  b.photons = r.integer("photons", b.photons, 1);
-  b.image_resolution_m = r.number("image_resolution_m", b.image_resolution_m, above(0));
+  b.photons = r.integer("photons");
+  b.image_resolution_m = r.number("image_resolution_m");
   r.finish();
   return b;
+}
+
+// The bytes of one shot's waveforms: bands x tally bins (the window and the pulse's margin on
+// each side, as pipeline/transport/lidar_model.hpp sizes them) x waveforms (total, canopy,
+// ground, and one per order) x 8. Computed in double, so that no size overflows on the way.
+struct ShotSize {
+  double bands, window_bins, margin_bins, waveforms, bytes;
+};
+
+ShotSize shot_size(const Config& c) {
+  ShotSize size;
+  size.bands = static_cast<double>(c.sensor.bands.size());
+  size.window_bins = c.sensor.bins;
+  size.margin_bins = 2.0 * std::ceil(6.0 * c.sensor.pulse_sigma_ns / c.sensor.bin_ns);
+  size.waveforms = 3.0 + (c.output.per_order ? c.simulation.max_order : 0);
+  size.bytes = size.bands * (size.window_bins + size.margin_bins) * size.waveforms * 8.0;
+  return size;
+}
+
+std::string mebibytes(double bytes) {
+  return format_number(std::round(bytes / 1048576.0 * 10) / 10) + " MiB";
+}
+
+// A run holds a shot's waveforms many times over (the transport tallies each shot's rays in 65
+// copies, and every thread simulates a shot): one shot's must stay small. Refused beyond the
+// limit, at the key that makes it large.
+void check_shot_size(const Config& c) {
+  const ShotSize size = shot_size(c);
+  if (size.bytes <= run_limits::shot_waveform_bytes) return;
+  std::string place = "/sensor/bins";
+  if (size.margin_bins > size.window_bins) place = "/sensor/pulse_sigma_ns";
+  if (c.output.per_order && size.waveforms > 3.0 &&
+      size.bytes * 3.0 / size.waveforms <= run_limits::shot_waveform_bytes)
+    place = "/output/per_order";
+  std::ostringstream why;
+  why << "a shot's waveforms would take " << mebibytes(size.bytes) << " ("
+      << format_number(size.bands) << " bands x " << format_number(size.window_bins) << " bins + "
+      << format_number(size.margin_bins) << " bins of pulse margin x "
+      << format_number(size.waveforms) << " waveforms x 8 bytes), more than the limit of "
+      << mebibytes(run_limits::shot_waveform_bytes) << " a shot";
+  throw config_error(place, why.str());
 }
 
 // A relative path of the configuration is taken relative to the configuration file's folder, so
@@ -666,9 +712,9 @@ Config parse_config(const json& document) {
     throw config_error("", "the configuration must be a JSON object, got " + describe(document));
   Config c;
   c.resolved = json::object();
-  JsonReader root(document, "", c.resolved);
+  JsonReader root(document, "", c.resolved, configuration_keys());
   root.optional_string("$schema");  // lets an editor find the schema; not a setting
-  c.seed = root.unsigned_integer("seed", c.seed);
+  c.seed = root.unsigned_integer("seed");
   // The sensor first: its bands give the per-band optical properties their length.
   c.sensor = read_sensor(root);
   c.simulation = read_simulation(root);
@@ -680,7 +726,25 @@ Config parse_config(const json& document) {
   c.brf = read_brf(root);
   root.finish();
   c.resolved.erase("$schema");
+  check_shot_size(c);
   return c;
+}
+
+void check_run(const Config& config) {
+  const OutputSettings& o = config.output;
+  if (!o.netcdf && !o.geojson)
+    throw config_error("/output",
+                       "nothing to write: output.netcdf and output.geojson are both false");
+  if (o.plots && !(o.netcdf && o.geojson))
+    throw config_error(
+        "/output/plots",
+        "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
+        "and output.geojson");
+  if (o.geojson && o.footprints_format != "GeoJSON")
+    throw config_error("/output/footprints_format",
+                       "\"" + o.footprints_format +
+                           "\" is not written by this version yet; the footprints are written as "
+                           "\"GeoJSON\"");
 }
 
 namespace {
@@ -688,15 +752,16 @@ namespace {
 // A stands file: GeoJSON polygons whose properties override canopy keys inside them. Each
 // feature's canopy is the scene's with its properties applied, checked as the configuration is;
 // a fault is the file's (exit status 3), named by its feature and key.
-std::vector<StandArea> read_stands(const std::string& path, const json& scene_canopy, const std::vector<Band>& bands) {
+std::vector<StandArea> read_stands(const std::string& path, const json& scene_canopy,
+                                   const std::vector<Band>& bands) {
   json document;
   try {
     document = read_json_file(path);
   } catch (const Error& e) {
     throw input_error(e.place(), e.message());
   }
-  if (!document.is_object() || document.value("type", "") != "FeatureCollection" || !document.contains("features") ||
-      !document["features"].is_array())
+  if (!document.is_object() || document.value("type", "") != "FeatureCollection" ||
+      !document.contains("features") || !document["features"].is_array())
     throw input_error(path, "a stands file must be a GeoJSON FeatureCollection");
   std::vector<StandArea> areas;
   for (std::size_t i = 0; i < document["features"].size(); ++i) {
@@ -707,12 +772,14 @@ std::vector<StandArea> read_stands(const std::string& path, const json& scene_ca
     if (type != "Polygon" && type != "MultiPolygon")
       throw input_error(path, where + ": the geometry must be a Polygon or MultiPolygon");
     StandArea area;
-    const json polygons = type == "Polygon" ? json::array({geometry["coordinates"]}) : geometry["coordinates"];
+    const json polygons =
+        type == "Polygon" ? json::array({geometry["coordinates"]}) : geometry["coordinates"];
     try {
       for (const json& polygon : polygons)
         for (const json& ring : polygon) {
           std::vector<std::array<double, 2>> points;
-          for (const json& point : ring) points.push_back({point.at(0).get<double>(), point.at(1).get<double>()});
+          for (const json& point : ring)
+            points.push_back({point.at(0).get<double>(), point.at(1).get<double>()});
           if (points.size() < 4) throw std::invalid_argument("a ring needs at least 4 positions");
           area.rings.push_back(std::move(points));
         }
@@ -723,12 +790,13 @@ std::vector<StandArea> read_stands(const std::string& path, const json& scene_ca
     canopy.erase("stands");
     canopy.erase("crowns_file");
     const json properties = feature.value("properties", json::object());
-    if (!properties.is_null() && !properties.is_object()) throw input_error(path, where + ": properties must be an object");
+    if (!properties.is_null() && !properties.is_object())
+      throw input_error(path, where + ": properties must be an object");
     if (properties.is_object())
       for (const auto& [key, value] : properties.items()) canopy[key] = value;
     const json document_of_stand = {{"canopy", canopy}};  // the reader keeps a pointer to it
     json resolved = json::object();
-    JsonReader root(document_of_stand, "", resolved);
+    JsonReader root(document_of_stand, "", resolved, configuration_keys());
     try {
       area.canopy = *read_canopy(root, bands);
     } catch (const Error& e) {
@@ -736,8 +804,10 @@ std::vector<StandArea> read_stands(const std::string& path, const json& scene_ca
       const std::string key = e.place().size() > 8 ? e.place().substr(8) : e.place();
       throw input_error(path, where + ": property " + key + ": " + e.message());
     }
-    if (area.canopy.crown_shape == CrownShape::layer || scene_canopy.value("crown_shape", "") == "layer")
-      throw input_error(path, where + ": a layer covers the whole scene: it cannot be a stand, nor have stands");
+    if (area.canopy.crown_shape == CrownShape::layer ||
+        scene_canopy.value("crown_shape", "") == "layer")
+      throw input_error(
+          path, where + ": a layer covers the whole scene: it cannot be a stand, nor have stands");
     areas.push_back(std::move(area));
   }
   return areas;
@@ -757,7 +827,8 @@ Config load_config(const std::filesystem::path& file, const std::vector<std::str
     resolve_path(c.canopy->stands, r["canopy"], "stands", folder);
   }
   resolve_path(c.track.ephemeris, r["track"], "ephemeris", folder);
-  if (c.canopy && !c.canopy->stands.empty()) c.canopy->stand_areas = read_stands(c.canopy->stands, r["canopy"], c.sensor.bands);
+  if (c.canopy && !c.canopy->stands.empty())
+    c.canopy->stand_areas = read_stands(c.canopy->stands, r["canopy"], c.sensor.bands);
   return c;
 }
 

@@ -45,6 +45,7 @@ struct OutputSettings {
   bool geojson = true;
   bool plots = false;
   bool per_order = false;
+  std::string footprints_format = "GeoJSON";  // "GeoJSON" or "GPKG"
 };
 
 // The detector and digitiser between the received light and the recorded waveform (`"detector"`).
@@ -76,6 +77,21 @@ struct BrfSettings {
   std::int64_t photons = 1000000;
   double image_resolution_m = 1.0;
 };
+
+// The sensor preset that gives the sensor's defaults.
+inline constexpr const char* default_sensor_preset = "north2010";
+
+// Sizes beyond which a run cannot be physical or would not fit in memory; the configuration
+// refuses them, naming the limit.
+namespace run_limits {
+inline constexpr std::uint64_t bands = 256;               // the detector keys its noise by band
+inline constexpr std::uint64_t waveform_bins = 1u << 24;  // ... and by bin
+inline constexpr std::uint64_t rays_per_shot = 1'000'000'000'000;  // days for one shot
+inline constexpr std::uint64_t track_shots = 1'000'000'000;        // 290 days of GLAS at 40 Hz
+// What one shot's waveforms may take: the transport tallies each shot's rays in 65 copies of
+// them (pipeline/transport/shot_transport.cpp) and every thread simulates a shot.
+inline constexpr double shot_waveform_bytes = 4.0 * 1024 * 1024;
+}  // namespace run_limits
 
 struct Config {
   std::uint64_t seed = 1;
@@ -114,6 +130,11 @@ void apply_override(nlohmann::json& document, const std::string& assignment);
 // Turns a configuration document into settings: presets expanded, defaults filled in, every
 // value checked. Unknown keys are errors that suggest the nearest known key.
 Config parse_config(const nlohmann::json& document);
+
+// What `run` needs beyond a configuration that simulates: something to write, both products for
+// the plots, a footprints format the writers have. `check` asks the same, so that the two accept
+// exactly the same configurations.
+void check_run(const Config& config);
 
 // read_json_file + apply_override for each + parse_config.
 Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "core/error.hpp"
 #include "core/names.hpp"
@@ -14,30 +15,6 @@
 namespace glaswave {
 
 using nlohmann::json;
-
-bool Range::contains(double x) const {
-  if (low && (low_open ? !(x > *low) : !(x >= *low))) return false;
-  if (high && (high_open ? !(x < *high) : !(x <= *high))) return false;
-  return true;
-}
-
-std::string Range::requirement() const {
-  if (low && high) {
-    return "must be in " + std::string(low_open ? "(" : "[") + format_number(*low) + ", " +
-           format_number(*high) + (high_open ? ")" : "]");
-  }
-  if (low) return std::string("must be ") + (low_open ? "> " : ">= ") + format_number(*low);
-  if (high) return std::string("must be ") + (high_open ? "< " : "<= ") + format_number(*high);
-  return "";
-}
-
-Range any_finite() { return Range{}; }
-Range at_least(double low) { return Range{low, std::nullopt, false, false}; }
-Range above(double low) { return Range{low, std::nullopt, true, false}; }
-Range closed(double low, double high) { return Range{low, high, false, false}; }
-Range half_open(double low, double high) { return Range{low, high, false, true}; }
-Range open_closed(double low, double high) { return Range{low, high, true, false}; }
-Range open(double low, double high) { return Range{low, high, true, true}; }
 
 std::string json_pointer_child(const std::string& path, const std::string& key) {
   std::string escaped;
@@ -124,19 +101,43 @@ std::int64_t read_integer(const std::string& place, const json& value, std::int6
   return n;
 }
 
-JsonReader::JsonReader(const json& object, std::string path, json& resolved)
-    : object_(object.is_null() ? nullptr : &object), path_(std::move(path)), resolved_(resolved) {
+JsonReader::JsonReader(const json& object, std::string path, json& resolved, const Key& declaration)
+    : object_(object.is_null() ? nullptr : &object),
+      path_(std::move(path)),
+      resolved_(resolved),
+      declaration_(&declaration) {
   if (object_ && !object_->is_object())
     throw config_error(path_, "must be an object, got " + describe(*object_));
   if (!resolved_.is_object()) resolved_ = json::object();
 }
 
+void JsonReader::throw_undeclared(const std::string& key) const {
+  throw std::logic_error("the configuration parser reads " + place(key) +
+                         " as it is not declared in pipeline/config/keys.cpp");
+}
+
+const Key& JsonReader::declared(const std::string& key, KeyType type) const {
+  const Key* k = declaration_->child(key);
+  if (!k || k->type != type) throw_undeclared(key);
+  return *k;
+}
+
 const json* JsonReader::find(const std::string& key) {
+  if (!declaration_->child(key)) throw_undeclared(key);
   if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.push_back(key);
   if (!object_) return nullptr;
   auto it = object_->find(key);
   if (it == object_->end()) return nullptr;
   return &*it;
+}
+
+// The value of a key; null when absent (or null where null means absent); "is required" when a
+// required key is absent.
+const json* JsonReader::find_required(const std::string& key, const Key& k) {
+  const json* value = find(key);
+  if (value && value->is_null() && k.nullable) value = nullptr;
+  if (!value && k.required) fail(key, "is required");
+  return value;
 }
 
 bool JsonReader::has(const std::string& key) {
@@ -154,32 +155,56 @@ const json& JsonReader::raw(const std::string& key) {
   return value ? *value : null_value;
 }
 
-double JsonReader::number(const std::string& key, double fallback, const Range& range) {
-  const json* value = find(key);
-  const double x = value ? read_number(place(key), *value, range) : fallback;
+double JsonReader::number(const std::string& key) {
+  const Key& k = declared(key, KeyType::number);
+  if (k.default_value.is_null() && !k.required) throw_undeclared(key);  // optional_number
+  return number(key, k.required ? 0.0 : k.default_value.get<double>());
+}
+
+double JsonReader::number(const std::string& key, double fallback) {
+  const Key& k = declared(key, KeyType::number);
+  const json* value = find_required(key, k);
+  const double x = value ? read_number(place(key), *value, k.range) : fallback;
   resolved_[key] = value ? *value : json(x);
   return x;
 }
 
-std::optional<double> JsonReader::optional_number(const std::string& key, const Range& range) {
+std::optional<double> JsonReader::optional_number(const std::string& key) {
+  const Key& k = declared(key, KeyType::number);
   const json* value = find(key);
   if (!value || value->is_null()) return std::nullopt;
-  const double x = read_number(place(key), *value, range);
+  const double x = read_number(place(key), *value, k.range);
   resolved_[key] = *value;
   return x;
 }
 
-std::int64_t JsonReader::integer(const std::string& key, std::int64_t fallback, std::int64_t min,
-                                 std::int64_t max) {
-  const json* value = find(key);
-  const std::int64_t n = value ? read_integer(place(key), *value, min, max) : fallback;
+std::int64_t JsonReader::integer(const std::string& key) {
+  const Key& k = declared(key, KeyType::integer);
+  const json* value = find_required(key, k);
+  const auto max = static_cast<std::int64_t>(
+      std::min<std::uint64_t>(k.max, std::numeric_limits<std::int64_t>::max()));
+  const std::int64_t n =
+      value ? read_integer(place(key), *value, k.min, max) : k.default_value.get<std::int64_t>();
   resolved_[key] = n;
   return n;
 }
 
-std::uint64_t JsonReader::unsigned_integer(const std::string& key, std::uint64_t fallback) {
+std::optional<std::int64_t> JsonReader::optional_integer(const std::string& key) {
+  const Key& k = declared(key, KeyType::integer);
+  const json* value = find(key);
+  if (!value || value->is_null()) return std::nullopt;
+  const auto max = static_cast<std::int64_t>(
+      std::min<std::uint64_t>(k.max, std::numeric_limits<std::int64_t>::max()));
+  const std::int64_t n = read_integer(place(key), *value, k.min, max);
+  resolved_[key] = n;
+  return n;
+}
+
+std::uint64_t JsonReader::unsigned_integer(const std::string& key) {
+  const Key& k = declared(key, KeyType::integer);
   const json* value = find(key);
   if (!value) {
+    const auto fallback = k.default_value.get<std::uint64_t>();
     resolved_[key] = fallback;
     return fallback;
   }
@@ -193,17 +218,24 @@ std::uint64_t JsonReader::unsigned_integer(const std::string& key, std::uint64_t
   return n;
 }
 
-bool JsonReader::boolean(const std::string& key, bool fallback) {
+bool JsonReader::boolean(const std::string& key) {
+  const Key& k = declared(key, KeyType::boolean);
   const json* value = find(key);
   if (value && !value->is_boolean())
     fail(key, "must be a boolean (true or false), got " + describe(*value));
-  const bool b = value ? value->get<bool>() : fallback;
+  const bool b = value ? value->get<bool>() : k.default_value.get<bool>();
   resolved_[key] = b;
   return b;
 }
 
+std::string JsonReader::string(const std::string& key) {
+  const Key& k = declared(key, KeyType::string);
+  return string(key, k.default_value.is_string() ? k.default_value.get<std::string>() : "");
+}
+
 std::string JsonReader::string(const std::string& key, const std::string& fallback) {
-  const json* value = find(key);
+  const Key& k = declared(key, KeyType::string);
+  const json* value = find_required(key, k);
   if (value && !value->is_string()) fail(key, "must be a string, got " + describe(*value));
   std::string s = value ? value->get<std::string>() : fallback;
   resolved_[key] = s;
@@ -211,6 +243,7 @@ std::string JsonReader::string(const std::string& key, const std::string& fallba
 }
 
 std::optional<std::string> JsonReader::optional_string(const std::string& key) {
+  declared(key, KeyType::string);
   const json* value = find(key);
   if (!value || value->is_null()) return std::nullopt;
   if (!value->is_string()) fail(key, "must be a string, got " + describe(*value));
@@ -219,21 +252,31 @@ std::optional<std::string> JsonReader::optional_string(const std::string& key) {
 }
 
 JsonReader JsonReader::object(const std::string& key) {
+  const Key& k = declared(key, KeyType::object);
   const json& value = raw(key);
   if (!value.is_null() && !value.is_object())
     fail(key, "must be an object, got " + describe(value));
-  return JsonReader(value, place(key), resolved_[key]);
+  return JsonReader(value, place(key), resolved_[key], k);
 }
 
-std::vector<JsonReader> JsonReader::object_array(const std::string& key, bool required,
-                                                 bool non_empty) {
+std::vector<JsonReader> JsonReader::object_array(const std::string& key) {
+  return object_array(key, declared(key, KeyType::object_array).required);
+}
+
+std::vector<JsonReader> JsonReader::object_array(const std::string& key, bool required) {
+  const Key& k = declared(key, KeyType::object_array);
   const json& value = raw(key);
   if (value.is_null()) {
     if (required) fail(key, "is required");
     return {};
   }
   if (!value.is_array()) fail(key, "must be an array, got " + describe(value));
-  if (non_empty && value.empty()) fail(key, "must not be empty");
+  if (value.size() < k.min_items)
+    fail(key, k.min_items == 1 ? "must not be empty"
+                               : "must have at least " + std::to_string(k.min_items) + " elements");
+  if (value.size() > k.max_items)
+    fail(key, "must have at most " + std::to_string(k.max_items) + " elements, got " +
+                  std::to_string(value.size()));
   // Size the resolved array first: readers keep references to its elements.
   json& out = resolved_[key];
   out = json::array();
@@ -245,7 +288,7 @@ std::vector<JsonReader> JsonReader::object_array(const std::string& key, bool re
     const std::string element_place = array_place + "/" + std::to_string(i);
     if (!value[i].is_object())
       throw config_error(element_place, "must be an object, got " + describe(value[i]));
-    readers.emplace_back(value[i], element_place, out[i]);
+    readers.emplace_back(value[i], element_place, out[i], k);
   }
   return readers;
 }

@@ -1,6 +1,7 @@
-// A path-aware reader of one JSON object of the configuration: each key is read with its type,
-// default and range where the settings member is assigned, the value used is recorded into the
-// resolved configuration, and keys nobody asked for are rejected at the end.
+// A path-aware reader of one JSON object of the configuration: each key is read through its
+// declaration (pipeline/config/keys.hpp), which gives its type, default and range, where the
+// settings member is assigned; the value used is recorded into the resolved configuration, and
+// keys nobody asked for are rejected at the end.
 #pragma once
 
 #include <cstdint>
@@ -12,28 +13,9 @@
 #include <vector>
 
 #include "core/names.hpp"
+#include "pipeline/config/keys.hpp"
 
 namespace glaswave {
-
-// The allowed interval of a number; open or closed at each end, either end optional.
-struct Range {
-  std::optional<double> low;
-  std::optional<double> high;
-  bool low_open = false;
-  bool high_open = false;
-
-  bool contains(double x) const;
-  // "must be >= 0", "must be in (0, 1]", or empty when anything finite goes.
-  std::string requirement() const;
-};
-
-Range any_finite();
-Range at_least(double low);                  // [low, inf)
-Range above(double low);                     // (low, inf)
-Range closed(double low, double high);       // [low, high]
-Range half_open(double low, double high);    // [low, high)
-Range open_closed(double low, double high);  // (low, high]
-Range open(double low, double high);         // (low, high)
 
 // The JSON pointer of `key` inside the object at `path` ("/canopy" + "pai" -> "/canopy/pai"),
 // with '~' and '/' escaped as RFC 6901 asks.
@@ -53,12 +35,18 @@ std::string unknown_key_message(const std::string& key, const std::vector<std::s
 class JsonReader {
  public:
   // `object` is the JSON at `path` (null stands for an absent object: every key takes its
-  // default); `resolved` receives the values as used. Throws when `object` is neither an object
+  // default), declared by `declaration` (an object, an array of objects or the object form of a
+  // choice); `resolved` receives the values as used. Throws when `object` is neither an object
   // nor null.
-  JsonReader(const nlohmann::json& object, std::string path, nlohmann::json& resolved);
+  JsonReader(const nlohmann::json& object, std::string path, nlohmann::json& resolved,
+             const Key& declaration);
 
   const std::string& path() const { return path_; }
   std::string place(const std::string& key) const { return json_pointer_child(path_, key); }
+
+  // The declaration of a key of this object. Reading a key that is not declared, or as another
+  // type than declared, is a bug of the parser: std::logic_error.
+  const Key& declared(const std::string& key, KeyType type) const;
 
   // Whether the key is present and not null. Declares the key as known.
   bool has(const std::string& key);
@@ -70,37 +58,42 @@ class JsonReader {
   // key as known; the caller writes what it used into resolved().
   const nlohmann::json& raw(const std::string& key);
 
-  double number(const std::string& key, double fallback, const Range& range);
-  std::optional<double> optional_number(const std::string& key, const Range& range);
-  std::int64_t integer(const std::string& key, std::int64_t fallback, std::int64_t min,
-                       std::int64_t max = std::numeric_limits<std::int64_t>::max());
-  std::uint64_t unsigned_integer(const std::string& key, std::uint64_t fallback);
-  bool boolean(const std::string& key, bool fallback);
+  // Each reads a key with its declared default and range; `fallback` replaces the declared
+  // default where the default depends on other keys. A key declared required and absent is an
+  // error.
+  double number(const std::string& key);
+  double number(const std::string& key, double fallback);
+  std::optional<double> optional_number(const std::string& key);
+  std::int64_t integer(const std::string& key);
+  std::optional<std::int64_t> optional_integer(const std::string& key);
+  std::uint64_t unsigned_integer(const std::string& key);
+  bool boolean(const std::string& key);
+  std::string string(const std::string& key);
   std::string string(const std::string& key, const std::string& fallback);
   std::optional<std::string> optional_string(const std::string& key);
 
-  // A string that names one of `choices`.
+  // A string that names one of the declared choices, each mapped to its value by `values`.
   template <typename T>
-  T choice(const std::string& key, T fallback,
-           const std::vector<std::pair<std::string, T>>& choices) {
-    std::vector<std::string> names;
-    std::string fallback_name;
-    for (const auto& [name, value] : choices) {
-      names.push_back(name);
-      if (value == fallback) fallback_name = name;
+  T choice(const std::string& key, const std::vector<std::pair<std::string, T>>& values) {
+    const Key& k = declared(key, KeyType::string);
+    const std::string name = string(key);
+    for (const std::string& known : k.choices) {
+      if (known != name) continue;
+      for (const auto& [value_name, value] : values)
+        if (value_name == name) return value;
+      throw_undeclared(key);
     }
-    const std::string name = string(key, fallback_name);
-    for (const auto& [choice_name, value] : choices)
-      if (choice_name == name) return value;
-    throw_not_one_of(key, name, names);
+    throw_not_one_of(key, name, k.choices);
   }
 
   // A nested object (absent or null reads as empty, so its keys take their defaults).
   JsonReader object(const std::string& key);
 
-  // An array of objects; `required` makes an absent key an error. Each element gets its own
-  // reader, whose finish() the caller calls.
-  std::vector<JsonReader> object_array(const std::string& key, bool required, bool non_empty);
+  // An array of objects, required and of the length its declaration says (`required` may ask
+  // for it where other keys make it so). Each element gets its own reader, whose finish() the
+  // caller calls.
+  std::vector<JsonReader> object_array(const std::string& key);
+  std::vector<JsonReader> object_array(const std::string& key, bool required);
 
   // Values as used at this level.
   nlohmann::json& resolved() { return resolved_; }
@@ -110,15 +103,18 @@ class JsonReader {
 
   // An error at `key` inside this object.
   [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+  [[noreturn]] void throw_not_one_of(const std::string& key, const std::string& got,
+                                     const std::vector<std::string>& names) const;
 
  private:
   const nlohmann::json* find(const std::string& key);
-  [[noreturn]] void throw_not_one_of(const std::string& key, const std::string& got,
-                                     const std::vector<std::string>& names) const;
+  const nlohmann::json* find_required(const std::string& key, const Key& k);
+  [[noreturn]] void throw_undeclared(const std::string& key) const;
 
   const nlohmann::json* object_;  // null when the object is absent
   std::string path_;
   nlohmann::json& resolved_;
+  const Key* declaration_;
   std::vector<std::string> known_;
 };
 

@@ -61,6 +61,7 @@ std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track
 }
 
 CheckSummary check_inputs(const Config& config) {
+  check_run(config);  // what run refuses before simulating
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
   // The forest reads its crowns file and checks what the configuration cannot alone.
   grow_forest(config);
@@ -76,6 +77,7 @@ CheckSummary check_inputs(const Config& config) {
 RunSummary run_simulation(const Config& config, const RunRequest& request,
                           const ProgressCallback& progress) {
   const auto started = std::chrono::steady_clock::now();
+  check_run(config);  // first, as check_inputs does: check and run refuse alike
 
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
   // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
@@ -91,14 +93,6 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
                                                                    " on the terrain)"
                                                              : std::string()));
 
-  if (!config.output.netcdf && !config.output.geojson)
-    throw config_error("/output",
-                       "nothing to write: output.netcdf and output.geojson are both false");
-  if (config.output.plots && !(config.output.netcdf && config.output.geojson))
-    throw config_error(
-        "/output/plots",
-        "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
-        "and output.geojson");
   OutputDirectory directory(request.out_dir);
 
   // The products record what the DEM's heights were measured from, as the terrain chose it (its

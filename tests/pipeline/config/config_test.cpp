@@ -410,7 +410,8 @@ TEST(Errors, UnknownKeySuggestsTheNearest) {
             "/brf/views/1/zenith: unknown key \"zenith\"; did you mean \"zenith_deg\"?");
   // Nothing close: the known keys are listed instead of a guess.
   EXPECT_EQ(error_of(doc(R"({"output": {"xyz": true}})")),
-            "/output/xyz: unknown key \"xyz\"; known keys: geojson, netcdf, per_order, plots");
+            "/output/xyz: unknown key \"xyz\"; known keys: footprints_format, geojson, netcdf, "
+            "per_order, plots");
 }
 
 TEST(Errors, WrongTypes) {
@@ -525,7 +526,8 @@ TEST(Terrain, DemBandAndVerticalDatum) {
   EXPECT_EQ(c.terrain.vertical_datum, "ellipsoid");
   EXPECT_EQ(c.resolved["terrain"]["vertical_datum"], "ellipsoid");
   EXPECT_FALSE(c.resolved["terrain"].contains("dem_band"));
-  c = parse_config(doc(R"({"terrain": {"dem": "a.tif", "dem_band": 2, "vertical_datum": "egm96"}})"));
+  c = parse_config(
+      doc(R"({"terrain": {"dem": "a.tif", "dem_band": 2, "vertical_datum": "egm96"}})"));
   EXPECT_EQ(c.terrain.dem_band, 2);
   EXPECT_EQ(c.terrain.vertical_datum, "egm96");
   EXPECT_EQ(parse_config(c.resolved).resolved, c.resolved);
@@ -536,8 +538,9 @@ TEST(Terrain, DemBandAndVerticalDatum) {
             "/terrain/dem_band: must be >= 1, got 0");
   EXPECT_EQ(error_of(doc(R"({"terrain": {"plane": {}, "dem_band": 1}})")),
             "/terrain/dem_band: applies to terrain.dem only");
-  EXPECT_THAT(error_of(doc(R"({"terrain": {"dem": "a.tif", "vertical_datum": "egm69"}})")),
-              AllOf(StartsWith("/terrain/vertical_datum: must be"), HasSubstr("did you mean \"egm96\"?")));
+  EXPECT_THAT(
+      error_of(doc(R"({"terrain": {"dem": "a.tif", "vertical_datum": "egm69"}})")),
+      AllOf(StartsWith("/terrain/vertical_datum: must be"), HasSubstr("did you mean \"egm96\"?")));
   EXPECT_THAT(error_of(doc(R"({"terrain": {"plane": {}, "vertical_datum": "egm96"}})")),
               StartsWith("/terrain/vertical_datum: applies to terrain.dem only"));
   // A plane's resolved configuration says "ellipsoid", and parses back.
@@ -762,8 +765,10 @@ TEST(Override, UnknownKeyFromSetIsStillCaught) {
 TEST(LoadConfig, OverridesInOrderAndPathsRelativeToTheFile) {
   TempDir dir;
   // The stands file is read with the configuration; the others are opened later by their readers.
-  const std::string stands = std::filesystem::absolute(
-      dir.write("elsewhere/stands.geojson", R"({"type": "FeatureCollection", "features": []})")).string();
+  const std::string stands =
+      std::filesystem::absolute(
+          dir.write("elsewhere/stands.geojson", R"({"type": "FeatureCollection", "features": []})"))
+          .string();
   const auto file = dir.write("site/config.json", R"({
     "terrain": {"dem": "dems/dem.tif"},
     "canopy": {"pai": 3, "stands": ")" + stands + R"(", "crowns_file": "../crowns.csv"},

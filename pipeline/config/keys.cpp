@@ -1,0 +1,683 @@
+// The declaration of every configuration key, and what is generated from it: the JSON Schema
+// and the README's table of keys. Defaults that the settings structs already hold are taken
+// from their member initialisers, so that each default is written once.
+#include "pipeline/config/keys.hpp"
+
+#include <sstream>
+
+#include "canopy/canopy_settings.hpp"
+#include "footprints/track_settings.hpp"
+#include "pipeline/config/config.hpp"
+#include "pipeline/config/json_reader.hpp"
+#include "pipeline/config/presets.hpp"
+#include "terrain/terrain_settings.hpp"
+
+namespace glaswave {
+
+using nlohmann::json;
+
+// ---- ranges ---------------------------------------------------------------------------------
+
+bool Range::contains(double x) const {
+  if (low && (low_open ? !(x > *low) : !(x >= *low))) return false;
+  if (high && (high_open ? !(x < *high) : !(x <= *high))) return false;
+  return true;
+}
+
+std::string Range::requirement() const {
+  if (low && high) {
+    return "must be in " + std::string(low_open ? "(" : "[") + format_number(*low) + ", " +
+           format_number(*high) + (high_open ? ")" : "]");
+  }
+  if (low) return std::string("must be ") + (low_open ? "> " : ">= ") + format_number(*low);
+  if (high) return std::string("must be ") + (high_open ? "< " : "<= ") + format_number(*high);
+  return "";
+}
+
+std::string Range::interval() const {
+  if (low && high) {
+    return std::string(low_open ? "(" : "[") + format_number(*low) + ", " + format_number(*high) +
+           (high_open ? ")" : "]");
+  }
+  if (low) return (low_open ? "> " : "≥ ") + format_number(*low);
+  if (high) return (high_open ? "< " : "≤ ") + format_number(*high);
+  return "";
+}
+
+Range any_finite() { return Range{}; }
+Range at_least(double low) { return Range{low, std::nullopt, false, false}; }
+Range above(double low) { return Range{low, std::nullopt, true, false}; }
+Range closed(double low, double high) { return Range{low, high, false, false}; }
+Range half_open(double low, double high) { return Range{low, high, false, true}; }
+Range open_closed(double low, double high) { return Range{low, high, true, false}; }
+Range open(double low, double high) { return Range{low, high, true, true}; }
+
+// ---- builders -------------------------------------------------------------------------------
+
+const Key* Key::child(const std::string& key) const {
+  for (const Key& c : children)
+    if (c.name == key) return &c;
+  return nullptr;
+}
+
+Key&& Key::with_required() && {
+  required = true;
+  return std::move(*this);
+}
+Key&& Key::with_nullable() && {
+  nullable = true;
+  return std::move(*this);
+}
+Key&& Key::with_default_text(std::string text) && {
+  default_text = std::move(text);
+  return std::move(*this);
+}
+Key&& Key::with_items(std::size_t least, std::size_t most) && {
+  min_items = least;
+  max_items = most;
+  return std::move(*this);
+}
+
+namespace {
+
+Key make(std::string name, KeyType type, std::string unit, std::string description) {
+  Key k;
+  k.name = std::move(name);
+  k.type = type;
+  k.unit = std::move(unit);
+  k.description = std::move(description);
+  return k;
+}
+
+}  // namespace
+
+namespace declare {
+
+Key number(std::string name, std::optional<double> fallback, Range range, std::string unit,
+           std::string description) {
+  Key k = make(std::move(name), KeyType::number, std::move(unit), std::move(description));
+  if (fallback) k.default_value = *fallback;
+  k.nullable = !fallback;  // a number without a default may be null: not set
+  k.range = range;
+  return k;
+}
+
+Key integer(std::string name, std::optional<std::int64_t> fallback, std::int64_t min,
+            std::uint64_t max, std::string unit, std::string description) {
+  Key k = make(std::move(name), KeyType::integer, std::move(unit), std::move(description));
+  if (fallback) k.default_value = *fallback;
+  k.min = min;
+  k.max = max;
+  return k;
+}
+
+Key boolean(std::string name, bool fallback, std::string description) {
+  Key k = make(std::move(name), KeyType::boolean, "", std::move(description));
+  k.default_value = fallback;
+  return k;
+}
+
+Key string(std::string name, std::optional<std::string> fallback, std::string description) {
+  Key k = make(std::move(name), KeyType::string, "", std::move(description));
+  if (fallback) k.default_value = *fallback;
+  k.nullable = !fallback;
+  return k;
+}
+
+Key choice(std::string name, std::optional<std::string> fallback, std::vector<std::string> choices,
+           std::string description) {
+  Key k = string(std::move(name), std::move(fallback), std::move(description));
+  k.choices = std::move(choices);
+  return k;
+}
+
+Key time(std::string name, std::optional<std::string> fallback, std::string description) {
+  Key k = string(std::move(name), std::move(fallback), std::move(description));
+  k.format = "date-time";
+  return k;
+}
+
+Key path(std::string name, std::string description) {
+  Key k = string(std::move(name), std::nullopt, std::move(description));
+  k.format = "path";
+  return k;
+}
+
+Key spectral(std::string name, double fallback, Range range, std::string unit,
+             std::string description) {
+  Key k = make(std::move(name), KeyType::spectral, std::move(unit), std::move(description));
+  k.default_value = fallback;
+  k.range = range;
+  return k;
+}
+
+Key number_pair(std::string name, std::array<double, 2> fallback, Range range, std::string unit,
+                std::string description) {
+  Key k = make(std::move(name), KeyType::number_pair, std::move(unit), std::move(description));
+  k.default_value = json::array({fallback[0], fallback[1]});
+  k.range = range;
+  return k;
+}
+
+Key object(std::string name, std::string description, std::vector<Key> children) {
+  Key k = make(std::move(name), KeyType::object, "", std::move(description));
+  k.nullable = true;  // null reads as an absent object: every key takes its default
+  k.children = std::move(children);
+  return k;
+}
+
+Key object_array(std::string name, json fallback, std::string description,
+                 std::vector<Key> item_keys) {
+  Key k = make(std::move(name), KeyType::object_array, "", std::move(description));
+  k.default_value = std::move(fallback);
+  k.children = std::move(item_keys);
+  return k;
+}
+
+}  // namespace declare
+
+// ---- the declaration ------------------------------------------------------------------------
+
+namespace {
+
+using namespace declare;
+
+constexpr double wgs84_equatorial_radius_m = 6378137.0;
+constexpr std::uint64_t int_max = static_cast<std::uint64_t>(std::numeric_limits<int>::max());
+
+std::vector<std::string> preset_names() {
+  std::vector<std::string> names;
+  for (const auto& [name, text] : sensor_presets()) names.push_back(name);
+  return names;
+}
+
+Key sensor_keys() {
+  const SensorSettings s;
+  Key preset = choice("preset", std::nullopt, preset_names(),
+                      "`north2010` (the seed's Table 2, exactly) or `glas` (the same with "
+                      "GLAS's ~70 m beam); keys beside it override it (`bands` as a whole); "
+                      "absent: the values of `north2010`");
+  preset.default_text = "none";
+  return object(
+      "sensor", "the lidar (the seed's Table 2)",
+      {std::move(preset),
+       number("pulse_sigma_ns", s.pulse_sigma_ns, above(0), "ns",
+              "RMS width of the Gaussian pulse"),
+       number("divergence_sigma_rad", s.divergence_sigma_rad, above(0), "rad",
+              "beam angular RMS width per axis (intensity ∝ exp(−θ²/2σ²))"),
+       number("ifov_rad", s.ifov_rad, above(0), "rad",
+              "detector full field of view (top-hat cone)"),
+       number("telescope_area_m2", s.telescope_area_m2, above(0), "m²", "receiver aperture"),
+       number("bin_ns", s.bin_ns, above(0), "ns", "width of a recording bin"),
+       integer("bins", s.bins, 1, run_limits::waveform_bins, "",
+               "recording bins; the return from the footprint centre falls two thirds into the "
+               "window"),
+       object_array(
+           "bands", json::parse(sensor_presets().at(default_sensor_preset))["bands"],
+           "the laser's bands: 532 and 1064 nm by default, with pulse energies of 32 and "
+           "72 mJ and round-trip transmissions of 0.8 and 0.9",
+           {string("name", std::nullopt,
+                   "the band's name: the key of per-band values and the suffix of "
+                   "per-band GeoJSON properties; unique, not empty")
+                .with_required(),
+            number("wavelength_nm", std::nullopt, above(0), "nm", "wavelength").with_required(),
+            number("pulse_energy_mJ", std::nullopt, above(0), "mJ", "energy of a transmitted pulse")
+                .with_required(),
+            number("atmos_transmission_roundtrip", std::nullopt, open_closed(0, 1), "",
+                   "two-way transmission of the atmosphere")
+                .with_required()})
+           .with_items(1, run_limits::bands)
+           .with_default_text("the preset's")});
+}
+
+Key simulation_keys() {
+  const SimulationSettings s;
+  return object("simulation", "the Monte Carlo transport",
+                {integer("rays_per_shot", s.rays_per_shot, 1, run_limits::rays_per_shot, "",
+                         "Monte Carlo rays a shot (error falls as n^−1/2)"),
+                 integer("max_order", s.max_order, 1, int_max, "", "highest scattering order")});
+}
+
+Key terrain_keys() {
+  const TerrainSettings t;
+  const PlaneSettings p;
+  const RoughnessSettings g;
+  Key dem =
+      path("dem",
+           "a raster GDAL reads, with a CRS (geographic or projected; nodata honoured); "
+           "exactly one of `dem` and `plane`. A shot whose beam (3 σ) falls over nodata or "
+           "off the raster is flagged, its waveform fill. An unusable file (missing, corrupt, "
+           "truncated, no CRS) is an error, exit status 3");
+  Key dem_band = integer("dem_band", std::nullopt, 1, int_max, "",
+                         "`dem` only: the band of heights (from 1); required when the raster has "
+                         "more than one");
+  Key datum = choice(
+      "vertical_datum", t.vertical_datum, {"ellipsoid", "egm96"},
+      "`dem` only: what the DEM's heights are measured from when its CRS has no vertical part: "
+      "`ellipsoid` (its own), `egm96` (the EGM96 geoid, through PROJ's `egm96_15.gtx`), or a "
+      "vertical CRS PROJ knows (`EPSG:3855` when its grid is installed). A vertical CRS of the "
+      "DEM's own wins; the choice made is in the run summary and in the products' `config`");
+  datum.open_choices = true;
+  datum.what_else = "a vertical CRS as AUTHORITY:CODE";
+  datum.pattern = ":";
+  Key terrain =
+      object(
+          "terrain", "the ground: exactly one of `dem` and `plane`",
+          {std::move(dem),
+           object("plane",
+                  "a synthetic plane, anchored at the origin's latitude and longitude, for slope "
+                  "studies; exactly one of `dem` and `plane`",
+                  {number("origin_lat_deg", p.origin_lat_deg, closed(-90, 90), "deg",
+                          "latitude of the origin"),
+                   number("origin_lon_deg", p.origin_lon_deg, closed(-180, 360), "deg",
+                          "longitude of the origin"),
+                   number("elevation_m", p.elevation_m, any_finite(), "m",
+                          "height of the origin above WGS84"),
+                   number("slope_deg", p.slope_deg, closed(0, 89), "deg", "slope of the plane"),
+                   number("aspect_deg", p.aspect_deg, any_finite(), "deg",
+                          "the azimuth the slope faces (clockwise from north)")}),
+           std::move(dem_band), std::move(datum),
+           object(
+               "roughness",
+               "random relief added under the beam (a Gaussian random field with covariance "
+               "exp(−r²/L²), fixed by position and `seed`, meshed every L/3)",
+               {number("rms_m", g.rms_m, at_least(0), "m", "RMS height of the relief"),
+                number("correlation_m", g.correlation_m, above(0), "m", "correlation length L")}),
+           spectral("soil_reflectance", 0.15, closed(0, 1), "", "Lambertian soil, per band")})
+          .with_required();
+  return terrain;
+}
+
+Key canopy_keys() {
+  const CanopySettings c;
+  Key lad = make("lad", KeyType::choice_or_object, "",
+                 "leaf angle distribution: a name, or `{\"ellipsoidal_mean_deg\": X}` for "
+                 "Campbell's ellipsoidal distribution");
+  lad.default_value = "spherical";
+  lad.choices = {"spherical",   "planophile",   "erectophile",
+                 "plagiophile", "extremophile", "uniform"};
+  lad.children = {number("ellipsoidal_mean_deg", std::nullopt, open(0, 90), "deg",
+                         "mean leaf inclination of the ellipsoidal distribution")
+                      .with_required()};
+  Key canopy = object(
+      "canopy",
+      "the vegetation (names of the seed's Table 1): bare ground when null or absent; `{}` is "
+      "Table 1. Leaves are bi-Lambertian, bark and soil Lambertian. Trees stand on the local "
+      "ground; the same tree is in the same place for every shot that sees it",
+      {number("pai", c.pai, at_least(0), "m²/m²",
+              "one-sided plant area of leaves and bark per unit ground area of the scene (with "
+              "`crowns_file`: of the crowns' bounding box)"),
+       std::move(lad),
+       number("cover", c.cover, closed(0, 1), "",
+              "crown cover, crowns placed at random (below 1 unless `crown_shape` is `layer`)"),
+       number("green_fraction", c.green_fraction, closed(0, 1), "",
+              "the leaves' part of the plant area; 1 − `bark_fraction` when only that is given"),
+       number("bark_fraction", c.bark_fraction, closed(0, 1), "",
+              "the bark's part of the plant area; 1 − `green_fraction` when only that is given; "
+              "the two add up to 1"),
+       choice("crown_shape", "ellipsoid", {"ellipsoid", "cone", "layer"},
+              "`ellipsoid`, `cone`, or `layer`: a homogeneous slab over the whole scene, "
+              "`crown_base_m[0]` to `crown_base_m[0] + 2 crown_half_height_m` above the ground "
+              "(`pai` is its total)"),
+       number("crown_radius_m", c.crown_radius_m, above(0), "m", "crown radius"),
+       number("crown_half_height_m", c.crown_half_height_m, above(0), "m", "crown half height"),
+       number_pair(
+           "crown_base_m", c.crown_base_m, at_least(0), "m",
+           "[min, max]: crown bases uniform in this range above the terrain under the stem"),
+       number("leaf_size_m", c.leaf_size_m, at_least(0), "m",
+              "the hotspot's correlation length; 0 is the point-leaf limit"),
+       number("dbh_m", c.dbh_m, at_least(0), "m",
+              "trunk diameter; trunks from the ground to the crown"),
+       spectral("leaf_reflectance", 0.4, closed(0, 1), "", "per band"),
+       spectral("leaf_transmittance", 0.4, closed(0, 1), "",
+                "per band; `leaf_reflectance` + `leaf_transmittance` ≤ 1"),
+       spectral("bark_reflectance", 0.3, closed(0, 1), "", "per band"),
+       path("crowns_file",
+            "a CSV of explicit crowns instead of random ones: header "
+            "`lon,lat,base_m,radius_m,half_height_m` (degrees) or "
+            "`x,y,base_m,radius_m,half_height_m` (metres east and north of `terrain.plane`'s "
+            "origin); `pai` is then per unit area of the crowns' bounding box"),
+       path("stands",
+            "a GeoJSON FeatureCollection of Polygons or MultiPolygons whose `properties` override "
+            "canopy keys inside them (`{\"pai\": 1.5, \"lad\": \"erectophile\"}`); checked like "
+            "the configuration, a bad file is exit status 3 naming the feature and key; not with "
+            "a `layer`")});
+  canopy.default_text = "null";
+  return canopy;
+}
+
+Key track_keys() {
+  const TrackSettings t;
+  const OrbitElements o;
+  return object(
+      "track", "the shots: where they are and how the beam points",
+      {choice("type", "pass", {"pass", "points", "orbit", "ephemeris"},
+              "how shots are placed: `pass`, `points`, `orbit` or `ephemeris`"),
+       number("start_lat_deg", t.start_lat_deg, closed(-90, 90), "deg",
+              "`pass`: the spacecraft flies the geodesic from here along the heading"),
+       number("start_lon_deg", t.start_lon_deg, closed(-180, 360), "deg",
+              "`pass`: see `start_lat_deg`"),
+       number("heading_deg", t.heading_deg, any_finite(), "deg",
+              "`pass`: the heading, clockwise from north"),
+       integer("shots", t.shots, 1, run_limits::track_shots, "",
+               "shots of a pass. `orbit`: shots at `rate_hz` from `start_time`, numbered by "
+               "their place in that sequence; only those whose footprint falls on the terrain "
+               "are simulated and written, the others skipped (`check` says how many). "
+               "`points`: the number of points"),
+       number("rate_hz", t.rate_hz, above(0), "Hz", "shot rate (times)"),
+       number("spacing_m", std::nullopt, above(0), "m",
+              "spacing of shots along track; from the orbital ground speed and `rate_hz` when "
+              "not given")
+           .with_default_text("from speed"),
+       number("altitude_m", t.altitude_m, above(0), "m",
+              "spacecraft height above WGS84 (`pass`, `points`)"),
+       time("start_time", "2000-01-01T12:00:00Z", "ISO 8601 UTC time of shot 0"),
+       number("off_nadir_deg", t.off_nadir_deg, half_open(0, 45), "deg",
+              "beam tilted from geodetic nadir, for every type; a track none of whose shots "
+              "meets the terrain is an error (exit status 3)"),
+       number("pointing_azimuth_deg", t.pointing_azimuth_deg, any_finite(), "deg",
+              "the azimuth the beam is tilted toward (clockwise from north)"),
+       object_array(
+           "points", json(), "`points`: targets on the ground, one shot each",
+           {number("lat_deg", std::nullopt, closed(-90, 90), "deg", "latitude").with_required(),
+            number("lon_deg", std::nullopt, closed(-180, 360), "deg", "longitude").with_required()})
+           .with_items(1, run_limits::track_shots),
+       number("semi_major_axis_m", o.semi_major_axis_m, above(wgs84_equatorial_radius_m), "m",
+              "`orbit`: mean elements at `epoch` in the true-equator mean-equinox frame (as "
+              "two-line elements), propagated with the J2 secular drift of node, perigee and "
+              "mean anomaly, turned Earth-fixed with GMST (UT1 taken as UTC)"),
+       number("eccentricity", o.eccentricity, half_open(0, 1), "",
+              "`orbit`: the perigee must be above the Earth"),
+       number("inclination_deg", o.inclination_deg, closed(0, 180), "deg", "`orbit`"),
+       number("raan_deg", o.raan_deg, any_finite(), "deg",
+              "`orbit`: right ascension of the ascending node"),
+       number("arg_perigee_deg", o.arg_perigee_deg, any_finite(), "deg",
+              "`orbit`: argument of perigee"),
+       number("mean_anomaly_deg", o.mean_anomaly_deg, any_finite(), "deg", "`orbit`"),
+       time("epoch", std::nullopt, "`orbit`: ISO 8601 UTC time of the elements")
+           .with_default_text("`start_time`"),
+       path("ephemeris",
+            "`ephemeris`: a CSV file, one shot a row, with a header row "
+            "`time,x_m,y_m,z_m[,pointing_x,pointing_y,pointing_z]` (any order): time as ISO "
+            "8601 UTC or seconds since 2000-01-01T12:00:00Z, the spacecraft's WGS84 Earth-fixed "
+            "position (m), and optionally the beam direction (Earth-fixed, any length); without "
+            "it the beam points by `off_nadir_deg` and `pointing_azimuth_deg`. Lines starting "
+            "with `#` are skipped; errors name `file:line`")});
+}
+
+Key output_keys() {
+  const OutputSettings o;
+  return object("output", "which products to write; at least one of `netcdf` and `geojson`",
+                {boolean("netcdf", o.netcdf, "write `shots.nc`"),
+                 boolean("geojson", o.geojson, "write the footprints (`footprints.geojson`)"),
+                 boolean("plots", o.plots,
+                         "PNG plots (drawn from both products: needs `netcdf` and `geojson`)"),
+                 boolean("per_order", o.per_order, "per-scattering-order waveforms"),
+                 choice("footprints_format", o.footprints_format, {"GeoJSON", "GPKG"},
+                        "the footprints' format: `footprints.geojson`, or `footprints.gpkg` (not "
+                        "written by this version yet)")});
+}
+
+Key detector_keys() {
+  const DetectorSettings d;
+  return object(
+      "detector",
+      "the receiver between the light and the recorded waveform, to make waveforms that look "
+      "like GLAS's; off by default. Levels are in W at the detector's input and `rx_waveform` "
+      "stays in W; its noise is keyed by (seed, shot, band, bin), the same for any threads or "
+      "split. The truth parts `rx_waveform_canopy`/`_ground` stay noise-free",
+      {boolean("enabled", d.enabled, "whether the detector applies"),
+       number("background_W", d.background_W, at_least(0), "W",
+              "mean background light (a sunlit scene)"),
+       boolean("photon_noise", d.photon_noise,
+               "Poisson statistics of signal and background photons, hν from each band's "
+               "wavelength"),
+       number("quantum_efficiency", d.quantum_efficiency, open_closed(0, 1), "",
+              "photoelectrons per photon, for `photon_noise`"),
+       number("noise_rms_W", d.noise_rms_W, at_least(0), "W", "Gaussian detector noise, RMS"),
+       number("gain", d.gain, above(0), "", "amplification before the digitiser"),
+       integer("bits", d.bits, 0, 32, "", "digitiser resolution; 0: not digitised"),
+       number("saturation_W", std::nullopt, above(0), "W",
+              "the digitiser's full scale after the gain; required with `bits`; output above it "
+              "clips, below 0 reads 0")
+           .with_default_text("none")});
+}
+
+Key brf_keys() {
+  const BrfSettings b;
+  const BrfView v;
+  return object(
+      "brf", "`glaswave brf` (FLIGHT's solar mode; not available in this version yet)",
+      {number("sun_zenith_deg", b.sun_zenith_deg, half_open(0, 90), "deg", "sun zenith angle"),
+       number("sun_azimuth_deg", b.sun_azimuth_deg, any_finite(), "deg", "sun azimuth"),
+       object_array(
+           "views", json::array({{{"zenith_deg", v.zenith_deg}, {"azimuth_deg", v.azimuth_deg}}}),
+           "the view directions of the reflectance",
+           {number("zenith_deg", v.zenith_deg, half_open(0, 90), "deg", "view zenith angle"),
+            number("azimuth_deg", v.azimuth_deg, any_finite(), "deg", "view azimuth")})
+           .with_items(1, std::numeric_limits<std::size_t>::max()),
+       integer("photons", b.photons, 1, run_limits::rays_per_shot, "",
+               "photons traced from the sun"),
+       number("image_resolution_m", b.image_resolution_m, above(0), "m",
+              "pixel size of `scene.tif`")});
+}
+
+}  // namespace
+
+const Key& configuration_keys() {
+  static const Key root = [] {
+    const Config c;
+    Key schema =
+        declare::string("$schema", std::nullopt,
+                        "the JSON Schema an editor checks the file against (`glaswave check "
+                        "--schema`); not a setting");
+    schema.default_text = "none";
+    return declare::object(
+        "", "a glaswave configuration",
+        {std::move(schema),
+         declare::integer("seed", static_cast<std::int64_t>(c.seed), 0,
+                          std::numeric_limits<std::uint64_t>::max(), "",
+                          "random seed: a shot's waveform depends only on the configuration, the "
+                          "seed and its shot number"),
+         sensor_keys(), simulation_keys(), terrain_keys(), canopy_keys(), track_keys(),
+         output_keys(), detector_keys(), brf_keys()});
+  }();
+  return root;
+}
+
+// ---- the JSON Schema ------------------------------------------------------------------------
+
+namespace {
+
+std::string schema_description(const Key& k) {
+  std::string text = k.description;
+  if (!k.unit.empty()) text += " (unit: " + k.unit + ")";
+  if (k.default_value.is_null() && !k.default_text.empty() && k.default_text != "none")
+    text += " (default: " + k.default_text + ")";
+  return text;
+}
+
+void add_range(json& s, const Range& r) {
+  if (r.low) s[r.low_open ? "exclusiveMinimum" : "minimum"] = *r.low;
+  if (r.high) s[r.high_open ? "exclusiveMaximum" : "maximum"] = *r.high;
+}
+
+json object_schema(const Key& k);
+
+json key_schema(const Key& k) {
+  json s = json::object();
+  switch (k.type) {
+    case KeyType::number:
+      s["type"] = "number";
+      add_range(s, k.range);
+      break;
+    case KeyType::integer:
+      s["type"] = "integer";
+      s["minimum"] = k.min;
+      s["maximum"] = k.max;
+      break;
+    case KeyType::boolean:
+      s["type"] = "boolean";
+      break;
+    case KeyType::string:
+      s["type"] = "string";
+      if (k.format == "date-time") s["format"] = "date-time";
+      if (k.format == "path") s["minLength"] = 1;
+      if (!k.choices.empty() && !k.open_choices) s["enum"] = k.choices;
+      if (!k.choices.empty() && k.open_choices) {
+        s["anyOf"] = json::array({{{"enum", k.choices}}, {{"pattern", k.pattern}}});
+      }
+      break;
+    case KeyType::spectral: {
+      json per_band = {{"type", "number"}};
+      add_range(per_band, k.range);
+      s["anyOf"] = json::array(
+          {per_band,
+           {{"type", "object"}, {"minProperties", 1}, {"additionalProperties", per_band}}});
+      break;
+    }
+    case KeyType::number_pair: {
+      json item = {{"type", "number"}};
+      add_range(item, k.range);
+      s = {{"type", "array"}, {"items", item}, {"minItems", 2}, {"maxItems", 2}};
+      break;
+    }
+    case KeyType::object:
+      s = object_schema(k);
+      break;
+    case KeyType::object_array:
+      s = {{"type", "array"}, {"items", object_schema(k)}};
+      if (k.min_items > 0) s["minItems"] = k.min_items;
+      if (k.max_items != std::numeric_limits<std::size_t>::max()) s["maxItems"] = k.max_items;
+      break;
+    case KeyType::choice_or_object:
+      s["anyOf"] = json::array({{{"type", "string"}, {"enum", k.choices}}, object_schema(k)});
+      break;
+  }
+  if (k.nullable && k.type != KeyType::choice_or_object && k.type != KeyType::spectral &&
+      s.contains("type"))
+    s["type"] = json::array({s["type"], "null"});
+  if (!k.default_value.is_null()) s["default"] = k.default_value;
+  s["description"] = schema_description(k);
+  return s;
+}
+
+json object_schema(const Key& k) {
+  json s = {{"type", "object"}, {"additionalProperties", false}};
+  json properties = json::object();
+  json required = json::array();
+  for (const Key& c : k.children) {
+    properties[c.name] = key_schema(c);
+    if (c.required) required.push_back(c.name);
+  }
+  s["properties"] = properties;
+  if (!required.empty()) s["required"] = required;
+  return s;
+}
+
+}  // namespace
+
+json configuration_schema() {
+  const Key& root = configuration_keys();
+  json s = {{"$schema", "https://json-schema.org/draft/2020-12/schema"},
+            {"title", "glaswave configuration"},
+            {"description", root.description + " (glaswave " GLASWAVE_VERSION ")"}};
+  s.update(object_schema(root));
+  // Exactly one of `dem` and `plane`, as the parser asks.
+  s["properties"]["terrain"]["oneOf"] =
+      json::array({{{"required", {"dem"}}, {"not", {{"required", {"plane"}}}}},
+                   {{"required", {"plane"}}, {"not", {{"required", {"dem"}}}}}});
+  return s;
+}
+
+// ---- the README's table ---------------------------------------------------------------------
+
+namespace {
+
+std::string code(const std::string& text) { return "`" + text + "`"; }
+
+std::string default_cell(const Key& k) {
+  if (k.type == KeyType::object || k.type == KeyType::object_array) {
+    if (!k.default_text.empty()) return k.default_text;
+    return "—";
+  }
+  if (k.default_value.is_null()) return k.default_text.empty() ? "—" : k.default_text;
+  const json& v = k.default_value;
+  if (v.is_string()) return code(v.get<std::string>());
+  if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+  if (v.is_number_float()) return format_number(v.get<double>());
+  if (v.is_number()) return v.dump();
+  if (v.is_array() && k.type == KeyType::number_pair)
+    return "[" + format_number(v[0].get<double>()) + ", " + format_number(v[1].get<double>()) + "]";
+  return code(v.dump());
+}
+
+std::string integer_text(const Key& k) {
+  std::string text = "integer ≥ " + std::to_string(k.min);
+  if (k.max != static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()) &&
+      k.max != std::numeric_limits<std::uint64_t>::max() && k.max != int_max)
+    text = "integer in [" + std::to_string(k.min) + ", " + std::to_string(k.max) + "]";
+  return text;
+}
+
+std::string allowed_cell(const Key& k) {
+  std::string choices;
+  for (std::size_t i = 0; i < k.choices.size(); ++i)
+    choices += (i ? ", " : "") + code(k.choices[i]);
+  switch (k.type) {
+    case KeyType::number:
+      return k.range.low || k.range.high ? "number " + k.range.interval() : "number";
+    case KeyType::integer:
+      return integer_text(k);
+    case KeyType::boolean:
+      return "true, false";
+    case KeyType::string:
+      if (!k.choices.empty()) return k.open_choices ? choices + " or " + k.what_else : choices;
+      if (k.format == "date-time") return "ISO 8601 UTC time";
+      if (k.format == "path") return "file path";
+      return "string";
+    case KeyType::spectral:
+      return "number " + k.range.interval() + ", or an object of one per band";
+    case KeyType::number_pair:
+      return "[min, max], each " + k.range.interval();
+    case KeyType::object:
+      return k.nullable && k.default_text == "null" ? "object or null" : "object";
+    case KeyType::object_array: {
+      std::string text = "array of objects";
+      if (k.max_items != std::numeric_limits<std::size_t>::max())
+        text += " (" + std::to_string(k.min_items) + " to " + std::to_string(k.max_items) + ")";
+      else if (k.min_items > 0)
+        text += " (at least " + std::to_string(k.min_items) + ")";
+      return text;
+    }
+    case KeyType::choice_or_object:
+      return choices + ", or an object";
+  }
+  return "";
+}
+
+void add_rows(const Key& k, const std::string& prefix, std::ostringstream& out) {
+  for (const Key& c : k.children) {
+    const std::string name = prefix + c.name;
+    if (c.name != "$schema") {
+      std::string meaning = c.description;
+      if (c.required) meaning = "required; " + meaning;
+      out << "| " << code(name) << " | " << allowed_cell(c) << " | " << default_cell(c) << " | "
+          << (c.unit.empty() ? "—" : c.unit) << " | " << meaning << " |\n";
+    }
+    if (c.type == KeyType::object || c.type == KeyType::choice_or_object)
+      add_rows(c, name + ".", out);
+    if (c.type == KeyType::object_array) add_rows(c, name + "[].", out);
+  }
+}
+
+}  // namespace
+
+std::string configuration_keys_markdown() {
+  std::ostringstream out;
+  out << "| key | allowed | default | unit | meaning |\n|---|---|---|---|---|\n";
+  add_rows(configuration_keys(), "", out);
+  return out.str();
+}
+
+}  // namespace glaswave

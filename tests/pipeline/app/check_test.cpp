@@ -1,0 +1,127 @@
+// `glaswave check` against `glaswave run` (PRODUCT.md section 2): the two accept exactly the same
+// configurations, so each bad configuration here ends both with the same status and the same
+// one-line message, and run leaves nothing behind. And `check --schema` prints the schema.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "tests/pipeline/engine/engine_test_support.hpp"
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace test_support;
+
+class Check : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    // The process id keeps runs of the suite in other checkouts on this machine apart.
+    dir_ = fs::temp_directory_path() /
+           ("glaswave_check_" + std::to_string(::getpid()) + "_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // One shot over a plane, with `changes` merged in.
+  std::string write_config(const json& changes) {
+    json config = {
+        {"sensor", {{"preset", "glas"}}},
+        {"simulation", {{"rays_per_shot", 100}}},
+        {"terrain", {{"plane", {{"origin_lat_deg", 46.0}, {"origin_lon_deg", 8.0}}}}},
+        {"canopy", nullptr},
+        {"track", {{"start_lat_deg", 46.0}, {"start_lon_deg", 8.0}, {"shots", 1}}},
+    };
+    config.merge_patch(changes);
+    const fs::path file = dir_ / "config.json";
+    std::ofstream(file) << config.dump(2);
+    return file.string();
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Check, RefusesExactlyWhatRunRefuses) {
+  const fs::path stands = dir_ / "stands.geojson";
+  std::ofstream(stands) << R"({"type": "FeatureCollection", "features": [{"type": "Feature",
+      "properties": {"pai": 1}, "geometry": {"type": "Polygon", "coordinates":
+      [[[7.9, 45.9], [8.1, 45.9], [8.1, 46.1], [7.9, 46.1], [7.9, 45.9]]]}}]})";
+  struct Case {
+    json changes;
+    int status;
+    std::string message;  // the start of what follows "glaswave: error: "
+  };
+  const std::vector<Case> cases = {
+      {{{"canopy", {{"pai", -1}}}}, 2, "/canopy/pai: must be >= 0, got -1"},
+      {{{"output", {{"netcdf", false}, {"geojson", false}}}}, 2, "/output: nothing to write"},
+      {{{"output", {{"plots", true}, {"geojson", false}}}}, 2, "/output/plots: plots are drawn"},
+      {{{"output", {{"footprints_format", "GPKG"}}}},
+       2,
+       "/output/footprints_format: \"GPKG\" is not written by this version yet"},
+      {{{"sensor", {{"bins", 1000000}}}}, 2, "/sensor/bins: a shot's waveforms would take"},
+      {{{"sensor", {{"bins", 20000}}},
+        {"simulation", {{"max_order", 100}}},
+        {"output", {{"per_order", true}}}},
+       2,
+       "/output/per_order: a shot's waveforms would take"},
+      {{{"simulation", {{"rays_per_shot", 1e13}}}},
+       2,
+       "/simulation/rays_per_shot: must be <= 1000000000000"},
+      {{{"terrain", {{"vertical_datum", "egm96"}}}},
+       2,
+       "/terrain/vertical_datum: applies to terrain.dem only"},
+      {{{"terrain", {{"dem_band", 1}}}}, 2, "/terrain/dem_band: applies to terrain.dem only"},
+      {{{"canopy", {{"crown_shape", "layer"}, {"stands", stands.string()}}}},
+       3,
+       stands.string() + ": feature 0: a layer covers the whole scene"},
+      {{{"terrain", {{"plane", nullptr}, {"dem", (dir_ / "absent.tif").string()}}}},
+       3,
+       (dir_ / "absent.tif").string() + ": cannot read the DEM"},
+  };
+  for (const Case& c : cases) {
+    const std::string config = write_config(c.changes);
+    const CommandOutcome check = run_glaswave("check " + config);
+    const CommandOutcome run =
+        run_glaswave("run " + config + " --quiet --out " + (dir_ / "out").string());
+    EXPECT_EQ(check.status, c.status) << c.changes << ": " << check.output;
+    EXPECT_EQ(run.status, check.status) << c.changes << ": " << run.output;
+    EXPECT_EQ(run.output, check.output) << c.changes;
+    EXPECT_EQ(check.output.rfind("glaswave: error: " + c.message, 0), 0u)
+        << c.changes << ": " << check.output;
+    EXPECT_EQ(std::count(check.output.begin(), check.output.end(), '\n'), 1) << check.output;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << c.changes;
+  }
+  // What check accepts, run runs.
+  const std::string good = write_config(json::object());
+  const CommandOutcome check = run_glaswave("check " + good);
+  EXPECT_EQ(check.status, 0) << check.output;
+  const CommandOutcome run =
+      run_glaswave("run " + good + " --quiet --out " + (dir_ / "out").string());
+  EXPECT_EQ(run.status, 0) << run.output;
+}
+
+TEST_F(Check, SchemaIsPrinted) {
+  const CommandOutcome schema = run_glaswave("check --schema");
+  ASSERT_EQ(schema.status, 0) << schema.output;
+  const json parsed = json::parse(schema.output);
+  EXPECT_EQ(parsed["$schema"], "https://json-schema.org/draft/2020-12/schema");
+  EXPECT_EQ(parsed.at(json::json_pointer("/properties/canopy/properties/pai/minimum")), 0);
+  // A configuration that names the schema is still a configuration.
+  const std::string config = write_config({{"$schema", "glaswave.schema.json"}});
+  EXPECT_EQ(run_glaswave("check " + config).status, 0);
+  // Without a configuration or --schema there is nothing to check.
+  const CommandOutcome nothing = run_glaswave("check");
+  EXPECT_EQ(nothing.status, 2);
+  EXPECT_EQ(nothing.output.rfind("glaswave: error: check: give CONFIG", 0), 0u) << nothing.output;
+}
+
+}  // namespace
+}  // namespace glaswave
