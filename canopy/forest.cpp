@@ -18,10 +18,6 @@ namespace {
 
 constexpr double metres_per_degree = metres_per_degree_latitude;  // ample for a search radius
 
-std::uint64_t kind_seed(std::uint64_t seed, std::size_t kind) {
-  return seed + 0x9e3779b97f4a7c15ULL * kind;
-}
-
 // Even-odd rule over all rings.
 bool inside(const StandArea& area, double lon_deg, double lat_deg) {
   bool in = false;
@@ -74,7 +70,7 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
                              ((lon_max - lon_min) * lon_m + 2.0 * mean_radius_m);
       kind.area_density_m2_m3 = s.pai * area_m2 / crown_volume_m3;
     } else {
-      kind.stand.emplace(s, kind_seed(seed, k));
+      kind.stand.emplace(s, seed, k);
       kind.area_density_m2_m3 = kind.stand->area_density_m2_m3();
     }
     kinds_.push_back(std::move(kind));

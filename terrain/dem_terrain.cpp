@@ -2,6 +2,11 @@
 // and meshes on the DEM's own nodes.
 #include "terrain/dem_terrain.hpp"
 
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -15,13 +20,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include <cpl_conv.h>
-#include <cpl_error.h>
-#include <gdal_priv.h>
-#include <ogr_spatialref.h>
-
-#include "terrain/crs_transform.hpp"
 #include "core/error.hpp"
+#include "terrain/crs_transform.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
@@ -435,15 +435,8 @@ double DemTerrain::height_m(double lat_deg, double lon_deg) const {
   if (!dem.inside(uv)) return nan;
   const int i = std::min(static_cast<int>(std::floor(uv[0])), dem.width - 2);
   const int j = std::min(static_cast<int>(std::floor(uv[1])), dem.height - 2);
-  const double fu = uv[0] - i, fv = uv[1] - j;
-  // The triangle of the cell holding the point, as mesh() has it: (a, b, d) or (a, d, c).
-  const double a = dem.node(i, j).h_m, d = dem.node(i + 1, j + 1).h_m;
-  if (fu >= fv) {
-    const double b = dem.node(i + 1, j).h_m;
-    return a + fu * (b - a) + fv * (d - b);
-  }
-  const double c = dem.node(i, j + 1).h_m;
-  return a + fv * (c - a) + fu * (d - c);
+  return cell_height(uv[0] - i, uv[1] - j,
+                     [&](int di, int dj) { return dem.node(i + di, j + dj).h_m; });
 }
 
 double DemTerrain::detail_m() const { return impl_->detail_m; }
@@ -462,29 +455,24 @@ GroundMesh DemTerrain::mesh(const LocalFrame& frame, double half_size_m, double)
   const Impl::NodeBlock nodes(dem, w.i0, w.i0 + (ni - 1) * stride, w.j0, w.j0 + (nj - 1) * stride);
 
   mesh.vertices_m.reserve(3 * static_cast<std::size_t>(ni) * nj);
-  std::vector<bool> valid(static_cast<std::size_t>(ni) * nj);
+  std::vector<std::uint32_t> node_vertex(static_cast<std::size_t>(ni) * nj, no_vertex);
   mesh.min_height_m = std::numeric_limits<double>::infinity();
   mesh.max_height_m = -std::numeric_limits<double>::infinity();
   for (int jj = 0; jj < nj; ++jj) {
     for (int ii = 0; ii < ni; ++ii) {
       const Node n = nodes(w.i0 + ii * stride, w.j0 + jj * stride);
       const std::size_t k = static_cast<std::size_t>(jj) * ni + ii;
-      valid[k] = n.valid();
-      const Vec3 p = valid[k] ? frame.to_local({n.lat_deg, n.lon_deg, n.h_m}) : Vec3{0.0, 0.0, 0.0};
+      const Vec3 p =
+          n.valid() ? frame.to_local({n.lat_deg, n.lon_deg, n.h_m}) : Vec3{0.0, 0.0, 0.0};
       for (double coordinate : p) mesh.vertices_m.push_back(static_cast<float>(coordinate));
-      if (valid[k]) {
+      if (n.valid()) {
+        node_vertex[k] = static_cast<std::uint32_t>(k);
         mesh.min_height_m = std::min(mesh.min_height_m, p[2]);
         mesh.max_height_m = std::max(mesh.max_height_m, p[2]);
       }
     }
   }
-  for (int jj = 0; jj + 1 < nj; ++jj) {
-    for (int ii = 0; ii + 1 < ni; ++ii) {
-      const std::uint32_t a = jj * ni + ii, b = a + 1, c = a + ni, d = c + 1;
-      if (valid[a] && valid[b] && valid[d]) mesh.triangles.insert(mesh.triangles.end(), {a, b, d});
-      if (valid[a] && valid[d] && valid[c]) mesh.triangles.insert(mesh.triangles.end(), {a, d, c});
-    }
-  }
+  triangulate_grid(ni, nj, node_vertex, mesh.triangles);
   if (mesh.triangles.empty()) mesh.min_height_m = mesh.max_height_m = 0.0;
   return mesh;
 }

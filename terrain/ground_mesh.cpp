@@ -11,6 +11,21 @@
 
 namespace glaswave {
 
+void triangulate_grid(int ni, int nj, const std::vector<std::uint32_t>& node_vertex,
+                      std::vector<std::uint32_t>& triangles) {
+  for (int j = 0; j + 1 < nj; ++j) {
+    for (int i = 0; i + 1 < ni; ++i) {
+      const std::size_t n = static_cast<std::size_t>(j) * ni + i;
+      const std::uint32_t a = node_vertex[n], b = node_vertex[n + 1], c = node_vertex[n + ni],
+                          d = node_vertex[n + ni + 1];
+      if (a != no_vertex && b != no_vertex && d != no_vertex)
+        triangles.insert(triangles.end(), {a, b, d});
+      if (a != no_vertex && d != no_vertex && c != no_vertex)
+        triangles.insert(triangles.end(), {a, d, c});
+    }
+  }
+}
+
 GroundMesh build_ground_mesh(const Terrain& terrain, const LocalFrame& frame, double half_size_m,
                              double spacing_m, const RoughnessField* roughness,
                              double rough_half_size_m) {
@@ -29,7 +44,7 @@ GroundMesh sample_ground_mesh(const Terrain& terrain, const LocalFrame& frame, d
 
   GroundMesh mesh;
   mesh.vertices_m.reserve(3 * nodes * nodes);
-  std::vector<bool> valid(nodes * nodes);
+  std::vector<std::uint32_t> node_vertex(nodes * nodes, no_vertex);
   mesh.min_height_m = std::numeric_limits<double>::infinity();
   mesh.max_height_m = -std::numeric_limits<double>::infinity();
   for (int j = 0; j < nodes; ++j) {
@@ -39,25 +54,17 @@ GroundMesh sample_ground_mesh(const Terrain& terrain, const LocalFrame& frame, d
       const Geodetic below =
           frame.to_geodetic({-half_size_m + i * step_m, -half_size_m + j * step_m, 0.0});
       const double height_m = terrain.height_m(below.lat_deg, below.lon_deg);
-      valid[j * nodes + i] = std::isfinite(height_m);
-      const Vec3 node =
-          frame.to_local({below.lat_deg, below.lon_deg, valid[j * nodes + i] ? height_m : 0.0});
+      const bool valid = std::isfinite(height_m);
+      const Vec3 node = frame.to_local({below.lat_deg, below.lon_deg, valid ? height_m : 0.0});
       for (double coordinate : node) mesh.vertices_m.push_back(static_cast<float>(coordinate));
-      if (valid[j * nodes + i]) {
+      if (valid) {
+        node_vertex[j * nodes + i] = j * nodes + i;
         mesh.min_height_m = std::min(mesh.min_height_m, node[2]);
         mesh.max_height_m = std::max(mesh.max_height_m, node[2]);
       }
     }
   }
-  // Each triangle stands on its own three nodes, as a DEM's do: a hole removes only the
-  // triangles that touch it.
-  for (int j = 0; j < cells; ++j) {
-    for (int i = 0; i < cells; ++i) {
-      const std::uint32_t a = j * nodes + i, b = a + 1, c = a + nodes, d = c + 1;
-      if (valid[a] && valid[b] && valid[d]) mesh.triangles.insert(mesh.triangles.end(), {a, b, d});
-      if (valid[a] && valid[d] && valid[c]) mesh.triangles.insert(mesh.triangles.end(), {a, d, c});
-    }
-  }
+  triangulate_grid(nodes, nodes, node_vertex, mesh.triangles);
   if (mesh.triangles.empty()) mesh.min_height_m = mesh.max_height_m = 0.0;
   return mesh;
 }
