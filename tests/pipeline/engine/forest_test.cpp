@@ -122,7 +122,7 @@ TEST_F(Forests, BadFilesAreNamedWithTheirPlace) {
     FAIL() << "a bad crowns file was accepted";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::input);
-    EXPECT_EQ(std::string(e.what()), crowns + ":3: radius_m is not a number: \"eight\"");
+    EXPECT_EQ(std::string(e.what()), crowns + ":3: radius_m: expected a finite number, got \"eight\"");
   }
 }
 
