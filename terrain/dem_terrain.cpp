@@ -126,6 +126,11 @@ struct DemTerrain::Impl {
   std::size_t tiles_read = 0;
 
   void open(const TerrainSettings& settings);
+  void open_dataset();
+  void choose_band(int dem_band);
+  void read_georeferencing(const std::string& vertical_datum);
+  void read_encoding();
+  void measure_spacing();
   TilePtr load(int tx, int ty);
   TilePtr tile(int tx, int ty);
   Node node(int i, int j) {
@@ -178,6 +183,23 @@ struct DemTerrain::Impl {
 void DemTerrain::Impl::open(const TerrainSettings& settings) {
   prepare_gdal();
   const GdalErrorTrap quiet;  // GDAL's warnings about the file stay off the terminal too
+  open_dataset();
+  choose_band(settings.dem_band);
+  read_georeferencing(settings.vertical_datum);
+  read_encoding();
+  tiles_x = (width + options.tile_pixels - 1) / options.tile_pixels;
+  tiles_y = (height + options.tile_pixels - 1) / options.tile_pixels;
+
+  // A truncated or corrupt file often opens: read the tiles at its start, middle and end now,
+  // so that it fails here and not halfway through a run.
+  for (const auto& [tx, ty] :
+       {std::array<int, 2>{0, 0}, {tiles_x / 2, tiles_y / 2}, {tiles_x - 1, tiles_y - 1}})
+    tile(tx, ty);
+
+  measure_spacing();
+}
+
+void DemTerrain::Impl::open_dataset() {
   namespace fs = std::filesystem;
   // GDAL's virtual file systems (/vsizip/, /vsicurl/) are left to GDAL to find.
   if (path.rfind("/vsi", 0) != 0) {
@@ -193,14 +215,18 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
       throw input_error(
           path, "cannot read the DEM: " + trap.cause("GDAL does not recognise it as a raster"));
   }
+}
+
+// The band with the heights: the one there is, or terrain.dem_band's.
+void DemTerrain::Impl::choose_band(int dem_band) {
   const int bands = dataset->GetRasterCount();
   if (bands < 1) throw input_error(path, "the DEM has no raster band");
-  if (settings.dem_band == 0 && bands > 1) {
+  if (dem_band == 0 && bands > 1) {
     throw input_error(path, "the DEM has " + std::to_string(bands) +
                                 " bands: choose the one with heights with terrain.dem_band (1 to " +
                                 std::to_string(bands) + ")");
   }
-  const int band_number = settings.dem_band == 0 ? 1 : settings.dem_band;
+  const int band_number = dem_band == 0 ? 1 : dem_band;
   if (band_number > bands) {
     throw input_error(path, "the DEM has " + std::to_string(bands) + " band" +
                                 (bands > 1 ? "s" : "") + ", terrain.dem_band asks for band " +
@@ -211,7 +237,10 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
   height = dataset->GetRasterYSize();
   if (width < 2 || height < 2)
     throw input_error(path, "the DEM is too small: at least 2 x 2 cells are needed");
+}
 
+// Where the raster lies: its CRS and geotransform, and the transform of its nodes to WGS84.
+void DemTerrain::Impl::read_georeferencing(const std::string& vertical_datum) {
   const OGRSpatialReference* srs = dataset->GetSpatialRef();
   if (!srs || srs->IsEmpty()) {
     throw input_error(path,
@@ -239,8 +268,11 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
   }
   const std::string crs_wkt = wkt;
   CPLFree(wkt);
-  crs = std::make_unique<CrsTransform>(crs_wkt, settings.vertical_datum, path);
+  crs = std::make_unique<CrsTransform>(crs_wkt, vertical_datum, path);
+}
 
+// How heights are stored: nodata value or mask, scale and offset, and their unit.
+void DemTerrain::Impl::read_encoding() {
   int has_nodata = 0;
   const double nodata_value = band->GetNoDataValue(&has_nodata);
   if (has_nodata) nodata = nodata_value;
@@ -252,21 +284,14 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
   if (!has_scale) scale = 1.0;
   if (!has_offset) offset = 0.0;
   // A vertical CRS carries the unit of its heights; without one, the band's unit says.
-  if (!srs->IsCompound()) {
+  if (!dataset->GetSpatialRef()->IsCompound()) {
     const double metres = metres_per_unit(band->GetUnitType());
     scale *= metres;
     offset *= metres;
   }
+}
 
-  tiles_x = (width + options.tile_pixels - 1) / options.tile_pixels;
-  tiles_y = (height + options.tile_pixels - 1) / options.tile_pixels;
-
-  // A truncated or corrupt file often opens: read the tiles at its start, middle and end now,
-  // so that it fails here and not halfway through a run.
-  for (const auto& [tx, ty] :
-       {std::array<int, 2>{0, 0}, {tiles_x / 2, tiles_y / 2}, {tiles_x - 1, tiles_y - 1}})
-    tile(tx, ty);
-
+void DemTerrain::Impl::measure_spacing() {
   // The node spacing in metres about the raster's centre.
   const int ci = width / 2 - 1, cj = height / 2 - 1;
   const Node centre = node(ci, cj), east = node(ci + 1, cj), south = node(ci, cj + 1);
