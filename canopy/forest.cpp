@@ -46,7 +46,7 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
     if (s.crown_shape == CrownShape::layer) {
       if (!canopy.stand_areas.empty())
         throw setting_error(ErrorKind::config, "crown_shape",
-                           "a layer covers the whole scene: it cannot be used with stands");
+                            "a layer covers the whole scene: it cannot be used with stands");
       kind.area_density_m2_m3 = s.pai / (2.0 * s.crown_half_height_m);
     } else if (k == 0 && !s.crowns_file.empty()) {
       kind.explicit_trees = read_crowns_file(s.crowns_file, plane);

@@ -98,10 +98,11 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
     if (kept_shots_.empty()) {
       char rate[32];
       std::snprintf(rate, sizeof rate, "%g", settings_.rate_hz);
-      throw setting_error(ErrorKind::input, "", "the orbit never meets the terrain: none of its " +
-                                      std::to_string(sequence_length_) + " shots from " +
-                                      format_iso8601_utc(settings_.start_time_s) + " at " + rate +
-                                      " Hz falls on it");
+      throw setting_error(ErrorKind::input, "",
+                          "the orbit never meets the terrain: none of its " +
+                              std::to_string(sequence_length_) + " shots from " +
+                              format_iso8601_utc(settings_.start_time_s) + " at " + rate +
+                              " Hz falls on it");
     }
     return;
   }
@@ -109,9 +110,10 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
   // not a product of flagged shots. The first shot usually meets it, so this costs one shot.
   for (std::int64_t shot = 0; shot < sequence_length_; ++shot)
     if (locate_shot(shot).on_terrain) return;
-  throw setting_error(ErrorKind::input, "", "the track never meets the terrain: none of its " +
-                                  std::to_string(sequence_length_) +
-                                  " shots' beams reaches ground with data");
+  throw setting_error(ErrorKind::input, "",
+                      "the track never meets the terrain: none of its " +
+                          std::to_string(sequence_length_) +
+                          " shots' beams reaches ground with data");
 }
 
 std::int64_t Track::size() const {
