@@ -4,23 +4,18 @@
 #include <GeographicLib/LocalCartesian.hpp>
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <numbers>
-#include <sstream>
 #include <string>
 
 #include "canopy/crown.hpp"
+#include "core/csv.hpp"
 #include "core/error.hpp"
 
 namespace glaswave {
 namespace {
 
 constexpr double metres_per_degree = metres_per_degree_latitude;  // ample for a search radius
-
-std::uint64_t kind_seed(std::uint64_t seed, std::size_t kind) {
-  return seed + 0x9e3779b97f4a7c15ULL * kind;
-}
 
 // Even-odd rule over all rings.
 bool inside(const StandArea& area, double lon_deg, double lat_deg) {
@@ -51,7 +46,7 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
     if (s.crown_shape == CrownShape::layer) {
       if (!canopy.stand_areas.empty())
         throw setting_error(ErrorKind::config, "crown_shape",
-                           "a layer covers the whole scene: it cannot be used with stands");
+                            "a layer covers the whole scene: it cannot be used with stands");
       kind.area_density_m2_m3 = s.pai / (2.0 * s.crown_half_height_m);
     } else if (k == 0 && !s.crowns_file.empty()) {
       kind.explicit_trees = read_crowns_file(s.crowns_file, plane);
@@ -74,7 +69,7 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
                              ((lon_max - lon_min) * lon_m + 2.0 * mean_radius_m);
       kind.area_density_m2_m3 = s.pai * area_m2 / crown_volume_m3;
     } else {
-      kind.stand.emplace(s, kind_seed(seed, k));
+      kind.stand.emplace(s, seed, k);
       kind.area_density_m2_m3 = kind.stand->area_density_m2_m3();
     }
     kinds_.push_back(std::move(kind));
@@ -117,83 +112,57 @@ std::vector<Tree> Forest::trees_near(double lat_deg, double lon_deg, double radi
 namespace glaswave {
 namespace {
 
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream stream(line);
-  std::string field;
-  while (std::getline(stream, field, ',')) {
-    const auto first = field.find_first_not_of(" \t\r");
-    const auto last = field.find_last_not_of(" \t\r");
-    fields.push_back(first == std::string::npos ? std::string()
-                                                : field.substr(first, last - first + 1));
+const std::vector<std::string_view> geographic_header{"lon", "lat", "base_m", "radius_m",
+                                                      "half_height_m"};
+const std::vector<std::string_view> metric_header{"x", "y", "base_m", "radius_m", "half_height_m"};
+
+// A crown from a row of the crowns file: degrees, or metres about the plane's origin.
+Tree read_crown(const CsvReader& csv, const std::vector<std::string_view>& fields,
+                const std::optional<GeographicLib::LocalCartesian>& origin) {
+  const std::string place = csv.place();
+  if (fields.size() != 5)
+    throw input_error(place, "expected 5 values, got " + std::to_string(fields.size()));
+  const std::vector<std::string_view>& names = origin ? metric_header : geographic_header;
+  double values[5];
+  for (int i = 0; i < 5; ++i) values[i] = csv.number(fields[i], names[i]);
+  Tree tree;
+  if (!origin) {
+    if (values[1] < -90.0 || values[1] > 90.0) throw input_error(place, "lat must be in [-90, 90]");
+    tree.lon_deg = values[0];
+    tree.lat_deg = values[1];
+  } else {
+    double h = 0.0;
+    origin->Reverse(values[0], values[1], 0.0, tree.lat_deg, tree.lon_deg, h);
   }
-  return fields;
+  if (values[2] < 0.0) throw input_error(place, "base_m must be >= 0");
+  if (values[3] <= 0.0) throw input_error(place, "radius_m must be > 0");
+  if (values[4] <= 0.0) throw input_error(place, "half_height_m must be > 0");
+  tree.crown_base_m = values[2];
+  tree.crown_radius_m = values[3];
+  tree.crown_half_height_m = values[4];
+  return tree;
 }
 
 }  // namespace
 
 std::vector<Tree> read_crowns_file(const std::filesystem::path& file,
                                    const std::optional<PlaneSettings>& plane) {
-  std::ifstream in(file);
-  if (!in) throw input_error(file.string(), "cannot read the crowns file");
-  const std::vector<std::string> geographic{"lon", "lat", "base_m", "radius_m", "half_height_m"};
-  const std::vector<std::string> metric{"x", "y", "base_m", "radius_m", "half_height_m"};
-  std::vector<Tree> trees;
+  CsvReader csv(file, "the crowns file");
+  std::vector<std::string_view> fields;
   std::optional<GeographicLib::LocalCartesian> origin;
-  bool header_seen = false, in_degrees = true;
-  std::string line;
-  for (int number = 1; std::getline(in, line); ++number) {
-    const std::string place = file.string() + ":" + std::to_string(number);
-    const std::vector<std::string> fields = split_csv(line);
-    if (fields.empty() || (fields.size() == 1 && fields[0].empty()) || fields[0].rfind('#', 0) == 0)
-      continue;
-    if (!header_seen) {
-      in_degrees = fields == geographic;
-      if (!in_degrees && fields != metric)
-        throw input_error(place,
-                          "expected the header lon,lat,base_m,radius_m,half_height_m or "
-                          "x,y,base_m,radius_m,half_height_m");
-      if (!in_degrees) {
-        if (!plane)
-          throw input_error(
-              place, "x,y crowns are metres from terrain.plane's origin; with a DEM give lon,lat");
-        origin.emplace(plane->origin_lat_deg, plane->origin_lon_deg, 0.0);
-      }
-      header_seen = true;
-      continue;
-    }
-    if (fields.size() != 5)
-      throw input_error(place, "expected 5 values, got " + std::to_string(fields.size()));
-    double values[5];
-    for (int i = 0; i < 5; ++i) {
-      std::size_t used = 0;
-      try {
-        values[i] = std::stod(fields[i], &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != fields[i].size() || fields[i].empty() || !std::isfinite(values[i]))
-        throw input_error(place, (in_degrees ? geographic : metric)[i] + " is not a number: \"" +
-                                     fields[i] + "\"");
-    }
-    Tree tree;
-    if (in_degrees) {
-      if (values[1] < -90.0 || values[1] > 90.0)
-        throw input_error(place, "lat must be in [-90, 90]");
-      tree.lon_deg = values[0];
-      tree.lat_deg = values[1];
-    } else {
-      double h = 0.0;
-      origin->Reverse(values[0], values[1], 0.0, tree.lat_deg, tree.lon_deg, h);
-    }
-    if (values[2] < 0.0) throw input_error(place, "base_m must be >= 0");
-    if (values[3] <= 0.0) throw input_error(place, "radius_m must be > 0");
-    if (values[4] <= 0.0) throw input_error(place, "half_height_m must be > 0");
-    tree.crown_base_m = values[2];
-    tree.crown_radius_m = values[3];
-    tree.crown_half_height_m = values[4];
-    trees.push_back(tree);
+  if (csv.next_row(fields) && fields != geographic_header) {
+    if (fields != metric_header)
+      throw input_error(csv.place(),
+                        "expected the header lon,lat,base_m,radius_m,half_height_m or "
+                        "x,y,base_m,radius_m,half_height_m");
+    if (!plane)
+      throw input_error(
+          csv.place(),
+          "x,y crowns are metres from terrain.plane's origin; with a DEM give lon,lat");
+    origin.emplace(plane->origin_lat_deg, plane->origin_lon_deg, 0.0);
   }
+  std::vector<Tree> trees;
+  while (csv.next_row(fields)) trees.push_back(read_crown(csv, fields, origin));
   if (trees.empty()) throw input_error(file.string(), "the crowns file lists no crowns");
   return trees;
 }

@@ -1,7 +1,7 @@
 // A stand of trees placed at random at the target crown cover, deterministically by location:
 // the ground is cut into tiles of about 50 m and each tile's trees come from a random stream
-// keyed by (seed, tile), so the same tree is in the same place for every shot that sees it and
-// a long track never builds the whole forest.
+// keyed by (seed, tile, kind) (core/random.hpp), so the same tree is in the same place for every
+// shot that sees it and a long track never builds the whole forest.
 #pragma once
 
 #include <cstdint>
@@ -25,7 +25,8 @@ struct Tree {
 
 class Stand {
  public:
-  Stand(const CanopySettings& canopy, std::uint64_t seed);
+  // `kind` tells the stands of one run apart (Forest's kinds of canopy): each has its own trees.
+  Stand(const CanopySettings& canopy, std::uint64_t seed, std::uint64_t kind = 0);
 
   // Trees whose stems stand within `radius_m` of a point (a few tiles more may come back).
   std::vector<Tree> trees_near(double lat_deg, double lon_deg, double radius_m) const;
@@ -38,6 +39,7 @@ class Stand {
  private:
   CanopySettings canopy_;
   std::uint64_t seed_;
+  std::uint64_t kind_;
   double trees_per_m2_;
   double area_density_m2_m3_;
 };

@@ -56,4 +56,9 @@ std::optional<std::string> nearest_name(const std::string& name,
   return std::nullopt;
 }
 
+std::string did_you_mean(const std::string& name, const std::vector<std::string>& known) {
+  const auto nearest = nearest_name(name, known);
+  return nearest ? "; did you mean \"" + *nearest + "\"?" : std::string();
+}
+
 }  // namespace glaswave

@@ -15,4 +15,8 @@ std::size_t edit_distance(const std::string& a, const std::string& b);
 std::optional<std::string> nearest_name(const std::string& name,
                                         const std::vector<std::string>& known);
 
+// The one wording of the suggestion, to append to an error message: `; did you mean "NAME"?`, or
+// nothing when no known name is close enough.
+std::string did_you_mean(const std::string& name, const std::vector<std::string>& known);
+
 }  // namespace glaswave

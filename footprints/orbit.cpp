@@ -49,12 +49,12 @@ Orbit::Orbit(const OrbitElements& elements) : epoch_(elements) {
   const double a = elements.semi_major_axis_m, e = elements.eccentricity;
   const double p = a * (1.0 - e * e);
   const double cos_i = std::cos(elements.inclination_deg * deg);
-  mean_motion_rad_s_ = std::sqrt(gm_m3_s2 / (a * a * a));
-  const double k = mean_motion_rad_s_ * j2 * (radius_m / p) * (radius_m / p);
+  const double mean_motion_rad_s = std::sqrt(gm_m3_s2 / (a * a * a));
+  const double k = mean_motion_rad_s * j2 * (radius_m / p) * (radius_m / p);
   raan_rate_rad_s_ = -1.5 * k * cos_i;
   perigee_rate_rad_s_ = 0.75 * k * (5.0 * cos_i * cos_i - 1.0);
   mean_anomaly_rate_rad_s_ =
-      mean_motion_rad_s_ + 0.75 * k * std::sqrt(1.0 - e * e) * (3.0 * cos_i * cos_i - 1.0);
+      mean_motion_rad_s + 0.75 * k * std::sqrt(1.0 - e * e) * (3.0 * cos_i * cos_i - 1.0);
 }
 
 OrbitElements Orbit::elements_at(double time_s) const {

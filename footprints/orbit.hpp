@@ -31,14 +31,8 @@ class Orbit {
   Vec3 inertial_position_m(double time_s) const;
   Vec3 ecef_position_m(double time_s) const;
 
-  double mean_motion_rad_s() const { return mean_motion_rad_s_; }
-  double raan_rate_rad_s() const { return raan_rate_rad_s_; }
-  double perigee_rate_rad_s() const { return perigee_rate_rad_s_; }
-  double mean_anomaly_rate_rad_s() const { return mean_anomaly_rate_rad_s_; }
-
  private:
   OrbitElements epoch_;
-  double mean_motion_rad_s_ = 0.0;
   double raan_rate_rad_s_ = 0.0;
   double perigee_rate_rad_s_ = 0.0;
   double mean_anomaly_rate_rad_s_ = 0.0;

@@ -10,8 +10,8 @@
 #include <numbers>
 #include <string>
 
-#include "footprints/glas_time.hpp"
 #include "core/error.hpp"
+#include "footprints/glas_time.hpp"
 
 namespace glaswave {
 namespace {
@@ -98,10 +98,11 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
     if (kept_shots_.empty()) {
       char rate[32];
       std::snprintf(rate, sizeof rate, "%g", settings_.rate_hz);
-      throw setting_error(ErrorKind::input, "", "the orbit never meets the terrain: none of its " +
-                                      std::to_string(sequence_length_) + " shots from " +
-                                      format_iso8601_utc(settings_.start_time_s) + " at " + rate +
-                                      " Hz falls on it");
+      throw setting_error(ErrorKind::input, "",
+                          "the orbit never meets the terrain: none of its " +
+                              std::to_string(sequence_length_) + " shots from " +
+                              format_iso8601_utc(settings_.start_time_s) + " at " + rate +
+                              " Hz falls on it");
     }
     return;
   }
@@ -109,9 +110,10 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
   // not a product of flagged shots. The first shot usually meets it, so this costs one shot.
   for (std::int64_t shot = 0; shot < sequence_length_; ++shot)
     if (locate_shot(shot).on_terrain) return;
-  throw setting_error(ErrorKind::input, "", "the track never meets the terrain: none of its " +
-                                  std::to_string(sequence_length_) +
-                                  " shots' beams reaches ground with data");
+  throw setting_error(ErrorKind::input, "",
+                      "the track never meets the terrain: none of its " +
+                          std::to_string(sequence_length_) +
+                          " shots' beams reaches ground with data");
 }
 
 std::int64_t Track::size() const {
@@ -144,12 +146,7 @@ std::vector<Footprint> Track::footprints(std::int64_t first_record,
   return out;
 }
 
-Footprint Track::locate_shot(std::int64_t shot) const {
-  Footprint f;
-  f.shot_number = shot;
-  f.time_s = settings_.start_time_s + static_cast<double>(shot) / settings_.rate_hz;
-  f.off_nadir_deg = settings_.off_nadir_deg;
-  std::optional<Vec3> target;  // points: the ground point aimed at
+bool Track::place_spacecraft(std::int64_t shot, Footprint& f) const {
   switch (settings_.type) {
     case TrackType::pass: {
       double lat_deg = 0.0, lon_deg = 0.0;
@@ -158,8 +155,6 @@ Footprint Track::locate_shot(std::int64_t shot) const {
           static_cast<double>(shot) * pass_spacing_m_, lat_deg, lon_deg);
       f.spacecraft = {lat_deg, lon_deg, settings_.altitude_m};
       f.spacecraft_ecef = ecef_from_geodetic(f.spacecraft);
-      f.beam_ecef =
-          pointing_direction(f.spacecraft, settings_.off_nadir_deg, settings_.pointing_azimuth_deg);
       break;
     }
     case TrackType::points: {
@@ -167,20 +162,17 @@ Footprint Track::locate_shot(std::int64_t shot) const {
       const double height_m = terrain_.height_m(point.lat_deg, point.lon_deg);
       // No ground under the target: the spacecraft is placed as if the ground were the ellipsoid,
       // and the shot is flagged.
-      target = ecef_from_geodetic(
+      const Vec3 target = ecef_from_geodetic(
           {point.lat_deg, point.lon_deg, std::isfinite(height_m) ? height_m : 0.0});
-      f.spacecraft_ecef = aim_at(*target, settings_.altitude_m, settings_.off_nadir_deg,
+      f.spacecraft_ecef = aim_at(target, settings_.altitude_m, settings_.off_nadir_deg,
                                  settings_.pointing_azimuth_deg);
       f.spacecraft = geodetic_from_ecef(f.spacecraft_ecef);
-      f.beam_ecef = normalized(*target - f.spacecraft_ecef);
-      if (!std::isfinite(height_m)) return f;
-      break;
+      f.beam_ecef = normalized(target - f.spacecraft_ecef);
+      return std::isfinite(height_m);
     }
     case TrackType::orbit: {
       f.spacecraft_ecef = orbit_->ecef_position_m(f.time_s);
       f.spacecraft = geodetic_from_ecef(f.spacecraft_ecef);
-      f.beam_ecef =
-          pointing_direction(f.spacecraft, settings_.off_nadir_deg, settings_.pointing_azimuth_deg);
       break;
     }
     case TrackType::ephemeris: {
@@ -191,13 +183,22 @@ Footprint Track::locate_shot(std::int64_t shot) const {
       if (row.pointing_ecef) {
         f.beam_ecef = *row.pointing_ecef;
         f.off_nadir_deg = off_nadir_angle_deg(f.spacecraft_ecef, f.beam_ecef);
-      } else {
-        f.beam_ecef = pointing_direction(f.spacecraft, settings_.off_nadir_deg,
-                                         settings_.pointing_azimuth_deg);
+        return true;
       }
       break;
     }
   }
+  f.beam_ecef =
+      pointing_direction(f.spacecraft, settings_.off_nadir_deg, settings_.pointing_azimuth_deg);
+  return true;
+}
+
+Footprint Track::locate_shot(std::int64_t shot) const {
+  Footprint f;
+  f.shot_number = shot;
+  f.time_s = settings_.start_time_s + static_cast<double>(shot) / settings_.rate_hz;
+  f.off_nadir_deg = settings_.off_nadir_deg;
+  if (!place_spacecraft(shot, f)) return f;
   if (const auto hit = intersect_terrain(terrain_, f.spacecraft_ecef, f.beam_ecef, limits_)) {
     f.on_terrain = true;
     f.ground = geodetic_from_ecef(*hit);

@@ -68,9 +68,11 @@ class Track {
   // The footprint of any shot of the sequence, kept or not, 0 <= shot_number < sequence_length().
   Footprint locate_shot(std::int64_t shot_number) const;
 
-  const TrackSettings& settings() const { return settings_; }
-
  private:
+  // The spacecraft and the beam of a shot; false when the shot is flagged before any search for
+  // the ground (a target point over no data).
+  bool place_spacecraft(std::int64_t shot, Footprint& f) const;
+
   TrackSettings settings_;
   const Terrain& terrain_;
   TerrainLimits limits_;

@@ -1,13 +1,13 @@
 // PROJ behind a small RAII layer: one prototype operation, cloned per borrowing thread.
 #include "terrain/crs_transform.hpp"
 
+#include <proj.h>
+#include <proj_experimental.h>
+
 #include <cmath>
 #include <limits>
 #include <mutex>
 #include <vector>
-
-#include <proj.h>
-#include <proj_experimental.h>
 
 #include "core/error.hpp"
 
@@ -105,92 +105,123 @@ struct CrsTransform::Impl {
   };
 };
 
-CrsTransform::CrsTransform(const std::string& crs_wkt, const std::string& vertical_datum,
-                           const std::string& place)
-    : impl_(std::make_unique<Impl>()) {
-  impl_->context = quiet_context();
-  PJ_CONTEXT* context = impl_->context.get();
-  const PjPtr crs(proj_create(context, crs_wkt.c_str()));
-  if (!crs)
+namespace {
+
+// A raster's CRS taken apart: the horizontal part decides the units of x and y; the vertical
+// part, where heights are from.
+struct CrsParts {
+  PjPtr crs, horizontal, vertical;  // vertical: the CRS's own, else the configuration's, if any
+  bool compound = false;
+  bool three_d = false;
+  bool geographic = false;
+};
+
+CrsParts read_crs(PJ_CONTEXT* context, const std::string& crs_wkt, const std::string& place) {
+  CrsParts parts;
+  parts.crs.reset(proj_create(context, crs_wkt.c_str()));
+  if (!parts.crs)
     throw input_error(place,
                       "PROJ cannot read its coordinate reference system: " + proj_message(context));
-
-  // The horizontal part decides the units of x and y; the vertical part, where heights are from.
-  PjPtr horizontal = unbound(context, crs.get());
-  PjPtr vertical;
-  const bool compound = proj_get_type(crs.get()) == PJ_TYPE_COMPOUND_CRS;
-  if (compound) {
-    const PjPtr first(proj_crs_get_sub_crs(context, crs.get(), 0));
-    vertical.reset(proj_crs_get_sub_crs(context, crs.get(), 1));
-    if (!first || !vertical) throw input_error(place, "PROJ cannot split its compound CRS");
-    horizontal = unbound(context, first.get());
+  const PJ* crs = parts.crs.get();
+  parts.horizontal = unbound(context, crs);
+  parts.compound = proj_get_type(crs) == PJ_TYPE_COMPOUND_CRS;
+  if (parts.compound) {
+    const PjPtr first(proj_crs_get_sub_crs(context, crs, 0));
+    parts.vertical.reset(proj_crs_get_sub_crs(context, crs, 1));
+    if (!first || !parts.vertical) throw input_error(place, "PROJ cannot split its compound CRS");
+    parts.horizontal = unbound(context, first.get());
   }
-  const PJ_TYPE type = proj_get_type(horizontal.get());
-  impl_->geographic = type == PJ_TYPE_GEOGRAPHIC_2D_CRS || type == PJ_TYPE_GEOGRAPHIC_3D_CRS;
-  if (!impl_->geographic && type != PJ_TYPE_PROJECTED_CRS)
-    throw input_error(
-        place, "its CRS (" + name_of(horizontal.get()) + ") is neither geographic nor projected");
-  const PjPtr coordinate_system(proj_crs_get_coordinate_system(context, horizontal.get()));
-  const bool three_d =
+  const PJ_TYPE type = proj_get_type(parts.horizontal.get());
+  parts.geographic = type == PJ_TYPE_GEOGRAPHIC_2D_CRS || type == PJ_TYPE_GEOGRAPHIC_3D_CRS;
+  if (!parts.geographic && type != PJ_TYPE_PROJECTED_CRS)
+    throw input_error(place, "its CRS (" + name_of(parts.horizontal.get()) +
+                                 ") is neither geographic nor projected");
+  const PjPtr coordinate_system(proj_crs_get_coordinate_system(context, parts.horizontal.get()));
+  parts.three_d =
       coordinate_system && proj_cs_get_axis_count(context, coordinate_system.get()) == 3;
+  return parts;
+}
 
-  PjPtr source;
-  if (compound) {
-    source.reset(proj_clone(context, crs.get()));
-    impl_->datum = {identifier(vertical.get()), "DEM heights in " + name_of(vertical.get()) + " (" +
-                                                    identifier(vertical.get()) +
-                                                    "), the DEM's own vertical CRS"};
-  } else if (three_d) {
+// The CRS the raster's (x, y, height) are in, with the datum of its heights: its own vertical
+// CRS, its 3-D CRS, or the configuration's vertical datum (which then becomes `parts.vertical`).
+PjPtr source_crs(PJ_CONTEXT* context, CrsParts& parts, const std::string& vertical_datum,
+                 const std::string& place, VerticalDatum& datum) {
+  const PJ* crs = parts.crs.get();
+  if (parts.compound) {
+    const PJ* vertical = parts.vertical.get();
+    datum = {identifier(vertical), "DEM heights in " + name_of(vertical) + " (" +
+                                       identifier(vertical) + "), the DEM's own vertical CRS"};
+    return PjPtr(proj_clone(context, crs));
+  }
+  if (parts.three_d) {
     // A 3-D CRS holds ellipsoidal heights by definition.
-    source.reset(proj_clone(context, crs.get()));
-    impl_->datum = {"ellipsoid", "DEM heights above the " + ellipsoid_name(context, crs.get()) +
-                                     " ellipsoid, by the DEM's 3-D CRS"};
-  } else if (vertical_datum == "ellipsoid") {
-    source.reset(proj_crs_promote_to_3D(context, nullptr, crs.get()));
+    datum = {"ellipsoid", "DEM heights above the " + ellipsoid_name(context, crs) +
+                              " ellipsoid, by the DEM's 3-D CRS"};
+    return PjPtr(proj_clone(context, crs));
+  }
+  if (vertical_datum == "ellipsoid") {
+    PjPtr source(proj_crs_promote_to_3D(context, nullptr, crs));
     if (!source)
       throw input_error(place, "PROJ cannot give its CRS heights: " + proj_message(context));
-    impl_->datum = {"ellipsoid", "DEM heights above the " + ellipsoid_name(context, crs.get()) +
-                                     " ellipsoid, from terrain.vertical_datum"};
-  } else {
-    const std::string definition = vertical_datum == "egm96" ? "EPSG:5773" : vertical_datum;
-    vertical.reset(proj_create(context, definition.c_str()));
-    if (!vertical || proj_get_type(vertical.get()) != PJ_TYPE_VERTICAL_CRS)
-      throw setting_error(ErrorKind::config, "vertical_datum",
-                         "must be \"ellipsoid\", \"egm96\" or a vertical CRS PROJ knows, got \"" +
-                             vertical_datum + "\"");
-    source.reset(proj_create_compound_crs(
-        context, (name_of(crs.get()) + " + " + name_of(vertical.get())).c_str(), crs.get(),
-        vertical.get()));
-    if (!source)
-      throw input_error(
-          place, "PROJ cannot combine its CRS with " + definition + ": " + proj_message(context));
-    impl_->datum = {vertical_datum, "DEM heights in " + name_of(vertical.get()) + " (" +
-                                        identifier(vertical.get()) +
-                                        "), from terrain.vertical_datum"};
+    datum = {"ellipsoid", "DEM heights above the " + ellipsoid_name(context, crs) +
+                              " ellipsoid, from terrain.vertical_datum"};
+    return source;
   }
+  const std::string definition = vertical_datum == "egm96" ? "EPSG:5773" : vertical_datum;
+  parts.vertical.reset(proj_create(context, definition.c_str()));
+  const PJ* vertical = parts.vertical.get();
+  if (!vertical || proj_get_type(vertical) != PJ_TYPE_VERTICAL_CRS)
+    throw setting_error(ErrorKind::config, "vertical_datum",
+                        "must be \"ellipsoid\", \"egm96\" or a vertical CRS PROJ knows, got \"" +
+                            vertical_datum + "\"");
+  PjPtr source(proj_create_compound_crs(context, (name_of(crs) + " + " + name_of(vertical)).c_str(),
+                                        parts.crs.get(), parts.vertical.get()));
+  if (!source)
+    throw input_error(
+        place, "PROJ cannot combine its CRS with " + definition + ": " + proj_message(context));
+  datum = {vertical_datum, "DEM heights in " + name_of(vertical) + " (" + identifier(vertical) +
+                               "), from terrain.vertical_datum"};
+  return source;
+}
 
+// The operation from the source CRS to WGS84 longitude, latitude and ellipsoidal height, axes in
+// that order.
+PjPtr operation_to_wgs84(PJ_CONTEXT* context, const PJ* source, const CrsParts& parts,
+                         const std::string& place) {
   const PjPtr target(proj_create(context, "EPSG:4979"));  // WGS 84, 3-D
   if (!target)
     throw run_error("PROJ", "cannot find EPSG:4979 in its database: " + proj_message(context));
   // No ballpark: a geoid grid PROJ cannot find must be an error, not heights off by tens of
   // metres. Without a vertical CRS a ballpark datum shift is better than nothing.
   const char* const strict[] = {"ALLOW_BALLPARK=NO", nullptr};
-  PjPtr operation(
-      proj_create_crs_to_crs_from_pj(context, source.get(), target.get(), nullptr, strict));
-  if (!operation && !vertical)
+  PjPtr operation(proj_create_crs_to_crs_from_pj(context, source, target.get(), nullptr, strict));
+  if (!operation && !parts.vertical)
     operation.reset(
-        proj_create_crs_to_crs_from_pj(context, source.get(), target.get(), nullptr, nullptr));
+        proj_create_crs_to_crs_from_pj(context, source, target.get(), nullptr, nullptr));
   if (!operation) {
-    const std::string from = vertical
-                                 ? name_of(vertical.get()) + " (" + identifier(vertical.get()) + ")"
-                                 : "its CRS (" + name_of(crs.get()) + ")";
+    const PJ* vertical = parts.vertical.get();
+    const std::string from = vertical ? name_of(vertical) + " (" + identifier(vertical) + ")"
+                                      : "its CRS (" + name_of(parts.crs.get()) + ")";
     throw input_error(
         place, "PROJ has no transformation from " + from +
                    " to WGS84 ellipsoidal heights; is the grid it needs installed (proj-data)?");
   }
-  impl_->prototype.reset(proj_normalize_for_visualization(context, operation.get()));
-  if (!impl_->prototype)
-    throw input_error(place, "PROJ cannot order its axes: " + proj_message(context));
+  PjPtr normalised(proj_normalize_for_visualization(context, operation.get()));
+  if (!normalised) throw input_error(place, "PROJ cannot order its axes: " + proj_message(context));
+  return normalised;
+}
+
+}  // namespace
+
+CrsTransform::CrsTransform(const std::string& crs_wkt, const std::string& vertical_datum,
+                           const std::string& place)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->context = quiet_context();
+  PJ_CONTEXT* context = impl_->context.get();
+  CrsParts parts = read_crs(context, crs_wkt, place);
+  impl_->geographic = parts.geographic;
+  const PjPtr source = source_crs(context, parts, vertical_datum, place, impl_->datum);
+  impl_->prototype = operation_to_wgs84(context, source.get(), parts, place);
 }
 
 CrsTransform::~CrsTransform() = default;

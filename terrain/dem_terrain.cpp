@@ -2,6 +2,11 @@
 // and meshes on the DEM's own nodes.
 #include "terrain/dem_terrain.hpp"
 
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -15,13 +20,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include <cpl_conv.h>
-#include <cpl_error.h>
-#include <gdal_priv.h>
-#include <ogr_spatialref.h>
-
-#include "terrain/crs_transform.hpp"
 #include "core/error.hpp"
+#include "terrain/crs_transform.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
@@ -126,6 +126,11 @@ struct DemTerrain::Impl {
   std::size_t tiles_read = 0;
 
   void open(const TerrainSettings& settings);
+  void open_dataset();
+  void choose_band(int dem_band);
+  void read_georeferencing(const std::string& vertical_datum);
+  void read_encoding();
+  void measure_spacing();
   TilePtr load(int tx, int ty);
   TilePtr tile(int tx, int ty);
   Node node(int i, int j) {
@@ -178,6 +183,23 @@ struct DemTerrain::Impl {
 void DemTerrain::Impl::open(const TerrainSettings& settings) {
   prepare_gdal();
   const GdalErrorTrap quiet;  // GDAL's warnings about the file stay off the terminal too
+  open_dataset();
+  choose_band(settings.dem_band);
+  read_georeferencing(settings.vertical_datum);
+  read_encoding();
+  tiles_x = (width + options.tile_pixels - 1) / options.tile_pixels;
+  tiles_y = (height + options.tile_pixels - 1) / options.tile_pixels;
+
+  // A truncated or corrupt file often opens: read the tiles at its start, middle and end now,
+  // so that it fails here and not halfway through a run.
+  for (const auto& [tx, ty] :
+       {std::array<int, 2>{0, 0}, {tiles_x / 2, tiles_y / 2}, {tiles_x - 1, tiles_y - 1}})
+    tile(tx, ty);
+
+  measure_spacing();
+}
+
+void DemTerrain::Impl::open_dataset() {
   namespace fs = std::filesystem;
   // GDAL's virtual file systems (/vsizip/, /vsicurl/) are left to GDAL to find.
   if (path.rfind("/vsi", 0) != 0) {
@@ -193,14 +215,18 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
       throw input_error(
           path, "cannot read the DEM: " + trap.cause("GDAL does not recognise it as a raster"));
   }
+}
+
+// The band with the heights: the one there is, or terrain.dem_band's.
+void DemTerrain::Impl::choose_band(int dem_band) {
   const int bands = dataset->GetRasterCount();
   if (bands < 1) throw input_error(path, "the DEM has no raster band");
-  if (settings.dem_band == 0 && bands > 1) {
+  if (dem_band == 0 && bands > 1) {
     throw input_error(path, "the DEM has " + std::to_string(bands) +
                                 " bands: choose the one with heights with terrain.dem_band (1 to " +
                                 std::to_string(bands) + ")");
   }
-  const int band_number = settings.dem_band == 0 ? 1 : settings.dem_band;
+  const int band_number = dem_band == 0 ? 1 : dem_band;
   if (band_number > bands) {
     throw input_error(path, "the DEM has " + std::to_string(bands) + " band" +
                                 (bands > 1 ? "s" : "") + ", terrain.dem_band asks for band " +
@@ -211,7 +237,10 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
   height = dataset->GetRasterYSize();
   if (width < 2 || height < 2)
     throw input_error(path, "the DEM is too small: at least 2 x 2 cells are needed");
+}
 
+// Where the raster lies: its CRS and geotransform, and the transform of its nodes to WGS84.
+void DemTerrain::Impl::read_georeferencing(const std::string& vertical_datum) {
   const OGRSpatialReference* srs = dataset->GetSpatialRef();
   if (!srs || srs->IsEmpty()) {
     throw input_error(path,
@@ -239,8 +268,11 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
   }
   const std::string crs_wkt = wkt;
   CPLFree(wkt);
-  crs = std::make_unique<CrsTransform>(crs_wkt, settings.vertical_datum, path);
+  crs = std::make_unique<CrsTransform>(crs_wkt, vertical_datum, path);
+}
 
+// How heights are stored: nodata value or mask, scale and offset, and their unit.
+void DemTerrain::Impl::read_encoding() {
   int has_nodata = 0;
   const double nodata_value = band->GetNoDataValue(&has_nodata);
   if (has_nodata) nodata = nodata_value;
@@ -252,21 +284,14 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
   if (!has_scale) scale = 1.0;
   if (!has_offset) offset = 0.0;
   // A vertical CRS carries the unit of its heights; without one, the band's unit says.
-  if (!srs->IsCompound()) {
+  if (!dataset->GetSpatialRef()->IsCompound()) {
     const double metres = metres_per_unit(band->GetUnitType());
     scale *= metres;
     offset *= metres;
   }
+}
 
-  tiles_x = (width + options.tile_pixels - 1) / options.tile_pixels;
-  tiles_y = (height + options.tile_pixels - 1) / options.tile_pixels;
-
-  // A truncated or corrupt file often opens: read the tiles at its start, middle and end now,
-  // so that it fails here and not halfway through a run.
-  for (const auto& [tx, ty] :
-       {std::array<int, 2>{0, 0}, {tiles_x / 2, tiles_y / 2}, {tiles_x - 1, tiles_y - 1}})
-    tile(tx, ty);
-
+void DemTerrain::Impl::measure_spacing() {
   // The node spacing in metres about the raster's centre.
   const int ci = width / 2 - 1, cj = height / 2 - 1;
   const Node centre = node(ci, cj), east = node(ci + 1, cj), south = node(ci, cj + 1);
@@ -435,15 +460,8 @@ double DemTerrain::height_m(double lat_deg, double lon_deg) const {
   if (!dem.inside(uv)) return nan;
   const int i = std::min(static_cast<int>(std::floor(uv[0])), dem.width - 2);
   const int j = std::min(static_cast<int>(std::floor(uv[1])), dem.height - 2);
-  const double fu = uv[0] - i, fv = uv[1] - j;
-  // The triangle of the cell holding the point, as mesh() has it: (a, b, d) or (a, d, c).
-  const double a = dem.node(i, j).h_m, d = dem.node(i + 1, j + 1).h_m;
-  if (fu >= fv) {
-    const double b = dem.node(i + 1, j).h_m;
-    return a + fu * (b - a) + fv * (d - b);
-  }
-  const double c = dem.node(i, j + 1).h_m;
-  return a + fv * (c - a) + fu * (d - c);
+  return cell_height(uv[0] - i, uv[1] - j,
+                     [&](int di, int dj) { return dem.node(i + di, j + dj).h_m; });
 }
 
 double DemTerrain::detail_m() const { return impl_->detail_m; }
@@ -462,29 +480,24 @@ GroundMesh DemTerrain::mesh(const LocalFrame& frame, double half_size_m, double)
   const Impl::NodeBlock nodes(dem, w.i0, w.i0 + (ni - 1) * stride, w.j0, w.j0 + (nj - 1) * stride);
 
   mesh.vertices_m.reserve(3 * static_cast<std::size_t>(ni) * nj);
-  std::vector<bool> valid(static_cast<std::size_t>(ni) * nj);
+  std::vector<std::uint32_t> node_vertex(static_cast<std::size_t>(ni) * nj, no_vertex);
   mesh.min_height_m = std::numeric_limits<double>::infinity();
   mesh.max_height_m = -std::numeric_limits<double>::infinity();
   for (int jj = 0; jj < nj; ++jj) {
     for (int ii = 0; ii < ni; ++ii) {
       const Node n = nodes(w.i0 + ii * stride, w.j0 + jj * stride);
       const std::size_t k = static_cast<std::size_t>(jj) * ni + ii;
-      valid[k] = n.valid();
-      const Vec3 p = valid[k] ? frame.to_local({n.lat_deg, n.lon_deg, n.h_m}) : Vec3{0.0, 0.0, 0.0};
+      const Vec3 p =
+          n.valid() ? frame.to_local({n.lat_deg, n.lon_deg, n.h_m}) : Vec3{0.0, 0.0, 0.0};
       for (double coordinate : p) mesh.vertices_m.push_back(static_cast<float>(coordinate));
-      if (valid[k]) {
+      if (n.valid()) {
+        node_vertex[k] = static_cast<std::uint32_t>(k);
         mesh.min_height_m = std::min(mesh.min_height_m, p[2]);
         mesh.max_height_m = std::max(mesh.max_height_m, p[2]);
       }
     }
   }
-  for (int jj = 0; jj + 1 < nj; ++jj) {
-    for (int ii = 0; ii + 1 < ni; ++ii) {
-      const std::uint32_t a = jj * ni + ii, b = a + 1, c = a + ni, d = c + 1;
-      if (valid[a] && valid[b] && valid[d]) mesh.triangles.insert(mesh.triangles.end(), {a, b, d});
-      if (valid[a] && valid[d] && valid[c]) mesh.triangles.insert(mesh.triangles.end(), {a, d, c});
-    }
-  }
+  triangulate_grid(ni, nj, node_vertex, mesh.triangles);
   if (mesh.triangles.empty()) mesh.min_height_m = mesh.max_height_m = 0.0;
   return mesh;
 }

@@ -11,6 +11,21 @@
 
 namespace glaswave {
 
+void triangulate_grid(int ni, int nj, const std::vector<std::uint32_t>& node_vertex,
+                      std::vector<std::uint32_t>& triangles) {
+  for (int j = 0; j + 1 < nj; ++j) {
+    for (int i = 0; i + 1 < ni; ++i) {
+      const std::size_t n = static_cast<std::size_t>(j) * ni + i;
+      const std::uint32_t a = node_vertex[n], b = node_vertex[n + 1], c = node_vertex[n + ni],
+                          d = node_vertex[n + ni + 1];
+      if (a != no_vertex && b != no_vertex && d != no_vertex)
+        triangles.insert(triangles.end(), {a, b, d});
+      if (a != no_vertex && d != no_vertex && c != no_vertex)
+        triangles.insert(triangles.end(), {a, d, c});
+    }
+  }
+}
+
 GroundMesh build_ground_mesh(const Terrain& terrain, const LocalFrame& frame, double half_size_m,
                              double spacing_m, const RoughnessField* roughness,
                              double rough_half_size_m) {
@@ -29,7 +44,7 @@ GroundMesh sample_ground_mesh(const Terrain& terrain, const LocalFrame& frame, d
 
   GroundMesh mesh;
   mesh.vertices_m.reserve(3 * nodes * nodes);
-  std::vector<bool> valid(nodes * nodes);
+  std::vector<std::uint32_t> node_vertex(nodes * nodes, no_vertex);
   mesh.min_height_m = std::numeric_limits<double>::infinity();
   mesh.max_height_m = -std::numeric_limits<double>::infinity();
   for (int j = 0; j < nodes; ++j) {
@@ -39,68 +54,51 @@ GroundMesh sample_ground_mesh(const Terrain& terrain, const LocalFrame& frame, d
       const Geodetic below =
           frame.to_geodetic({-half_size_m + i * step_m, -half_size_m + j * step_m, 0.0});
       const double height_m = terrain.height_m(below.lat_deg, below.lon_deg);
-      valid[j * nodes + i] = std::isfinite(height_m);
-      const Vec3 node =
-          frame.to_local({below.lat_deg, below.lon_deg, valid[j * nodes + i] ? height_m : 0.0});
+      const bool valid = std::isfinite(height_m);
+      const Vec3 node = frame.to_local({below.lat_deg, below.lon_deg, valid ? height_m : 0.0});
       for (double coordinate : node) mesh.vertices_m.push_back(static_cast<float>(coordinate));
-      if (valid[j * nodes + i]) {
+      if (valid) {
+        node_vertex[j * nodes + i] = j * nodes + i;
         mesh.min_height_m = std::min(mesh.min_height_m, node[2]);
         mesh.max_height_m = std::max(mesh.max_height_m, node[2]);
       }
     }
   }
-  // Each triangle stands on its own three nodes, as a DEM's do: a hole removes only the
-  // triangles that touch it.
-  for (int j = 0; j < cells; ++j) {
-    for (int i = 0; i < cells; ++i) {
-      const std::uint32_t a = j * nodes + i, b = a + 1, c = a + nodes, d = c + 1;
-      if (valid[a] && valid[b] && valid[d]) mesh.triangles.insert(mesh.triangles.end(), {a, b, d});
-      if (valid[a] && valid[d] && valid[c]) mesh.triangles.insert(mesh.triangles.end(), {a, d, c});
-    }
-  }
+  triangulate_grid(nodes, nodes, node_vertex, mesh.triangles);
   if (mesh.triangles.empty()) mesh.min_height_m = mesh.max_height_m = 0.0;
   return mesh;
 }
 
-SurfaceOrientation fit_surface_orientation(const Terrain& terrain, const LocalFrame& frame,
-                                           double sigma_m, const Vec3& beam_axis) {
-  const Vec3 axis = normalized(beam_axis);
-  // The beam's trace on the ground lengthens as 1 / cos(off-nadir); 3.5 sigma leaves out 0.2 %
-  // of its weight.
-  const double reach_m = 3.5 * sigma_m / std::max(0.2, std::abs(axis[2]));
-  const GroundMesh mesh = terrain.mesh(frame, reach_m, std::min(terrain.detail_m(), sigma_m / 4.0));
+namespace {
 
-  // Weighted least squares for z = c0 + c1 x + c2 y over the surface: each triangle is cut into
-  // m^2 equal parts no wider than sigma / 4, each weighted at its centroid by its horizontal
-  // area and the beam's irradiance there.
+// The normal equations of a weighted least-squares fit of z = c0 + c1 x + c2 y over a surface,
+// each part of it weighted by its horizontal area and a beam's Gaussian irradiance there.
+struct BeamWeightedPlaneFit {
+  Eigen::Vector3d axis;  // the beam's, unit, through the origin
+  double sigma_m;
   Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  const double part_m = sigma_m / 4.0;
-  auto vertex = [&](std::uint32_t index) {
-    return Eigen::Vector3d(mesh.vertices_m[3 * index], mesh.vertices_m[3 * index + 1],
-                           mesh.vertices_m[3 * index + 2]);
-  };
-  const Eigen::Vector3d a_axis(axis[0], axis[1], axis[2]);
-  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3) {
-    const Eigen::Vector3d p0 = vertex(mesh.triangles[t]), p1 = vertex(mesh.triangles[t + 1]),
-                          p2 = vertex(mesh.triangles[t + 2]);
+
+  // A triangle, cut into m^2 equal parts no wider than sigma / 4, each weighted at its centroid.
+  void add_triangle(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                    const Eigen::Vector3d& p2) {
     const Eigen::Vector3d e1 = p1 - p0, e2 = p2 - p0;
     const double area_m2 = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
-    if (area_m2 == 0.0) continue;
+    if (area_m2 == 0.0) return;
     // Far triangles weigh nothing: skip them before cutting them up.
     const Eigen::Vector3d centroid = (p0 + p1 + p2) / 3.0;
     const double radius_m =
         std::max({(p0 - centroid).norm(), (p1 - centroid).norm(), (p2 - centroid).norm()});
     const double centroid_off_m =
-        std::sqrt(std::max(0.0, centroid.squaredNorm() - std::pow(centroid.dot(a_axis), 2)));
-    if (centroid_off_m - radius_m > 6.0 * sigma_m) continue;
+        std::sqrt(std::max(0.0, centroid.squaredNorm() - std::pow(centroid.dot(axis), 2)));
+    if (centroid_off_m - radius_m > 6.0 * sigma_m) return;
     const double longest_m =
         std::max({e1.head<2>().norm(), e2.head<2>().norm(), (p2 - p1).head<2>().norm()});
-    const int m = std::clamp(static_cast<int>(std::ceil(longest_m / part_m)), 1, 64);
+    const int m = std::clamp(static_cast<int>(std::ceil(longest_m / (sigma_m / 4.0))), 1, 64);
     const double part_area_m2 = area_m2 / (m * m);
     auto add = [&](double u, double v) {
       const Eigen::Vector3d p = p0 + (u / m) * e1 + (v / m) * e2;
-      const double along_m = p.dot(a_axis);
+      const double along_m = p.dot(axis);
       const double off_sq_m2 = std::max(0.0, p.squaredNorm() - along_m * along_m);
       const double weight = part_area_m2 * std::exp(-off_sq_m2 / (2.0 * sigma_m * sigma_m));
       const Eigen::Vector3d row(1.0, p.x(), p.y());
@@ -114,12 +112,32 @@ SurfaceOrientation fit_surface_orientation(const Terrain& terrain, const LocalFr
       }
     }
   }
+};
+
+}  // namespace
+
+SurfaceOrientation fit_surface_orientation(const Terrain& terrain, const LocalFrame& frame,
+                                           double sigma_m, const Vec3& beam_axis) {
+  const Vec3 axis = normalized(beam_axis);
+  // The beam's trace on the ground lengthens as 1 / cos(off-nadir); 3.5 sigma leaves out 0.2 %
+  // of its weight.
+  const double reach_m = 3.5 * sigma_m / std::max(0.2, std::abs(axis[2]));
+  const GroundMesh mesh = terrain.mesh(frame, reach_m, std::min(terrain.detail_m(), sigma_m / 4.0));
+  BeamWeightedPlaneFit fit{Eigen::Vector3d(axis[0], axis[1], axis[2]), sigma_m};
+  auto vertex = [&](std::uint32_t index) {
+    return Eigen::Vector3d(mesh.vertices_m[3 * index], mesh.vertices_m[3 * index + 1],
+                           mesh.vertices_m[3 * index + 2]);
+  };
+  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
+    fit.add_triangle(vertex(mesh.triangles[t]), vertex(mesh.triangles[t + 1]),
+                     vertex(mesh.triangles[t + 2]));
+
   SurfaceOrientation orientation;
-  if (normal_matrix(0, 0) <= 0.0) {  // no ground under the beam
+  if (fit.normal_matrix(0, 0) <= 0.0) {  // no ground under the beam
     orientation.slope_deg = orientation.aspect_deg = std::numeric_limits<double>::quiet_NaN();
     return orientation;
   }
-  const Eigen::Vector3d c = normal_matrix.ldlt().solve(rhs);
+  const Eigen::Vector3d c = fit.normal_matrix.ldlt().solve(fit.rhs);
   const double rad = 180.0 / std::numbers::pi;
   orientation.slope_deg = std::atan(std::hypot(c[1], c[2])) * rad;
   // The surface faces down the gradient.

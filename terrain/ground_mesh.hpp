@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "terrain/local_frame.hpp"
@@ -18,6 +19,33 @@ struct GroundMesh {
   double min_height_m = 0.0;             // of the vertices triangles use, in the local frame
   double max_height_m = 0.0;
 };
+
+// The one triangulation of a grid of heights (sampled terrains, DEMs, the roughness lattice):
+// each cell (i, j) is cut by the diagonal from node (i, j) to (i + 1, j + 1) into the triangles
+// (a, b, d) and (a, d, c), a = (i, j), b = (i + 1, j), c = (i, j + 1), d = (i + 1, j + 1).
+
+// A grid node without a vertex (no data there).
+inline constexpr std::uint32_t no_vertex = std::numeric_limits<std::uint32_t>::max();
+
+// Appends the triangles of a grid of ni x nj nodes, node (i, j) being vertex
+// `node_vertex[j * ni + i]`. Each triangle stands on its own three nodes: a node without a
+// vertex removes only the triangles that touch it.
+void triangulate_grid(int ni, int nj, const std::vector<std::uint32_t>& node_vertex,
+                      std::vector<std::uint32_t>& triangles);
+
+// The height at (fu, fv) in [0, 1]^2 of a cell on the triangle of the triangulation holding it,
+// `height(di, dj)` giving the height of node (i + di, j + dj); only the three nodes of that
+// triangle are asked for.
+template <typename NodeHeight>
+double cell_height(double fu, double fv, NodeHeight height) {
+  const double a = height(0, 0), d = height(1, 1);
+  if (fu >= fv) {
+    const double b = height(1, 0);
+    return a + fu * (b - a) + fv * (d - b);
+  }
+  const double c = height(0, 1);
+  return a + fv * (c - a) + fu * (d - c);
+}
 
 // The ground a shot's rays meet: the terrain's own mesh over (at least) the square of half-width
 // `half_size_m` about the frame's origin (Terrain::mesh; `spacing_m` is the grid of terrains that

@@ -43,5 +43,4 @@ Geodetic geodetic_from_ecef(const Vec3& ecef);
 // East, north and up unit vectors (ECEF) at a geodetic position.
 std::array<Vec3, 3> enu_axes(double lat_deg, double lon_deg);
 
-
 }  // namespace glaswave

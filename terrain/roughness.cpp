@@ -7,24 +7,13 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <optional>
 
-#include "core/bit_mix.hpp"
+#include "core/random.hpp"
+#include "core/samplers.hpp"
 
 namespace glaswave {
 namespace {
-
-constexpr auto mix = mix_bits;
-
-// Standard normal white noise at a lattice node, a pure function of its arguments.
-double white_noise(std::uint64_t zone_key, std::int64_t i, std::int64_t j) {
-  const std::uint64_t h = mix(zone_key ^ mix(static_cast<std::uint64_t>(i) * 0xd1b54a32d192ed03ULL ^
-                                             mix(static_cast<std::uint64_t>(j))));
-  const double u1 = (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;  // (0, 1)
-  const double u2 = static_cast<double>(mix(h) >> 11) * 0x1.0p-53;
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);  // Box-Muller
-}
 
 // A position on the lattice's map: easting and northing (m) in a fixed zone, northings running
 // on through the equator so that a zone's lattice has no seam there.
@@ -35,11 +24,49 @@ struct GridPoint {
 struct Zone {
   int number = 0;  // UTM 1..60, or 0 for UPS
   bool north = true;
-  std::uint64_t key(std::uint64_t seed) const {
-    return mix(seed ^ mix(static_cast<std::uint64_t>(
-                          number == GeographicLib::UTMUPS::UPS ? (north ? 61 : 62) : number)));
+  // The lattices of the zones: UTM's by number (northings run on through the equator), UPS's
+  // two apart.
+  std::uint64_t index() const {
+    return static_cast<std::uint64_t>(number == GeographicLib::UTMUPS::UPS ? (north ? 61 : 62)
+                                                                           : number);
   }
 };
+
+// Standard normal white noise at a lattice node, a pure function of its arguments.
+double white_noise(std::uint64_t seed, const Zone& zone, std::int64_t i, std::int64_t j) {
+  RandomStream random(seed, pair_key(i, j), zone.index(), RandomPurpose::roughness);
+  return standard_normal(random);
+}
+
+// The Gaussian-smoothed noise of the ni x nj lattice nodes from (i0, j0) (node (i0 + a, j0 + b)
+// at b * ni + a): white noise with a margin of half the kernel, convolved along each axis in turn.
+std::vector<double> smoothed_noise(std::uint64_t seed, const Zone& zone,
+                                   const std::vector<double>& kernel, std::int64_t i0,
+                                   std::int64_t j0, int ni, int nj) {
+  const int half_taps = static_cast<int>(kernel.size() / 2);
+  const int wi = ni + 2 * half_taps, wj = nj + 2 * half_taps;
+  std::vector<double> noise(static_cast<std::size_t>(wi) * wj);
+  for (int j = 0; j < wj; ++j)
+    for (int i = 0; i < wi; ++i)
+      noise[static_cast<std::size_t>(j) * wi + i] =
+          white_noise(seed, zone, i0 - half_taps + i, j0 - half_taps + j);
+  std::vector<double> along_i(static_cast<std::size_t>(ni) * wj, 0.0);
+  for (int j = 0; j < wj; ++j)
+    for (int i = 0; i < ni; ++i) {
+      double sum = 0.0;
+      for (std::size_t k = 0; k < kernel.size(); ++k)
+        sum += kernel[k] * noise[static_cast<std::size_t>(j) * wi + i + k];
+      along_i[static_cast<std::size_t>(j) * ni + i] = sum;
+    }
+  std::vector<double> smoothed(static_cast<std::size_t>(ni) * nj, 0.0);
+  for (int j = 0; j < nj; ++j)
+    for (int i = 0; i < ni; ++i) {
+      double sum = 0.0;
+      for (std::size_t k = 0; k < kernel.size(); ++k) sum += kernel[k] * along_i[(j + k) * ni + i];
+      smoothed[static_cast<std::size_t>(j) * ni + i] = sum;
+    }
+  return smoothed;
+}
 
 Zone zone_of(double lat_deg, double lon_deg) {
   return {GeographicLib::UTMUPS::StandardZone(lat_deg, lon_deg), lat_deg >= 0.0};
@@ -194,6 +221,170 @@ std::vector<ClipVertex> clip(const std::vector<ClipVertex>& polygon, Side side) 
   return out;
 }
 
+// The region of a roughened mesh on the lattice: the nodes [i0, i1] x [j0, j1] of the zone's
+// lattice (spacing h), and the maps between the lattice's grid (relative to the frame's origin,
+// `centre`) and the frame.
+struct LatticeRegion {
+  Zone zone;
+  GridPoint centre;
+  QuadraticMap to_local, to_grid;
+  double h;
+  std::int64_t i0 = 0, i1 = 0, j0 = 0, j1 = 0;
+
+  int ni() const { return static_cast<int>(i1 - i0 + 1); }
+  int nj() const { return static_cast<int>(j1 - j0 + 1); }
+  // The frame's (x, y) of a point at fractional lattice node (i, j).
+  std::array<double, 2> local(double i, double j) const {
+    return to_local(i * h - centre.x_m, j * h - centre.y_m);
+  }
+};
+
+// Maps between the lattice's grid and the frame, fitted on 5 x 5 points of the region at the
+// ground's mean height: the frame's axes are not the local verticals, so a point's height moves
+// its latitude and longitude, but by well under a millimetre within tens of metres of it.
+LatticeRegion fit_region_maps(const GroundMesh& base, const LocalFrame& frame, double half_size_m,
+                              double h) {
+  const Geodetic& origin = frame.origin();
+  const Zone zone = zone_of(origin.lat_deg, origin.lon_deg);
+  const double z_ref_m = 0.5 * (base.min_height_m + base.max_height_m);
+  const GridPoint centre = grid_point(zone, origin.lat_deg, origin.lon_deg);
+  std::vector<std::array<double, 2>> local_points, grid_points;
+  for (int b = -2; b <= 2; ++b) {
+    for (int a = -2; a <= 2; ++a) {
+      const double x = 0.5 * a * half_size_m, y = 0.5 * b * half_size_m;
+      const Geodetic g = frame.to_geodetic({x, y, z_ref_m});
+      const GridPoint p = grid_point(zone, g.lat_deg, g.lon_deg);
+      local_points.push_back({x, y});
+      grid_points.push_back({p.x_m - centre.x_m, p.y_m - centre.y_m});
+    }
+  }
+  return {zone, centre, QuadraticMap(grid_points, local_points, half_size_m),
+          QuadraticMap(local_points, grid_points, half_size_m), h};
+}
+
+// The lattice nodes covering the square of half-width `half_size_m`, shrunk about the origin
+// while they are more than `max_nodes`.
+void cover_square(LatticeRegion& region, double half_size_m, std::int64_t max_nodes) {
+  const double h = region.h;
+  for (double shrink = 1.0;; shrink *= 0.95) {
+    const double r_m = half_size_m * shrink;
+    double gx0 = std::numeric_limits<double>::infinity(), gy0 = gx0, gx1 = -gx0, gy1 = -gx0;
+    for (const auto& [x, y] :
+         {std::array<double, 2>{-r_m, -r_m}, {r_m, -r_m}, {r_m, r_m}, {-r_m, r_m}}) {
+      const auto g = region.to_grid(x, y);
+      gx0 = std::min(gx0, g[0] + region.centre.x_m);
+      gx1 = std::max(gx1, g[0] + region.centre.x_m);
+      gy0 = std::min(gy0, g[1] + region.centre.y_m);
+      gy1 = std::max(gy1, g[1] + region.centre.y_m);
+    }
+    region.i0 = static_cast<std::int64_t>(std::floor(gx0 / h));
+    region.i1 = static_cast<std::int64_t>(std::ceil(gx1 / h));
+    region.j0 = static_cast<std::int64_t>(std::floor(gy0 / h));
+    region.j1 = static_cast<std::int64_t>(std::ceil(gy1 / h));
+    if (static_cast<std::int64_t>(region.ni()) * region.nj() <= max_nodes) return;
+  }
+}
+
+std::uint32_t add_vertex(GroundMesh& mesh, double x, double y, double z) {
+  mesh.vertices_m.insert(mesh.vertices_m.end(),
+                         {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
+  return static_cast<std::uint32_t>(mesh.vertices_m.size() / 3 - 1);
+}
+
+// A convex polygon as a fan of triangles of new vertices; slivers along an edge are left out.
+void add_convex_polygon(const std::vector<ClipVertex>& polygon, GroundMesh& mesh) {
+  if (polygon.size() < 3) return;
+  double twice_area = 0.0;
+  for (std::size_t k = 0; k < polygon.size(); ++k) {
+    const ClipVertex& p = polygon[k];
+    const ClipVertex& q = polygon[(k + 1) % polygon.size()];
+    twice_area += p.x * q.y - q.x * p.y;
+  }
+  if (std::abs(twice_area) < 1e-8) return;
+  const std::uint32_t first = add_vertex(mesh, polygon[0].x, polygon[0].y, polygon[0].z);
+  std::uint32_t previous = add_vertex(mesh, polygon[1].x, polygon[1].y, polygon[1].z);
+  for (std::size_t k = 2; k < polygon.size(); ++k) {
+    const std::uint32_t next = add_vertex(mesh, polygon[k].x, polygon[k].y, polygon[k].z);
+    mesh.triangles.insert(mesh.triangles.end(), {first, previous, next});
+    previous = next;
+  }
+}
+
+// The mesh's nodes on the base surface, raised by the relief: the lattice's nodes, or r times
+// finer where the base has finer detail (a DEM of fine cells) so that its own relief stays.
+// The field varies over a correlation length, three lattice steps: between nodes it is
+// interpolated bilinearly. At most 1024 nodes a side: finer detail is then smoothed.
+void mesh_region(const GroundMesh& base, const LatticeRegion& region,
+                 const std::vector<double>& relief_m, double base_spacing_m, GroundMesh& mesh) {
+  const int ni = region.ni(), nj = region.nj();
+  int r = 1;
+  if (base_spacing_m < region.h) r = static_cast<int>(std::ceil(region.h / base_spacing_m - 1e-9));
+  r = std::clamp(r, 1, std::max(1, 1023 / std::max(1, std::max(ni, nj) - 1)));
+  const int fi = (ni - 1) * r + 1, fj = (nj - 1) * r + 1;
+  auto relief_at = [&](int a, int b) {  // fine node (a, b): lattice (a / r, b / r)
+    const int i = std::min(a / r, std::max(ni - 2, 0)), j = std::min(b / r, std::max(nj - 2, 0));
+    const double u = static_cast<double>(a - i * r) / r, v = static_cast<double>(b - j * r) / r;
+    auto at = [&](int ii, int jj) {
+      return relief_m[static_cast<std::size_t>(std::min(jj, nj - 1)) * ni + std::min(ii, ni - 1)];
+    };
+    return (1 - u) * (1 - v) * at(i, j) + u * (1 - v) * at(i + 1, j) + (1 - u) * v * at(i, j + 1) +
+           u * v * at(i + 1, j + 1);
+  };
+  const HeightIndex ground(base);
+  std::vector<std::uint32_t> node_vertex(static_cast<std::size_t>(fi) * fj, no_vertex);
+  for (int b = 0; b < fj; ++b)
+    for (int a = 0; a < fi; ++a) {
+      const auto [x, y] = region.local(region.i0 + static_cast<double>(a) / r,
+                                       region.j0 + static_cast<double>(b) / r);
+      if (const auto z = ground.height_m(x, y))
+        node_vertex[static_cast<std::size_t>(b) * fi + a] =
+            add_vertex(mesh, x, y, *z + relief_at(a, b));
+    }
+  triangulate_grid(fi, fj, node_vertex, mesh.triangles);
+}
+
+// The base outside the lattice's region: its outline in the frame is a convex quadrilateral
+// (counter-clockwise, as east and north are in both). A triangle that crosses it is cut along
+// it; the outside is split into four convex parts (outside edge k, inside the edges before).
+void add_base_outside(const GroundMesh& base, const LatticeRegion& region, GroundMesh& mesh) {
+  const std::array<std::array<double, 2>, 4> quad = {
+      region.local(region.i0, region.j0), region.local(region.i1, region.j0),
+      region.local(region.i1, region.j1), region.local(region.i0, region.j1)};
+  auto side = [&](int edge, const ClipVertex& v) {
+    const auto& p = quad[edge];
+    const auto& q = quad[(edge + 1) % 4];
+    return (q[0] - p[0]) * (v.y - p[1]) - (q[1] - p[1]) * (v.x - p[0]);  // > 0 inside
+  };
+  for (std::size_t t = 0; t < base.triangles.size(); t += 3) {
+    std::vector<ClipVertex> triangle;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = base.triangles[t + k];
+      triangle.push_back(
+          {base.vertices_m[3 * v], base.vertices_m[3 * v + 1], base.vertices_m[3 * v + 2]});
+    }
+    bool disjoint = false, inside = true;
+    for (int edge = 0; edge < 4; ++edge) {
+      int outside = 0;
+      for (const ClipVertex& p : triangle) outside += side(edge, p) < 0.0 ? 1 : 0;
+      disjoint = disjoint || outside == 3;
+      inside = inside && outside == 0;
+    }
+    if (disjoint) {
+      mesh.triangles.insert(mesh.triangles.end(), base.triangles.begin() + t,
+                            base.triangles.begin() + t + 3);
+      continue;
+    }
+    if (inside) continue;
+    for (int edge = 0; edge < 4; ++edge) {
+      std::vector<ClipVertex> part =
+          clip(triangle, [&](const ClipVertex& p) { return -side(edge, p); });
+      for (int before = 0; before < edge && part.size() >= 3; ++before)
+        part = clip(part, [&](const ClipVertex& p) { return side(before, p); });
+      add_convex_polygon(part, mesh);
+    }
+  }
+}
+
 }  // namespace
 
 RoughnessField::RoughnessField(const RoughnessSettings& settings, std::uint64_t seed)
@@ -230,211 +421,34 @@ double RoughnessField::height_m(double lat_deg, double lon_deg) const {
   const double u = p.x_m / spacing_m_, v = p.y_m / spacing_m_;
   const auto i = static_cast<std::int64_t>(std::floor(u)),
              j = static_cast<std::int64_t>(std::floor(v));
-  const double fu = u - i, fv = v - j;
-  // The four nodes of the cell from one window of noise, smoothed along each axis in turn.
-  const std::uint64_t key = zone.key(seed_);
-  const int half_taps = static_cast<int>(kernel_.size() / 2), side = 2 * half_taps + 2;
-  std::vector<double> rows(2 * static_cast<std::size_t>(side), 0.0);  // [node column][noise row]
-  for (int l = 0; l < side; ++l)
-    for (int k = 0; k < side; ++k) {
-      const double w = white_noise(key, i - half_taps + k, j - half_taps + l);
-      if (k < side - 1) rows[l] += kernel_[k] * w;
-      if (k > 0) rows[side + l] += kernel_[k - 1] * w;
-    }
-  double node[2][2] = {};  // [row offset][column offset]
-  for (int di = 0; di < 2; ++di)
-    for (int l = 0; l < side; ++l) {
-      if (l < side - 1) node[0][di] += kernel_[l] * rows[di * side + l];
-      if (l > 0) node[1][di] += kernel_[l - 1] * rows[di * side + l];
-    }
-  const double a = node[0][0], b = node[0][1], c = node[1][0], d = node[1][1];
-  // The lattice triangle holding the point, as the mesh has it.
-  const double value = fu >= fv ? a + fu * (b - a) + fv * (d - b) : a + fv * (c - a) + fu * (d - c);
-  return scale_ * value;
+  // The four nodes of the cell, on the lattice triangle holding the point, as the mesh has it.
+  const std::vector<double> node = smoothed_noise(seed_, zone, kernel_, i, j, 2, 2);
+  return scale_ * cell_height(u - i, v - j, [&](int di, int dj) { return node[2 * dj + di]; });
 }
 
 GroundMesh RoughnessField::roughen(const GroundMesh& base, const LocalFrame& frame,
                                    double half_size_m, double base_spacing_m) const {
   if (!enabled() || base.triangles.empty() || half_size_m <= 0.0) return base;
-  const Geodetic& origin = frame.origin();
-  const Zone zone = zone_of(origin.lat_deg, origin.lon_deg);
-  const std::uint64_t key = zone.key(seed_);
-  const double h = spacing_m_;
+  LatticeRegion region = fit_region_maps(base, frame, half_size_m, spacing_m_);
+  cover_square(region, half_size_m, max_nodes);
+  const int ni = region.ni(), nj = region.nj();
 
-  // Maps between the lattice's grid and the frame, fitted on 5 x 5 points of the region at the
-  // ground's mean height: the frame's axes are not the local verticals, so a point's height moves
-  // its latitude and longitude, but by well under a millimetre within tens of metres of it.
-  const double z_ref_m = 0.5 * (base.min_height_m + base.max_height_m);
-  const GridPoint centre = grid_point(zone, origin.lat_deg, origin.lon_deg);
-  std::vector<std::array<double, 2>> local_points, grid_points;
-  for (int b = -2; b <= 2; ++b) {
-    for (int a = -2; a <= 2; ++a) {
-      const double x = 0.5 * a * half_size_m, y = 0.5 * b * half_size_m;
-      const Geodetic g = frame.to_geodetic({x, y, z_ref_m});
-      const GridPoint p = grid_point(zone, g.lat_deg, g.lon_deg);
-      local_points.push_back({x, y});
-      grid_points.push_back({p.x_m - centre.x_m, p.y_m - centre.y_m});
-    }
-  }
-  const QuadraticMap to_local(grid_points, local_points, half_size_m);
-  const QuadraticMap to_grid(local_points, grid_points, half_size_m);
-
-  // The lattice nodes covering the square, shrunk about the origin when they are too many.
-  std::int64_t i0 = 0, i1 = 0, j0 = 0, j1 = 0;
-  for (double shrink = 1.0;; shrink *= 0.95) {
-    const double r_m = half_size_m * shrink;
-    double gx0 = std::numeric_limits<double>::infinity(), gy0 = gx0, gx1 = -gx0, gy1 = -gx0;
-    for (const auto& [x, y] :
-         {std::array<double, 2>{-r_m, -r_m}, {r_m, -r_m}, {r_m, r_m}, {-r_m, r_m}}) {
-      const auto g = to_grid(x, y);
-      gx0 = std::min(gx0, g[0] + centre.x_m);
-      gx1 = std::max(gx1, g[0] + centre.x_m);
-      gy0 = std::min(gy0, g[1] + centre.y_m);
-      gy1 = std::max(gy1, g[1] + centre.y_m);
-    }
-    i0 = static_cast<std::int64_t>(std::floor(gx0 / h));
-    i1 = static_cast<std::int64_t>(std::ceil(gx1 / h));
-    j0 = static_cast<std::int64_t>(std::floor(gy0 / h));
-    j1 = static_cast<std::int64_t>(std::ceil(gy1 / h));
-    if ((i1 - i0 + 1) * (j1 - j0 + 1) <= max_nodes) break;
-  }
-  const int ni = static_cast<int>(i1 - i0 + 1), nj = static_cast<int>(j1 - j0 + 1);
-
-  // Smoothed noise of every node: white noise with a margin of half the kernel, convolved along
-  // each axis in turn.
-  const int half_taps = static_cast<int>(kernel_.size() / 2);
-  const int wi = ni + 2 * half_taps, wj = nj + 2 * half_taps;
-  std::vector<double> noise(static_cast<std::size_t>(wi) * wj);
-  for (int j = 0; j < wj; ++j)
-    for (int i = 0; i < wi; ++i)
-      noise[static_cast<std::size_t>(j) * wi + i] =
-          white_noise(key, i0 - half_taps + i, j0 - half_taps + j);
-  std::vector<double> along_i(static_cast<std::size_t>(ni) * wj, 0.0);
-  for (int j = 0; j < wj; ++j)
-    for (int i = 0; i < ni; ++i) {
-      double sum = 0.0;
-      for (std::size_t k = 0; k < kernel_.size(); ++k)
-        sum += kernel_[k] * noise[static_cast<std::size_t>(j) * wi + i + k];
-      along_i[static_cast<std::size_t>(j) * ni + i] = sum;
-    }
-  std::vector<double> relief_m(static_cast<std::size_t>(ni) * nj, 0.0);
-  const int ramp_nodes = std::max(1, static_cast<int>(std::lround(2.0 * correlation_m_ / h)));
+  // The relief of every node, tapering to nothing over the region's outer 2 correlation lengths.
+  std::vector<double> relief_m =
+      smoothed_noise(seed_, region.zone, kernel_, region.i0, region.j0, ni, nj);
+  const int ramp_nodes =
+      std::max(1, static_cast<int>(std::lround(2.0 * correlation_m_ / region.h)));
   for (int j = 0; j < nj; ++j)
     for (int i = 0; i < ni; ++i) {
-      double sum = 0.0;
-      for (std::size_t k = 0; k < kernel_.size(); ++k)
-        sum += kernel_[k] * along_i[(j + k) * ni + i];
       const int edge = std::min({i, ni - 1 - i, j, nj - 1 - j});
       const double taper = std::min(1.0, static_cast<double>(edge) / ramp_nodes);
-      relief_m[static_cast<std::size_t>(j) * ni + i] = scale_ * taper * sum;
+      relief_m[static_cast<std::size_t>(j) * ni + i] *= scale_ * taper;
     }
 
   GroundMesh mesh;
   mesh.vertices_m = base.vertices_m;
-  const HeightIndex ground(base);
-  auto add_vertex = [&](double x, double y, double z) {
-    mesh.vertices_m.insert(mesh.vertices_m.end(),
-                           {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
-    return static_cast<std::uint32_t>(mesh.vertices_m.size() / 3 - 1);
-  };
-
-  // The mesh's nodes on the base surface, raised by the relief: the lattice's nodes, or r times
-  // finer where the base has finer detail (a DEM of fine cells) so that its own relief stays.
-  // The field varies over a correlation length, three lattice steps: between nodes it is
-  // interpolated bilinearly. At most 1024 nodes a side: finer detail is then smoothed.
-  int r = 1;
-  if (base_spacing_m < h) r = static_cast<int>(std::ceil(h / base_spacing_m - 1e-9));
-  r = std::clamp(r, 1, std::max(1, 1023 / std::max(1, std::max(ni, nj) - 1)));
-  const int fi = (ni - 1) * r + 1, fj = (nj - 1) * r + 1;
-  auto relief_at = [&](int a, int b) {  // fine node (a, b): lattice (a / r, b / r)
-    const int i = std::min(a / r, ni - 2 < 0 ? 0 : ni - 2),
-              j = std::min(b / r, nj - 2 < 0 ? 0 : nj - 2);
-    const double u = static_cast<double>(a - i * r) / r, v = static_cast<double>(b - j * r) / r;
-    auto at = [&](int ii, int jj) {
-      return relief_m[static_cast<std::size_t>(std::min(jj, nj - 1)) * ni + std::min(ii, ni - 1)];
-    };
-    return (1 - u) * (1 - v) * at(i, j) + u * (1 - v) * at(i + 1, j) + (1 - u) * v * at(i, j + 1) +
-           u * v * at(i + 1, j + 1);
-  };
-  constexpr std::uint32_t missing = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> node_vertex(static_cast<std::size_t>(fi) * fj, missing);
-  for (int b = 0; b < fj; ++b)
-    for (int a = 0; a < fi; ++a) {
-      const auto [x, y] = to_local((i0 + static_cast<double>(a) / r) * h - centre.x_m,
-                                   (j0 + static_cast<double>(b) / r) * h - centre.y_m);
-      if (const auto z = ground.height_m(x, y))
-        node_vertex[static_cast<std::size_t>(b) * fi + a] = add_vertex(x, y, *z + relief_at(a, b));
-    }
-  for (int b = 0; b + 1 < fj; ++b)
-    for (int a = 0; a + 1 < fi; ++a) {
-      const std::uint32_t p = node_vertex[static_cast<std::size_t>(b) * fi + a],
-                          q = node_vertex[static_cast<std::size_t>(b) * fi + a + 1];
-      const std::uint32_t c = node_vertex[static_cast<std::size_t>(b + 1) * fi + a],
-                          d = node_vertex[static_cast<std::size_t>(b + 1) * fi + a + 1];
-      if (p != missing && q != missing && d != missing)
-        mesh.triangles.insert(mesh.triangles.end(), {p, q, d});
-      if (p != missing && d != missing && c != missing)
-        mesh.triangles.insert(mesh.triangles.end(), {p, d, c});
-    }
-
-  // The base outside the lattice's region: its outline in the frame is a convex quadrilateral
-  // (counter-clockwise, as east and north are in both). A triangle that crosses it is cut along
-  // it; the outside is split into four convex parts (outside edge k, inside the edges before).
-  std::array<std::array<double, 2>, 4> quad;
-  {
-    const std::array<std::array<std::int64_t, 2>, 4> corners = {
-        {{i0, j0}, {i1, j0}, {i1, j1}, {i0, j1}}};
-    for (int k = 0; k < 4; ++k)
-      quad[k] = to_local(corners[k][0] * h - centre.x_m, corners[k][1] * h - centre.y_m);
-  }
-  auto side = [&](int edge, double x, double y) {
-    const auto& p = quad[edge];
-    const auto& q = quad[(edge + 1) % 4];
-    return (q[0] - p[0]) * (y - p[1]) - (q[1] - p[1]) * (x - p[0]);  // > 0 inside
-  };
-  for (std::size_t t = 0; t < base.triangles.size(); t += 3) {
-    std::vector<ClipVertex> triangle;
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = base.triangles[t + k];
-      triangle.push_back(
-          {base.vertices_m[3 * v], base.vertices_m[3 * v + 1], base.vertices_m[3 * v + 2]});
-    }
-    bool disjoint = false, inside = true;
-    for (int edge = 0; edge < 4; ++edge) {
-      int outside = 0;
-      for (const ClipVertex& p : triangle) outside += side(edge, p.x, p.y) < 0.0 ? 1 : 0;
-      disjoint = disjoint || outside == 3;
-      inside = inside && outside == 0;
-    }
-    if (disjoint) {
-      mesh.triangles.insert(mesh.triangles.end(), base.triangles.begin() + t,
-                            base.triangles.begin() + t + 3);
-      continue;
-    }
-    if (inside) continue;
-    for (int edge = 0; edge < 4; ++edge) {
-      std::vector<ClipVertex> part =
-          clip(triangle, [&](const ClipVertex& p) { return -side(edge, p.x, p.y); });
-      for (int before = 0; before < edge && part.size() >= 3; ++before)
-        part = clip(part, [&](const ClipVertex& p) { return side(before, p.x, p.y); });
-      if (part.size() < 3) continue;
-      double twice_area = 0.0;
-      for (std::size_t k = 0; k < part.size(); ++k) {
-        const ClipVertex& p = part[k];
-        const ClipVertex& q = part[(k + 1) % part.size()];
-        twice_area += p.x * q.y - q.x * p.y;
-      }
-      if (std::abs(twice_area) < 1e-8) continue;  // a sliver along an edge
-      const std::uint32_t first = add_vertex(part[0].x, part[0].y, part[0].z);
-      std::uint32_t previous = add_vertex(part[1].x, part[1].y, part[1].z);
-      for (std::size_t k = 2; k < part.size(); ++k) {
-        const std::uint32_t next = add_vertex(part[k].x, part[k].y, part[k].z);
-        mesh.triangles.insert(mesh.triangles.end(), {first, previous, next});
-        previous = next;
-      }
-    }
-  }
-
+  mesh_region(base, region, relief_m, base_spacing_m, mesh);
+  add_base_outside(base, region, mesh);
   mesh.min_height_m = std::numeric_limits<double>::infinity();
   mesh.max_height_m = -std::numeric_limits<double>::infinity();
   for (std::uint32_t v : mesh.triangles) {

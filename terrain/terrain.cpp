@@ -2,14 +2,13 @@
 // factory that picks a terrain from settings.
 #include "terrain/terrain.hpp"
 
+#include <GeographicLib/LocalCartesian.hpp>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
-#include <GeographicLib/LocalCartesian.hpp>
-
-#include "terrain/dem_terrain.hpp"
 #include "core/error.hpp"
+#include "terrain/dem_terrain.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {

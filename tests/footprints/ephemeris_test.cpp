@@ -9,9 +9,9 @@
 #include <fstream>
 #include <numbers>
 
+#include "core/error.hpp"
 #include "footprints/glas_time.hpp"
 #include "footprints/track.hpp"
-#include "core/error.hpp"
 #include "tests/footprints/test_terrains.hpp"
 
 namespace glaswave {

@@ -3,6 +3,12 @@
 // coordinates; EGM96 geoid heights read by hand from PROJ's grid.
 #pragma once
 
+#include <gdal_priv.h>
+#include <gtest/gtest.h>
+#include <ogr_spatialref.h>
+#include <unistd.h>
+
+#include <GeographicLib/UTMUPS.hpp>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -13,12 +19,6 @@
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <GeographicLib/UTMUPS.hpp>
-#include <gdal_priv.h>
-#include <gtest/gtest.h>
-#include <ogr_spatialref.h>
-#include <unistd.h>
 
 #include "terrain/terrain.hpp"
 

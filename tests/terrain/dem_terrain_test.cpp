@@ -1,16 +1,17 @@
 // DEM terrain against rasters the tests write with GDAL: planes in UTM and geographic coordinates
 // against the plane they sample, meshes against height queries, nodata and edges, EGM96 against
 // the geoid grid read by hand, bad files, and the tile cache's bound under threads.
+#include "terrain/dem_terrain.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <fstream>
 #include <numbers>
 #include <random>
 #include <thread>
 
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-
-#include "terrain/dem_terrain.hpp"
 #include "core/error.hpp"
 #include "terrain/ground_mesh.hpp"
 #include "tests/terrain/dem_fixture.hpp"

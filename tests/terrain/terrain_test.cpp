@@ -1,14 +1,15 @@
 // The plane terrain, ground meshes and beam-weighted plane fits, against hand geometry.
+#include "terrain/terrain.hpp"
+
+#include <gtest/gtest.h>
+
+#include <GeographicLib/Geodesic.hpp>
 #include <cmath>
 #include <limits>
 #include <numbers>
 
-#include <GeographicLib/Geodesic.hpp>
-#include <gtest/gtest.h>
-
 #include "terrain/ground_mesh.hpp"
 #include "terrain/local_frame.hpp"
-#include "terrain/terrain.hpp"
 
 namespace glaswave {
 namespace {
@@ -53,7 +54,8 @@ TEST(GroundMesh, LiesOnThePlaneInTheFootprintFrame) {
     const double x = mesh.vertices_m[v], y = mesh.vertices_m[v + 1], z = mesh.vertices_m[v + 2];
     const double curvature_m = (x * x + y * y) / (2.0 * 6.36e6);
     // 1 mm: the local verticals tilt by distance / R from the frame's up, moving high nodes.
-    EXPECT_NEAR(z, -gradient * (x * std::sin(135.0 * deg) + y * std::cos(135.0 * deg)) - curvature_m, 1e-3);
+    EXPECT_NEAR(
+        z, -gradient * (x * std::sin(135.0 * deg) + y * std::cos(135.0 * deg)) - curvature_m, 1e-3);
   }
 }
 

@@ -113,7 +113,9 @@ TEST_F(Cli, RunWritesProductsThatReadBack) {
   nc_get_att_text(nc, NC_GLOBAL, "history", history.data());
   EXPECT_NE(history.find("run " + config), std::string::npos) << history;
   // The slope of the plane and the reflectance of eq. (1): rho_s cos(S) f_fov, f_fov ~ 1 here.
-  double slope[5], reflectance[10];
+  double slope[5], reflectance[10], range_m[5];
+  ASSERT_EQ(nc_inq_varid(nc, "range_m", &var), NC_NOERR);
+  nc_get_var_double(nc, var, range_m);
   ASSERT_EQ(nc_inq_varid(nc, "slope_deg", &var), NC_NOERR);
   nc_get_var_double(nc, var, slope);
   ASSERT_EQ(nc_inq_varid(nc, "reflectance", &var), NC_NOERR);
@@ -133,8 +135,24 @@ TEST_F(Cli, RunWritesProductsThatReadBack) {
   EXPECT_EQ(layer->GetFeatureCount(), 5);
   OGRFeature* feature = layer->GetNextFeature();
   ASSERT_NE(feature, nullptr);
-  EXPECT_EQ(wkbFlatten(feature->GetGeometryRef()->getGeometryType()), wkbPolygon);
-  // The footprint polygon is about 70 m across (glas preset): its area is near pi 35^2 m^2.
+  ASSERT_EQ(wkbFlatten(feature->GetGeometryRef()->getGeometryType()), wkbPolygon);
+  // The footprint polygon traces the beam's 1/e^2 contour, 2 sigma = 5.84e-5 rad from the axis
+  // (glas preset), at nadir: seen from above, 36 points on a circle of radius R tan(2 sigma),
+  // about 35 m, whatever the slope. Their polygon's area is 18 r^2 sin(10 deg); the ring is
+  // measured in metres with the series for a degree of latitude and longitude at 46 N (1e-5),
+  // and its coordinates are rounded in the file (cm): within 0.2 %.
+  const OGRLinearRing* ring = feature->GetGeometryRef()->toPolygon()->getExteriorRing();
+  const double phi = 46.0 * M_PI / 180.0;
+  const double m_lat = 111132.954 - 559.822 * std::cos(2 * phi) + 1.175 * std::cos(4 * phi),
+               m_lon = 111412.84 * std::cos(phi) - 93.5 * std::cos(3 * phi);
+  double twice_area_m2 = 0.0;
+  for (int i = 0; i + 1 < ring->getNumPoints(); ++i)
+    twice_area_m2 += (ring->getX(i) * m_lon) * (ring->getY(i + 1) * m_lat) -
+                     (ring->getX(i + 1) * m_lon) * (ring->getY(i) * m_lat);
+  const double radius_m = range_m[0] * std::tan(2.0 * 0.0000292);
+  EXPECT_EQ(ring->getNumPoints(), 37);  // closed
+  EXPECT_NEAR(0.5 * twice_area_m2 / (18.0 * radius_m * radius_m * std::sin(M_PI / 18.0)), 1.0,
+              2e-3);
   OGRFeature::DestroyFeature(feature);
   GDALClose(geojson);
 }

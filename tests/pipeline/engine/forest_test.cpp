@@ -8,9 +8,9 @@
 #include <fstream>
 #include <numbers>
 
+#include "core/error.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
-#include "core/error.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 
 namespace glaswave {
@@ -122,7 +122,8 @@ TEST_F(Forests, BadFilesAreNamedWithTheirPlace) {
     FAIL() << "a bad crowns file was accepted";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::input);
-    EXPECT_EQ(std::string(e.what()), crowns + ":3: radius_m is not a number: \"eight\"");
+    EXPECT_EQ(std::string(e.what()),
+              crowns + ":3: radius_m: expected a finite number, got \"eight\"");
   }
 }
 

@@ -76,7 +76,6 @@ TEST(WaveformProducts, BarePlane) {
       EXPECT_NEAR(r.centroid_m[band], kGroundM, 0.05);
       EXPECT_LT(r.sig_end_m[band], kGroundM);
       EXPECT_GT(r.sig_begin_m[band], kGroundM);
-      EXPECT_DOUBLE_EQ(r.energy_tr_J[band], r.energy_cr_J[band] + r.energy_gr_J[band]);
       EXPECT_NEAR(r.energy_tr_J[band] / r.rx_energy_J[band], 1.0, 0.01);
       EXPECT_LT(r.waveform_index[band], -0.99);
       EXPECT_NEAR(r.gauss_sigma_ns[band][0], run.config.sensor.pulse_sigma_ns, 0.1);
@@ -106,7 +105,6 @@ TEST(WaveformProducts, BaseForestGroundAndHeight) {
       EXPECT_GT(top_m, 30.0) << "a tall tree in every footprint";
       ground_ok += std::abs(r.ground_elev_est_m[band] - kGroundM) < 1.0;
       height_ok += std::abs(r.canopy_height_est_m[band] - top_m) < 3.0;
-      EXPECT_DOUBLE_EQ(r.energy_tr_J[band], r.energy_cr_J[band] + r.energy_gr_J[band]);
       // 70 % cover of PAI 3: mostly canopy return, some ground.
       EXPECT_GT(r.waveform_index[band], 0.0) << i;
       EXPECT_LT(r.waveform_index[band], 1.0) << i;

@@ -1,0 +1,68 @@
+// The CSV reader: numbers without the locale, rows without blanks and comments, errors at
+// file:line.
+#include "core/csv.hpp"
+
+#include <gtest/gtest.h>
+
+#include <clocale>
+#include <filesystem>
+#include <fstream>
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(ParseNumber, ReadsWholeFiniteNumbersWhateverTheLocale) {
+  // A locale whose decimal separator is a comma, where the machine has one: strtod and stod
+  // would then read "1.5" as 1.
+  for (const char* name : {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8"})
+    if (std::setlocale(LC_ALL, name)) break;
+  EXPECT_EQ(parse_number("1.5"), 1.5);
+  EXPECT_EQ(parse_number("+2.5e3"), 2500.0);
+  EXPECT_EQ(parse_number("-0.125"), -0.125);
+  for (const char* bad : {"", "1,5", "1.5 m", "abc", "nan", "inf", "1e999", "+", "0x10"})
+    EXPECT_FALSE(parse_number(bad)) << bad;
+  std::setlocale(LC_ALL, "C");
+}
+
+TEST(SplitCsvLine, TrimsFieldsAndKeepsEmptyOnes) {
+  const auto fields = split_csv_line(" a ,b\t,, 3\r");
+  ASSERT_EQ(fields.size(), 4u);
+  EXPECT_EQ(fields[0], "a");
+  EXPECT_EQ(fields[1], "b");
+  EXPECT_EQ(fields[2], "");
+  EXPECT_EQ(fields[3], "3");
+}
+
+TEST(CsvReader, SkipsBlankAndCommentLinesAndNamesTheLineOfAnError) {
+  const fs::path file = fs::temp_directory_path() / "glaswave_csv_test.csv";
+  std::ofstream(file) << "# a comment\nx,y\n\n   \n1, 2\n  # another\n3,four\n";
+  CsvReader csv(file, "the test file");
+  std::vector<std::string_view> fields;
+  ASSERT_TRUE(csv.next_row(fields));
+  EXPECT_EQ(csv.place(), file.string() + ":2");
+  ASSERT_TRUE(csv.next_row(fields));
+  EXPECT_EQ(csv.place(), file.string() + ":5");
+  EXPECT_EQ(csv.number(fields[1], "y"), 2.0);
+  ASSERT_TRUE(csv.next_row(fields));
+  try {
+    csv.number(fields[1], "y");
+    FAIL() << "\"four\" was read as a number";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::input);
+    EXPECT_EQ(std::string(e.what()),
+              file.string() + ":7: y: expected a finite number, got \"four\"");
+  }
+  EXPECT_FALSE(csv.next_row(fields));
+  fs::remove(file);
+  try {
+    CsvReader missing(file, "the test file");
+    FAIL() << "a missing file was opened";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), file.string() + ": cannot open the test file");
+  }
+}
+
+}  // namespace
+}  // namespace glaswave
