@@ -130,7 +130,8 @@ def test_ctrl_c_stops_a_run_and_leaves_nothing_behind(tmp_path):
             process.wait()
     assert process.returncode == 42, err
     assert out.strip() == "interrupted"
-    assert stopped_s < 5.0
+    assert stopped_s < 5.0, stopped_s
+    print(f"stopped {stopped_s:.3f} s after SIGINT")
     assert list(scratch.iterdir()) == []
 
 
