@@ -2,8 +2,10 @@
 // comes out of run_simulation, and neither a product, nor a .part file, nor the output directory
 // is left behind.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
+#include <string>
 
 #include "pipeline/engine/run.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
@@ -25,7 +27,8 @@ TEST(Cancel, AThrowFromTheProgressCallbackLeavesNothingBehind) {
   document["output"] = {{"netcdf", true}, {"geojson", true}};
   const Config config = parse_config(document);
 
-  const fs::path scratch = fs::temp_directory_path() / "glaswave_cancel_test";
+  const fs::path scratch =
+      fs::temp_directory_path() / ("glaswave_cancel_test_" + std::to_string(::getpid()));
   fs::remove_all(scratch);
   fs::create_directories(scratch);
   RunRequest request;
