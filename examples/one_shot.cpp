@@ -31,10 +31,10 @@ int main() try {
   const glaswave::Config config = glaswave::parse_config(document);
 
   // The terrain, the track planned on it, and the shot simulated where its beam meets the ground.
-  const std::unique_ptr<glaswave::Terrain> terrain = glaswave::make_terrain(config.terrain);
-  const glaswave::Track track(config.track, *terrain);
+  const std::unique_ptr<glaswave::Terrain> terrain = glaswave::open_terrain(config);
+  const std::unique_ptr<glaswave::Track> track = glaswave::plan_track(config, *terrain);
   const glaswave::ShotSimulator simulator(config, *terrain);
-  const glaswave::ShotRecord shot = simulator.simulate(track.footprint(0));
+  const glaswave::ShotRecord shot = simulator.simulate(track->footprint(0));
 
   const glaswave::SensorSettings& sensor = config.sensor;
   const double f_fov =
