@@ -27,9 +27,17 @@ constexpr std::size_t kMaxStderrChars = 4000;
 
 std::string describe_errno(int error) { return std::generic_category().message(error); }
 
+// GLASWAVE_SHARE when set; else share/glaswave beside the installed command (P/bin/glaswave ->
+// P/share/glaswave) when it holds the scripts; else the source tree the command was built from.
 fs::path share_dir() {
   const char* env = std::getenv("GLASWAVE_SHARE");
   if (env != nullptr && *env != '\0') return env;
+  std::error_code error;
+  const fs::path executable = fs::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    const fs::path installed = executable.parent_path().parent_path() / "share" / "glaswave";
+    if (fs::is_regular_file(installed / "plots" / "plot_products.py", error)) return installed;
+  }
   return GLASWAVE_SHARE_DIR;
 }
 

@@ -816,10 +816,13 @@ std::vector<StandArea> read_stands(const std::string& path, const json& scene_ca
 }  // namespace
 
 Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
-  json document = read_json_file(file);
+  return load_config_document(read_json_file(file), file.parent_path(), overrides);
+}
+
+Config load_config_document(json document, const std::filesystem::path& folder,
+                            const std::vector<std::string>& overrides) {
   for (const std::string& assignment : overrides) apply_override(document, assignment);
   Config c = parse_config(document);
-  const std::filesystem::path folder = file.parent_path();
   json& r = c.resolved;
   resolve_path(c.terrain.dem, r["terrain"], "dem", folder);
   if (c.canopy) {

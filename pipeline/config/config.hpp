@@ -139,4 +139,9 @@ void check_run(const Config& config);
 // read_json_file + apply_override for each + parse_config.
 Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides);
 
+// The same for a configuration that comes as a document rather than a file (a dict in Python):
+// relative paths in it are taken from `folder`, as load_config takes them from the file's.
+Config load_config_document(nlohmann::json document, const std::filesystem::path& folder,
+                            const std::vector<std::string>& overrides);
+
 }  // namespace glaswave

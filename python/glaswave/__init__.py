@@ -1,0 +1,120 @@
+"""glaswave: Monte Carlo simulation of satellite waveform lidar over vegetation and terrain.
+
+    import glaswave
+    ds = glaswave.run("forest.json", shots=range(0, 100), overrides={"canopy.pai": 2.0})
+    ds.rx_waveform.sel(band=1064)        # an xarray.Dataset, as shots.nc
+    glaswave.check({"canopy": {"pai": -1}})   # raises glaswave.ConfigError: /canopy/pai: ...
+
+The C++ engine does the work (with the GIL released; Ctrl-C stops it); errors come back as
+ConfigError (a bad configuration, a ValueError), InputError (unusable input data, a ValueError)
+and RunError (a failure while running, a RuntimeError), each with the message of the command
+line's `glaswave: error:` line and the `place` it names.
+"""
+
+import json
+import os
+import tempfile
+from collections.abc import Mapping
+
+from . import _glaswave
+from ._glaswave import ConfigError, InputError, RunError
+
+__version__ = _glaswave.__version__
+__all__ = ["run", "check", "ConfigError", "InputError", "RunError", "__version__"]
+
+
+def _source(config):
+    """(path, document, folder) for the engine: a file, or a dict as JSON text whose relative
+    paths are taken from the current directory."""
+    if isinstance(config, Mapping):
+        try:
+            document = json.dumps(config, allow_nan=False)
+        except (TypeError, ValueError) as error:
+            raise ConfigError(f"the configuration is not a JSON document: {error}") from None
+        return None, document, os.getcwd()
+    if isinstance(config, (str, bytes, os.PathLike)):
+        return os.fsdecode(config), None, os.getcwd()
+    raise TypeError(f"config must be a path or a dict, not {type(config).__name__}")
+
+
+def _assignments(overrides):
+    """{"canopy.pai": 2.0} -> ["canopy.pai=2.0"], as `--set` takes them."""
+    if overrides is None:
+        return []
+    if not isinstance(overrides, Mapping):
+        raise TypeError(f"overrides must be a dict, not {type(overrides).__name__}")
+    assignments = []
+    for key, value in overrides.items():
+        try:
+            text = json.dumps(value, allow_nan=False)
+        except (TypeError, ValueError) as error:
+            raise ConfigError(f"overrides[{key!r}]: not a JSON value: {error}") from None
+        assignments.append(f"{key}={text}")
+    return assignments
+
+
+def _shot_range(shots):
+    """None, range(a, b) or (a, b) -> the half-open (first, last) of `--shots A:B`."""
+    if shots is None:
+        return None, None
+    if isinstance(shots, range):
+        if shots.step != 1:
+            raise ConfigError(f"shots: a range with step 1, got {shots!r}")
+        first, last = shots.start, shots.stop
+    else:
+        try:
+            first, last = shots
+        except (TypeError, ValueError):
+            raise ConfigError(f"shots: a range or (first, last), got {shots!r}") from None
+    for value in (first, last):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
+            raise ConfigError(f"shots: shot numbers >= 0, got {shots!r}")
+    return first, last
+
+
+def _threads(threads):
+    if isinstance(threads, bool) or not isinstance(threads, int) or not 0 <= threads <= 65536:
+        raise ConfigError(f"threads: an integer from 0 (every core) to 65536, got {threads!r}")
+    return threads
+
+
+def run(config, shots=None, threads=0, overrides=None):
+    """Simulates the configuration's shots and returns shots.nc as an xarray.Dataset.
+
+    config:    a configuration file's path, or a dict of the JSON configuration (relative
+               paths in it are taken from the current directory).
+    shots:     None (the whole track), range(a, b) or (a, b): shot numbers a to b - 1, as
+               `--shots A:B`.
+    threads:   0 uses every core; results do not depend on it.
+    overrides: {"canopy.pai": 2.0, ...}, each applied as `--set KEY=VALUE`.
+
+    The Dataset has the variables, dimensions, attributes and values of the shots.nc that
+    `glaswave run` writes for the same configuration, decoded as xarray.open_dataset decodes.
+    """
+    import xarray  # here, so that check() works without it
+
+    path, document, folder = _source(config)
+    first, last = _shot_range(shots)
+    assignments = _assignments(overrides)
+    threads = _threads(threads)
+    described = repr(os.fsdecode(config)) if path is not None else "{...}"
+    command_line = (
+        f"glaswave.run({described}, shots={shots!r}, threads={threads}, overrides={overrides!r})"
+    )
+    # The engine writes its products into a directory of its own, removed whatever happens; the
+    # Dataset is read into memory before it goes.
+    with tempfile.TemporaryDirectory(prefix="glaswave-") as scratch:
+        out_dir = os.path.join(scratch, "run")
+        _glaswave.run(path, document, folder, assignments, out_dir, threads, first, last,
+                      command_line)
+        return xarray.load_dataset(os.path.join(out_dir, "shots.nc"))
+
+
+def check(config, overrides=None):
+    """Validates the configuration and opens its inputs, simulating nothing, as `glaswave check`.
+
+    Raises ConfigError (the message names the key as a JSON path) or InputError; returns a dict
+    with the track's `shots`, `sequence_length` and `shots_off_terrain`.
+    """
+    path, document, folder = _source(config)
+    return _glaswave.check(path, document, folder, _assignments(overrides))

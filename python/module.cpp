@@ -1,0 +1,140 @@
+// _glaswave, the C++ half of the Python module: the engine run into a directory, and check, with
+// glaswave's errors raised as Python exceptions of a fitting class. glaswave/__init__.py is the
+// face users see; it reads the products back into an xarray.Dataset.
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "pipeline/config/config.hpp"
+#include "pipeline/engine/run.hpp"
+
+namespace py = pybind11;
+
+namespace glaswave {
+namespace {
+
+// A run abandoned because Python's signal handler raised (Ctrl-C): the exception stays set in
+// the interpreter and is raised once the engine has unwound and removed its parts.
+struct Interrupted {};
+
+// The exception classes, owned by the module (kept alive as its attributes).
+PyObject* config_error_type = nullptr;
+PyObject* input_error_type = nullptr;
+PyObject* run_error_type = nullptr;
+
+// A configuration file, or a JSON document whose relative paths are taken from `folder`.
+Config load(const std::optional<std::string>& path, const std::optional<std::string>& document,
+            const std::string& folder, const std::vector<std::string>& overrides) {
+  if (path) return load_config(*path, overrides);
+  nlohmann::json parsed;
+  try {
+    parsed = nlohmann::json::parse(document.value_or("null"));
+  } catch (const nlohmann::json::exception& e) {
+    throw config_error("", std::string("not a JSON document: ") + e.what());
+  }
+  return load_config_document(std::move(parsed), folder, overrides);
+}
+
+py::dict run(const std::optional<std::string>& path, const std::optional<std::string>& document,
+             const std::string& folder, const std::vector<std::string>& overrides,
+             const std::string& out_dir, int threads, std::optional<std::int64_t> first_shot,
+             std::optional<std::int64_t> last_shot, const std::string& command_line) {
+  RunSummary summary;
+  try {
+    py::gil_scoped_release release;
+    Config config = load(path, document, folder, overrides);
+    // Python reads shots.nc back; the configuration written into it stays the user's.
+    config.output.netcdf = true;
+    config.output.geojson = false;
+    config.output.plots = false;
+    RunRequest request;
+    request.out_dir = out_dir;
+    request.threads = threads;
+    request.first_shot = first_shot;
+    request.last_shot = last_shot;
+    request.command_line = command_line;
+    // Between batches: Python's signal handlers run here, and one that raises stops the run.
+    const ProgressCallback progress = [](std::int64_t, std::int64_t) {
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) throw Interrupted{};
+    };
+    summary = run_simulation(config, request, progress);
+  } catch (const Interrupted&) {
+    throw py::error_already_set();  // the GIL is held again: raise what the handler raised
+  }
+  py::dict result;
+  result["shots"] = summary.shots;
+  result["shots_flagged"] = summary.shots_flagged;
+  result["ray_queries"] = summary.ray_queries;
+  result["wall_s"] = summary.wall_s;
+  result["vertical_datum"] = summary.vertical_datum;
+  return result;
+}
+
+py::dict check(const std::optional<std::string>& path, const std::optional<std::string>& document,
+               const std::string& folder, const std::vector<std::string>& overrides) {
+  CheckSummary summary;
+  {
+    py::gil_scoped_release release;
+    summary = check_inputs(load(path, document, folder, overrides));
+  }
+  py::dict result;
+  result["shots"] = summary.shots;
+  result["sequence_length"] = summary.sequence_length;
+  result["shots_off_terrain"] = summary.shots_off_terrain;
+  return result;
+}
+
+PyObject* add_exception(py::module_& m, const char* name, PyObject* base, const char* doc) {
+  const std::string qualified = std::string("glaswave.") + name;
+  PyObject* type = PyErr_NewExceptionWithDoc(qualified.c_str(), doc, base, nullptr);
+  if (type == nullptr) throw py::error_already_set();
+  m.add_object(name, py::handle(type));  // the module holds one reference, this file another
+  return type;
+}
+
+}  // namespace
+}  // namespace glaswave
+
+PYBIND11_MODULE(_glaswave, m) {
+  using namespace glaswave;
+  m.doc() = "glaswave's engine (use the glaswave package, which wraps it)";
+  m.attr("__version__") = GLASWAVE_VERSION;
+  config_error_type = add_exception(
+      m, "ConfigError", PyExc_ValueError,
+      "A bad configuration or argument; the message names the key as a JSON path "
+      "(\"/canopy/pai: must be >= 0, got -1\"). The command line exits with status 2.");
+  input_error_type = add_exception(
+      m, "InputError", PyExc_ValueError,
+      "Unusable input data (DEM, track, stands file), named by its path. The command line exits "
+      "with status 3.");
+  run_error_type = add_exception(
+      m, "RunError", PyExc_RuntimeError,
+      "A failure while running (a full disk...). The command line exits with status 4.");
+
+  py::register_exception_translator([](std::exception_ptr thrown) {
+    try {
+      if (thrown) std::rethrow_exception(thrown);
+    } catch (const Error& e) {
+      PyObject* type = e.kind() == ErrorKind::config  ? config_error_type
+                       : e.kind() == ErrorKind::input ? input_error_type
+                                                      : run_error_type;
+      py::object error = py::reinterpret_borrow<py::object>(type)(e.what());
+      error.attr("place") = e.place();
+      error.attr("reason") = e.message();
+      PyErr_SetObject(type, error.ptr());
+    }
+  });
+
+  using py::arg;
+  m.def("run", &run, arg("path"), arg("document"), arg("folder"), arg("overrides"), arg("out_dir"),
+        arg("threads"), arg("first_shot"), arg("last_shot"), arg("command_line"),
+        "Runs the engine and writes shots.nc under out_dir (which must not exist); returns the "
+        "run's summary.");
+  m.def("check", &check, arg("path"), arg("document"), arg("folder"), arg("overrides"),
+        "Loads the configuration and opens its inputs, simulating nothing; returns what it found.");
+}
