@@ -215,6 +215,107 @@ int check(const Arguments& arguments) {
   return 0;
 }
 
+int sweep(const Arguments& arguments, const std::vector<std::string>& variations) {
+  SweepRequest request;
+  request.config_file = arguments.config_file;
+  request.overrides = arguments.overrides;
+  for (const std::string& text : variations) request.variations.push_back(parse_variation(text));
+  request.out_dir =
+      arguments.out_dir.empty()
+          ? std::filesystem::path("out") /
+                (std::filesystem::path(arguments.config_file).stem().string() + "-sweep")
+          : std::filesystem::path(arguments.out_dir);
+  request.threads = arguments.threads;
+  run_sweep(request);
+  std::printf("glaswave: sensitivity.csv and sensitivity.md in %s\n",
+              request.out_dir.string().c_str());
+  return 0;
+}
+
+// The command line's commands and the options they share, bound to one Arguments.
+class Commands {
+ public:
+  Commands(CLI::App& app, Arguments& arguments) : app_(app), arguments_(arguments) {
+    add_run();
+    add_check();
+    add_sweep();
+    // A command of the contract that a later version brings: named, so that asking for it says
+    // so.
+    brf_ = app.add_subcommand("brf", "scene reflectance under the sun (not available yet)");
+    brf_->allow_extras();
+  }
+
+  // Runs the command the line chose.
+  int dispatch(const std::string& command_line) {
+    if (*brf_)
+      throw config_error(brf_->get_name(), "this command is not available in this version yet");
+    if (*run_) return run(arguments_, command_line);
+    if (*sweep_) return sweep(arguments_, variations_);
+    return check(arguments_);
+  }
+
+ private:
+  void add_config(CLI::App* command, bool required) {
+    auto* config = command->add_option("CONFIG", arguments_.config_file, "configuration (JSON)");
+    if (required) config->required();
+    command->add_option("--set", arguments_.overrides,
+                        "override a configuration key: KEY=VALUE (dotted KEY)");
+  }
+  void add_threads(CLI::App* command) {
+    command
+        ->add_option("--threads", arguments_.threads, "threads (0: every core; at most the cores)")
+        ->check(CLI::Range(0, 65536));
+  }
+
+  void add_run() {
+    run_ = app_.add_subcommand("run", "simulate the track's shots and write the products");
+    add_config(run_, true);
+    run_->add_option("--out", arguments_.out_dir, "output directory (default out/<config name>)");
+    add_threads(run_);
+    run_->add_option("--shots", arguments_.shots, "simulate shot numbers A to B-1 only (A:B)");
+    run_->add_option("--seed", arguments_.seed, "random seed (overrides the configuration's)")
+        ->check(CLI::Validator(
+            [](std::string& text) {
+              // An unsigned option would take -1 as 2^64 - 1.
+              return text.rfind('-', 0) == 0 ? "must be a non-negative integer, got " + text
+                                             : std::string();
+            },
+            "UINT"));
+    run_->add_flag("--resume", arguments_.resume, "finish an interrupted run");
+    run_->add_flag("--quiet", arguments_.quiet, "no progress bar");
+    run_->add_option("--debug-ray", arguments_.debug_ray,
+                     "re-run ray RAY of shot SHOT alone and print its events, one a line; "
+                     "writes no products (SHOT:RAY)");
+  }
+
+  void add_check() {
+    check_ = app_.add_subcommand("check", "validate the configuration and its inputs, run nothing");
+    add_config(check_, false);
+    check_->add_flag("--schema", arguments_.schema,
+                     "print the configuration's JSON Schema (draft 2020-12) and exit");
+    // The README's table of keys, for scripts/readme-keys.
+    check_->add_flag("--keys-markdown", arguments_.keys_markdown)->group("");
+  }
+
+  void add_sweep() {
+    sweep_ = app_.add_subcommand(
+        "sweep", "sensitivity study: the base case and each varied value, one key at a time");
+    add_config(sweep_, true);
+    sweep_->add_option("--vary", variations_, "a key and its values: KEY=V1,V2,...")->required();
+    sweep_->add_option("--out", arguments_.out_dir,
+                       "output directory (default out/<config name>-sweep)");
+    add_threads(sweep_);
+  }
+
+  CLI::App& app_;
+  Arguments& arguments_;
+  std::vector<std::string> variations_;
+  CLI::App* run_ = nullptr;
+  CLI::App* check_ = nullptr;
+  CLI::App* sweep_ = nullptr;
+  CLI::App* brf_ = nullptr;
+};
+
 }  // namespace
 
 int run_command_line(int argc, char** argv) {
@@ -223,66 +324,7 @@ int run_command_line(int argc, char** argv) {
   app.set_version_flag("--version", std::string("glaswave ") + GLASWAVE_VERSION);
   app.require_subcommand(1);
   Arguments arguments;
-
-  // The options the commands share.
-  const auto add_config = [&](CLI::App* command) {
-    command->add_option("CONFIG", arguments.config_file, "configuration (JSON)")->required();
-    command->add_option("--set", arguments.overrides,
-                        "override a configuration key: KEY=VALUE (dotted KEY)");
-  };
-  const auto add_threads = [&](CLI::App* command) {
-    command
-        ->add_option("--threads", arguments.threads, "threads (0: every core; at most the cores)")
-        ->check(CLI::Range(0, 65536));
-  };
-
-  CLI::App* run_command =
-      app.add_subcommand("run", "simulate the track's shots and write the products");
-  add_config(run_command);
-  run_command->add_option("--out", arguments.out_dir,
-                          "output directory (default out/<config name>)");
-  add_threads(run_command);
-  run_command->add_option("--shots", arguments.shots, "simulate shot numbers A to B-1 only (A:B)");
-  run_command->add_option("--seed", arguments.seed, "random seed (overrides the configuration's)")
-      ->check(CLI::Validator(
-          [](std::string& text) {
-            // An unsigned option would take -1 as 2^64 - 1.
-            return text.rfind('-', 0) == 0 ? "must be a non-negative integer, got " + text
-                                           : std::string();
-          },
-          "UINT"));
-  run_command->add_flag("--resume", arguments.resume, "finish an interrupted run");
-  run_command->add_flag("--quiet", arguments.quiet, "no progress bar");
-  run_command->add_option("--debug-ray", arguments.debug_ray,
-                          "re-run ray RAY of shot SHOT alone and print its events, one a line; "
-                          "writes no products (SHOT:RAY)");
-
-  CLI::App* check_command =
-      app.add_subcommand("check", "validate the configuration and its inputs, run nothing");
-  check_command->add_option("CONFIG", arguments.config_file, "configuration (JSON)");
-  check_command->add_option("--set", arguments.overrides,
-                            "override a configuration key: KEY=VALUE (dotted KEY)");
-  check_command->add_flag("--schema", arguments.schema,
-                          "print the configuration's JSON Schema (draft 2020-12) and exit");
-  // The README's table of keys, for scripts/readme-keys.
-  check_command->add_flag("--keys-markdown", arguments.keys_markdown)->group("");
-
-  std::vector<std::string> variations;
-  CLI::App* sweep_command = app.add_subcommand(
-      "sweep", "sensitivity study: the base case and each varied value, one key at a time");
-  add_config(sweep_command);
-  sweep_command->add_option("--vary", variations, "a key and its values: KEY=V1,V2,...")
-      ->required();
-  sweep_command->add_option("--out", arguments.out_dir,
-                            "output directory (default out/<config name>-sweep)");
-  add_threads(sweep_command);
-
-  // A command of the contract that a later version brings: named, so that asking for it says so.
-  std::vector<CLI::App*> planned;
-  planned.push_back(
-      app.add_subcommand("brf", "scene reflectance under the sun (not available yet)"));
-  planned.back()->allow_extras();
-
+  Commands commands(app, arguments);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -290,31 +332,8 @@ int run_command_line(int argc, char** argv) {
     std::fprintf(stderr, "glaswave: error: %s (see glaswave --help)\n", e.what());
     return 2;
   }
-
   try {
-    for (const CLI::App* command : planned)
-      if (*command)
-        throw config_error(command->get_name(),
-                           "this command is not available in this version yet");
-    if (*run_command) return run(arguments, joined(argc, argv));
-    if (*sweep_command) {
-      SweepRequest request;
-      request.config_file = arguments.config_file;
-      request.overrides = arguments.overrides;
-      for (const std::string& text : variations)
-        request.variations.push_back(parse_variation(text));
-      request.out_dir =
-          arguments.out_dir.empty()
-              ? std::filesystem::path("out") /
-                    (std::filesystem::path(arguments.config_file).stem().string() + "-sweep")
-              : std::filesystem::path(arguments.out_dir);
-      request.threads = arguments.threads;
-      run_sweep(request);
-      std::printf("glaswave: sensitivity.csv and sensitivity.md in %s\n",
-                  request.out_dir.string().c_str());
-      return 0;
-    }
-    return check(arguments);
+    return commands.dispatch(joined(argc, argv));
   } catch (const Error& e) {
     std::fprintf(stderr, "glaswave: error: %s\n", e.what());
     return e.exit_status();

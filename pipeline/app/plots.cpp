@@ -81,6 +81,33 @@ std::string trimmed(std::string text) {
   return text;
 }
 
+// Everything the child writes to its stderr until it closes it.
+std::string read_all(const Fd& fd) {
+  std::string text;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = ::read(fd.get(), buffer, sizeof buffer);
+    if (n > 0) {
+      text.append(buffer, static_cast<std::size_t>(n));
+    } else if (n == 0 || errno != EINTR) {
+      return text;
+    }
+  }
+}
+
+// The child's stdin and stdout on /dev/null, its stderr into `stderr_fd`.
+void redirect(SpawnActions& actions, const Fd& stderr_fd) {
+  int error =
+      posix_spawn_file_actions_addopen(actions.get(), STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  if (error == 0)
+    error =
+        posix_spawn_file_actions_addopen(actions.get(), STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  if (error == 0)
+    error = posix_spawn_file_actions_adddup2(actions.get(), stderr_fd.get(), STDERR_FILENO);
+  if (error != 0)
+    throw run_error("plots", "cannot prepare the child process: " + describe_errno(error));
+}
+
 }  // namespace
 
 void write_plots(const fs::path& out_dir) {
@@ -107,32 +134,15 @@ void write_plots(const fs::path& out_dir) {
   Fd read_end(ends[0]), write_end(ends[1]);
 
   SpawnActions actions;
-  int error =
-      posix_spawn_file_actions_addopen(actions.get(), STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  if (error == 0)
-    error =
-        posix_spawn_file_actions_addopen(actions.get(), STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  if (error == 0)
-    error = posix_spawn_file_actions_adddup2(actions.get(), write_end.get(), STDERR_FILENO);
-  if (error != 0)
-    throw run_error("plots", "cannot prepare the child process: " + describe_errno(error));
-
+  redirect(actions, write_end);
   pid_t pid = -1;
-  error = debian_python ? posix_spawn(&pid, argv[0], actions.get(), nullptr, argv.data(), environ)
+  const int error = debian_python
+                        ? posix_spawn(&pid, argv[0], actions.get(), nullptr, argv.data(), environ)
                         : posix_spawnp(&pid, argv[0], actions.get(), nullptr, argv.data(), environ);
   if (error != 0) throw run_error("plots", "cannot start " + python + ": " + describe_errno(error));
   write_end.reset();  // so that reading ends when the child exits
 
-  std::string errors;
-  char buffer[4096];
-  for (;;) {
-    const ssize_t n = ::read(read_end.get(), buffer, sizeof buffer);
-    if (n > 0) {
-      errors.append(buffer, static_cast<std::size_t>(n));
-    } else if (n == 0 || errno != EINTR) {
-      break;
-    }
-  }
+  std::string errors = read_all(read_end);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0) {
     if (errno != EINTR)
