@@ -2,10 +2,10 @@
 // with netCDF-C and GDAL's OGR, and its errors checked against PRODUCT.md sections 2 and 5.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 #include <netcdf.h>
 #include <ogrsf_frmts.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>

@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
+#include "core/error.hpp"
 #include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
-#include "core/error.hpp"
 #include "tests/terrain/dem_fixture.hpp"
 
 namespace glaswave {

@@ -1,5 +1,5 @@
-// What the engine and app tests share: a track simulated shot by shot through ShotSimulator, the built
-// glaswave command run as a user runs it, and the moments of a waveform.
+// What the engine and app tests share: a track simulated shot by shot through ShotSimulator, the
+// built glaswave command run as a user runs it, and the moments of a waveform.
 #pragma once
 
 #include <sys/wait.h>
