@@ -23,7 +23,7 @@ install(FILES pipeline/glaswave.hpp DESTINATION include/glaswave)
 
 set(package_dir ${CMAKE_INSTALL_LIBDIR}/cmake/glaswave)
 install(EXPORT glaswaveTargets NAMESPACE glaswave:: DESTINATION ${package_dir})
-configure_package_config_file(cmake/glaswaveConfig.cmake.in
+configure_package_config_file(pipeline/glaswaveConfig.cmake.in
   ${PROJECT_BINARY_DIR}/glaswaveConfig.cmake INSTALL_DESTINATION ${package_dir})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/glaswaveConfigVersion.cmake
   COMPATIBILITY SameMinorVersion)
