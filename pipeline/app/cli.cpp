@@ -4,10 +4,12 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
+#include <tuple>
 
 #include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
@@ -33,46 +35,36 @@ struct Arguments {
   bool keys_markdown = false;  // check --keys-markdown (hidden: scripts/readme-keys)
 };
 
-// "A:B" -> [A, B); either side may be empty.
-void parse_shot_range(const std::string& text, RunRequest& request) {
+// The two sides of "A:B" as non-negative integers, either absent when empty; `usage` is the
+// message when the text is not of that form.
+std::pair<std::optional<std::int64_t>, std::optional<std::int64_t>> colon_pair(
+    const std::string& text, const char* option, const std::string& usage) {
   const auto colon = text.find(':');
+  if (colon == std::string::npos) throw config_error(option, usage);
   auto number = [&](const std::string& part) -> std::optional<std::int64_t> {
     if (part.empty()) return std::nullopt;
-    std::size_t used = 0;
     std::int64_t value = -1;
-    try {
-      value = std::stoll(part, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != part.size() || value < 0)
-      throw config_error("--shots", "expected A:B with shot numbers, got \"" + text + "\"");
+    const auto [end, error] = std::from_chars(part.data(), part.data() + part.size(), value);
+    if (error != std::errc() || end != part.data() + part.size() || value < 0)
+      throw config_error(option, usage);
     return value;
   };
-  if (colon == std::string::npos)
-    throw config_error("--shots", "expected A:B, got \"" + text + "\"");
-  request.first_shot = number(text.substr(0, colon));
-  request.last_shot = number(text.substr(colon + 1));
+  return {number(text.substr(0, colon)), number(text.substr(colon + 1))};
 }
 
-// "SHOT:RAY" -> the two numbers.
+// "A:B" -> [A, B); either side may be empty.
+void parse_shot_range(const std::string& text, RunRequest& request) {
+  std::tie(request.first_shot, request.last_shot) =
+      colon_pair(text, "--shots", "expected A:B with shot numbers, got \"" + text + "\"");
+}
+
+// "SHOT:RAY" -> the two numbers, both needed.
 std::pair<std::int64_t, std::int64_t> parse_shot_and_ray(const std::string& text) {
-  const auto colon = text.find(':');
-  auto number = [&](const std::string& part) {
-    std::size_t used = 0;
-    std::int64_t value = -1;
-    try {
-      value = std::stoll(part, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (part.empty() || used != part.size() || value < 0)
-      throw config_error("--debug-ray",
-                         "expected SHOT:RAY, a shot number and a ray number, got \"" + text + "\"");
-    return value;
-  };
-  if (colon == std::string::npos) number("");  // throws: both numbers are needed
-  return {number(text.substr(0, colon)), number(text.substr(colon + 1))};
+  const std::string usage =
+      "expected SHOT:RAY, a shot number and a ray number, got \"" + text + "\"";
+  const auto [shot, ray] = colon_pair(text, "--debug-ray", usage);
+  if (!shot || !ray) throw config_error("--debug-ray", usage);
+  return {*shot, *ray};
 }
 
 Config load(const Arguments& arguments) {

@@ -17,15 +17,15 @@ struct LidarBand {
   double atmos_transmission_roundtrip = 1.0;
 };
 
-// The lidar's beam, field of view, pulse and digitiser window (the seed's Table 2; these defaults
-// are its values). The engine fills it from the configuration's sensor.
+// The lidar's beam, field of view, pulse and digitiser window, as the seed's Table 2 lists
+// them. The engine fills it from the configuration's sensor, which holds the defaults.
 struct LidarSettings {
-  double pulse_sigma_ns = 5.0;
-  double divergence_sigma_rad = 0.00011;  // beam angular RMS width per axis
-  double ifov_rad = 0.0004;               // detector full field of view (top-hat cone)
-  double telescope_area_m2 = 0.709;
-  double bin_ns = 1.0;
-  int bins = 544;
+  double pulse_sigma_ns = 0.0;
+  double divergence_sigma_rad = 0.0;  // beam angular RMS width per axis
+  double ifov_rad = 0.0;              // detector full field of view (top-hat cone)
+  double telescope_area_m2 = 0.0;
+  double bin_ns = 0.0;
+  int bins = 0;
   std::vector<LidarBand> bands;
 };
 

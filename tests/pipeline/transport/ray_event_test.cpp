@@ -9,15 +9,12 @@
 #include "canopy/leaf_angles.hpp"
 #include "pipeline/transport/shot_transport.hpp"
 #include "terrain/ground_mesh.hpp"
+#include "tests/pipeline/transport/transport_test_support.hpp"
 
 namespace glaswave {
 namespace {
 
-LidarSettings table2_sensor() {
-  LidarSettings sensor;  // defaults are the seed's Table 2
-  sensor.bands = {{532.0, 32.0, 0.8}, {1064.0, 72.0, 0.9}};
-  return sensor;
-}
+using test_support::table2_sensor;
 
 // E_t T A_T f_fov / (pi R^2) of PHYSICS.md section 1 for Table 2's 532 nm band at 600 km, from
 // the table's numbers (A_T = pi 0.95^2 / 4 = 0.709 m^2, ifov 0.4 mrad, sigma 0.11 mrad).

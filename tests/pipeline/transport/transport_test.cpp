@@ -9,15 +9,12 @@
 #include "core/random.hpp"
 #include "pipeline/transport/shot_transport.hpp"
 #include "terrain/ground_mesh.hpp"
+#include "tests/pipeline/transport/transport_test_support.hpp"
 
 namespace glaswave {
 namespace {
 
-LidarSettings table2_sensor() {
-  LidarSettings sensor;  // defaults are the seed's Table 2
-  sensor.bands = {{532.0, 32.0, 0.8}, {1064.0, 72.0, 0.9}};
-  return sensor;
-}
+using test_support::table2_sensor;
 
 TEST(LidarModel, PulseConvolutionKeepsEnergyAndHasTheTransmittedWidth) {
   const LidarModel lidar(table2_sensor());
