@@ -8,13 +8,16 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <system_error>
+#include <vector>
 
+#include "core/error.hpp"
+#include "core/names.hpp"
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/config/presets.hpp"
-#include "core/error.hpp"
 
 namespace glaswave {
 
@@ -34,10 +37,8 @@ struct TokenPlace {
   std::string pointer;
 };
 
-// nlohmann-json stops at a number that overflows a double (1e999) with an error that names the
-// token but not where it is. The text before that token is valid JSON, so a small scan that
-// follows objects and arrays finds the token's line, column and key path.
-TokenPlace locate_number(const std::string& text, const std::string& token) {
+// Where a scan of JSON text stands in the nesting of objects and arrays, and on which line.
+struct JsonScan {
   struct Frame {
     bool object;
     std::string key;
@@ -46,36 +47,32 @@ TokenPlace locate_number(const std::string& text, const std::string& token) {
   std::vector<Frame> stack;
   bool expect_key = false;
   std::size_t line = 1, line_start = 0;
-  auto pointer = [&] {
+
+  // The JSON pointer of the value being scanned.
+  std::string pointer() const {
     std::string p;
     for (const Frame& f : stack)
       p = f.object ? json_pointer_child(p, f.key) : p + "/" + std::to_string(f.index);
     return p;
-  };
-  for (std::size_t i = 0; i < text.size();) {
-    const char c = text[i];
-    if (c == '"') {
-      std::size_t j = i + 1;
-      while (j < text.size() && text[j] != '"') j += text[j] == '\\' ? 2 : 1;
-      if (!stack.empty() && stack.back().object && expect_key) {
-        try {
-          stack.back().key = json::parse(text.substr(i, j - i + 1)).get<std::string>();
-        } catch (const json::exception&) {
-          stack.back().key = text.substr(i + 1, j - i - 1);
-        }
+  }
+
+  // Skips the string that opens at text[i], taking it as the key of its object when a key is
+  // expected; returns where the scan goes on.
+  std::size_t skip_string(const std::string& text, std::size_t i) {
+    std::size_t j = i + 1;
+    while (j < text.size() && text[j] != '"') j += text[j] == '\\' ? 2 : 1;
+    if (!stack.empty() && stack.back().object && expect_key) {
+      try {
+        stack.back().key = json::parse(text.substr(i, j - i + 1)).get<std::string>();
+      } catch (const json::exception&) {
+        stack.back().key = text.substr(i + 1, j - i - 1);
       }
-      i = j + 1;
-      continue;
     }
-    if (c == '-' || (c >= '0' && c <= '9')) {
-      std::size_t j = i;
-      while (j < text.size() &&
-             std::string_view("0123456789+-.eE").find(text[j]) != std::string_view::npos)
-        ++j;
-      if (text.compare(i, j - i, token) == 0) return {true, line, i - line_start + 1, pointer()};
-      i = j;
-      continue;
-    }
+    return j + 1;
+  }
+
+  // Follows one byte of structure at text[i]: brackets, separators and newlines.
+  void structure(char c, std::size_t i) {
     switch (c) {
       case '{':
         stack.push_back({true, "", 0});
@@ -106,7 +103,35 @@ TokenPlace locate_number(const std::string& text, const std::string& token) {
       default:
         break;
     }
+  }
+};
+
+// The end of the number token that begins at text[i].
+std::size_t number_end(const std::string& text, std::size_t i) {
+  while (i < text.size() &&
+         std::string_view("0123456789+-.eE").find(text[i]) != std::string_view::npos)
     ++i;
+  return i;
+}
+
+// nlohmann-json stops at a number that overflows a double (1e999) with an error that names the
+// token but not where it is. The text before that token is valid JSON, so a small scan that
+// follows objects and arrays finds the token's line, column and key path.
+TokenPlace locate_number(const std::string& text, const std::string& token) {
+  JsonScan scan;
+  for (std::size_t i = 0; i < text.size();) {
+    const char c = text[i];
+    if (c == '"') {
+      i = scan.skip_string(text, i);
+    } else if (c == '-' || (c >= '0' && c <= '9')) {
+      const std::size_t end = number_end(text, i);
+      if (text.compare(i, end - i, token) == 0)
+        return {true, scan.line, i - scan.line_start + 1, scan.pointer()};
+      i = end;
+    } else {
+      scan.structure(c, i);
+      ++i;
+    }
   }
   return {};
 }
@@ -196,6 +221,28 @@ double time_s(JsonReader& reader, const std::string& key, const std::string& tex
 
 // ---- sections -------------------------------------------------------------------------------
 
+// The preset a sensor section names (the default when it names none), one of the presets there
+// are.
+std::string sensor_preset(const json& given) {
+  if (!given.is_object() || !given.contains("preset") || given["preset"].is_null())
+    return default_sensor_preset;
+  const json& name = given["preset"];
+  if (!name.is_string())
+    throw config_error("/sensor/preset", "must be a string, got " + describe(name));
+  const std::string preset = name.get<std::string>();
+  if (sensor_presets().count(preset)) return preset;
+  std::vector<std::string> names;
+  std::string known;
+  for (const auto& [preset_name, text] : sensor_presets()) {
+    names.push_back(preset_name);
+    known += (known.empty() ? "" : ", ") + preset_name;
+  }
+  const std::string suggestion = did_you_mean(preset, names);
+  throw config_error("/sensor/preset",
+                     "unknown preset \"" + preset + "\"" +
+                         (suggestion.empty() ? "; the presets are " + known : suggestion));
+}
+
 SensorSettings read_sensor(JsonReader& root) {
   const json& given = root.raw("sensor");
   if (!given.is_null() && !given.is_object())
@@ -203,25 +250,7 @@ SensorSettings read_sensor(JsonReader& root) {
 
   SensorSettings s;
   // A preset is the base; keys given beside it replace the preset's ("bands" as a whole).
-  std::string preset = default_sensor_preset;
-  if (given.is_object() && given.contains("preset") && !given["preset"].is_null()) {
-    const json& name = given["preset"];
-    if (!name.is_string())
-      throw config_error("/sensor/preset", "must be a string, got " + describe(name));
-    preset = name.get<std::string>();
-    if (!sensor_presets().count(preset)) {
-      std::vector<std::string> names;
-      std::string known;
-      for (const auto& [preset_name, text] : sensor_presets()) {
-        names.push_back(preset_name);
-        known += (known.empty() ? "" : ", ") + preset_name;
-      }
-      const auto nearest = nearest_name(preset, names);
-      throw config_error("/sensor/preset", "unknown preset \"" + preset + "\"; " +
-                                               (nearest ? "did you mean \"" + *nearest + "\"?"
-                                                        : "the presets are " + known));
-    }
-  }
+  const std::string preset = sensor_preset(given);
   const auto preset_text = sensor_presets().find(preset);
   json merged =
       preset_text != sensor_presets().end() ? json::parse(preset_text->second) : json::object();
@@ -303,9 +332,7 @@ TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
     for (const std::string& name : datum.choices) message += "\"" + name + "\", ";
     message.resize(message.size() - 2);
     message += " or a vertical CRS such as \"EPSG:3855\", got \"" + t.vertical_datum + "\"";
-    if (const auto suggestion = nearest_name(t.vertical_datum, datum.choices))
-      message += "; did you mean \"" + *suggestion + "\"?";
-    r.fail("vertical_datum", message);
+    r.fail("vertical_datum", message + did_you_mean(t.vertical_datum, datum.choices));
   }
   if (!dem && t.vertical_datum != datum.default_value.get<std::string>())
     r.fail("vertical_datum",
@@ -353,28 +380,17 @@ void read_lad(JsonReader& r, CanopySettings& c) {
   }
   std::string list;
   for (const std::string& known : declared.choices) list += known + ", ";
-  std::string message =
-      "must be one of " + list + "or {\"ellipsoidal_mean_deg\": X}, got " + describe(value);
-  if (const auto suggestion = nearest_name(name, declared.choices))
-    message += "; did you mean \"" + *suggestion + "\"?";
-  r.fail("lad", message);
+  r.fail("lad", "must be one of " + list + "or {\"ellipsoidal_mean_deg\": X}, got " +
+                    describe(value) + did_you_mean(name, declared.choices));
 }
 
 // A fraction that is the complement of a value the user gave: rounded to 12 decimals so that
 // 1 - 0.8 reads 0.2 in the resolved configuration, not 0.19999999999999996.
 double complement(double x) { return std::round((1.0 - x) * 1e12) / 1e12; }
 
-std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Band>& bands) {
-  if (!root.has("canopy")) {
-    root.resolved()["canopy"] = nullptr;  // bare ground
-    return std::nullopt;
-  }
-  CanopySettings c;
-  JsonReader r = root.object("canopy");
-  c.pai = r.number("pai");
-  read_lad(r, c);
-  c.cover = r.number("cover");
-  // Giving one fraction implies the other; giving both asks that they add up.
+// Giving one of the green and bark fractions implies the other; giving both asks that they add
+// up.
+void read_fractions(JsonReader& r, CanopySettings& c) {
   if (r.has("bark_fraction") && !r.has("green_fraction")) {
     c.bark_fraction = r.number("bark_fraction");
     c.green_fraction = r.number("green_fraction", complement(c.bark_fraction));
@@ -388,16 +404,10 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
   if (std::fabs(fraction_sum - 1.0) > 1e-9)
     r.fail("bark_fraction",
            "green_fraction + bark_fraction must be 1, got " + format_number(fraction_sum));
-  c.crown_shape = r.choice<CrownShape>("crown_shape", {{"ellipsoid", CrownShape::ellipsoid},
-                                                       {"cone", CrownShape::cone},
-                                                       {"layer", CrownShape::layer}});
-  // Crowns placed at random overlap: their cover 1 - exp(-n pi r^2) never reaches 1.
-  if (c.crown_shape != CrownShape::layer && c.cover >= 1.0)
-    r.fail(
-        "cover",
-        "must be < 1 for randomly placed crowns, got 1; a closed canopy is crown_shape \"layer\"");
-  c.crown_radius_m = r.number("crown_radius_m");
-  c.crown_half_height_m = r.number("crown_half_height_m");
+}
+
+// The heights of the crowns' bases, [min, max].
+void read_crown_base(JsonReader& r, CanopySettings& c) {
   const json& base = r.raw("crown_base_m");
   if (!base.is_null()) {
     if (!base.is_array() || base.size() != 2)
@@ -409,8 +419,25 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
       r.fail("crown_base_m", "min must be <= max, got " + describe(base));
   }
   r.resolved()["crown_base_m"] = base.is_null() ? json(c.crown_base_m) : base;
-  c.leaf_size_m = r.number("leaf_size_m");
-  c.dbh_m = r.number("dbh_m");
+}
+
+// The crowns: their shape, size and where they begin.
+void read_crowns(JsonReader& r, CanopySettings& c) {
+  c.crown_shape = r.choice<CrownShape>("crown_shape", {{"ellipsoid", CrownShape::ellipsoid},
+                                                       {"cone", CrownShape::cone},
+                                                       {"layer", CrownShape::layer}});
+  // Crowns placed at random overlap: their cover 1 - exp(-n pi r^2) never reaches 1.
+  if (c.crown_shape != CrownShape::layer && c.cover >= 1.0)
+    r.fail(
+        "cover",
+        "must be < 1 for randomly placed crowns, got 1; a closed canopy is crown_shape \"layer\"");
+  c.crown_radius_m = r.number("crown_radius_m");
+  c.crown_half_height_m = r.number("crown_half_height_m");
+  read_crown_base(r, c);
+}
+
+// The optical properties of leaves and bark, per band.
+void read_canopy_optics(JsonReader& r, CanopySettings& c, const std::vector<Band>& bands) {
   c.leaf_reflectance = spectral(r, "leaf_reflectance", bands);
   c.leaf_transmittance = spectral(r, "leaf_transmittance", bands);
   // Energy conservation of a bi-Lambertian leaf: what is not reflected or transmitted is absorbed.
@@ -422,10 +449,69 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
     }
   }
   c.bark_reflectance = spectral(r, "bark_reflectance", bands);
+}
+
+std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Band>& bands) {
+  if (!root.has("canopy")) {
+    root.resolved()["canopy"] = nullptr;  // bare ground
+    return std::nullopt;
+  }
+  CanopySettings c;
+  JsonReader r = root.object("canopy");
+  c.pai = r.number("pai");
+  read_lad(r, c);
+  c.cover = r.number("cover");
+  read_fractions(r, c);
+  read_crowns(r, c);
+  c.leaf_size_m = r.number("leaf_size_m");
+  c.dbh_m = r.number("dbh_m");
+  read_canopy_optics(r, c, bands);
   c.crowns_file = non_empty_path(r, "crowns_file");
   c.stands = non_empty_path(r, "stands");
   r.finish();
   return c;
+}
+
+// The ground points of a "points" track, one shot each.
+void read_points(JsonReader& r, TrackSettings& t, bool shots_given) {
+  const bool points_type = t.type == TrackType::points;
+  for (JsonReader& p : r.object_array("points", points_type)) {
+    GroundPoint point;
+    point.lat_deg = p.number("lat_deg");
+    point.lon_deg = p.number("lon_deg");
+    p.finish();
+    t.points.push_back(point);
+  }
+  if (points_type) {
+    const auto count = static_cast<std::int64_t>(t.points.size());
+    if (shots_given && t.shots != count) {
+      r.fail("shots", "must equal the number of points (" + std::to_string(count) +
+                          ") when type is \"points\", got " + std::to_string(t.shots));
+    }
+    t.shots = count;
+    r.resolved()["shots"] = count;
+  }
+}
+
+// Keplerian elements sit flat in `track`, as the product contract lists them. Elements without
+// an epoch are taken to hold at the first shot.
+void read_orbit(JsonReader& r, TrackSettings& t, const std::string& start_time) {
+  OrbitElements& o = t.orbit;
+  o.semi_major_axis_m = r.number("semi_major_axis_m");
+  o.eccentricity = r.number("eccentricity");
+  o.inclination_deg = r.number("inclination_deg");
+  o.raan_deg = r.number("raan_deg");
+  o.arg_perigee_deg = r.number("arg_perigee_deg");
+  o.mean_anomaly_deg = r.number("mean_anomaly_deg");
+  const std::string epoch = r.string("epoch", start_time);
+  o.epoch_s = time_s(r, "epoch", epoch);
+  if (t.type == TrackType::orbit) {
+    const double perigee_m = o.semi_major_axis_m * (1.0 - o.eccentricity);
+    if (perigee_m <= wgs84_equatorial_radius_m) {
+      r.fail("eccentricity", "puts the perigee (" + format_number(perigee_m) +
+                                 " m from the Earth's centre) inside the Earth");
+    }
+  }
 }
 
 TrackSettings read_track(JsonReader& root) {
@@ -447,44 +533,8 @@ TrackSettings read_track(JsonReader& root) {
   t.start_time_s = time_s(r, "start_time", start_time);
   t.off_nadir_deg = r.number("off_nadir_deg");
   t.pointing_azimuth_deg = r.number("pointing_azimuth_deg");
-
-  const bool points_type = t.type == TrackType::points;
-  for (JsonReader& p : r.object_array("points", points_type)) {
-    GroundPoint point;
-    point.lat_deg = p.number("lat_deg");
-    point.lon_deg = p.number("lon_deg");
-    p.finish();
-    t.points.push_back(point);
-  }
-  if (points_type) {
-    const auto count = static_cast<std::int64_t>(t.points.size());
-    if (shots_given && t.shots != count) {
-      r.fail("shots", "must equal the number of points (" + std::to_string(count) +
-                          ") when type is \"points\", got " + std::to_string(t.shots));
-    }
-    t.shots = count;
-    r.resolved()["shots"] = count;
-  }
-
-  // Keplerian elements sit flat in `track`, as the product contract lists them.
-  OrbitElements& o = t.orbit;
-  o.semi_major_axis_m = r.number("semi_major_axis_m");
-  o.eccentricity = r.number("eccentricity");
-  o.inclination_deg = r.number("inclination_deg");
-  o.raan_deg = r.number("raan_deg");
-  o.arg_perigee_deg = r.number("arg_perigee_deg");
-  o.mean_anomaly_deg = r.number("mean_anomaly_deg");
-  // Elements without an epoch are taken to hold at the first shot.
-  const std::string epoch = r.string("epoch", start_time);
-  o.epoch_s = time_s(r, "epoch", epoch);
-  if (t.type == TrackType::orbit) {
-    const double perigee_m = o.semi_major_axis_m * (1.0 - o.eccentricity);
-    if (perigee_m <= wgs84_equatorial_radius_m) {
-      r.fail("eccentricity", "puts the perigee (" + format_number(perigee_m) +
-                                 " m from the Earth's centre) inside the Earth");
-    }
-  }
-
+  read_points(r, t, shots_given);
+  read_orbit(r, t, start_time);
   t.ephemeris = non_empty_path(r, "ephemeris");
   if (t.type == TrackType::ephemeris && t.ephemeris.empty())
     r.fail("ephemeris", "is required when type is \"ephemeris\"");

@@ -52,8 +52,8 @@ std::string format_number(double x) {
 
 std::string unknown_key_message(const std::string& key, const std::vector<std::string>& known) {
   std::string message = "unknown key \"" + key + "\"";
-  if (const auto suggestion = nearest_name(key, known))
-    return message + "; did you mean \"" + *suggestion + "\"?";
+  if (const std::string suggestion = did_you_mean(key, known); !suggestion.empty())
+    return message + suggestion;
   if (known.empty()) return message + "; this object takes no keys";
   std::vector<std::string> sorted = known;
   std::sort(sorted.begin(), sorted.end());
@@ -309,10 +309,7 @@ void JsonReader::throw_not_one_of(const std::string& key, const std::string& got
                                   const std::vector<std::string>& names) const {
   std::string list;
   for (std::size_t i = 0; i < names.size(); ++i) list += (i ? ", " : "") + names[i];
-  std::string message = "must be one of " + list + ", got \"" + got + "\"";
-  if (const auto suggestion = nearest_name(got, names))
-    message += "; did you mean \"" + *suggestion + "\"?";
-  fail(key, message);
+  fail(key, "must be one of " + list + ", got \"" + got + "\"" + did_you_mean(got, names));
 }
 
 }  // namespace glaswave
