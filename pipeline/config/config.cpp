@@ -294,8 +294,8 @@ SimulationSettings read_simulation(JsonReader& root) {
   return s;
 }
 
+// The terrain, which the caller has seen to be given.
 TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
-  if (!root.has("terrain")) root.fail("terrain", "is required: give \"dem\" or \"plane\"");
   TerrainSettings t;
   JsonReader r = root.object("terrain");
   const std::optional<std::string> dem = r.optional_string("dem");
@@ -768,12 +768,16 @@ Config parse_config(const json& document) {
   // The sensor first: its bands give the per-band optical properties their length.
   c.sensor = read_sensor(root);
   c.simulation = read_simulation(root);
-  c.terrain = read_terrain(root, c.sensor.bands);
+  // A missing terrain is told after every other section is read, so that a wrong value given
+  // ({"canopy": {"pai": -1}}) is named before the section not given.
+  const bool terrain_given = root.has("terrain");
+  if (terrain_given) c.terrain = read_terrain(root, c.sensor.bands);
   c.canopy = read_canopy(root, c.sensor.bands);
   c.track = read_track(root);
   c.output = read_output(root);
   c.detector = read_detector(root);
   c.brf = read_brf(root);
+  if (!terrain_given) root.fail("terrain", "is required: give \"dem\" or \"plane\"");
   root.finish();
   c.resolved.erase("$schema");
   check_shot_size(c);

@@ -57,6 +57,18 @@ def test_check_raises_config_error_naming_the_json_path():
     assert summary["shots"] == 3 and summary["shots_off_terrain"] == 0
 
 
+def test_the_contracts_example_names_the_wrong_value_before_the_missing_terrain():
+    # PRODUCT.md §6, as written there: no terrain, and a negative PAI.
+    with pytest.raises(glaswave.ConfigError) as raised:
+        glaswave.check({"canopy": {"pai": -1}})
+    assert isinstance(raised.value, ValueError)
+    assert str(raised.value) == "/canopy/pai: must be >= 0, got -1"
+    assert raised.value.place == "/canopy/pai"
+    with pytest.raises(glaswave.ConfigError) as raised:
+        glaswave.check({"canopy": {"pai": 1}})
+    assert str(raised.value) == '/terrain: is required: give "dem" or "plane"'
+
+
 def test_unusable_input_is_an_input_error_and_relative_paths_start_in_the_current_directory(
         tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)

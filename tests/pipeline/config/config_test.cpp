@@ -12,9 +12,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/error.hpp"
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/presets.hpp"
-#include "core/error.hpp"
 
 namespace glaswave {
 namespace {
@@ -517,6 +517,20 @@ TEST(Errors, TerrainNeedsExactlyOneOfDemAndPlane) {
   const Config c = parse_config(doc(R"({"terrain": {"dem": "/data/dem.tif"}})"));
   EXPECT_EQ(c.terrain.dem, "/data/dem.tif");
   EXPECT_FALSE(c.terrain.plane.has_value());
+}
+
+// PRODUCT.md §6's example: a wrong value is named before the terrain that is not given, in
+// whichever section it is.
+TEST(Errors, AWrongValueIsNamedBeforeAMissingTerrain) {
+  const json example = json::parse(R"({"canopy": {"pai": -1}})");
+  EXPECT_EQ(error_of(example), "/canopy/pai: must be >= 0, got -1");
+  EXPECT_EQ(place_of(example), "/canopy/pai");
+  EXPECT_EQ(error_of(json::parse(R"({"output": {"netcdf": 1}})")),
+            "/output/netcdf: must be a boolean (true or false), got 1");
+  // With every given value right, the missing terrain is the error.
+  EXPECT_EQ(error_of(json::parse(R"({"canopy": {"pai": 1}})")),
+            "/terrain: is required: give \"dem\" or \"plane\"");
+  EXPECT_EQ(place_of(json::parse(R"({"terrain": null})")), "/terrain");
 }
 
 TEST(Terrain, DemBandAndVerticalDatum) {
