@@ -159,8 +159,9 @@ TEST(Schema, EveryObjectRefusesUnknownKeys) {
   std::function<void(const json&, const std::string&)> walk = [&](const json& s,
                                                                   const std::string& where) {
     if (!s.is_object()) return;
-    if (s.contains("properties"))
+    if (s.contains("properties")) {
       EXPECT_EQ(s.value("additionalProperties", json(true)), false) << where;
+    }
     for (const auto& [key, child] : s.items()) {
       if (child.is_object()) walk(child, where + "/" + key);
       if (child.is_array())
@@ -220,10 +221,11 @@ TEST(Schema, TheParserAcceptsEveryKeyOfTheSchema) {
 TEST(Schema, DefaultsAreWhatTheParserFillsIn) {
   const json schema = configuration_schema();
   const json resolved = parse_config(doc(R"({"canopy": {}})")).resolved;
-  for (const std::string& section : {"simulation", "canopy", "output", "detector", "brf"}) {
+  for (const std::string section : {"simulation", "canopy", "output", "detector", "brf"}) {
     for (const auto& [key, s] : schema["properties"][section]["properties"].items()) {
-      if (s.contains("default"))
+      if (s.contains("default")) {
         EXPECT_EQ(resolved[section][key], s["default"]) << section << "/" << key;
+      }
     }
   }
   // The sensor's defaults are the default preset's values.
