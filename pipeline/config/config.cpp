@@ -768,8 +768,9 @@ Config parse_config(const json& document) {
   // The sensor first: its bands give the per-band optical properties their length.
   c.sensor = read_sensor(root);
   c.simulation = read_simulation(root);
-  // A missing terrain is told after every other section is read, so that a wrong value given
-  // ({"canopy": {"pai": -1}}) is named before the section not given.
+  // A missing terrain is told after every other section is read and the unknown keys are
+  // refused, so that a wrong value given ({"canopy": {"pai": -1}}) or a misspelt "terrian" is
+  // named before the section not given.
   const bool terrain_given = root.has("terrain");
   if (terrain_given) c.terrain = read_terrain(root, c.sensor.bands);
   c.canopy = read_canopy(root, c.sensor.bands);
@@ -777,8 +778,8 @@ Config parse_config(const json& document) {
   c.output = read_output(root);
   c.detector = read_detector(root);
   c.brf = read_brf(root);
-  if (!terrain_given) root.fail("terrain", "is required: give \"dem\" or \"plane\"");
   root.finish();
+  if (!terrain_given) root.fail("terrain", "is required: give \"dem\" or \"plane\"");
   c.resolved.erase("$schema");
   check_shot_size(c);
   return c;

@@ -531,6 +531,9 @@ TEST(Errors, AWrongValueIsNamedBeforeAMissingTerrain) {
   EXPECT_EQ(error_of(json::parse(R"({"canopy": {"pai": 1}})")),
             "/terrain: is required: give \"dem\" or \"plane\"");
   EXPECT_EQ(place_of(json::parse(R"({"terrain": null})")), "/terrain");
+  // A misspelt terrain is named as such, with the key it was meant to be.
+  EXPECT_EQ(error_of(json::parse(R"({"terrian": {"plane": {}}})")),
+            "/terrian: unknown key \"terrian\"; did you mean \"terrain\"?");
 }
 
 TEST(Terrain, DemBandAndVerticalDatum) {
