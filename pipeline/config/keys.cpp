@@ -217,8 +217,7 @@ Key sensor_keys() {
            "the laser's bands: 532 and 1064 nm by default, with pulse energies of 32 and "
            "72 mJ and round-trip transmissions of 0.8 and 0.9",
            {string("name", std::nullopt,
-                   "the band's name: the key of per-band values and the suffix of "
-                   "per-band GeoJSON properties; unique, not empty")
+                   "the band's name: the key of per-band values; unique, not empty")
                 .with_required(),
             number("wavelength_nm", std::nullopt, above(0), "nm", "wavelength").with_required(),
             number("pulse_energy_mJ", std::nullopt, above(0), "mJ", "energy of a transmitted pulse")
