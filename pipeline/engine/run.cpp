@@ -80,6 +80,12 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   check_run(config);  // first, as check_inputs does: check and run refuse alike
 
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
+  // The products record what the DEM's heights were measured from, as the terrain chose it (its
+  // own vertical CRS wins over terrain.vertical_datum). The simulator grows the forest before
+  // the track is planned, in check_inputs' order, so that both name the same first fault.
+  Config used = config;
+  used.resolved["terrain"]["vertical_datum"] = terrain->vertical_datum().key;
+  const ShotSimulator simulator(used, *terrain);
   // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
   const std::unique_ptr<Track> planned = plan_track(config, *terrain);
   const Track& track = *planned;
@@ -94,12 +100,6 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
                                                              : std::string()));
 
   OutputDirectory directory(request.out_dir);
-
-  // The products record what the DEM's heights were measured from, as the terrain chose it (its
-  // own vertical CRS wins over terrain.vertical_datum).
-  Config used = config;
-  used.resolved["terrain"]["vertical_datum"] = terrain->vertical_datum().key;
-  const ShotSimulator simulator(used, *terrain);
   RunInfo info = simulator.run_info(last - first, request.command_line);
   info.vertical_datum = terrain->vertical_datum().description;
   const std::vector<std::unique_ptr<ProductWriter>> writers = make_writers(
