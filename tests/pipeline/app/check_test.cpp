@@ -85,6 +85,9 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
       {{{"terrain", {{"plane", nullptr}, {"dem", (dir_ / "absent.tif").string()}}}},
        3,
        (dir_ / "absent.tif").string() + ": cannot read the DEM"},
+      {{{"canopy", {{"crowns_file", (dir_ / "absent.csv").string()}}}},
+       3,
+       (dir_ / "absent.csv").string() + ": "},
   };
   for (const Case& c : cases) {
     const std::string config = write_config(c.changes);
