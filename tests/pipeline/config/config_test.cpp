@@ -15,33 +15,16 @@
 #include "core/error.hpp"
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/presets.hpp"
+#include "tests/pipeline/config/config_test_support.hpp"
 
 namespace glaswave {
 namespace {
 
 using nlohmann::json;
+using test_support::doc;
+using test_support::error_of;
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
-
-// A configuration document from JSON text; a flat plane is added when the text has no terrain,
-// since the terrain is the one section without a default.
-json doc(const std::string& text) {
-  json d = json::parse(text);
-  if (!d.contains("terrain")) d["terrain"] = {{"plane", json::object()}};
-  return d;
-}
-
-// The message of the error parse_config throws, or "" when it throws none.
-std::string error_of(const json& document) {
-  try {
-    parse_config(document);
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::config);
-    EXPECT_EQ(e.exit_status(), 2);
-    return e.what();
-  }
-  return "";
-}
 
 std::string place_of(const json& document) {
   try {

@@ -18,29 +18,16 @@
 #include "pipeline/config/config.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/presets.hpp"
+#include "tests/pipeline/config/config_test_support.hpp"
 
 namespace glaswave {
 namespace {
 
 using nlohmann::json;
+using test_support::doc;
+using test_support::error_of;
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
-
-json doc(const std::string& text) {
-  json d = json::parse(text);
-  if (!d.contains("terrain")) d["terrain"] = {{"plane", json::object()}};
-  return d;
-}
-
-std::string error_of(const json& document) {
-  try {
-    parse_config(document);
-  } catch (const Error& e) {
-    EXPECT_EQ(e.exit_status(), 2);
-    return e.what();
-  }
-  return "";
-}
 
 std::string run_error_of(const json& document) {
   try {
