@@ -24,28 +24,13 @@ double table2_normalisation_532_J() {
 }
 
 // Two ellipsoid crowns of two kinds of foliage over level ground, seen from 600 km at nadir.
-struct TwoCrowns {
-  TwoCrowns() {
-    vegetation.crowns = {{CrownShape::ellipsoid, {4.0, 0.0, 6.0}, 7.0, 6.0, 0.4, 0},
-                         {CrownShape::ellipsoid, {-5.0, 3.0, 3.0}, 6.0, 5.0, 0.5, 1}};
-    scene =
-        std::make_unique<Scene>(device, build_ground_mesh(plane, frame, 150.0, 1.0e9), vegetation);
-    geometry.sensor_m = {0.0, 0.0, 600000.0};
-    geometry.axis = {0.0, 0.0, -1.0};
-    geometry.range_m = 600000.0;
-    const Foliage broadleaf{{0.45, 0.45}, {0.45, 0.45}, {0.3, 0.3}, &angles, 0.05};
-    const Foliage needles{{0.1, 0.4}, {0.05, 0.4}, {0.2, 0.3}, &angles, 0.0};
-    optics.soil_reflectance = {0.2, 0.25};
-    optics.foliage = {broadleaf, needles};
-  }
-  PlaneTerrain plane{{0.0, 0.0, 0.0, 0.0, 0.0}};
-  LocalFrame frame{{0.0, 0.0, 0.0}};
-  RayDevice device;
-  Vegetation vegetation;
-  std::unique_ptr<Scene> scene;
-  ShotGeometry geometry;
-  LeafAngles angles{LeafAngleDistribution::spherical, 0.0};
-  SceneOptics optics;
+struct TwoCrowns : test_support::CrownScene {
+  TwoCrowns()
+      : CrownScene({{CrownShape::ellipsoid, {4.0, 0.0, 6.0}, 7.0, 6.0, 0.4, 0},
+                    {CrownShape::ellipsoid, {-5.0, 3.0, 3.0}, 6.0, 5.0, 0.5, 1}},
+                   {{{0.45, 0.45}, {0.45, 0.45}, {0.3, 0.3}, 0.05},  // broadleaf
+                    {{0.1, 0.4}, {0.05, 0.4}, {0.2, 0.3}, 0.0}},     // needles
+                   {0.2, 0.25}) {}
 };
 
 // Every ray of a shot re-run alone: the shot is the sum of its rays, to round-off (the rays'

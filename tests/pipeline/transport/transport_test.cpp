@@ -120,32 +120,11 @@ TEST(ShotTransport, SameBitsForAnyThreadCount) {
   EXPECT_NE(one.total_W, other.total_W);
 }
 
-// A scene with one crown over level ground, seen from 600 km at nadir.
-struct CrownScene {
-  explicit CrownScene(std::vector<Crown> crowns) {
-    vegetation.crowns = std::move(crowns);
-    scene =
-        std::make_unique<Scene>(device, build_ground_mesh(plane, frame, 150.0, 1.0e9), vegetation);
-    geometry.sensor_m = {0.0, 0.0, 600000.0};
-    geometry.axis = {0.0, 0.0, -1.0};
-    geometry.range_m = 600000.0;
-    foliage.reflectance = {0.45, 0.45};
-    foliage.transmittance = {0.45, 0.45};
-    foliage.trunk_reflectance = {0.3, 0.3};
-    foliage.leaf_angles = &angles;
-    foliage.leaf_size_m = 0.05;
-    optics.soil_reflectance = {0.2, 0.2};
-    optics.foliage = {foliage};
-  }
-  PlaneTerrain plane{{0.0, 0.0, 0.0, 0.0, 0.0}};
-  LocalFrame frame{{0.0, 0.0, 0.0}};
-  RayDevice device;
-  Vegetation vegetation;
-  std::unique_ptr<Scene> scene;
-  ShotGeometry geometry;
-  LeafAngles angles{LeafAngleDistribution::spherical, 0.0};
-  Foliage foliage;
-  SceneOptics optics;
+// Crowns of one kind of foliage (0.45 both ways, bark 0.3, leaves 5 cm) over soil of 0.2.
+struct OneKindScene : test_support::CrownScene {
+  explicit OneKindScene(std::vector<Crown> crowns)
+      : CrownScene(std::move(crowns), {{{0.45, 0.45}, {0.45, 0.45}, {0.3, 0.3}, 0.05}},
+                   {0.2, 0.2}) {}
 };
 
 // Overlapping crowns add their foliage: two coincident crowns of density u scatter as one of 2u.
@@ -153,7 +132,7 @@ TEST(ShotTransport, OverlappingCrownsAddTheirFoliage) {
   const Crown crown{CrownShape::ellipsoid, {0.0, 0.0, 5.0}, 60.0, 8.0, 0.05};
   Crown dense = crown;
   dense.area_density_m2_m3 = 0.1;
-  const CrownScene two({crown, crown}), one({dense});
+  const OneKindScene two({crown, crown}), one({dense});
   const LidarModel lidar(table2_sensor());
   TransportOptions options;
   options.rays = 40000;
@@ -169,7 +148,7 @@ TEST(ShotTransport, OverlappingCrownsAddTheirFoliage) {
 // light crossing the 8 m of foliage above it once (the hotspot).
 TEST(ShotTransport, ACrownReachingBelowTheGroundKeepsTheGroundReturn) {
   const double u = 0.05;
-  const CrownScene scene({{CrownShape::ellipsoid, {0.0, 0.0, -8.0}, 300.0, 8.0, u}});
+  const OneKindScene scene({{CrownShape::ellipsoid, {0.0, 0.0, -8.0}, 300.0, 8.0, u}});
   const LidarModel lidar(table2_sensor());
   TransportOptions options;
   options.rays = 40000;
@@ -183,8 +162,8 @@ TEST(ShotTransport, ACrownReachingBelowTheGroundKeepsTheGroundReturn) {
 }
 
 TEST(ShotTransport, SameBitsForAnyThreadCountInAForest) {
-  const CrownScene forest({{CrownShape::ellipsoid, {3.0, 0.0, 15.0}, 8.0, 8.0, 0.3},
-                           {CrownShape::cone, {-6.0, 4.0, 12.0}, 5.0, 9.0, 0.4}});
+  const OneKindScene forest({{CrownShape::ellipsoid, {3.0, 0.0, 15.0}, 8.0, 8.0, 0.3},
+                             {CrownShape::cone, {-6.0, 4.0, 12.0}, 5.0, 9.0, 0.4}});
   const LidarModel lidar(table2_sensor());
   TransportOptions options;
   options.rays = 12000;

@@ -1,7 +1,16 @@
-// What the transport tests share: the lidar of the seed's Table 2, typed from the table.
+// What the transport tests share: the lidar of the seed's Table 2, typed from the table, and
+// crowns over level ground seen from 600 km at nadir.
 #pragma once
 
+#include <memory>
+#include <vector>
+
+#include "canopy/leaf_angles.hpp"
+#include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"
+#include "pipeline/transport/shot_transport.hpp"
+#include "terrain/ground_mesh.hpp"
+#include "terrain/terrain.hpp"
 
 namespace glaswave::test_support {
 
@@ -19,5 +28,37 @@ inline LidarSettings table2_sensor() {
   sensor.bands = {{532.0, 32.0, 0.8}, {1064.0, 72.0, 0.9}};
   return sensor;
 }
+
+// Crowns over level ground (150 m around the origin), seen from 600 km at nadir, with spherical
+// leaves; `foliage` gives each crown material its optics (reflectance, transmittance, trunk
+// reflectance and leaf size per kind) and `soil` the ground's reflectance per band.
+struct CrownScene {
+  struct Kind {
+    std::vector<double> reflectance, transmittance, trunk_reflectance;
+    double leaf_size_m = 0.0;
+  };
+
+  CrownScene(std::vector<Crown> crowns, const std::vector<Kind>& kinds, std::vector<double> soil) {
+    vegetation.crowns = std::move(crowns);
+    scene =
+        std::make_unique<Scene>(device, build_ground_mesh(plane, frame, 150.0, 1.0e9), vegetation);
+    geometry.sensor_m = {0.0, 0.0, 600000.0};
+    geometry.axis = {0.0, 0.0, -1.0};
+    geometry.range_m = 600000.0;
+    optics.soil_reflectance = std::move(soil);
+    for (const Kind& kind : kinds)
+      optics.foliage.push_back({kind.reflectance, kind.transmittance, kind.trunk_reflectance,
+                                &angles, kind.leaf_size_m});
+  }
+
+  PlaneTerrain plane{{0.0, 0.0, 0.0, 0.0, 0.0}};
+  LocalFrame frame{{0.0, 0.0, 0.0}};
+  RayDevice device;
+  Vegetation vegetation;
+  std::unique_ptr<Scene> scene;
+  ShotGeometry geometry;
+  LeafAngles angles{LeafAngleDistribution::spherical, 0.0};
+  SceneOptics optics;
+};
 
 }  // namespace glaswave::test_support
