@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tests/scratch_dir.hpp"
+
 namespace glaswave {
 namespace {
 
@@ -36,7 +38,8 @@ TEST(SplitCsvLine, TrimsFieldsAndKeepsEmptyOnes) {
 }
 
 TEST(CsvReader, SkipsBlankAndCommentLinesAndNamesTheLineOfAnError) {
-  const fs::path file = fs::temp_directory_path() / "glaswave_csv_test.csv";
+  const test_support::ScratchDir dir("glaswave_csv_test");
+  const fs::path file = dir / "test.csv";
   std::ofstream(file) << "# a comment\nx,y\n\n   \n1, 2\n  # another\n3,four\n";
   CsvReader csv(file, "the test file");
   std::vector<std::string_view> fields;

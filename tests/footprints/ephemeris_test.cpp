@@ -13,6 +13,7 @@
 #include "footprints/glas_time.hpp"
 #include "footprints/track.hpp"
 #include "tests/footprints/test_terrains.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -21,15 +22,6 @@ namespace fs = std::filesystem;
 
 class Ephemeris : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glaswave_ephemeris_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   fs::path write(const std::string& text) {
     const fs::path file = dir_ / "track.csv";
     std::ofstream(file) << text;
@@ -49,7 +41,7 @@ class Ephemeris : public ::testing::Test {
     return {};
   }
 
-  fs::path dir_;
+  test_support::ScratchDir dir_{"glaswave_ephemeris"};
 };
 
 std::string position_text(const Geodetic& point) {

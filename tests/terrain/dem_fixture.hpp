@@ -6,7 +6,6 @@
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
-#include <unistd.h>
 
 #include <GeographicLib/UTMUPS.hpp>
 #include <array>
@@ -21,6 +20,7 @@
 #include <vector>
 
 #include "terrain/terrain.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave::testing {
 
@@ -174,22 +174,6 @@ class Egm96Grid {
 };
 
 // A fresh folder under the system's temporary directory for one test, removed at its end.
-class TempFolder {
- public:
-  TempFolder() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = std::filesystem::temp_directory_path() /
-            (std::string("glaswave_") + info->test_suite_name() + "_" + info->name() + "_" +
-             std::to_string(::getpid()));  // suites of several build folders may run at once
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempFolder() { std::filesystem::remove_all(path_); }
-  const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  std::filesystem::path path_;
-};
+using TempFolder = test_support::ScratchDir;
 
 }  // namespace glaswave::testing

@@ -2,7 +2,6 @@
 // configurations, so each bad configuration here ends both with the same status and the same
 // one-line message, and run leaves nothing behind. And `check --schema` prints the schema.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -11,6 +10,7 @@
 #include <vector>
 
 #include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -21,16 +21,6 @@ using namespace test_support;
 
 class Check : public ::testing::Test {
  protected:
-  void SetUp() override {
-    // The process id keeps runs of the suite in other checkouts on this machine apart.
-    dir_ = fs::temp_directory_path() /
-           ("glaswave_check_" + std::to_string(::getpid()) + "_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // One shot over a plane, with `changes` merged in.
   std::string write_config(const json& changes) {
     json config = {
@@ -46,7 +36,7 @@ class Check : public ::testing::Test {
     return file.string();
   }
 
-  fs::path dir_;
+  ScratchDir dir_{"glaswave_check"};
 };
 
 TEST_F(Check, RefusesExactlyWhatRunRefuses) {

@@ -5,7 +5,6 @@
 #include <netcdf.h>
 #include <ogrsf_frmts.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -17,6 +16,7 @@
 #include <string>
 
 #include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -26,16 +26,6 @@ using namespace test_support;
 
 class Cli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glaswave_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // A short pass over a sloped plane.
   std::string write_config(const nlohmann::json& changes = nlohmann::json::object()) {
     nlohmann::json config = {
@@ -64,7 +54,7 @@ class Cli : public ::testing::Test {
     return file.string();
   }
 
-  fs::path dir_;
+  ScratchDir dir_{"glaswave_cli"};
 };
 
 // rx_waveform of shots.nc, flattened.

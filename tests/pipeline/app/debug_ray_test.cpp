@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -25,20 +26,14 @@ constexpr int rays = 16;
 class DebugRay : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glaswave_debug_ray_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     // One shot at nadir over bare soil (0.15) on a plane sloping 8 degrees, few rays.
     nlohmann::json config = plane_shot("glas", 8.0, 0.0, rays);
     config["output"] = {{"netcdf", true}, {"geojson", false}};
     config_ = (dir_ / "plane.json").string();
     std::ofstream(config_) << config.dump(2);
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
-  fs::path dir_;
+  ScratchDir dir_{"glaswave_debug_ray"};
   std::string config_;
 };
 

@@ -7,7 +7,6 @@
 #include "pipeline/app/plots.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <GeographicLib/UTMUPS.hpp>
 #include <array>
@@ -24,6 +23,7 @@
 #include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
+#include "tests/scratch_dir.hpp"
 #include "tests/terrain/dem_fixture.hpp"
 
 namespace glaswave {
@@ -124,16 +124,6 @@ void write_products(const fs::path& dir, bool all_flagged, const std::string& co
 
 class PlotsTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glaswave plots " +  // a space, as no shell must see the path
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // Each plot exists, is a PNG, and holds more than axes alone would; no .part is left.
   void expect_plots() const {
     for (const char* name : {"waveforms.png", "track_profile.png", "footprints_map.png"}) {
@@ -151,18 +141,18 @@ class PlotsTest : public ::testing::Test {
     }
   }
 
-  fs::path dir_;
+  test_support::ScratchDir dir_{"glaswave plots"};  // a space, as no shell must see the path
 };
 
 TEST_F(PlotsTest, WritesThreePngsOfATinyProduct) {
-  write_products(dir_, false);
-  ASSERT_NO_THROW(write_plots(dir_));
+  write_products(dir_.path(), false);
+  ASSERT_NO_THROW(write_plots(dir_.path()));
   expect_plots();
 }
 
 TEST_F(PlotsTest, DrawsAProductWhoseShotsAreAllFlagged) {
-  write_products(dir_, true);
-  ASSERT_NO_THROW(write_plots(dir_));
+  write_products(dir_.path(), true);
+  ASSERT_NO_THROW(write_plots(dir_.path()));
   expect_plots();
 }
 
@@ -193,15 +183,15 @@ TEST_F(PlotsTest, DrawsTheFootprintsOverAHillshadeOfTheDemAndWithoutItWhenItIsGo
   const fs::path dem = dir_ / "hills.tif";
   const fs::path map = dir_ / "plots" / "footprints_map.png";
   write_hills(dem);
-  write_products(dir_, false, nlohmann::json{{"terrain", {{"dem", dem.string()}}}}.dump());
-  ASSERT_NO_THROW(write_plots(dir_));
+  write_products(dir_.path(), false, nlohmann::json{{"terrain", {{"dem", dem.string()}}}}.dump());
+  ASSERT_NO_THROW(write_plots(dir_.path()));
   expect_plots();
   EXPECT_NE(
       png_bytes(map).find("over a hillshade of the DEM; CRS WGS 84 / UTM zone 11N (EPSG:32611)"),
       std::string::npos);
 
   fs::remove(dem);  // the products moved away from their DEM: the plain map, no error
-  ASSERT_NO_THROW(write_plots(dir_));
+  ASSERT_NO_THROW(write_plots(dir_.path()));
   expect_plots();
   EXPECT_EQ(png_bytes(map).find("hillshade"), std::string::npos);
   EXPECT_NE(png_bytes(map).find("longitude and latitude (WGS 84)"), std::string::npos);
@@ -209,7 +199,7 @@ TEST_F(PlotsTest, DrawsTheFootprintsOverAHillshadeOfTheDemAndWithoutItWhenItIsGo
 
 TEST_F(PlotsTest, FolderWithoutShotsThrowsWithTheScriptsMessage) {
   try {
-    write_plots(dir_);
+    write_plots(dir_.path());
     FAIL() << "no error";
   } catch (const Error& error) {
     EXPECT_EQ(error.kind(), ErrorKind::run);

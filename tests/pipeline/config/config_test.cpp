@@ -5,7 +5,6 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <fstream>
@@ -16,6 +15,7 @@
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/presets.hpp"
 #include "tests/pipeline/config/config_test_support.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -36,30 +36,7 @@ std::string place_of(const json& document) {
 }
 
 // A fresh folder under the system's temporary directory, removed at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = std::filesystem::temp_directory_path() /
-            ("glaswave_config_test_" + std::to_string(::getpid()) + "_" + info->name());
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  std::filesystem::path write(const std::string& name, const std::string& text) const {
-    const auto file = path_ / name;
-    std::filesystem::create_directories(file.parent_path());
-    std::ofstream(file) << text;
-    return file;
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using TempDir = test_support::ScratchDir;
 
 // ---- sensor presets (the seed's Table 2) ----------------------------------------------------
 

@@ -6,7 +6,6 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +18,7 @@
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/presets.hpp"
 #include "tests/pipeline/config/config_test_support.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -226,9 +226,7 @@ TEST(Schema, DefaultsAreWhatTheParserFillsIn) {
 TEST(Schema, ValidatesWithPythonJsonschema) {
   if (std::system("python3 -c 'import jsonschema' >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "python3-jsonschema is not installed";
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("glaswave_schema_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const test_support::ScratchDir dir("glaswave_schema_test");
   std::ofstream(dir / "schema.json") << configuration_schema().dump();
   json good = json::array(), bad = json::array();
   for (const json& document : rich_documents()) {
@@ -254,8 +252,7 @@ TEST(Schema, ValidatesWithPythonJsonschema) {
       "    assert not v.is_valid(doc), i\n";
   std::ofstream(dir / "check.py") << script;
   const int status =
-      std::system(("python3 " + (dir / "check.py").string() + " " + dir.string()).c_str());
-  std::filesystem::remove_all(dir);
+      std::system(("python3 " + (dir / "check.py").string() + " " + dir.path().string()).c_str());
   EXPECT_EQ(status, 0);
 }
 

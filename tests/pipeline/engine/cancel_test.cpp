@@ -2,13 +2,13 @@
 // comes out of run_simulation, and neither a product, nor a .part file, nor the output directory
 // is left behind.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <string>
 
 #include "pipeline/engine/run.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -27,10 +27,7 @@ TEST(Cancel, AThrowFromTheProgressCallbackLeavesNothingBehind) {
   document["output"] = {{"netcdf", true}, {"geojson", true}};
   const Config config = parse_config(document);
 
-  const fs::path scratch =
-      fs::temp_directory_path() / ("glaswave_cancel_test_" + std::to_string(::getpid()));
-  fs::remove_all(scratch);
-  fs::create_directories(scratch);
+  const test_support::ScratchDir scratch("glaswave_cancel_test");
   RunRequest request;
   request.out_dir = scratch / "run";
   request.threads = 1;
@@ -43,8 +40,7 @@ TEST(Cancel, AThrowFromTheProgressCallbackLeavesNothingBehind) {
   EXPECT_THROW(run_simulation(config, request, cancel_after_first), Cancelled);
   EXPECT_EQ(reports, 1);
   EXPECT_FALSE(fs::exists(request.out_dir));
-  EXPECT_TRUE(fs::is_empty(scratch));
-  fs::remove_all(scratch);
+  EXPECT_TRUE(fs::is_empty(scratch.path()));
 }
 
 }  // namespace

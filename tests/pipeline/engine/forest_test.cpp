@@ -1,7 +1,6 @@
 // Explicit crowns (crowns_file) and stands (GeoJSON polygons overriding canopy keys): their
 // trees where the files put them, with the optics the stands give, and bad files named.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -12,6 +11,7 @@
 #include "footprints/track.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -20,15 +20,6 @@ namespace fs = std::filesystem;
 
 class Forests : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glaswave_forest_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   std::string write(const std::string& name, const std::string& text) {
     std::ofstream(dir_ / name) << text;
     return (dir_ / name).string();
@@ -37,7 +28,7 @@ class Forests : public ::testing::Test {
     std::ofstream(dir_ / "config.json") << document.dump();
     return load_config(dir_ / "config.json", {});
   }
-  fs::path dir_;
+  test_support::ScratchDir dir_{"glaswave_forest"};
 };
 
 std::vector<ShotRecord> simulate(const Config& config) {

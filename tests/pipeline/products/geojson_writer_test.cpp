@@ -7,7 +7,6 @@
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 #include <ogrsf_frmts.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +21,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/products/product_fields.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -133,16 +133,8 @@ void CPL_STDCALL collect_gdal_message(CPLErr level, CPLErrorNum, const char* mes
 class GeojsonWriterTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() { GDALAllRegister(); }
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glaswave_geojson_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
   void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);  // kept for inspection when a test fails
+    if (HasFailure()) dir_.keep();  // kept for inspection when a test fails
   }
   fs::path file() const { return dir_ / "footprints.geojson"; }
   fs::path part() const { return dir_ / "footprints.geojson.part"; }
@@ -161,7 +153,7 @@ class GeojsonWriterTest : public ::testing::Test {
     return buffer.str();
   }
 
-  fs::path dir_;
+  test_support::ScratchDir dir_{"glaswave_geojson"};
 };
 
 TEST_F(GeojsonWriterTest, FinalFileAndNoPart) {

@@ -5,7 +5,6 @@
 
 #include <gtest/gtest.h>
 #include <netcdf.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -16,6 +15,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -149,21 +149,13 @@ ShotRecord make_flagged_record(int record) {
 
 class NetcdfWriterTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glaswave_netcdf_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
   void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);  // kept for inspection when a test fails
+    if (HasFailure()) dir_.keep();  // kept for inspection when a test fails
   }
   fs::path file() const { return dir_ / "shots.nc"; }
   fs::path part() const { return dir_ / "shots.nc.part"; }
 
-  fs::path dir_;
+  test_support::ScratchDir dir_{"glaswave_netcdf"};
 };
 
 // Reads back a file through the C API; every failure is a test failure naming the call.

@@ -5,7 +5,6 @@
 #include "pipeline/products/product_fields.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -16,6 +15,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/products/product_writer.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -207,16 +207,6 @@ TEST(StoreMetrics, CopiesEachMetricToItsField) {
 
 class ProductWritersTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glaswave_writers_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   static RunInfo info() {
     RunInfo info;
     info.shots = 2;
@@ -236,23 +226,23 @@ class ProductWritersTest : public ::testing::Test {
   }
   std::set<std::string> files() const {
     std::set<std::string> names;
-    for (const auto& entry : fs::directory_iterator(dir_))
+    for (const auto& entry : fs::directory_iterator(dir_.path()))
       names.insert(entry.path().filename().string());
     return names;
   }
 
-  fs::path dir_;
+  test_support::ScratchDir dir_{"glaswave_writers"};
 };
 
 TEST_F(ProductWritersTest, MakesTheWritersAskedFor) {
-  EXPECT_EQ(make_writers(dir_, {.netcdf = true, .geojson = true}, info()).size(), 2u);
-  EXPECT_EQ(make_writers(dir_, {.netcdf = false, .geojson = true}, info()).size(), 1u);
-  EXPECT_TRUE(make_writers(dir_, {.netcdf = false, .geojson = false}, info()).empty());
+  EXPECT_EQ(make_writers(dir_.path(), {.netcdf = true, .geojson = true}, info()).size(), 2u);
+  EXPECT_EQ(make_writers(dir_.path(), {.netcdf = false, .geojson = true}, info()).size(), 1u);
+  EXPECT_TRUE(make_writers(dir_.path(), {.netcdf = false, .geojson = false}, info()).empty());
   EXPECT_TRUE(files().empty()) << "writers destroyed unfinished leave nothing";
 }
 
 TEST_F(ProductWritersTest, FinishedWritersLeaveTheirProducts) {
-  auto writers = make_writers(dir_, {}, info());
+  auto writers = make_writers(dir_.path(), {}, info());
   for (std::int64_t i : {1, 0})
     for (const auto& writer : writers) writer->write(i, flagged(i));
   for (const auto& writer : writers) writer->finish(RunStats{});
@@ -261,7 +251,7 @@ TEST_F(ProductWritersTest, FinishedWritersLeaveTheirProducts) {
 }
 
 TEST_F(ProductWritersTest, AbortRemovesThePartAndRefusesMore) {
-  auto writers = make_writers(dir_, {}, info());
+  auto writers = make_writers(dir_.path(), {}, info());
   for (const auto& writer : writers) writer->write(0, flagged(0));
   EXPECT_EQ(files(), (std::set<std::string>{"footprints.geojson.part", "shots.nc.part"}));
   for (const auto& writer : writers) {
