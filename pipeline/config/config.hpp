@@ -25,7 +25,7 @@ struct Band {
 
 // The lidar (the seed's Table 2). Defaults are the `north2010` preset.
 struct SensorSettings {
-  std::string preset;  // "north2010", "glas" or empty
+  std::string preset;  // "north2010", "glas", "gedi" or empty
   double pulse_sigma_ns = 5.0;
   double divergence_sigma_rad = 0.00011;  // beam angular RMS width per axis
   double ifov_rad = 0.0004;               // detector full field of view (top-hat cone)

@@ -194,9 +194,10 @@ std::vector<std::string> preset_names() {
 Key sensor_keys() {
   const SensorSettings s;
   Key preset = choice("preset", std::nullopt, preset_names(),
-                      "`north2010` (the seed's Table 2, exactly) or `glas` (the same with "
-                      "GLAS's ~70 m beam); keys beside it override it (`bands` as a whole); "
-                      "absent: the values of `north2010`");
+                      "`north2010` (the seed's Table 2, exactly), `glas` (the same with "
+                      "GLAS's ~70 m beam) or `gedi` (GEDI's power beam: 1064 nm, 15.6 ns FWHM, "
+                      "~25 m from 420 km; set `track.altitude_m` to 420000); keys beside it "
+                      "override it (`bands` as a whole); absent: the values of `north2010`");
   preset.default_text = "none";
   return object(
       "sensor", "the lidar (the seed's Table 2)",

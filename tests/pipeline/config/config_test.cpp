@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 #include "core/error.hpp"
@@ -90,6 +91,37 @@ TEST(SensorPreset, GlasFootprintIsAbout70m) {
   expect_table2_bands(c.sensor);
 }
 
+// GEDI's published instrument: one 1064 nm band; a pulse of 15.6 ns FWHM; footprints about 25 m
+// across (1/e² diameter) from the ISS at about 420 km (Dubayah et al. 2020); an 0.8 m receiver
+// telescope whose fibres each see 300 µrad of the ground; 10 mJ for a full-power laser's beam
+// (gedi.umd.edu, instrument specifications). The expected values are computed here from those.
+TEST(SensorPreset, GediMatchesThePublishedInstrument) {
+  const Config c = parse_config(doc(R"({"sensor": {"preset": "gedi"}})"));
+  EXPECT_EQ(c.sensor.preset, "gedi");
+  // A Gaussian pulse's FWHM is 2 sqrt(2 ln 2) sigma.
+  const double fwhm_ns = 2.0 * std::sqrt(2.0 * std::log(2.0)) * c.sensor.pulse_sigma_ns;
+  EXPECT_NEAR(fwhm_ns, 15.6, 0.05);
+  // The 1/e² diameter at nadir is 4·σθ·H (see GlasFootprintIsAbout70m); 0.1 m of tolerance.
+  const double altitude_m = 420000.0;
+  EXPECT_NEAR(4.0 * c.sensor.divergence_sigma_rad * altitude_m, 25.0, 0.1);
+  const double footprint_area_m2 = std::numbers::pi * 12.5 * 12.5;
+  const double radius_m = 2.0 * c.sensor.divergence_sigma_rad * altitude_m;
+  EXPECT_NEAR(std::numbers::pi * radius_m * radius_m / footprint_area_m2, 1.0, 0.01);
+  EXPECT_NEAR(c.sensor.telescope_area_m2, std::numbers::pi * 0.4 * 0.4, 1e-3);
+  EXPECT_NEAR(c.sensor.ifov_rad, 300e-6, 1e-9);
+  // The field of view takes in the whole beam: its half angle is many beam sigmas.
+  EXPECT_GT(0.5 * c.sensor.ifov_rad, 6.0 * c.sensor.divergence_sigma_rad);
+  EXPECT_EQ(c.sensor.bin_ns, 1.0);
+  // The window holds GEDI L1B's longest records (1420 samples of 1 ns).
+  EXPECT_GE(c.sensor.bins, 1420);
+  ASSERT_EQ(c.sensor.bands.size(), 1u);
+  EXPECT_EQ(c.sensor.bands[0].name, "1064");
+  EXPECT_EQ(c.sensor.bands[0].wavelength_nm, 1064.0);
+  EXPECT_EQ(c.sensor.bands[0].pulse_energy_mJ, 10.0);
+  EXPECT_GT(c.sensor.bands[0].atmos_transmission_roundtrip, 0.0);
+  EXPECT_LE(c.sensor.bands[0].atmos_transmission_roundtrip, 1.0);
+}
+
 TEST(SensorPreset, KeysBesidePresetOverrideIt) {
   const Config c = parse_config(doc(R"({"sensor": {"preset": "glas", "pulse_sigma_ns": 3.5,
       "bins": 200, "bands": [{"name": "1064", "wavelength_nm": 1064, "pulse_energy_mJ": 75,
@@ -107,8 +139,9 @@ TEST(SensorPreset, KeysBesidePresetOverrideIt) {
 }
 
 TEST(SensorPreset, UnknownPresetListsKnownOnes) {
-  const std::string what = error_of(doc(R"({"sensor": {"preset": "gedi"}})"));
-  EXPECT_THAT(what, StartsWith("/sensor/preset: unknown preset \"gedi\""));
+  const std::string what = error_of(doc(R"({"sensor": {"preset": "icesat2"}})"));
+  EXPECT_THAT(what, StartsWith("/sensor/preset: unknown preset \"icesat2\""));
+  EXPECT_THAT(what, HasSubstr("gedi"));
   EXPECT_THAT(what, HasSubstr("glas"));
   EXPECT_THAT(what, HasSubstr("north2010"));
   EXPECT_EQ(error_of(doc(R"({"sensor": {"preset": 1}})")),
@@ -118,6 +151,7 @@ TEST(SensorPreset, UnknownPresetListsKnownOnes) {
 TEST(SensorPreset, CompiledPresetsParse) {
   ASSERT_TRUE(sensor_presets().count("north2010"));
   ASSERT_TRUE(sensor_presets().count("glas"));
+  ASSERT_TRUE(sensor_presets().count("gedi"));
   for (const auto& [name, text] : sensor_presets())
     EXPECT_TRUE(json::parse(text).is_object()) << name;
 }
