@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <tuple>
 
@@ -30,6 +31,7 @@ struct Arguments {
   std::optional<std::uint64_t> seed;
   bool resume = false;
   bool quiet = false;
+  bool json = false;           // run --json: the summary as one JSON object
   std::string debug_ray;       // SHOT:RAY
   bool schema = false;         // check --schema
   bool keys_markdown = false;  // check --keys-markdown (hidden: scripts/readme-keys)
@@ -174,6 +176,20 @@ int run(const Arguments& arguments, const std::string& command_line) {
   // Plots are drawn from the finished products; a failure there leaves the products whole.
   if (config.output.plots) write_plots(request.out_dir);
   const double wall_s = std::max(summary.wall_s, 1e-9);
+  if (arguments.json) {
+    const nlohmann::json object = {
+        {"shots", summary.shots},
+        {"shots_flagged", summary.shots_flagged},
+        {"wall_s", summary.wall_s},
+        {"shots_per_s", summary.shots / wall_s},
+        {"ray_queries", summary.ray_queries},
+        {"ray_queries_per_s", summary.ray_queries / wall_s},
+        {"vertical_datum", summary.vertical_datum},
+        {"out_dir", request.out_dir.string()},
+    };
+    std::printf("%s\n", object.dump().c_str());
+    return 0;
+  }
   std::printf(
       "glaswave: %lld shots in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; %s; "
       "products in %s\n",
@@ -275,6 +291,8 @@ class Commands {
             "UINT"));
     run_->add_flag("--resume", arguments_.resume, "finish an interrupted run");
     run_->add_flag("--quiet", arguments_.quiet, "no progress bar");
+    run_->add_flag("--json", arguments_.json,
+                   "print the summary as one JSON object on stdout instead of the summary line");
     run_->add_option("--debug-ray", arguments_.debug_ray,
                      "re-run ray RAY of shot SHOT alone and print its events, one a line; "
                      "writes no products (SHOT:RAY)");
