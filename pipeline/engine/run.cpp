@@ -102,8 +102,12 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   OutputDirectory directory(request.out_dir);
   RunInfo info = simulator.run_info(last - first, request.command_line);
   info.vertical_datum = terrain->vertical_datum().description;
-  const std::vector<std::unique_ptr<ProductWriter>> writers = make_writers(
-      request.out_dir, ProductSettings{config.output.netcdf, config.output.geojson}, info);
+  const ProductSettings settings{config.output.netcdf, config.output.geojson,
+                                 config.output.footprints_format == "GPKG"
+                                     ? FootprintsFormat::gpkg
+                                     : FootprintsFormat::geojson};
+  const std::vector<std::unique_ptr<ProductWriter>> writers =
+      make_writers(request.out_dir, settings, info);
 
   RunSummary summary;
   summary.ray_queries = simulate_records(

@@ -365,19 +365,24 @@ const ProductField* find_product_field(std::string_view name) {
   return nullptr;
 }
 
-std::vector<std::string> geojson_property_names(const ProductField& field) {
-  switch (field.geojson) {
-    case GeojsonProperty::none:
-      return {};
-    case GeojsonProperty::value:
-      return {field.name};
-    case GeojsonProperty::levels: {
-      std::vector<std::string> names;
-      for (const int level : kGeojsonLevels) names.push_back(field.name + std::to_string(level));
-      return names;
+std::vector<GeojsonPropertyName> geojson_properties(const ProductField& field,
+                                                    const std::vector<std::string>& band_names) {
+  std::vector<GeojsonPropertyName> properties;
+  if (field.geojson == GeojsonProperty::none) return properties;
+  if (!field.per_band()) {
+    properties.push_back({field.name, 0, -1});
+    return properties;
+  }
+  for (std::size_t band = 0; band < band_names.size(); ++band) {
+    const std::string suffix = "_" + band_names[band];
+    if (field.geojson == GeojsonProperty::levels) {
+      for (const int level : kGeojsonLevels)
+        properties.push_back({field.name + std::to_string(level) + suffix, band, level});
+    } else {
+      properties.push_back({field.name + suffix, band, -1});
     }
   }
-  return {};
+  return properties;
 }
 
 std::size_t ProductShape::length(std::string_view name) const {

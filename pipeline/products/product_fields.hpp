@@ -35,8 +35,10 @@ enum class FieldSource : std::uint8_t {
 // How a field appears among a footprint's GeoJSON properties.
 enum class GeojsonProperty : std::uint8_t {
   none,    // not there (arrays over bins and Gaussians)
-  value,   // the value; a per-band field gives its first band's, under the field's name
-  levels,  // a few entries of the last dimension, as GEDI names them (rh25 ... rh100)
+  value,   // the value under the field's name; a per-band field gives every band's, each under
+           // the name suffixed with the band's (energy_tr_1064, reflectance_532)
+  levels,  // a few entries of the last dimension, as GEDI names them (rh25 ... rh100), each
+           // band's suffixed as above (rh98_1064)
 };
 
 // The ShotRecord member a field lives in. Nested vectors are [band][...].
@@ -83,8 +85,19 @@ const ProductField* find_product_field(std::string_view name);
 // GEDI L2A's usual few of rh0..rh100, the GeoJSON properties of a `levels` field.
 inline constexpr std::array<int, 5> kGeojsonLevels = {25, 50, 75, 98, 100};
 
-// The GeoJSON property names of `field`, in order (none, one, or one per level).
-std::vector<std::string> geojson_property_names(const ProductField& field);
+// One GeoJSON property: its name, the band it reads (0 for a per-shot scalar) and, for a
+// `levels` field, the entry of the last dimension (kGeojsonLevels).
+struct GeojsonPropertyName {
+  std::string name;
+  std::size_t band = 0;
+  int level = -1;  // -1 unless the field is `levels`
+};
+
+// The GeoJSON properties of `field`, in order: none; one for a per-shot scalar; one per band
+// (and per level, band after band) for a per-band field, named with the band's name as a
+// suffix ("energy_tr_1064", "rh98_532"). `band_names` are the run's (RunInfo::bands).
+std::vector<GeojsonPropertyName> geojson_properties(const ProductField& field,
+                                                    const std::vector<std::string>& band_names);
 
 // The lengths of a run's dimensions after (shot, band).
 struct ProductShape {

@@ -1,8 +1,8 @@
 // The factory of a run's product writers: the one place that knows which writers exist.
 #include "pipeline/products/product_writer.hpp"
 
-#include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
+#include "pipeline/products/ogr_writer.hpp"
 
 namespace glaswave {
 
@@ -12,8 +12,12 @@ std::vector<std::unique_ptr<ProductWriter>> make_writers(const std::filesystem::
   std::vector<std::unique_ptr<ProductWriter>> writers;
   if (settings.netcdf)
     writers.push_back(std::make_unique<NetcdfWriter>(out_dir / "shots.nc", info));
-  if (settings.geojson)
-    writers.push_back(std::make_unique<GeojsonWriter>(out_dir / "footprints.geojson", info));
+  if (settings.footprints) {
+    const bool gpkg = settings.footprints_format == FootprintsFormat::gpkg;
+    writers.push_back(
+        std::make_unique<OgrWriter>(out_dir / (gpkg ? "footprints.gpkg" : "footprints.geojson"),
+                                    settings.footprints_format, info));
+  }
   return writers;
 }
 

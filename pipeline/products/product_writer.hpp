@@ -1,5 +1,5 @@
-// The one interface every product writer implements (shots.nc, footprints.geojson, and the
-// GPKG and HDF5 granules to come), and the factory that makes a run's writers. A writer begins
+// The one interface every product writer implements (shots.nc, footprints.geojson or .gpkg,
+// and the HDF5 granules to come), and the factory that makes a run's writers. A writer begins
 // when it is made (from its final path and the RunInfo), takes records by index, then finishes
 // or is aborted; its product appears under its final name only when finish() succeeds.
 #pragma once
@@ -31,10 +31,14 @@ class ProductWriter {
   virtual void abort() noexcept = 0;
 };
 
+// The footprints' format: DIR/footprints.geojson (RFC 7946) or DIR/footprints.gpkg.
+enum class FootprintsFormat : std::uint8_t { geojson, gpkg };
+
 // Which products a run writes (the engine fills it from the configuration's `output`).
 struct ProductSettings {
-  bool netcdf = true;   // DIR/shots.nc
-  bool geojson = true;  // DIR/footprints.geojson
+  bool netcdf = true;      // DIR/shots.nc
+  bool footprints = true;  // DIR/footprints.geojson or DIR/footprints.gpkg
+  FootprintsFormat footprints_format = FootprintsFormat::geojson;
 };
 
 // The writers of a run, each begun under `out_dir` (which must exist). Empty when `settings`

@@ -70,13 +70,33 @@ TEST(ProductFields, TableIsConsistent) {
   EXPECT_EQ(find_product_field("no_such_field"), nullptr);
 }
 
+// Per-band properties carry the band's name as a suffix, band after band; per-shot scalars none.
+std::vector<std::string> names_of(const char* field, const std::vector<std::string>& bands) {
+  std::vector<std::string> names;
+  for (const GeojsonPropertyName& property : geojson_properties(*find_product_field(field), bands))
+    names.push_back(property.name);
+  return names;
+}
+
 TEST(ProductFields, GeojsonNames) {
-  EXPECT_EQ(geojson_property_names(*find_product_field("energy_tr")),
-            (std::vector<std::string>{"energy_tr"}));
-  EXPECT_EQ(geojson_property_names(*find_product_field("rh")),
-            (std::vector<std::string>{"rh25", "rh50", "rh75", "rh98", "rh100"}));
-  EXPECT_TRUE(geojson_property_names(*find_product_field("rx_waveform")).empty());
-  EXPECT_TRUE(geojson_property_names(*find_product_field("gauss_amp")).empty());
+  const std::vector<std::string> bands = {"532", "1064"};
+  EXPECT_EQ(names_of("energy_tr", bands),
+            (std::vector<std::string>{"energy_tr_532", "energy_tr_1064"}));
+  EXPECT_EQ(names_of("energy_tr", {"1064"}), (std::vector<std::string>{"energy_tr_1064"}));
+  EXPECT_EQ(
+      names_of("rh", bands),
+      (std::vector<std::string>{"rh25_532", "rh50_532", "rh75_532", "rh98_532", "rh100_532",
+                                "rh25_1064", "rh50_1064", "rh75_1064", "rh98_1064", "rh100_1064"}));
+  EXPECT_EQ(names_of("shot_number", bands), (std::vector<std::string>{"shot_number"}));
+  EXPECT_EQ(names_of("elev", bands), (std::vector<std::string>{"elev"}));
+  EXPECT_TRUE(names_of("rx_waveform", bands).empty());
+  EXPECT_TRUE(names_of("gauss_amp", bands).empty());
+  const auto rh = geojson_properties(*find_product_field("rh"), bands);
+  EXPECT_EQ(rh[8].band, 1u);
+  EXPECT_EQ(rh[8].level, 98);
+  const auto reflectance = geojson_properties(*find_product_field("reflectance"), bands);
+  EXPECT_EQ(reflectance[1].band, 1u);
+  EXPECT_EQ(reflectance[1].level, -1);
 }
 
 ShotRecord shot_known_values() {
@@ -235,9 +255,9 @@ class ProductWritersTest : public ::testing::Test {
 };
 
 TEST_F(ProductWritersTest, MakesTheWritersAskedFor) {
-  EXPECT_EQ(make_writers(dir_.path(), {.netcdf = true, .geojson = true}, info()).size(), 2u);
-  EXPECT_EQ(make_writers(dir_.path(), {.netcdf = false, .geojson = true}, info()).size(), 1u);
-  EXPECT_TRUE(make_writers(dir_.path(), {.netcdf = false, .geojson = false}, info()).empty());
+  EXPECT_EQ(make_writers(dir_.path(), {.netcdf = true, .footprints = true}, info()).size(), 2u);
+  EXPECT_EQ(make_writers(dir_.path(), {.netcdf = false, .footprints = true}, info()).size(), 1u);
+  EXPECT_TRUE(make_writers(dir_.path(), {.netcdf = false, .footprints = false}, info()).empty());
   EXPECT_TRUE(files().empty()) << "writers destroyed unfinished leave nothing";
 }
 
@@ -248,6 +268,15 @@ TEST_F(ProductWritersTest, FinishedWritersLeaveTheirProducts) {
   for (const auto& writer : writers) writer->finish(RunStats{});
   for (const auto& writer : writers) writer->abort();  // too late: the products stay
   EXPECT_EQ(files(), (std::set<std::string>{"footprints.geojson", "shots.nc"}));
+}
+
+TEST_F(ProductWritersTest, GpkgFootprintsWhenAskedFor) {
+  auto writers = make_writers(
+      dir_.path(), {.netcdf = false, .footprints_format = FootprintsFormat::gpkg}, info());
+  ASSERT_EQ(writers.size(), 1u);
+  for (std::int64_t i : {1, 0}) writers[0]->write(i, flagged(i));
+  writers[0]->finish(RunStats{});
+  EXPECT_EQ(files(), (std::set<std::string>{"footprints.gpkg"}));
 }
 
 TEST_F(ProductWritersTest, AbortRemovesThePartAndRefusesMore) {

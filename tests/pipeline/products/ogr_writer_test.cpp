@@ -1,7 +1,8 @@
-// Tests of footprints.geojson: written from hand-made records out of order, then read back
-// through GDAL/OGR as QGIS and ogrinfo would (no warning allowed), and as plain JSON for what
-// RFC 7946 asks of the text itself (no crs, no NaN, 8-decimal coordinates).
-#include "pipeline/products/geojson_writer.hpp"
+// Tests of the footprints (footprints.geojson, footprints.gpkg): written from hand-made records
+// out of order, then read back through GDAL/OGR as QGIS and ogrinfo would (no warning allowed),
+// and the GeoJSON as plain JSON for what RFC 7946 asks of the text itself (no crs, no NaN,
+// 8-decimal coordinates, counter-clockwise exterior rings within +-180 degrees).
+#include "pipeline/products/ogr_writer.hpp"
 
 #include <cpl_error.h>
 #include <gdal_priv.h>
@@ -130,7 +131,7 @@ void CPL_STDCALL collect_gdal_message(CPLErr level, CPLErrorNum, const char* mes
   }
 }
 
-class GeojsonWriterTest : public ::testing::Test {
+class OgrWriterTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() { GDALAllRegister(); }
   void TearDown() override {
@@ -140,7 +141,7 @@ class GeojsonWriterTest : public ::testing::Test {
   fs::path part() const { return dir_ / "footprints.geojson.part"; }
 
   void write_product() const {
-    GeojsonWriter writer(file(), make_info());
+    OgrWriter writer(file(), FootprintsFormat::geojson, make_info());
     for (int record : {2, 1, 0})
       writer.write(record, record == 1 ? make_flagged_record(1) : make_record(record));
     writer.finish(RunStats{10, 1.0, 1});
@@ -156,13 +157,13 @@ class GeojsonWriterTest : public ::testing::Test {
   test_support::ScratchDir dir_{"glaswave_geojson"};
 };
 
-TEST_F(GeojsonWriterTest, FinalFileAndNoPart) {
+TEST_F(OgrWriterTest, FinalFileAndNoPart) {
   write_product();
   EXPECT_TRUE(fs::exists(file()));
   EXPECT_FALSE(fs::exists(part()));
 }
 
-TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
+TEST_F(OgrWriterTest, OgrReadsItWithoutWarnings) {
   write_product();
   GdalMessages messages;
   CPLPushErrorHandlerEx(collect_gdal_message, &messages);
@@ -188,51 +189,36 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
   EXPECT_TRUE(crs->IsGeographic());
 
   const OGRFeatureDefn* definition = layer->GetLayerDefn();
-  for (const char* name : {"time",
-                           "lat",
-                           "lon",
-                           "elev",
-                           "sc_lat",
-                           "sc_lon",
-                           "sc_alt",
-                           "off_nadir_deg",
-                           "range_m",
-                           "slope_deg",
-                           "aspect_deg",
-                           "elev_bin0",
-                           "elev_lastbin",
-                           "rx_energy",
-                           "rx_energy_canopy",
-                           "rx_energy_ground",
-                           "reflectance",
-                           "energy_tr",
-                           "energy_cr",
-                           "energy_gr",
-                           "waveform_index",
-                           "sig_begin_m",
-                           "sig_end_m",
-                           "centroid_m",
-                           "ground_elev_est",
-                           "canopy_height_est",
-                           "rh25",
-                           "rh50",
-                           "rh75",
-                           "rh98",
-                           "rh100",
-                           "cover_true",
-                           "pai_true",
-                           "canopy_height_true"}) {
-    const int index = definition->GetFieldIndex(name);
+  std::vector<std::string> reals = {
+      "time",         "lat",        "lon",        "elev",
+      "sc_lat",       "sc_lon",     "sc_alt",     "off_nadir_deg",
+      "range_m",      "slope_deg",  "aspect_deg", "elev_bin0",
+      "elev_lastbin", "cover_true", "pai_true",   "canopy_height_true"};
+  std::vector<std::string> integers = {"shot_number", "quality_flag"};
+  // Every band's values, each under its name suffixed with the band's.
+  for (const char* band : {"_532", "_1064"}) {
+    for (const std::string name :
+         {"rx_energy", "rx_energy_canopy", "rx_energy_ground", "reflectance", "energy_tr",
+          "energy_cr", "energy_gr", "waveform_index", "sig_begin_m", "sig_end_m", "centroid_m",
+          "ground_elev_est", "canopy_height_est", "rh25", "rh50", "rh75", "rh98", "rh100"})
+      reals.push_back(name + band);
+    integers.push_back(std::string("n_peaks") + band);
+  }
+  for (const std::string& name : reals) {
+    const int index = definition->GetFieldIndex(name.c_str());
     ASSERT_GE(index, 0) << name;
     EXPECT_EQ(definition->GetFieldDefn(index)->GetType(), OFTReal) << name;
   }
-  for (const char* name : {"shot_number", "quality_flag", "n_peaks"}) {
-    const int index = definition->GetFieldIndex(name);
+  for (const std::string& name : integers) {
+    const int index = definition->GetFieldIndex(name.c_str());
     ASSERT_GE(index, 0) << name;
     const OGRFieldType type = definition->GetFieldDefn(index)->GetType();
     EXPECT_TRUE(type == OFTInteger || type == OFTInteger64) << name;
   }
-  EXPECT_EQ(definition->GetFieldCount(), 37);
+  // No unsuffixed per-band value: a reader cannot mistake one band's for another's.
+  for (const char* name : {"reflectance", "energy_tr", "rh98", "n_peaks"})
+    EXPECT_LT(definition->GetFieldIndex(name), 0) << name;
+  EXPECT_EQ(definition->GetFieldCount(), 18 + 2 * 19);
 
   // Features come in record order although they were written 2, 1, 0.
   ASSERT_EQ(features.size(), 3u);
@@ -247,7 +233,7 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
     EXPECT_EQ(feature.GetFieldAsInteger("quality_flag"), expected.quality_flag);
   }
 
-  // A good shot: its polygon, first vertex to the 8 decimals kept, orientation as given.
+  // A good shot: its polygon, first vertex to the 8 decimals kept, counter-clockwise as given.
   const OGRFeature& first = *features[0];
   const ShotRecord record0 = make_record(0);
   const OGRGeometry* geometry = first.GetGeometryRef();
@@ -264,28 +250,33 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
   EXPECT_EQ(geometry->toPolygon()->getNumInteriorRings(), 0);
   EXPECT_TRUE(first.IsFieldNull(definition->GetFieldIndex("aspect_deg")))
       << "NaN must read back as null";
-  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("reflectance"), record0.reflectance[0]);
-  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("rx_energy"), record0.rx_energy_J[0]);
-  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("rx_energy_ground"), record0.rx_energy_ground_J[0]);
-  // The first band's waveform metrics and the footprint's truth.
+  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("reflectance_532"), record0.reflectance[0]);
+  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("reflectance_1064"), record0.reflectance[1]);
+  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("rx_energy_532"), record0.rx_energy_J[0]);
+  EXPECT_DOUBLE_EQ(first.GetFieldAsDouble("rx_energy_ground_1064"), record0.rx_energy_ground_J[1]);
+  // Each band's waveform metrics, and the footprint's truth.
   for (int record : {0, 2}) {
     const OGRFeature& feature = *features[record];
     const ShotRecord expected = make_record(record);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("energy_tr"), expected.energy_tr_J[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("energy_cr"), expected.energy_cr_J[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("energy_gr"), expected.energy_gr_J[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("waveform_index"), expected.waveform_index[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("sig_begin_m"), expected.sig_begin_m[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("sig_end_m"), expected.sig_end_m[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("centroid_m"), expected.centroid_m[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("ground_elev_est"), expected.ground_elev_est_m[0]);
-    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("canopy_height_est"),
-                     expected.canopy_height_est_m[0]);
-    EXPECT_EQ(feature.GetFieldAsInteger("n_peaks"), expected.n_peaks[0]);
-    for (int k : {25, 50, 75, 98, 100})
-      EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble(("rh" + std::to_string(k)).c_str()),
-                       expected.rh_m[0][k])
-          << k;
+    for (std::size_t band : {0u, 1u}) {
+      const std::string suffix = band == 0 ? "_532" : "_1064";
+      auto value = [&](const char* name) {
+        return feature.GetFieldAsDouble((name + suffix).c_str());
+      };
+      EXPECT_DOUBLE_EQ(value("energy_tr"), expected.energy_tr_J[band]);
+      EXPECT_DOUBLE_EQ(value("energy_cr"), expected.energy_cr_J[band]);
+      EXPECT_DOUBLE_EQ(value("energy_gr"), expected.energy_gr_J[band]);
+      EXPECT_DOUBLE_EQ(value("waveform_index"), expected.waveform_index[band]);
+      EXPECT_DOUBLE_EQ(value("sig_begin_m"), expected.sig_begin_m[band]);
+      EXPECT_DOUBLE_EQ(value("sig_end_m"), expected.sig_end_m[band]);
+      EXPECT_DOUBLE_EQ(value("centroid_m"), expected.centroid_m[band]);
+      EXPECT_DOUBLE_EQ(value("ground_elev_est"), expected.ground_elev_est_m[band]);
+      EXPECT_DOUBLE_EQ(value("canopy_height_est"), expected.canopy_height_est_m[band]);
+      EXPECT_EQ(feature.GetFieldAsInteger(("n_peaks" + suffix).c_str()), expected.n_peaks[band]);
+      for (int k : {25, 50, 75, 98, 100})
+        EXPECT_DOUBLE_EQ(value(("rh" + std::to_string(k)).c_str()), expected.rh_m[band][k])
+            << k << suffix;
+    }
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("cover_true"), expected.cover_true);
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("pai_true"), expected.pai_true);
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("canopy_height_true"), expected.canopy_height_true_m);
@@ -296,8 +287,9 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
   EXPECT_EQ(flagged.GetGeometryRef(), nullptr);
   EXPECT_EQ(flagged.GetFieldAsInteger("quality_flag"), quality_no_terrain);
   for (const char* name :
-       {"elev", "rx_energy", "rx_energy_canopy", "rx_energy_ground", "reflectance", "energy_tr",
-        "ground_elev_est", "canopy_height_est", "n_peaks", "rh98", "cover_true"}) {
+       {"elev", "rx_energy_532", "rx_energy_canopy_1064", "rx_energy_ground_532",
+        "reflectance_1064", "energy_tr_1064", "ground_elev_est_532", "canopy_height_est_1064",
+        "n_peaks_532", "n_peaks_1064", "rh98_1064", "cover_true"}) {
     EXPECT_TRUE(flagged.IsFieldNull(definition->GetFieldIndex(name))) << name;
   }
   EXPECT_FALSE(flagged.IsFieldNull(definition->GetFieldIndex("lat")));
@@ -305,17 +297,15 @@ TEST_F(GeojsonWriterTest, OgrReadsItWithoutWarnings) {
 
 // The properties of every Feature are those the product field table gives, in its order, and
 // each is a field of shots.nc's table (or a level of one).
-TEST_F(GeojsonWriterTest, PropertiesAreThoseOfTheFieldTable) {
+TEST_F(OgrWriterTest, PropertiesAreThoseOfTheFieldTable) {
   write_product();
   const nlohmann::json document = nlohmann::json::parse(text());
   std::vector<std::string> expected;
   for (const ProductField& field : product_fields()) {
-    for (const std::string& name : geojson_property_names(field)) expected.push_back(name);
-    if (field.geojson == GeojsonProperty::value) {
-      EXPECT_EQ(geojson_property_names(field), (std::vector<std::string>{field.name}));
-    }
+    for (const GeojsonPropertyName& property : geojson_properties(field, {"532", "1064"}))
+      expected.push_back(property.name);
   }
-  EXPECT_EQ(expected.size(), 37u);
+  EXPECT_EQ(expected.size(), 18u + 2 * 19u);
   for (const auto& feature : document.at("features")) {
     std::vector<std::string> names;
     for (const auto& [name, value] : feature.at("properties").items()) names.push_back(name);
@@ -326,17 +316,19 @@ TEST_F(GeojsonWriterTest, PropertiesAreThoseOfTheFieldTable) {
   }
   // Order in the text of the first Feature: each property after the one before it.
   const std::string content = text();
-  const std::size_t end_of_first = content.find("}}");
+  // OGR writes a Feature's properties before its geometry.
+  const std::size_t end_of_first = content.find("\"geometry\"");
+  ASSERT_NE(end_of_first, std::string::npos);
   std::size_t at = 0;
   for (const std::string& name : expected) {
     const std::size_t found = content.find("\"" + name + "\":", at);
     ASSERT_LT(found, end_of_first) << name << " out of order";
     at = found;
   }
-  // Per-shot scalars and the first band's values: shots.nc's rows that are not arrays over
-  // bins, orders or Gaussians, typed here.
-  for (const char* name :
-       {"shot_number", "quality_flag", "elev", "reflectance", "n_peaks", "canopy_height_true"})
+  // Per-shot scalars and every band's values: shots.nc's rows that are not arrays over bins,
+  // orders or Gaussians, typed here.
+  for (const char* name : {"shot_number", "quality_flag", "elev", "reflectance_532",
+                           "reflectance_1064", "n_peaks_1064", "rh98_532", "canopy_height_true"})
     EXPECT_NE(std::find(expected.begin(), expected.end(), name), expected.end()) << name;
   for (const char* name : {"rx_waveform", "rx_waveform_order", "gauss_amp", "rh"})
     EXPECT_EQ(std::find(expected.begin(), expected.end(), name), expected.end()) << name;
@@ -344,11 +336,11 @@ TEST_F(GeojsonWriterTest, PropertiesAreThoseOfTheFieldTable) {
 
 // RFC 7946 section 3.1.9: a footprint across the antimeridian is cut there into a MultiPolygon
 // whose parts lie either side, together the octagon's area; one clear of it stays a Polygon.
-TEST_F(GeojsonWriterTest, FootprintAcrossTheAntimeridianIsCut) {
+TEST_F(OgrWriterTest, FootprintAcrossTheAntimeridianIsCut) {
   RunInfo info = make_info();
   info.shots = 2;
   {
-    GeojsonWriter writer(file(), info);
+    OgrWriter writer(file(), FootprintsFormat::geojson, info);
     ShotRecord across = make_record(0), clear = make_record(1);
     across.footprint_lonlat = octagon(179.9998, 12.0);
     for (auto& p : across.footprint_lonlat)
@@ -383,7 +375,153 @@ TEST_F(GeojsonWriterTest, FootprintAcrossTheAntimeridianIsCut) {
   EXPECT_EQ(wkbFlatten(features[1]->GetGeometryRef()->getGeometryType()), wkbPolygon);
 }
 
-TEST_F(GeojsonWriterTest, TextIsRfc7946) {
+// Every exterior ring of `geometry` (a Polygon or a MultiPolygon's parts): checks `check`.
+template <typename Check>
+void for_each_exterior_ring(const OGRGeometry& geometry, Check check) {
+  if (wkbFlatten(geometry.getGeometryType()) == wkbPolygon) {
+    check(*geometry.toPolygon()->getExteriorRing());
+    return;
+  }
+  ASSERT_EQ(wkbFlatten(geometry.getGeometryType()), wkbMultiPolygon);
+  for (const OGRPolygon* part : *geometry.toMultiPolygon()) check(*part->getExteriorRing());
+}
+
+// Twice the signed area of a ring in the lon/lat plane, computed here from its points (not with
+// OGR's isClockwise): positive when counter-clockwise.
+double twice_signed_area(const OGRLinearRing& ring) {
+  double sum = 0.0;
+  for (int i = 0; i + 1 < ring.getNumPoints(); ++i)
+    sum += ring.getX(i) * ring.getY(i + 1) - ring.getX(i + 1) * ring.getY(i);
+  return sum;
+}
+
+// A track across the antimeridian, eastward then westward, with rings given counter-clockwise
+// and clockwise, in both formats: every exterior ring is counter-clockwise (RFC 7946 section
+// 3.1.6) and every position within [-180, 180]; the footprints over the line are cut in two.
+TEST_F(OgrWriterTest, AntimeridianTrackRingsAreCounterClockwiseWithinRange) {
+  constexpr int kTrack = 9;
+  for (const FootprintsFormat format : {FootprintsFormat::geojson, FootprintsFormat::gpkg}) {
+    const fs::path path =
+        dir_ / (format == FootprintsFormat::gpkg ? "track.gpkg" : "track.geojson");
+    RunInfo info = make_info();
+    info.shots = kTrack;
+    {
+      OgrWriter writer(path, format, info);
+      for (int record = kTrack - 1; record >= 0; --record) {
+        ShotRecord shot = make_record(record);
+        // 179.9990 ... 180.0010 (wrapped past 180), 0.00025 degree apart: the octagons of
+        // shots 3 to 5 straddle the line.
+        double lon = 179.999 + 0.00025 * record;
+        if (lon > 180.0) lon -= 360.0;
+        shot.footprint_lonlat = octagon(lon, -5.0 + 0.001 * record);
+        for (auto& p : shot.footprint_lonlat) p[0] = std::remainder(p[0], 360.0);
+        if (record % 2 == 1)  // clockwise as given
+          std::reverse(shot.footprint_lonlat.begin(), shot.footprint_lonlat.end());
+        writer.write(record, shot);
+      }
+      writer.finish(RunStats{});
+    }
+    GdalMessages messages;
+    CPLPushErrorHandlerEx(collect_gdal_message, &messages);
+    GDALDatasetUniquePtr dataset(GDALDataset::FromHandle(
+        GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+    std::vector<OGRFeatureUniquePtr> features;
+    if (dataset)
+      for (auto& feature : *dataset->GetLayer(0)) features.emplace_back(feature.release());
+    CPLPopErrorHandler();
+    EXPECT_EQ(messages.count, 0) << messages.text;
+    ASSERT_EQ(features.size(), static_cast<std::size_t>(kTrack)) << path;
+    int cut = 0, rings = 0;
+    for (int record = 0; record < kTrack; ++record) {
+      const OGRGeometry* geometry = features[record]->GetGeometryRef();
+      ASSERT_NE(geometry, nullptr) << record;
+      EXPECT_EQ(features[record]->GetFieldAsInteger64("shot_number"), 100 + record);
+      if (wkbFlatten(geometry->getGeometryType()) == wkbMultiPolygon &&
+          geometry->toMultiPolygon()->getNumGeometries() == 2)
+        ++cut;
+      for_each_exterior_ring(*geometry, [&](const OGRLinearRing& ring) {
+        ++rings;
+        EXPECT_GT(twice_signed_area(ring), 0.0) << path << " record " << record;
+        for (int i = 0; i < ring.getNumPoints(); ++i) {
+          EXPECT_LE(std::abs(ring.getX(i)), 180.0) << path << " record " << record;
+          EXPECT_LE(std::abs(ring.getY(i)), 90.0);
+        }
+      });
+    }
+    EXPECT_EQ(cut, 3) << path;
+    EXPECT_EQ(rings, kTrack + 3) << path;
+  }
+}
+
+// footprints.gpkg: the same features through the GPKG driver, in EPSG:4326, every footprint a
+// MultiPolygon (one geometry type per layer, as GeoPackage readers expect), a flagged shot's
+// geometry null, the per-band properties under their suffixed names; no .part left.
+TEST_F(OgrWriterTest, GeoPackage) {
+  const fs::path gpkg = dir_ / "footprints.gpkg";
+  {
+    OgrWriter writer(gpkg, FootprintsFormat::gpkg, make_info());
+    for (int record : {2, 1, 0})
+      writer.write(record, record == 1 ? make_flagged_record(1) : make_record(record));
+    writer.finish(RunStats{});
+  }
+  std::vector<std::string> left;
+  for (const auto& entry : fs::directory_iterator(dir_.path()))
+    left.push_back(entry.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"footprints.gpkg"});
+
+  GdalMessages messages;
+  CPLPushErrorHandlerEx(collect_gdal_message, &messages);
+  GDALDatasetUniquePtr dataset(GDALDataset::FromHandle(
+      GDALOpenEx(gpkg.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+  OGRLayer* layer = dataset ? dataset->GetLayerByName("footprints") : nullptr;
+  std::vector<OGRFeatureUniquePtr> features;
+  if (layer != nullptr)
+    for (auto& feature : *layer) features.emplace_back(feature.release());
+  CPLPopErrorHandler();
+  EXPECT_EQ(messages.count, 0) << messages.text;
+  ASSERT_TRUE(dataset);
+  ASSERT_NE(layer, nullptr);
+  EXPECT_STREQ(dataset->GetDriver()->GetDescription(), "GPKG");
+  EXPECT_EQ(layer->GetFeatureCount(), kShots);
+  EXPECT_EQ(wkbFlatten(layer->GetGeomType()), wkbMultiPolygon);
+  const OGRSpatialReference* crs = layer->GetSpatialRef();
+  ASSERT_NE(crs, nullptr);
+  EXPECT_STREQ(crs->GetAuthorityName(nullptr), "EPSG");
+  EXPECT_STREQ(crs->GetAuthorityCode(nullptr), "4326");
+
+  ASSERT_EQ(features.size(), 3u);
+  for (int record : {0, 2}) {
+    const ShotRecord expected = make_record(record);
+    const OGRFeature& feature = *features[record];
+    EXPECT_EQ(feature.GetFieldAsInteger64("shot_number"), expected.shot_number);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("energy_tr_1064"), expected.energy_tr_J[1]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("reflectance_532"), expected.reflectance[0]);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("rh98_532"), expected.rh_m[0][98]);
+    const OGRGeometry* geometry = feature.GetGeometryRef();
+    ASSERT_NE(geometry, nullptr);
+    ASSERT_EQ(wkbFlatten(geometry->getGeometryType()), wkbMultiPolygon);
+    const OGRLinearRing* ring = geometry->toMultiPolygon()->getGeometryRef(0)->getExteriorRing();
+    ASSERT_EQ(ring->getNumPoints(), static_cast<int>(expected.footprint_lonlat.size()));
+    EXPECT_DOUBLE_EQ(ring->getX(0), expected.footprint_lonlat[0][0]);
+    EXPECT_DOUBLE_EQ(ring->getY(0), expected.footprint_lonlat[0][1]);
+  }
+  EXPECT_EQ(features[1]->GetGeometryRef(), nullptr);
+  EXPECT_TRUE(features[1]->IsFieldNull(features[1]->GetFieldIndex("energy_tr_1064")));
+}
+
+TEST_F(OgrWriterTest, UnfinishedGeoPackageLeavesNothing) {
+  {
+    OgrWriter writer(dir_ / "footprints.gpkg", FootprintsFormat::gpkg, make_info());
+    writer.write(0, make_record(0));
+    writer.write(2, make_record(2));
+    EXPECT_TRUE(fs::exists(dir_ / "footprints.gpkg.part"));
+    writer.abort();
+    EXPECT_THROW(writer.write(1, make_record(1)), Error);
+  }
+  EXPECT_TRUE(fs::is_empty(dir_.path()));
+}
+
+TEST_F(OgrWriterTest, TextIsRfc7946) {
   write_product();
   const std::string content = text();
   EXPECT_EQ(content.find("NaN"), std::string::npos);
@@ -404,7 +542,7 @@ TEST_F(GeojsonWriterTest, TextIsRfc7946) {
   EXPECT_EQ(coordinates[0].front(), coordinates[0].back()) << "ring closed";
 
   // No more than 8 decimals in coordinates (about a millimetre on the ground).
-  const std::regex coordinate_list(R"re("coordinates":\[\[(.*?)\]\]\})re");
+  const std::regex coordinate_list(R"re("coordinates": ?\[ ?\[(.*?)\] ?\] ?\})re");
   const std::regex too_precise(R"(\.\d{9,})");
   int polygons = 0;
   for (auto it = std::sregex_iterator(content.begin(), content.end(), coordinate_list);
@@ -418,9 +556,9 @@ TEST_F(GeojsonWriterTest, TextIsRfc7946) {
   EXPECT_EQ(polygons, 2);
 }
 
-TEST_F(GeojsonWriterTest, UnfinishedWriterLeavesNothing) {
+TEST_F(OgrWriterTest, UnfinishedWriterLeavesNothing) {
   {
-    GeojsonWriter writer(file(), make_info());
+    OgrWriter writer(file(), FootprintsFormat::geojson, make_info());
     writer.write(0, make_record(0));
     writer.write(2, make_record(2));
     EXPECT_TRUE(fs::exists(part()));
@@ -430,9 +568,9 @@ TEST_F(GeojsonWriterTest, UnfinishedWriterLeavesNothing) {
   EXPECT_FALSE(fs::exists(file()));
 }
 
-TEST_F(GeojsonWriterTest, FinishWithMissingRecordFailsAndLeavesNothing) {
+TEST_F(OgrWriterTest, FinishWithMissingRecordFailsAndLeavesNothing) {
   {
-    GeojsonWriter writer(file(), make_info());
+    OgrWriter writer(file(), FootprintsFormat::geojson, make_info());
     writer.write(0, make_record(0));
     writer.write(2, make_record(2));
     try {
@@ -448,8 +586,8 @@ TEST_F(GeojsonWriterTest, FinishWithMissingRecordFailsAndLeavesNothing) {
   EXPECT_FALSE(fs::exists(file()));
 }
 
-TEST_F(GeojsonWriterTest, BadRecordsAreErrors) {
-  GeojsonWriter writer(file(), make_info());
+TEST_F(OgrWriterTest, BadRecordsAreErrors) {
+  OgrWriter writer(file(), FootprintsFormat::geojson, make_info());
   EXPECT_THROW(writer.write(3, make_record(0)), Error);
   EXPECT_THROW(writer.write(-1, make_record(0)), Error);
 
@@ -466,9 +604,10 @@ TEST_F(GeojsonWriterTest, BadRecordsAreErrors) {
   EXPECT_THROW(writer.write(0, make_record(0)), Error);  // already written out
 }
 
-TEST_F(GeojsonWriterTest, UnwritableDirectoryIsARunError) {
+TEST_F(OgrWriterTest, UnwritableDirectoryIsARunError) {
   try {
-    GeojsonWriter writer(dir_ / "missing" / "footprints.geojson", make_info());
+    OgrWriter writer(dir_ / "missing" / "footprints.geojson", FootprintsFormat::geojson,
+                     make_info());
     FAIL() << "created a file in a directory that does not exist";
   } catch (const Error& error) {
     EXPECT_EQ(error.kind(), ErrorKind::run);
