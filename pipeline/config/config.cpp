@@ -795,11 +795,11 @@ void check_run(const Config& config) {
         "/output/plots",
         "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
         "and output.geojson");
-  if (o.geojson && o.footprints_format != "GeoJSON")
+  if (o.plots && o.footprints_format != "GeoJSON")
     throw config_error("/output/footprints_format",
-                       "\"" + o.footprints_format +
-                           "\" is not written by this version yet; the footprints are written as "
-                           "\"GeoJSON\"");
+                       "plots are drawn from footprints.geojson: output.plots needs "
+                       "footprints_format \"GeoJSON\", got \"" +
+                           o.footprints_format + "\"");
 }
 
 namespace {

@@ -414,8 +414,8 @@ Key output_keys() {
                          "PNG plots (drawn from both products: needs `netcdf` and `geojson`)"),
                  boolean("per_order", o.per_order, "per-scattering-order waveforms"),
                  choice("footprints_format", o.footprints_format, {"GeoJSON", "GPKG"},
-                        "the footprints' format: `footprints.geojson`, or `footprints.gpkg` (not "
-                        "written by this version yet)")});
+                        "the footprints' format: `footprints.geojson`, or `footprints.gpkg` "
+                        "(GeoPackage)")});
 }
 
 Key detector_keys() {

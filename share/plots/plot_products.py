@@ -69,8 +69,12 @@ def bin_elevations(shots, i):
                        shots["rx_waveform"].shape[2])
 
 
+def band_label(name):
+    return name + (" nm" if name.isdigit() else "")
+
+
 def band_labels(shots):
-    return [name + (" nm" if name.isdigit() else "") for name in shots["band_name"]]
+    return [band_label(name) for name in shots["band_name"]]
 
 
 def power_unit(peak_W):
@@ -237,15 +241,23 @@ def plot_track_profile(shots, path):
     save(fig, path)
 
 
-def read_footprints(geojson):
-    """The footprints' outer rings (lon, lat arrays) and their first band's reflectance."""
+def map_band(shots):
+    """The band the footprint map shows: 1064 nm, the band GLAS and GEDI range with, where the
+    run has it, else the last band."""
+    names = list(shots["band_name"])
+    return "1064" if "1064" in names else names[-1]
+
+
+def read_footprints(geojson, band):
+    """The footprints' outer rings (lon, lat arrays) and their reflectance in `band` (the
+    property `reflectance_<band>`)."""
     polygons, values = [], []
     for feature in geojson["features"]:
         geometry = feature.get("geometry")
         if geometry is None or geometry.get("type") != "Polygon":
             continue  # a flagged shot has no footprint
         polygons.append(np.asarray(geometry["coordinates"][0], dtype=float)[:, :2])
-        value = feature["properties"].get("reflectance")
+        value = feature["properties"].get("reflectance_" + band)
         values.append(np.nan if value is None else value)
     return polygons, values
 
@@ -357,7 +369,8 @@ def crs_labels(srs):
 
 
 def plot_footprints_map(geojson, shots, path):
-    polygons, values = read_footprints(geojson)
+    band = map_band(shots)
+    polygons, values = read_footprints(geojson, band)
     background = dem_background(shots["config"], polygons)
     fig, ax = plt.subplots(figsize=(8, 7))
     if polygons:
@@ -374,7 +387,7 @@ def plot_footprints_map(geojson, shots, path):
             mid, half = (low + high) / 2, max((high - low) / 2, 0.005)
             cells.set_clim(mid - half, mid + half)
         ax.add_collection(cells)
-        bar = fig.colorbar(cells, ax=ax, shrink=0.8, label="reflectance, first band (1)")
+        bar = fig.colorbar(cells, ax=ax, shrink=0.8, label=f"reflectance, {band_label(band)} (1)")
         bar.formatter.set_useOffset(False)
         if background is not None:
             x0, x1, y0, y1 = background["extent"]

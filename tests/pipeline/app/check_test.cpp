@@ -1,7 +1,11 @@
 // `glaswave check` against `glaswave run` (PRODUCT.md section 2): the two accept exactly the same
 // configurations, so each bad configuration here ends both with the same status and the same
-// one-line message, and run leaves nothing behind. And `check --schema` prints the schema.
+// one-line message, and run leaves nothing behind. And `check --schema` prints the schema, and
+// the footprints' GeoPackage, once refused, is accepted and written.
+#include <cpl_error.h>
+#include <gdal_priv.h>
 #include <gtest/gtest.h>
+#include <ogrsf_frmts.h>
 
 #include <filesystem>
 #include <fstream>
@@ -53,9 +57,9 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
       {{{"canopy", {{"pai", -1}}}}, 2, "/canopy/pai: must be >= 0, got -1"},
       {{{"output", {{"netcdf", false}, {"geojson", false}}}}, 2, "/output: nothing to write"},
       {{{"output", {{"plots", true}, {"geojson", false}}}}, 2, "/output/plots: plots are drawn"},
-      {{{"output", {{"footprints_format", "GPKG"}}}},
+      {{{"output", {{"footprints_format", "GPKG"}, {"plots", true}}}},
        2,
-       "/output/footprints_format: \"GPKG\" is not written by this version yet"},
+       "/output/footprints_format: plots are drawn from footprints.geojson"},
       {{{"sensor", {{"bins", 1000000}}}}, 2, "/sensor/bins: a shot's waveforms would take"},
       {{{"sensor", {{"bins", 20000}}},
         {"simulation", {{"max_order", 100}}},
@@ -99,6 +103,57 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
   const CommandOutcome run =
       run_glaswave("run " + good + " --quiet --out " + (dir_ / "out").string());
   EXPECT_EQ(run.status, 0) << run.output;
+}
+
+// `output.footprints_format: "GPKG"`: check accepts it, run writes footprints.gpkg (and no
+// footprints.geojson), which GDAL opens without a warning: one feature per shot, EPSG:4326, the
+// per-band properties under their suffixed names.
+TEST_F(Check, GpkgFootprintsAreWritten) {
+  const std::string config =
+      write_config({{"output", {{"footprints_format", "GPKG"}}}, {"track", {{"shots", 3}}}});
+  const CommandOutcome check = run_glaswave("check " + config);
+  EXPECT_EQ(check.status, 0) << check.output;
+  const fs::path out = dir_ / "gpkg";
+  const CommandOutcome run = run_glaswave("run " + config + " --quiet --out " + out.string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_TRUE(fs::exists(out / "shots.nc"));
+  EXPECT_FALSE(fs::exists(out / "footprints.geojson"));
+  EXPECT_FALSE(fs::exists(out / "footprints.gpkg.part"));
+  ASSERT_TRUE(fs::exists(out / "footprints.gpkg"));
+
+  GDALAllRegister();
+  std::string warnings;
+  CPLPushErrorHandlerEx(
+      [](CPLErr level, CPLErrorNum, const char* message) {
+        if (level >= CE_Warning)
+          *static_cast<std::string*>(CPLGetErrorHandlerUserData()) += std::string(message) + "\n";
+      },
+      &warnings);
+  GDALDatasetUniquePtr dataset(GDALDataset::FromHandle(GDALOpenEx((out / "footprints.gpkg").c_str(),
+                                                                  GDAL_OF_VECTOR | GDAL_OF_READONLY,
+                                                                  nullptr, nullptr, nullptr)));
+  OGRLayer* layer = dataset ? dataset->GetLayerByName("footprints") : nullptr;
+  int features = 0;
+  double energy_tr_1064 = 0.0;
+  if (layer != nullptr) {
+    for (auto& feature : *layer) {
+      ++features;
+      energy_tr_1064 += feature->GetFieldAsDouble("energy_tr_1064");
+    }
+  }
+  CPLPopErrorHandler();
+  EXPECT_EQ(warnings, "");
+  ASSERT_TRUE(dataset);
+  ASSERT_NE(layer, nullptr);
+  EXPECT_STREQ(dataset->GetDriver()->GetDescription(), "GPKG");
+  EXPECT_EQ(layer->GetFeatureCount(), 3);
+  EXPECT_EQ(features, 3);
+  EXPECT_GT(layer->GetLayerDefn()->GetFieldIndex("energy_tr_1064"), 0);
+  EXPECT_GT(energy_tr_1064, 0.0);
+  const OGRSpatialReference* crs = layer->GetSpatialRef();
+  ASSERT_NE(crs, nullptr);
+  EXPECT_STREQ(crs->GetAuthorityName(nullptr), "EPSG");
+  EXPECT_STREQ(crs->GetAuthorityCode(nullptr), "4326");
 }
 
 TEST_F(Check, SchemaIsPrinted) {

@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "pipeline/products/geojson_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
+#include "pipeline/products/ogr_writer.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/terrain/dem_fixture.hpp"
@@ -112,7 +112,7 @@ ShotRecord make_flagged_shot(int record) {
 void write_products(const fs::path& dir, bool all_flagged, const std::string& config_json = "{}") {
   const RunInfo info = make_info(config_json);
   NetcdfWriter netcdf(dir / "shots.nc", info);
-  GeojsonWriter geojson(dir / "footprints.geojson", info);
+  OgrWriter geojson(dir / "footprints.geojson", FootprintsFormat::geojson, info);
   for (int i = 0; i < kShots; ++i) {
     const ShotRecord shot = all_flagged || i == 1 ? make_flagged_shot(i) : make_shot(i);
     netcdf.write(i, shot);

@@ -366,9 +366,10 @@ TEST(CheckRun, OutputsAndFormats) {
             "/output: nothing to write: output.netcdf and output.geojson are both false");
   EXPECT_THAT(run_error_of(doc(R"({"output": {"plots": true, "geojson": false}})")),
               StartsWith("/output/plots: plots are drawn from shots.nc and footprints.geojson"));
-  EXPECT_EQ(run_error_of(doc(R"({"output": {"footprints_format": "GPKG"}})")),
-            "/output/footprints_format: \"GPKG\" is not written by this version yet; the "
-            "footprints are written as \"GeoJSON\"");
+  EXPECT_EQ(run_error_of(doc(R"({"output": {"footprints_format": "GPKG"}})")), "");
+  EXPECT_EQ(run_error_of(doc(R"({"output": {"footprints_format": "GPKG", "plots": true}})")),
+            "/output/footprints_format: plots are drawn from footprints.geojson: output.plots "
+            "needs footprints_format \"GeoJSON\", got \"GPKG\"");
   EXPECT_EQ(run_error_of(doc(R"({"output": {"footprints_format": "GPKG", "geojson": false}})")),
             "");
   EXPECT_EQ(error_of(doc(R"({"output": {"footprints_format": "gpkg"}})")),
