@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tests/pipeline/engine/engine_test_support.hpp"
 #include "tests/scratch_dir.hpp"
@@ -145,6 +147,53 @@ TEST_F(Cli, RunWritesProductsThatReadBack) {
               2e-3);
   OGRFeature::DestroyFeature(feature);
   GDALClose(geojson);
+}
+
+// A pass across the antimeridian, its first footprint straddling the line (RFC 7946 sections
+// 3.1.6 and 3.1.9): that footprint is a MultiPolygon of two parts, one each side, and every
+// exterior ring of every footprint is counter-clockwise with lon/lat within +-180 and +-90. The
+// orientation is the sign of the ring's area computed here from its points.
+TEST_F(Cli, AntimeridianTrackFootprintsAreCutCounterClockwiseWithinRange) {
+  const std::string config =
+      write_config({{"simulation", {{"rays_per_shot", 100}}},
+                    {"terrain", {{"plane", {{"origin_lon_deg", 179.9999}}}}},
+                    {"track", {{"start_lon_deg", 179.9999}, {"heading_deg", 90.0}, {"shots", 4}}}});
+  const CommandOutcome run =
+      run_glaswave("run " + config + " --quiet --out " + (dir_ / "out").string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  GDALAllRegister();
+  GDALDatasetUniquePtr dataset(GDALDataset::FromHandle(
+      GDALOpenEx((dir_ / "out" / "footprints.geojson").c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY,
+                 nullptr, nullptr, nullptr)));
+  ASSERT_TRUE(dataset);
+  int features = 0, multipolygons = 0, rings = 0;
+  for (auto& feature : *dataset->GetLayer(0)) {
+    ++features;
+    const OGRGeometry* geometry = feature->GetGeometryRef();
+    ASSERT_NE(geometry, nullptr);
+    std::vector<const OGRPolygon*> parts;
+    if (wkbFlatten(geometry->getGeometryType()) == wkbMultiPolygon) {
+      ++multipolygons;
+      for (const OGRPolygon* part : *geometry->toMultiPolygon()) parts.push_back(part);
+    } else {
+      ASSERT_EQ(wkbFlatten(geometry->getGeometryType()), wkbPolygon);
+      parts.push_back(geometry->toPolygon());
+    }
+    for (const OGRPolygon* part : parts) {
+      ++rings;
+      const OGRLinearRing* ring = part->getExteriorRing();
+      double twice_area = 0.0;
+      for (int i = 0; i + 1 < ring->getNumPoints(); ++i) {
+        twice_area += ring->getX(i) * ring->getY(i + 1) - ring->getX(i + 1) * ring->getY(i);
+        EXPECT_LE(std::abs(ring->getX(i)), 180.0);
+        EXPECT_LE(std::abs(ring->getY(i)), 90.0);
+      }
+      EXPECT_GT(twice_area, 0.0) << "shot " << features - 1;
+    }
+  }
+  EXPECT_EQ(features, 4);
+  EXPECT_EQ(multipolygons, 1);
+  EXPECT_EQ(rings, 5);
 }
 
 // In a forest with rough ground and every scattering order, the hardest case for determinism.
