@@ -216,7 +216,9 @@ TransportOptions ShotSimulator::transport_options() const {
 }
 
 void ShotSimulator::flag_off_terrain(ShotRecord& record, const Footprint& footprint) const {
-  record.quality_flag = quality_no_terrain;
+  record.quality_flag = quality_invalid;
+  // Met the terrain, yet not enough of it under the beam: over nodata or the DEM's edge.
+  record.quality_reason = footprint.on_terrain ? reason_nodata : reason_off_terrain;
   const std::size_t orders =
       config_.output.per_order ? static_cast<std::size_t>(config_.simulation.max_order) : 0;
   fill_flagged(record, {.bands = lidar_.band_count(),

@@ -6,7 +6,11 @@
 
 #include <netcdf.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <ctime>
 #include <limits>
 #include <span>
 #include <string>
@@ -26,12 +30,58 @@ namespace {
 // Level 2 already takes most of what deflate can from waveforms (long runs of zero power
 // before and after the return); higher levels cost time for little more.
 constexpr int kDeflateLevel = 2;
+// Per-shot scalars and [shot, band] values are chunked this many shots at a time: a whole
+// variable reads in a few chunks, one shot reads a few kilobytes.
+constexpr std::size_t kShotsPerScalarChunk = 1024;
 // The coordinates of a trajectory; they carry no `coordinates` attribute themselves.
 constexpr const char* kShotCoordinates = "time lat lon";
+// The grid mapping variable every geolocated variable names.
+constexpr const char* kCrsVariable = "crs";
+// EPSG:4979, WGS 84 with ellipsoidal heights: latitude, longitude and every elevation of the
+// product are geodetic coordinates on the WGS 84 ellipsoid.
+constexpr const char* kCrsWkt =
+    R"wkt(GEOGCRS["WGS 84",DATUM["World Geodetic System 1984",ELLIPSOID["WGS 84",6378137,)wkt"
+    R"wkt(298.257223563,LENGTHUNIT["metre",1]]],PRIMEM["Greenwich",0,ANGLEUNIT["degree",)wkt"
+    R"wkt(0.0174532925199433]],CS[ellipsoidal,3],AXIS["geodetic latitude (Lat)",north,ORDER[1],)wkt"
+    R"wkt(ANGLEUNIT["degree",0.0174532925199433]],AXIS["geodetic longitude (Lon)",east,ORDER[2],)wkt"
+    R"wkt(ANGLEUNIT["degree",0.0174532925199433]],AXIS["ellipsoidal height (h)",up,ORDER[3],)wkt"
+    R"wkt(LENGTHUNIT["metre",1]],ID["EPSG",4979]])wkt";
+// Seconds from 1970-01-01T00:00:00Z to the GLAS epoch 2000-01-01T12:00:00Z (UTC as POSIX and
+// CF's standard calendar count it, without leap seconds).
+constexpr double kGlasEpochUnix_s = 946728000.0;
 
 bool is_shot_coordinate(std::string_view name) {
-  return name == "time" || name == "lat" || name == "lon";
+  return name == "shot" || name == "time" || name == "lat" || name == "lon";
 }
+
+// ISO 8601 UTC with microseconds, as ACDD's time attributes take it.
+std::string iso8601_utc(double unix_s) {
+  double whole_s = std::floor(unix_s);
+  auto micro = static_cast<long>(std::llround((unix_s - whole_s) * 1e6));
+  if (micro >= 1000000) {
+    whole_s += 1.0;
+    micro -= 1000000;
+  }
+  const auto time = static_cast<std::time_t>(whole_s);
+  std::tm utc{};
+  gmtime_r(&time, &utc);
+  char text[64];
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%06ldZ", utc.tm_year + 1900,
+                utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, micro);
+  return text;
+}
+
+// The smallest and largest finite values seen; empty until one is.
+struct Bounds {
+  double min = std::numeric_limits<double>::infinity();
+  double max = -std::numeric_limits<double>::infinity();
+  void add(double value) {
+    if (!std::isfinite(value)) return;
+    min = std::min(min, value);
+    max = std::max(max, value);
+  }
+  bool empty() const { return min > max; }
+};
 
 nc_type nc_type_of(StorageType type) {
   switch (type) {
@@ -126,8 +176,8 @@ struct NetcdfWriter::Impl {
   };
   // The variables shared by every shot, written once the definitions end.
   struct RunVariables {
-    int trajectory = -1, wavelength = -1, band_name = -1, bin_time = -1, tx_time = -1,
-        tx_waveform = -1, order = -1, percentile = -1;
+    int trajectory = -1, band = -1, wavelength = -1, band_name = -1, bin_time = -1, tx_time = -1,
+        tx_waveform = -1, order = -1, percentile = -1, crs = -1;
   };
 
   explicit Impl(std::filesystem::path final_path) : file(std::move(final_path)) {}
@@ -147,6 +197,8 @@ struct NetcdfWriter::Impl {
   std::vector<DefinedVariable> variables;
   std::vector<bool> written;
   bool finished = false;
+  // What ACDD's discovery attributes say of the records written.
+  Bounds time_s, lat_deg, lon_deg, elev_m;
 
   [[noreturn]] void fail(const std::string& message) const {
     throw run_error(file.final_path().string(), message);
@@ -204,10 +256,12 @@ struct NetcdfWriter::Impl {
   }
 
   // Arrays over bins are most of the file: one shot per chunk makes each write() fill whole
-  // chunks (no read-modify-write, any order) and lets them be compressed.
+  // chunks (no read-modify-write, any order), lets them be compressed, and reading one shot's
+  // waveform reads that shot's chunk alone. Smaller per-shot values go many shots to a chunk.
   void chunk_by_shot(int varid, const char* name, const std::vector<std::size_t>& lengths) const {
     const std::string what = std::string("variable '") + name + "'";
-    std::vector<std::size_t> chunks = {1};
+    const bool waveform = lengths.size() >= 2;
+    std::vector<std::size_t> chunks = {waveform ? 1 : std::min(shots, kShotsPerScalarChunk)};
     chunks.insert(chunks.end(), lengths.begin(), lengths.end());
     check(nc_def_var_chunking(nc.id(), varid, NC_CHUNKED, chunks.data()), what + " chunking");
     check(nc_def_var_deflate(nc.id(), varid, 1, 1, kDeflateLevel), what + " compression");
@@ -227,28 +281,56 @@ struct NetcdfWriter::Impl {
     put_text_if(varid, def.name, "gedi_name", def.gedi_name);
     put_text_if(varid, def.name, "glas_name", def.glas_name);
     put_fill(varid, def);
-    if (!is_shot_coordinate(def.name)) put_text(varid, def.name, "coordinates", kShotCoordinates);
-    if (dimids.size() >= 3) chunk_by_shot(varid, def.name, lengths);
+    if (!is_shot_coordinate(def.name)) {
+      put_text(varid, def.name, "coordinates", kShotCoordinates);
+      put_text(varid, def.name, "grid_mapping", kCrsVariable);
+    }
+    chunk_by_shot(varid, def.name, lengths);
     variables.push_back({&def, varid, std::move(lengths)});
   }
 
   void define_globals(const RunInfo& info) {
     const std::string title = "glaswave simulated satellite waveform lidar shots";
     const std::string source = std::string("glaswave ") + GLASWAVE_VERSION;
-    put_text(NC_GLOBAL, "global", "Conventions", "CF-1.10");
+    put_text(NC_GLOBAL, "global", "Conventions", "CF-1.10, ACDD-1.3");
     put_text(NC_GLOBAL, "global", "featureType", "trajectory");
     put_text(NC_GLOBAL, "global", "title", title);
+    put_text(NC_GLOBAL, "global", "summary",
+             "Waveforms of a satellite laser altimeter (GLAS- or GEDI-like) simulated by Monte "
+             "Carlo radiative transfer over terrain and vegetation, one record per shot, with "
+             "their geolocation, GLA14- and GEDI L2A-style waveform metrics, and the truth of the "
+             "simulated scene under each footprint.");
+    put_text(NC_GLOBAL, "global", "keywords",
+             "lidar, waveform lidar, laser altimetry, GLAS, ICESat, GEDI, canopy height, "
+             "vegetation structure, Monte Carlo radiative transfer, simulation");
+    put_text(NC_GLOBAL, "global", "standard_name_vocabulary", "CF Standard Name Table v84");
+    put_text(NC_GLOBAL, "global", "processing_level", "simulated L1B/L2A-like waveforms");
+    put_text(NC_GLOBAL, "global", "creator_name", "");
+    put_text(NC_GLOBAL, "global", "date_created", now_iso8601());
     put_text(NC_GLOBAL, "global", "history", info.command_line);
     put_text(NC_GLOBAL, "global", "source", source);
     put_text(
         NC_GLOBAL, "global", "references",
         "North et al. (2010), A Monte Carlo radiative transfer model of satellite waveform lidar");
     put_text(NC_GLOBAL, "global", "config", info.config_json);
+    // The variables that every shot shares, as coordinates (xarray reads this attribute): runs
+    // of parts of a track (`--shots`) then combine with xarray's defaults, which would otherwise
+    // stack each part's copy of them along the shot dimension.
+    put_text(NC_GLOBAL, "global", "coordinates",
+             "trajectory crs wavelength band_name bin_time_ns tx_time_ns tx_waveform");
     if (!info.vertical_datum.empty())
       put_text(NC_GLOBAL, "global", "vertical_datum", info.vertical_datum);
     const unsigned long long seed = info.seed;
     check(nc_put_att_ulonglong(nc.id(), NC_GLOBAL, "seed", NC_UINT64, 1, &seed),
           "global attribute 'seed'");
+  }
+
+  static std::string now_iso8601() {
+    const auto now = std::chrono::system_clock::now();
+    const auto micro =
+        std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count();
+    return iso8601_utc(static_cast<double>(micro / 1000000) +
+                       static_cast<double>(micro % 1000000) * 1e-6);
   }
 
   void define_dims() {
@@ -267,8 +349,13 @@ struct NetcdfWriter::Impl {
     v.trajectory =
         define_variable("trajectory", NC_STRING, {}, "1", "trajectory (the simulated track)");
     put_text(v.trajectory, "trajectory", "cf_role", "trajectory_id");
-    v.wavelength = define_variable("wavelength", NC_DOUBLE, {dim("band")}, "nm",
-                                   "laser wavelength of the band");
+    // The band's coordinate is its wavelength, so that ds.sel(band=1064) picks a band;
+    // `wavelength` says the same under the name it had first.
+    v.band = define_variable("band", NC_DOUBLE, {dim("band")}, "nm", "laser wavelength of the band",
+                             "sensor_band_central_radiation_wavelength");
+    v.wavelength =
+        define_variable("wavelength", NC_DOUBLE, {dim("band")}, "nm",
+                        "laser wavelength of the band", "sensor_band_central_radiation_wavelength");
     v.band_name = define_variable("band_name", NC_STRING, {dim("band")}, "1", "name of the band");
     v.bin_time = define_variable("bin_time_ns", NC_DOUBLE, {dim("bin")}, "ns",
                                  "time of each bin centre after the return from range_m (two-way)");
@@ -276,6 +363,8 @@ struct NetcdfWriter::Impl {
                                 "time of each transmitted pulse bin centre about the pulse peak");
     v.tx_waveform = define_variable("tx_waveform", NC_FLOAT, {dim("band"), dim("tx_bin")}, "W",
                                     "transmitted pulse power");
+    put_text(v.tx_waveform, "tx_waveform", "gedi_name", "txwaveform");
+    v.crs = define_crs();
     if (shape.orders > 0)
       v.order = define_variable("order", NC_INT, {dim("order")}, "1", "scattering order");
     // The coordinate of rh's last dimension, so that ds.rh.sel(percentile=98) reads as GEDI's
@@ -285,16 +374,50 @@ struct NetcdfWriter::Impl {
     return v;
   }
 
+  // CF's grid mapping of geodetic coordinates on WGS 84, heights above the ellipsoid.
+  int define_crs() const {
+    const int varid = define_variable(kCrsVariable, NC_INT, {}, "1",
+                                      "coordinate reference system: WGS 84 "
+                                      "(EPSG:4979), heights above the ellipsoid");
+    put_text(varid, kCrsVariable, "grid_mapping_name", "latitude_longitude");
+    put_text(varid, kCrsVariable, "crs_wkt", kCrsWkt);
+    put_text(varid, kCrsVariable, "geographic_crs_name", "WGS 84");
+    put_text(varid, kCrsVariable, "horizontal_datum_name", "World Geodetic System 1984");
+    put_text(varid, kCrsVariable, "reference_ellipsoid_name", "WGS 84");
+    put_text(varid, kCrsVariable, "prime_meridian_name", "Greenwich");
+    const std::pair<const char*, double> numbers[] = {{"semi_major_axis", 6378137.0},
+                                                      {"inverse_flattening", 298.257223563},
+                                                      {"longitude_of_prime_meridian", 0.0}};
+    for (const auto& [name, value] : numbers) {
+      check(nc_put_att_double(nc.id(), varid, name, NC_DOUBLE, 1, &value),
+            std::string("attribute '") + name + "' of 'crs'");
+    }
+    return varid;
+  }
+
+  void put_flags(int varid, const char* variable, std::span<const unsigned char> values,
+                 const char* meanings) const {
+    check(nc_put_att_uchar(nc.id(), varid, "flag_values", NC_UBYTE, values.size(), values.data()),
+          std::string("attribute 'flag_values' of '") + variable + "'");
+    put_text(varid, variable, "flag_meanings", meanings);
+  }
+
   // The few attributes beyond those of the table.
   void define_special_attributes() const {
     for (const DefinedVariable& variable : variables) {
       if (std::string_view(variable.def->name) == "time")
         put_text(variable.varid, "time", "calendar", "standard");
       if (std::string_view(variable.def->name) == "quality_flag") {
-        const unsigned char values[] = {quality_good, quality_no_terrain};
-        check(nc_put_att_uchar(nc.id(), variable.varid, "flag_values", NC_UBYTE, 2, values),
-              "attribute 'flag_values' of 'quality_flag'");
-        put_text(variable.varid, "quality_flag", "flag_meanings", "good no_terrain");
+        const unsigned char values[] = {quality_invalid, quality_good};
+        put_flags(variable.varid, "quality_flag", values, "not_valid valid");
+      }
+      if (std::string_view(variable.def->name) == "quality_reason") {
+        const unsigned char values[] = {reason_none, reason_off_terrain, reason_nodata};
+        put_flags(variable.varid, "quality_reason", values, "none off_terrain nodata");
+        put_text(variable.varid, "quality_reason", "comment",
+                 "off_terrain: the laser ray never met the terrain; nodata: the beam fell (within "
+                 "3 sigma) over nodata or off the DEM's edge. Values 3 and up are kept for reasons "
+                 "found in the waveform (no signal, low signal, saturated).");
       }
     }
   }
@@ -309,6 +432,7 @@ struct NetcdfWriter::Impl {
       wavelengths.push_back(band.wavelength_nm);
       names.push_back(band.name.c_str());
     }
+    check(nc_put_var_double(nc.id(), v.band, wavelengths.data()), "writing variable 'band'");
     check(nc_put_var_double(nc.id(), v.wavelength, wavelengths.data()),
           "writing variable 'wavelength'");
     check(nc_put_var_string(nc.id(), v.band_name, names.data()), "writing variable 'band_name'");
@@ -405,6 +529,41 @@ struct NetcdfWriter::Impl {
     const std::vector<std::vector<double>> arrays = flatten_arrays(index, shot);
     for (std::size_t i = 0; i < variables.size(); ++i)
       put_value(index, shot, variables[i], arrays[i]);
+    time_s.add(shot.time_s);
+    lat_deg.add(shot.lat_deg);
+    lon_deg.add(shot.lon_deg);
+    elev_m.add(shot.elev_m);
+  }
+
+  void put_double(const char* name, double value) const {
+    check(nc_put_att_double(nc.id(), NC_GLOBAL, name, NC_DOUBLE, 1, &value),
+          std::string("global attribute '") + name + "'");
+  }
+
+  // ACDD's time and place of the data, from the records; none where no record has a value.
+  void define_coverage() const {
+    if (!time_s.empty()) {
+      put_text(NC_GLOBAL, "global", "time_coverage_start",
+               iso8601_utc(kGlasEpochUnix_s + time_s.min));
+      put_text(NC_GLOBAL, "global", "time_coverage_end",
+               iso8601_utc(kGlasEpochUnix_s + time_s.max));
+    }
+    if (!lat_deg.empty()) {
+      put_double("geospatial_lat_min", lat_deg.min);
+      put_double("geospatial_lat_max", lat_deg.max);
+      put_text(NC_GLOBAL, "global", "geospatial_lat_units", "degrees_north");
+    }
+    if (!lon_deg.empty()) {
+      put_double("geospatial_lon_min", lon_deg.min);
+      put_double("geospatial_lon_max", lon_deg.max);
+      put_text(NC_GLOBAL, "global", "geospatial_lon_units", "degrees_east");
+    }
+    if (!elev_m.empty()) {
+      put_double("geospatial_vertical_min", elev_m.min);
+      put_double("geospatial_vertical_max", elev_m.max);
+      put_text(NC_GLOBAL, "global", "geospatial_vertical_units", "m");
+      put_text(NC_GLOBAL, "global", "geospatial_vertical_positive", "up");
+    }
   }
 };
 
@@ -456,6 +615,7 @@ void NetcdfWriter::finish(const RunStats& stats) {
   }
   const int id = impl.nc.id();
   impl.check(nc_redef(id), "reopening definitions");
+  impl.define_coverage();
   const long long ray_queries = stats.ray_queries;
   const long long shots_flagged = stats.shots_flagged;
   impl.check(nc_put_att_longlong(id, NC_GLOBAL, "stats_ray_queries", NC_INT64, 1, &ray_queries),

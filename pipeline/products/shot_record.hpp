@@ -17,10 +17,19 @@ struct ProductBand {
   double wavelength_nm = 0.0;
 };
 
-// quality_flag values (flag_values / flag_meanings in shots.nc).
+// quality_flag values (flag_values / flag_meanings in shots.nc): GEDI L2A's convention, 1 for a
+// valid waveform, so that `quality_flag == 1` keeps the good shots.
 enum QualityFlag : std::uint8_t {
-  quality_good = 0,
-  quality_no_terrain = 1,  // the laser ray never met the terrain (off the DEM, over nodata)
+  quality_invalid = 0,  // no waveform: quality_reason says why
+  quality_good = 1,
+};
+
+// quality_reason values: why a shot is not valid. Values 3 and up are kept for the reasons a
+// waveform test would give (no signal, low signal, saturated); nothing detects them yet.
+enum QualityReason : std::uint8_t {
+  reason_none = 0,
+  reason_off_terrain = 1,  // the laser ray never met the terrain
+  reason_nodata = 2,       // the beam fell (within 3 sigma) over nodata or off the DEM's edge
 };
 
 struct ShotRecord {
@@ -32,6 +41,7 @@ struct ShotRecord {
   double slope_deg = 0.0, aspect_deg = 0.0;
   double elev_bin0_m = 0.0, elev_lastbin_m = 0.0;
   std::uint8_t quality_flag = quality_good;
+  std::uint8_t quality_reason = reason_none;
 
   // [band][bin], W. Fill (NaN) when quality_flag is not good.
   std::vector<std::vector<double>> rx_waveform_W;

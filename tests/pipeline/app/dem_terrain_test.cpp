@@ -317,7 +317,7 @@ TEST(DemCommand, ShotsOverNodataOrOffTheRasterAreFlagged) {
   nc_close(nc);
   for (int shot = 0; shot < 10; ++shot) {
     const bool flagged = shot == 3 || shot >= 8;
-    EXPECT_EQ(flags[shot], flagged ? quality_no_terrain : quality_good) << shot;
+    EXPECT_EQ(flags[shot], flagged ? quality_invalid : quality_good) << shot;
     EXPECT_EQ(std::isfinite(energy[2 * shot]), !flagged) << shot;
     if (!flagged) {
       EXPECT_NEAR(elev[shot], 700.0 + 0.05 * 172.0 * shot, 0.5) << shot;

@@ -105,7 +105,7 @@ ShotRecord make_flagged_shot(int record) {
   shot.shot_number = 10 + record;
   shot.time_s = 183254400.0 + 0.025 * record;
   shot.lat_deg = shot.lon_deg = shot.elev_m = std::nan("");
-  shot.quality_flag = quality_no_terrain;
+  shot.quality_flag = quality_invalid;
   return shot;
 }
 

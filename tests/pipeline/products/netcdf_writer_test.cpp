@@ -125,7 +125,8 @@ ShotRecord make_record(int record, int orders) {
 // A shot off the terrain: no waveforms at all, as the transport may hand it over.
 ShotRecord make_flagged_record(int record) {
   ShotRecord shot = make_record(record, 0);
-  shot.quality_flag = quality_no_terrain;
+  shot.quality_flag = quality_invalid;
+  shot.quality_reason = reason_nodata;
   shot.rx_waveform_W.clear();
   shot.rx_waveform_canopy_W.clear();
   shot.rx_waveform_ground_W.clear();
@@ -280,6 +281,10 @@ TEST_F(NetcdfWriterTest, EveryVariableHasUnitsAndLongName) {
   write_product(file(), make_info(kOrders), false);
   Reader nc(file());
   const std::set<std::string> expected = {"trajectory",
+                                          "crs",
+                                          "shot",
+                                          "band",
+                                          "quality_reason",
                                           "shot_number",
                                           "time",
                                           "lat",
@@ -348,8 +353,11 @@ TEST_F(NetcdfWriterTest, EveryVariableOfTheProductContractIsThere) {
   write_product(file(), make_info(kOrders), false);
   Reader nc(file());
   const std::map<std::string, std::vector<std::string>> contract = {
+      {"shot", {"shot"}},
       {"shot_number", {"shot"}},
+      {"band", {"band"}},
       {"quality_flag", {"shot"}},
+      {"quality_reason", {"shot"}},
       {"time", {"shot"}},
       {"lat", {"shot"}},
       {"lon", {"shot"}},
@@ -398,17 +406,12 @@ TEST_F(NetcdfWriterTest, EveryVariableOfTheProductContractIsThere) {
     EXPECT_FALSE(nc.text(name, "units").empty()) << name << " has no units";
     EXPECT_FALSE(nc.text(name, "long_name").empty()) << name << " has no long_name";
   }
-  // The contract's rows that shots.nc does not have yet: the coordinate variables `shot` and
-  // `band` (today the band coordinate is `wavelength`) and `quality_reason`. Listed so that this
-  // test fails, and the list is moved up, when they come.
-  for (const char* missing : {"shot", "band", "quality_reason"})
-    EXPECT_FALSE(nc.has_var(missing)) << missing << " is there now: move it into the contract map";
 }
 
 TEST_F(NetcdfWriterTest, CfAttributes) {
   write_product(file(), make_info(kOrders), false);
   Reader nc(file());
-  EXPECT_EQ(nc.text(NC_GLOBAL, "Conventions"), "CF-1.10");
+  EXPECT_EQ(nc.text(NC_GLOBAL, "Conventions"), "CF-1.10, ACDD-1.3");
   EXPECT_EQ(nc.text(NC_GLOBAL, "featureType"), "trajectory");
   EXPECT_FALSE(nc.text(NC_GLOBAL, "title").empty());
   EXPECT_EQ(nc.text(NC_GLOBAL, "history"), "glaswave run demo.json --out out/demo");
@@ -468,9 +471,89 @@ TEST_F(NetcdfWriterTest, CfAttributes) {
   EXPECT_EQ(type, NC_UBYTE);
   EXPECT_EQ(length, 2u);
   ASSERT_EQ(nc_get_att_uchar(nc.id(), flag, "flag_values", flag_values), NC_NOERR);
+  // GEDI L2A's convention: 1 is a valid waveform.
   EXPECT_EQ(flag_values[0], 0);
   EXPECT_EQ(flag_values[1], 1);
-  EXPECT_EQ(nc.text(flag, "flag_meanings"), "good no_terrain");
+  EXPECT_EQ(nc.text(flag, "flag_meanings"), "not_valid valid");
+  const int reason = nc.var("quality_reason");
+  EXPECT_EQ(nc.type_of("quality_reason"), NC_UBYTE);
+  unsigned char reason_values[3] = {9, 9, 9};
+  ASSERT_EQ(nc_inq_att(nc.id(), reason, "flag_values", &type, &length), NC_NOERR);
+  EXPECT_EQ(type, NC_UBYTE);
+  ASSERT_EQ(length, 3u);
+  ASSERT_EQ(nc_get_att_uchar(nc.id(), reason, "flag_values", reason_values), NC_NOERR);
+  EXPECT_EQ(reason_values[0], 0);
+  EXPECT_EQ(reason_values[1], 1);
+  EXPECT_EQ(reason_values[2], 2);
+  EXPECT_EQ(nc.text(reason, "flag_meanings"), "none off_terrain nodata");
+}
+
+// What a GEDI or GLAS user's tools look for: the coordinates of the shot and band dimensions,
+// the grid mapping, ACDD's discovery attributes with the data's bounds, and the names of the
+// missions' own products.
+TEST_F(NetcdfWriterTest, ConventionsOfTheMissionsAndOfDiscovery) {
+  write_product(file(), make_info(kOrders), true);
+  Reader nc(file());
+  long long shots[3] = {};
+  ASSERT_EQ(nc_get_var_longlong(nc.id(), nc.var("shot"), shots), NC_NOERR);
+  for (int record = 0; record < kShots; ++record) EXPECT_EQ(shots[record], 100 + record);
+  EXPECT_EQ(nc.doubles("band"), (std::vector<double>{532.0, 1064.0}));
+  EXPECT_EQ(nc.text("band", "units"), "nm");
+  EXPECT_FALSE(nc.has_att(nc.var("shot"), "coordinates"));
+
+  // Every per-shot variable located by the trajectory's coordinates names the CRS.
+  for (const char* name : {"elev", "sc_alt", "quality_flag", "rx_waveform", "rh", "energy_tr"})
+    EXPECT_EQ(nc.text(name, "grid_mapping"), "crs") << name;
+  const int crs = nc.var("crs");
+  const std::string wkt = nc.text(crs, "crs_wkt");
+  EXPECT_NE(wkt.find("WGS 84"), std::string::npos) << wkt;
+  EXPECT_NE(wkt.find("ellipsoidal,3"), std::string::npos) << "heights above the ellipsoid";
+  EXPECT_NE(wkt.find("4979"), std::string::npos) << wkt;
+  EXPECT_EQ(nc.text(crs, "grid_mapping_name"), "latitude_longitude");
+  double semi_major = 0.0, inverse_flattening = 0.0;
+  ASSERT_EQ(nc_get_att_double(nc.id(), crs, "semi_major_axis", &semi_major), NC_NOERR);
+  ASSERT_EQ(nc_get_att_double(nc.id(), crs, "inverse_flattening", &inverse_flattening), NC_NOERR);
+  EXPECT_EQ(semi_major, 6378137.0);
+  EXPECT_EQ(inverse_flattening, 298.257223563);
+
+  for (const char* name : {"title", "summary", "keywords", "date_created"})
+    EXPECT_FALSE(nc.text(NC_GLOBAL, name).empty()) << name;
+  EXPECT_TRUE(nc.has_att(NC_GLOBAL, "creator_name"));
+  // Times of records 0 and 2 (the flagged shot keeps its time): 183254400 s after the GLAS
+  // epoch is 2005-10-22T12:00:00Z: 2121 days after 2000-01-01T12:00:00Z (Python datetime).
+  EXPECT_EQ(nc.text(NC_GLOBAL, "time_coverage_start"), "2005-10-22T12:00:00.000000Z");
+  EXPECT_EQ(nc.text(NC_GLOBAL, "time_coverage_end"), "2005-10-22T12:00:00.050000Z");
+  double lat_min = 0.0, lat_max = 0.0, lon_min = 0.0, lon_max = 0.0;
+  ASSERT_EQ(nc_get_att_double(nc.id(), NC_GLOBAL, "geospatial_lat_min", &lat_min), NC_NOERR);
+  ASSERT_EQ(nc_get_att_double(nc.id(), NC_GLOBAL, "geospatial_lat_max", &lat_max), NC_NOERR);
+  ASSERT_EQ(nc_get_att_double(nc.id(), NC_GLOBAL, "geospatial_lon_min", &lon_min), NC_NOERR);
+  ASSERT_EQ(nc_get_att_double(nc.id(), NC_GLOBAL, "geospatial_lon_max", &lon_max), NC_NOERR);
+  EXPECT_EQ(lat_min, make_record(0, 0).lat_deg);
+  EXPECT_EQ(lat_max, make_record(2, 0).lat_deg);
+  EXPECT_EQ(lon_min, make_record(0, 0).lon_deg);
+  EXPECT_EQ(lon_max, make_record(2, 0).lon_deg);
+
+  const std::map<std::string, std::string> gedi = {{"shot_number", "shot_number"},
+                                                   {"time", "delta_time"},
+                                                   {"lat", "lat_lowestmode"},
+                                                   {"lon", "lon_lowestmode"},
+                                                   {"quality_flag", "quality_flag"},
+                                                   {"rh", "rh"},
+                                                   {"rx_waveform", "rxwaveform"},
+                                                   {"tx_waveform", "txwaveform"},
+                                                   {"rx_energy", "rx_energy"},
+                                                   {"ground_elev_est", "elev_lowestmode"},
+                                                   {"elev_bin0", "geolocation/elevation_bin0"}};
+  for (const auto& [name, gedi_name] : gedi) EXPECT_EQ(nc.text(name, "gedi_name"), gedi_name);
+  const std::map<std::string, std::string> glas = {{"lat", "d_lat"},
+                                                   {"lon", "d_lon"},
+                                                   {"time", "d_UTCTime_40"},
+                                                   {"centroid_m", "d_elev"},
+                                                   {"sig_begin_m", "d_SigBegOff"},
+                                                   {"sig_end_m", "d_SigEndOff"}};
+  for (const auto& [name, glas_name] : glas) EXPECT_EQ(nc.text(name, "glas_name"), glas_name);
+  EXPECT_EQ(nc.text("quality_flag", "standard_name"), "quality_flag");
+  EXPECT_EQ(nc.text("elev_bin0", "standard_name"), "height_above_reference_ellipsoid");
 }
 
 TEST_F(NetcdfWriterTest, TypesAndStorage) {
@@ -564,7 +647,7 @@ TEST_F(NetcdfWriterTest, ValuesComeBack) {
 
   unsigned char flags[3] = {9, 9, 9};
   ASSERT_EQ(nc_get_var_uchar(nc.id(), nc.var("quality_flag"), flags), NC_NOERR);
-  EXPECT_EQ(flags[0] + flags[1] + flags[2], 0);
+  EXPECT_EQ(flags[0] + flags[1] + flags[2], 3) << "all valid";
 
   EXPECT_EQ(nc.doubles("wavelength"), (std::vector<double>{532.0, 1064.0}));
   EXPECT_EQ(nc.doubles("bin_time_ns"), (std::vector<double>{-2.0, -1.0, 0.0, 1.0, 2.0}));
@@ -682,9 +765,14 @@ TEST_F(NetcdfWriterTest, FlaggedShotKeepsFill) {
   Reader nc(file());
   unsigned char flags[3] = {9, 9, 9};
   ASSERT_EQ(nc_get_var_uchar(nc.id(), nc.var("quality_flag"), flags), NC_NOERR);
-  EXPECT_EQ(flags[0], quality_good);
-  EXPECT_EQ(flags[1], quality_no_terrain);
-  EXPECT_EQ(flags[2], quality_good);
+  EXPECT_EQ(flags[0], 1) << "GEDI's valid";
+  EXPECT_EQ(flags[1], 0);
+  EXPECT_EQ(flags[2], 1);
+  unsigned char reasons[3] = {9, 9, 9};
+  ASSERT_EQ(nc_get_var_uchar(nc.id(), nc.var("quality_reason"), reasons), NC_NOERR);
+  EXPECT_EQ(reasons[0], 0);
+  EXPECT_EQ(reasons[1], 2) << "nodata";
+  EXPECT_EQ(reasons[2], 0);
   const auto rx = nc.doubles("rx_waveform");
   const auto by_order = nc.doubles("rx_waveform_order");
   const auto energy = nc.doubles("rx_energy");

@@ -99,7 +99,7 @@ ShotRecord make_record(int record) {
 
 ShotRecord make_flagged_record(int record) {
   ShotRecord shot = make_record(record);
-  shot.quality_flag = quality_no_terrain;
+  shot.quality_flag = quality_invalid;
   shot.elev_m = std::nan("");
   shot.rx_energy_J.clear();
   shot.rx_energy_canopy_J.clear();
@@ -285,7 +285,7 @@ TEST_F(OgrWriterTest, OgrReadsItWithoutWarnings) {
   // The flagged shot: no geometry, no metrics, its position still there.
   const OGRFeature& flagged = *features[1];
   EXPECT_EQ(flagged.GetGeometryRef(), nullptr);
-  EXPECT_EQ(flagged.GetFieldAsInteger("quality_flag"), quality_no_terrain);
+  EXPECT_EQ(flagged.GetFieldAsInteger("quality_flag"), quality_invalid);
   for (const char* name :
        {"elev", "rx_energy_532", "rx_energy_canopy_1064", "rx_energy_ground_532",
         "reflectance_1064", "energy_tr_1064", "ground_elev_est_532", "canopy_height_est_1064",

@@ -114,7 +114,7 @@ ShotRecord shot_known_values() {
   record.cover_true = 0.5;
   record.rx_energy_J = {1.0, 2.0};
   record.n_peaks = {3, 4};
-  record.quality_flag = quality_no_terrain;
+  record.quality_flag = quality_invalid;
   return record;
 }
 
@@ -129,7 +129,7 @@ TEST(FillFlagged, FillsWhatTheShotCannotKnowAndKeepsTheRest) {
   EXPECT_EQ(record.sc_lon_deg, -118.0);
   EXPECT_EQ(record.sc_alt_m, 600000.0);
   EXPECT_EQ(record.off_nadir_deg, 0.3);
-  EXPECT_EQ(record.quality_flag, quality_no_terrain);
+  EXPECT_EQ(record.quality_flag, quality_invalid);
   for (double v : {record.lat_deg, record.lon_deg, record.elev_m, record.range_m, record.slope_deg,
                    record.aspect_deg, record.elev_bin0_m, record.elev_lastbin_m, record.cover_true,
                    record.pai_true, record.canopy_height_true_m})
@@ -240,7 +240,7 @@ class ProductWritersTest : public ::testing::Test {
   static ShotRecord flagged(std::int64_t shot) {
     ShotRecord record;
     record.shot_number = shot;
-    record.quality_flag = quality_no_terrain;
+    record.quality_flag = quality_invalid;
     fill_flagged(record, {.bands = 1, .bins = 3, .orders = 0});
     return record;
   }

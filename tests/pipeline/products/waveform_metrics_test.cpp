@@ -204,7 +204,7 @@ TEST(ProcessShotWaveforms, FillsEveryBandAndFillsFlaggedShots) {
   EXPECT_EQ(record.rh_m[0].size(), static_cast<std::size_t>(kRhLevels));
   EXPECT_NEAR(record.rh_m[1][50], 0.0, 0.002);
 
-  record.quality_flag = quality_no_terrain;
+  record.quality_flag = quality_invalid;
   process_shot_waveforms(record, kBinNs, noise_free());
   EXPECT_EQ(record.n_peaks, (std::vector<std::int32_t>{0, 0}));
   EXPECT_TRUE(std::isnan(record.energy_tr_J[1]));
