@@ -217,7 +217,7 @@ TransportOptions ShotSimulator::transport_options() const {
 
 void ShotSimulator::flag_off_terrain(ShotRecord& record, const Footprint& footprint) const {
   record.quality_flag = quality_invalid;
-  // Met the terrain, yet not enough of it under the beam: over nodata or the DEM's edge.
+  // The axis met the terrain, yet nodata or the DEM's edge lies under the beam.
   record.quality_reason = footprint.on_terrain ? reason_nodata : reason_off_terrain;
   const std::size_t orders =
       config_.output.per_order ? static_cast<std::size_t>(config_.simulation.max_order) : 0;

@@ -415,8 +415,9 @@ struct NetcdfWriter::Impl {
         const unsigned char values[] = {reason_none, reason_off_terrain, reason_nodata};
         put_flags(variable.varid, "quality_reason", values, "none off_terrain nodata");
         put_text(variable.varid, "quality_reason", "comment",
-                 "off_terrain: the laser ray never met the terrain; nodata: the beam fell (within "
-                 "3 sigma) over nodata or off the DEM's edge. Values 3 and up are kept for reasons "
+                 "off_terrain: the beam's axis met no terrain (off the DEM, or into a nodata "
+                 "hole); nodata: it met the terrain, but nodata or the DEM's edge lies within 3 "
+                 "sigma of the beam. Values 3 and up are kept for reasons "
                  "found in the waveform (no signal, low signal, saturated).");
       }
     }

@@ -28,8 +28,8 @@ enum QualityFlag : std::uint8_t {
 // waveform test would give (no signal, low signal, saturated); nothing detects them yet.
 enum QualityReason : std::uint8_t {
   reason_none = 0,
-  reason_off_terrain = 1,  // the laser ray never met the terrain
-  reason_nodata = 2,       // the beam fell (within 3 sigma) over nodata or off the DEM's edge
+  reason_off_terrain = 1,  // the beam's axis met no terrain: off the DEM, or into a nodata hole
+  reason_nodata = 2,       // it met the terrain, but nodata or the DEM's edge is within 3 sigma
 };
 
 struct ShotRecord {

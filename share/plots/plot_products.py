@@ -128,7 +128,7 @@ def signal_extent(shots, i, fraction=SIGNAL_FRACTION, band=0):
 
 
 def plot_waveforms(shots, path):
-    good = np.flatnonzero(shots["quality_flag"] == 0)
+    good = np.flatnonzero(shots["quality_flag"] == 1)
     chosen = good[np.unique(np.linspace(0, len(good) - 1, min(MAX_PANELS, len(good))).round()
                             .astype(int))] if len(good) else []
     ncols = max(1, min(4, len(chosen)))
@@ -207,7 +207,7 @@ def along_track_km(lat_deg, lon_deg):
 
 
 def plot_track_profile(shots, path):
-    good = np.flatnonzero((shots["quality_flag"] == 0) & np.isfinite(shots["lat"])
+    good = np.flatnonzero((shots["quality_flag"] == 1) & np.isfinite(shots["lat"])
                           & np.isfinite(shots["lon"]))
     dist = along_track_km(shots["lat"][good], shots["lon"][good])
     extent = np.array([signal_extent(shots, i) for i in good]).reshape(-1, 2)

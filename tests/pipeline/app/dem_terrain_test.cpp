@@ -309,6 +309,9 @@ TEST(DemCommand, ShotsOverNodataOrOffTheRasterAreFlagged) {
   unsigned char flags[10];
   ASSERT_EQ(nc_inq_varid(nc, "quality_flag", &var), NC_NOERR);
   ASSERT_EQ(nc_get_var_uchar(nc, var, flags), NC_NOERR);
+  unsigned char reasons[10];
+  ASSERT_EQ(nc_inq_varid(nc, "quality_reason", &var), NC_NOERR);
+  ASSERT_EQ(nc_get_var_uchar(nc, var, reasons), NC_NOERR);
   double energy[20], elev[10];
   ASSERT_EQ(nc_inq_varid(nc, "rx_energy", &var), NC_NOERR);
   ASSERT_EQ(nc_get_var_double(nc, var, energy), NC_NOERR);
@@ -317,7 +320,11 @@ TEST(DemCommand, ShotsOverNodataOrOffTheRasterAreFlagged) {
   nc_close(nc);
   for (int shot = 0; shot < 10; ++shot) {
     const bool flagged = shot == 3 || shot >= 8;
-    EXPECT_EQ(flags[shot], flagged ? quality_invalid : quality_good) << shot;
+    EXPECT_EQ(flags[shot], flagged ? 0 : 1) << shot << ": 1 is valid, as in GEDI L2A";
+    // Shots 3 (the hole's centre) and 9 (past the raster) meet no terrain on the beam's axis;
+    // shot 8 meets it, with the raster's edge within 3 sigma of the beam.
+    const int reason = shot == 8 ? reason_nodata : flagged ? reason_off_terrain : reason_none;
+    EXPECT_EQ(reasons[shot], reason) << shot;
     EXPECT_EQ(std::isfinite(energy[2 * shot]), !flagged) << shot;
     if (!flagged) {
       EXPECT_NEAR(elev[shot], 700.0 + 0.05 * 172.0 * shot, 0.5) << shot;
