@@ -554,6 +554,8 @@ TEST_F(NetcdfWriterTest, ConventionsOfTheMissionsAndOfDiscovery) {
   for (const auto& [name, glas_name] : glas) EXPECT_EQ(nc.text(name, "glas_name"), glas_name);
   EXPECT_EQ(nc.text("quality_flag", "standard_name"), "quality_flag");
   EXPECT_EQ(nc.text("elev_bin0", "standard_name"), "height_above_reference_ellipsoid");
+  EXPECT_EQ(nc.text("slope_deg", "standard_name"), "ground_slope_angle");
+  EXPECT_EQ(nc.text("aspect_deg", "standard_name"), "ground_slope_direction");
 }
 
 TEST_F(NetcdfWriterTest, TypesAndStorage) {
