@@ -2,7 +2,7 @@
 
     import glaswave
     ds = glaswave.run("forest.json", shots=range(0, 100), overrides={"canopy.pai": 2.0})
-    ds.rx_waveform.isel(band=1)          # an xarray.Dataset, as shots.nc
+    ds.rx_waveform.sel(band=1064)        # an xarray.Dataset, as shots.nc
     glaswave.check({"canopy": {"pai": -1}})   # raises glaswave.ConfigError: /canopy/pai: ...
 
 The C++ engine does the work (with the GIL released; Ctrl-C stops it); errors come back as
