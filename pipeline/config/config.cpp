@@ -18,6 +18,7 @@
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/config/presets.hpp"
+#include "pipeline/config/stands_file.hpp"
 
 namespace glaswave {
 
@@ -804,51 +805,21 @@ void check_run(const Config& config) {
 
 namespace {
 
-// A stands file: GeoJSON polygons whose properties override canopy keys inside them. Each
-// feature's canopy is the scene's with its properties applied, checked as the configuration is;
-// a fault is the file's (exit status 3), named by its feature and key.
+// A stands file: polygons in any vector format and CRS OGR reads (read_stand_features), whose
+// attribute fields override canopy keys inside them. Each feature's canopy is the scene's with
+// its fields applied, checked as the configuration is; a fault is the file's (exit status 3),
+// named by its feature and key.
 std::vector<StandArea> read_stands(const std::string& path, const json& scene_canopy,
                                    const std::vector<Band>& bands) {
-  json document;
-  try {
-    document = read_json_file(path);
-  } catch (const Error& e) {
-    throw input_error(e.place(), e.message());
-  }
-  if (!document.is_object() || document.value("type", "") != "FeatureCollection" ||
-      !document.contains("features") || !document["features"].is_array())
-    throw input_error(path, "a stands file must be a GeoJSON FeatureCollection");
   std::vector<StandArea> areas;
-  for (std::size_t i = 0; i < document["features"].size(); ++i) {
-    const json& feature = document["features"][i];
-    const std::string where = "feature " + std::to_string(i);
-    const json geometry = feature.is_object() ? feature.value("geometry", json()) : json();
-    const std::string type = geometry.is_object() ? geometry.value("type", "") : "";
-    if (type != "Polygon" && type != "MultiPolygon")
-      throw input_error(path, where + ": the geometry must be a Polygon or MultiPolygon");
+  for (StandFeature& feature : read_stand_features(path)) {
+    const std::string& where = feature.name;
     StandArea area;
-    const json polygons =
-        type == "Polygon" ? json::array({geometry["coordinates"]}) : geometry["coordinates"];
-    try {
-      for (const json& polygon : polygons)
-        for (const json& ring : polygon) {
-          std::vector<std::array<double, 2>> points;
-          for (const json& point : ring)
-            points.push_back({point.at(0).get<double>(), point.at(1).get<double>()});
-          if (points.size() < 4) throw std::invalid_argument("a ring needs at least 4 positions");
-          area.rings.push_back(std::move(points));
-        }
-    } catch (const std::exception& e) {
-      throw input_error(path, where + ": bad coordinates (" + e.what() + ")");
-    }
+    area.rings = std::move(feature.rings);
     json canopy = scene_canopy;
     canopy.erase("stands");
     canopy.erase("crowns_file");
-    const json properties = feature.value("properties", json::object());
-    if (!properties.is_null() && !properties.is_object())
-      throw input_error(path, where + ": properties must be an object");
-    if (properties.is_object())
-      for (const auto& [key, value] : properties.items()) canopy[key] = value;
+    for (const auto& [key, value] : feature.properties.items()) canopy[key] = value;
     const json document_of_stand = {{"canopy", canopy}};  // the reader keeps a pointer to it
     json resolved = json::object();
     JsonReader root(document_of_stand, "", resolved, configuration_keys());

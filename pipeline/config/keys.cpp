@@ -338,8 +338,12 @@ Key canopy_keys() {
             "`x,y,base_m,radius_m,half_height_m` (metres east and north of `terrain.plane`'s "
             "origin); `pai` is then per unit area of the crowns' bounding box"),
        path("stands",
-            "a GeoJSON FeatureCollection of Polygons or MultiPolygons whose `properties` override "
-            "canopy keys inside them (`{\"pai\": 1.5, \"lad\": \"erectophile\"}`); checked like "
+            "a vector file GDAL/OGR reads (GeoJSON, GeoPackage, Shapefile, FlatGeobuf...) of "
+            "Polygons or MultiPolygons, every layer's features, whose attribute fields (GeoJSON "
+            "`properties`) override canopy keys inside them (`{\"pai\": 1.5, \"lad\": "
+            "\"erectophile\"}`; a text field holding a JSON object or array is read as that "
+            "JSON); in any CRS, brought to WGS84 with PROJ: a layer without one is taken as "
+            "longitude and latitude, and is an error if its coordinates are not; checked like "
             "the configuration, a bad file is exit status 3 naming the feature and key; not with "
             "a `layer`")});
   canopy.default_text = "null";

@@ -1,11 +1,19 @@
-// Explicit crowns (crowns_file) and stands (GeoJSON polygons overriding canopy keys): their
+// Explicit crowns (crowns_file) and stands (vector polygons overriding canopy keys): their
 // trees where the files put them, with the optics the stands give, and bad files named.
+#include <gdal_priv.h>
 #include <gtest/gtest.h>
+#include <ogr_spatialref.h>
+#include <ogrsf_frmts.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <memory>
 #include <numbers>
+#include <sstream>
+#include <vector>
 
 #include "core/error.hpp"
 #include "footprints/track.hpp"
@@ -30,6 +38,51 @@ class Forests : public ::testing::Test {
   }
   test_support::ScratchDir dir_{"glaswave_forest"};
 };
+
+using Ring = std::vector<std::array<double, 2>>;
+
+// A file of one polygon feature with a real field `pai`, written by GDAL's `driver` in `crs`
+// (empty: none, so a Shapefile gets no .prj).
+void write_stand(const fs::path& file, const char* driver_name, const std::string& crs,
+                 const Ring& ring, double pai) {
+  GDALAllRegister();
+  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName(driver_name);
+  ASSERT_NE(driver, nullptr) << driver_name;
+  GDALDataset* dataset = driver->Create(file.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
+  ASSERT_NE(dataset, nullptr) << file;
+  std::unique_ptr<OGRSpatialReference> srs;
+  if (!crs.empty()) {
+    srs = std::make_unique<OGRSpatialReference>();
+    ASSERT_EQ(srs->SetFromUserInput(crs.c_str()), OGRERR_NONE) << crs;
+  }
+  OGRLayer* layer = dataset->CreateLayer("stands", srs.get(), wkbPolygon, nullptr);
+  ASSERT_NE(layer, nullptr);
+  OGRFieldDefn field("pai", OFTReal);
+  ASSERT_EQ(layer->CreateField(&field), OGRERR_NONE);
+  OGRFeature feature(layer->GetLayerDefn());
+  feature.SetField("pai", pai);
+  OGRLinearRing outline;
+  for (const auto& [x, y] : ring) outline.addPoint(x, y);
+  OGRPolygon polygon;
+  polygon.addRing(&outline);
+  feature.SetGeometry(&polygon);
+  ASSERT_EQ(layer->CreateFeature(&feature), OGRERR_NONE);
+  GDALClose(dataset);
+}
+
+// Longitude and latitude -> x, y in `crs`, and back, by GDAL (as a user's GIS would).
+Ring transform(const Ring& ring, const std::string& from, const std::string& to) {
+  OGRSpatialReference source, target;
+  source.SetFromUserInput(from.c_str());
+  target.SetFromUserInput(to.c_str());
+  source.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  target.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  const std::unique_ptr<OGRCoordinateTransformation> t(
+      OGRCreateCoordinateTransformation(&source, &target));
+  Ring out = ring;
+  for (auto& [x, y] : out) EXPECT_TRUE(t && t->Transform(1, &x, &y));
+  return out;
+}
 
 std::vector<ShotRecord> simulate(const Config& config) {
   return test_support::simulate_track(config).records;
@@ -90,6 +143,81 @@ TEST_F(Forests, StandsOverrideTheCanopyInsideTheirPolygons) {
   EXPECT_GT(shots[0].rx_energy_canopy_J[0], 0.2 * shots[0].rx_energy_J[0]);
   EXPECT_EQ(shots[1].rx_energy_canopy_J[0], 0.0);
   EXPECT_GT(shots[1].rx_energy_ground_J[0], 0.0);
+}
+
+// A UTM (zone 11, EPSG:32611) GeoPackage stand with no plants east of the central meridian,
+// over a plane there: the shot inside sees bare ground, the one outside the scene's forest; the
+// same stand as a GeoJSON in longitude and latitude gives the same shots.
+TEST_F(Forests, AUtmGeoPackageStandChangesTheCanopyUnderIt) {
+  const std::array<double, 2> origin =
+      transform({{-117.0, 34.0}}, "EPSG:4326", "EPSG:32611").at(0);  // easting 500 km
+  const double x0 = origin[0], y0 = origin[1];
+  const Ring utm = {{x0, y0 - 2000},
+                    {x0 + 2000, y0 - 2000},
+                    {x0 + 2000, y0 + 2000},
+                    {x0, y0 + 2000},
+                    {x0, y0 - 2000}};
+  const fs::path gpkg = dir_ / "stands.gpkg";
+  write_stand(gpkg, "GPKG", "EPSG:32611", utm, 0.0);
+  std::ostringstream geojson;
+  geojson << std::setprecision(17)
+          << R"({"type": "FeatureCollection", "features": [{"type": "Feature", )"
+          << R"("properties": {"pai": 0.0}, "geometry": {"type": "Polygon", "coordinates": [[)";
+  const Ring lon_lat = transform(utm, "EPSG:32611", "EPSG:4326");
+  for (std::size_t i = 0; i < lon_lat.size(); ++i)
+    geojson << (i ? ", " : "") << "[" << lon_lat[i][0] << ", " << lon_lat[i][1] << "]";
+  geojson << "]]}}]}";
+  const std::string json_stands = write("stands.geojson", geojson.str());
+  const auto config_of = [&](const std::string& stands) {
+    return load({
+        {"sensor", {{"preset", "glas"}}},
+        {"simulation", {{"rays_per_shot", 3000}}},
+        {"terrain", {{"plane", {{"origin_lat_deg", 34.0}, {"origin_lon_deg", -117.0}}}}},
+        {"canopy", {{"stands", stands}, {"cover", 0.9}}},
+        {"track",
+         {{"type", "points"},
+          {"points",
+           {{{"lat_deg", 34.0}, {"lon_deg", -117.002}},
+            {{"lat_deg", 34.0}, {"lon_deg", -116.998}}}}}},
+    });
+  };
+  const Config config = config_of(gpkg.string());
+  ASSERT_EQ(config.canopy->stand_areas.size(), 1u);
+  EXPECT_EQ(config.canopy->stand_areas[0].canopy.pai, 0.0);
+  EXPECT_EQ(config.canopy->stand_areas[0].canopy.cover, 0.9);
+  const auto& ring = config.canopy->stand_areas[0].rings.at(0);
+  ASSERT_EQ(ring.size(), 5u);
+  EXPECT_NEAR(ring[0][0], -117.0, 1e-9);  // the central meridian: in longitude, not metres
+  EXPECT_NEAR(ring[0][1], 34.0 - 2000 / 111000.0, 1e-3);
+  const auto shots = simulate(config);
+  EXPECT_GT(shots[0].rx_energy_canopy_J[0], 0.2 * shots[0].rx_energy_J[0]);
+  EXPECT_EQ(shots[1].rx_energy_canopy_J[0], 0.0);
+  EXPECT_GT(shots[1].rx_energy_ground_J[0], 0.0);
+
+  const auto same = simulate(config_of(json_stands));
+  ASSERT_EQ(same.size(), shots.size());
+  for (std::size_t i = 0; i < shots.size(); ++i) {
+    EXPECT_EQ(same[i].rx_energy_canopy_J[0], shots[i].rx_energy_canopy_J[0]) << i;
+    EXPECT_EQ(same[i].rx_energy_ground_J[0], shots[i].rx_energy_ground_J[0]) << i;
+  }
+}
+
+// A Shapefile without its .prj whose coordinates are metres: it cannot be placed, and says so.
+TEST_F(Forests, AStandFileWithoutACrsInMetresIsAnInputError) {
+  const fs::path shp = dir_ / "stands.shp";
+  write_stand(shp, "ESRI Shapefile", "",
+              {{500000, 3760000}, {502000, 3760000}, {502000, 3762000}, {500000, 3760000}}, 1.0);
+  ASSERT_FALSE(fs::exists(dir_ / "stands.prj"));
+  try {
+    load({{"terrain", {{"plane", nlohmann::json::object()}}},
+          {"canopy", {{"stands", shp.string()}}}});
+    FAIL() << "a stands file in metres with no CRS was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::input);
+    EXPECT_NE(std::string(e.what()).find(shp.string() + ": feature 0: "), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("has no CRS"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(Forests, BadFilesAreNamedWithTheirPlace) {

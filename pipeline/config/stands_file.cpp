@@ -1,0 +1,167 @@
+#include "pipeline/config/stands_file.hpp"
+
+#include <cpl_error.h>
+#include <gdal.h>
+#include <ogr_api.h>
+#include <ogr_core.h>
+#include <ogr_geometry.h>
+#include <ogr_spatialref.h>
+#include <ogrsf_frmts.h>
+
+#include <cmath>
+#include <memory>
+
+#include "core/error.hpp"
+
+namespace glaswave {
+namespace {
+
+using json = nlohmann::json;
+using Ring = std::vector<std::array<double, 2>>;
+
+// GDAL's messages go to the error, never to the terminal.
+class QuietGdal {
+ public:
+  QuietGdal() {
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    CPLErrorReset();
+  }
+  ~QuietGdal() { CPLPopErrorHandler(); }
+  QuietGdal(const QuietGdal&) = delete;
+  QuietGdal& operator=(const QuietGdal&) = delete;
+  static std::string last() {
+    const std::string message = CPLGetLastErrorMsg();
+    return message.empty() ? "" : " (" + message + ")";
+  }
+};
+
+struct DatasetCloser {
+  void operator()(GDALDataset* d) const { GDALClose(d); }
+};
+
+// A field's value as the JSON of a canopy key: numbers as numbers, booleans as booleans, lists as
+// arrays, and text that reads as a JSON object or array (an `lad` object) as that JSON.
+json field_value(const OGRFeature& feature, int i) {
+  const OGRFieldDefn* field = feature.GetFieldDefnRef(i);
+  switch (field->GetType()) {
+    case OFTInteger:
+      if (field->GetSubType() == OFSTBoolean) return feature.GetFieldAsInteger(i) != 0;
+      return feature.GetFieldAsInteger(i);
+    case OFTInteger64:
+      return static_cast<std::int64_t>(feature.GetFieldAsInteger64(i));
+    case OFTReal:
+      return feature.GetFieldAsDouble(i);
+    case OFTIntegerList: {
+      int n = 0;
+      const int* values = feature.GetFieldAsIntegerList(i, &n);
+      return json(std::vector<int>(values, values + n));
+    }
+    case OFTInteger64List: {
+      int n = 0;
+      const GIntBig* values = feature.GetFieldAsInteger64List(i, &n);
+      return json(std::vector<std::int64_t>(values, values + n));
+    }
+    case OFTRealList: {
+      int n = 0;
+      const double* values = feature.GetFieldAsDoubleList(i, &n);
+      return json(std::vector<double>(values, values + n));
+    }
+    case OFTStringList: {
+      json list = json::array();
+      for (char** s = feature.GetFieldAsStringList(i); s != nullptr && *s != nullptr; ++s)
+        list.push_back(std::string(*s));
+      return list;
+    }
+    default: {
+      const std::string text = feature.GetFieldAsString(i);
+      const auto first = text.find_first_not_of(" \t\r\n");
+      if (first != std::string::npos && (text[first] == '{' || text[first] == '[')) {
+        json parsed = json::parse(text, nullptr, false);
+        if (!parsed.is_discarded()) return parsed;
+      }
+      return text;
+    }
+  }
+}
+
+void add_polygon(const OGRPolygon& polygon, std::vector<Ring>& rings) {
+  for (const OGRLinearRing* ring : polygon) {
+    Ring points;
+    for (const OGRPoint& point : *ring) points.push_back({point.getX(), point.getY()});
+    rings.push_back(std::move(points));
+  }
+}
+
+bool lon_lat(const std::vector<Ring>& rings) {
+  for (const Ring& ring : rings)
+    for (const auto& [x, y] : ring)
+      if (!(std::abs(x) <= 180 && std::abs(y) <= 90)) return false;
+  return true;
+}
+
+}  // namespace
+
+std::vector<StandFeature> read_stand_features(const std::string& path) {
+  GDALAllRegister();
+  const QuietGdal quiet;
+  const std::unique_ptr<GDALDataset, DatasetCloser> dataset(GDALDataset::FromHandle(
+      GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+  if (!dataset)
+    throw input_error(path, "cannot be read as a vector file (GeoJSON, GeoPackage, Shapefile...)" +
+                                QuietGdal::last());
+  OGRSpatialReference wgs84;
+  wgs84.SetWellKnownGeogCS("WGS84");
+  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  const int layers = dataset->GetLayerCount();
+  std::vector<StandFeature> features;
+  for (int l = 0; l < layers; ++l) {
+    OGRLayer* layer = dataset->GetLayer(l);
+    const std::string prefix =
+        layers > 1 ? "layer " + std::string(layer->GetName()) + " feature " : "feature ";
+    std::unique_ptr<OGRCoordinateTransformation> to_wgs84;
+    if (const OGRSpatialReference* crs = layer->GetSpatialRef()) {
+      OGRSpatialReference source(*crs);
+      source.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+      to_wgs84.reset(OGRCreateCoordinateTransformation(&source, &wgs84));
+      if (!to_wgs84)
+        throw input_error(path,
+                          (layers > 1 ? "layer " + std::string(layer->GetName()) + ": " : "") +
+                              "its CRS cannot be brought to WGS84 longitude and latitude" +
+                              QuietGdal::last());
+    }
+    layer->ResetReading();
+    int index = 0;
+    for (std::unique_ptr<OGRFeature> feature(layer->GetNextFeature()); feature;
+         feature.reset(layer->GetNextFeature()), ++index) {
+      StandFeature stand;
+      stand.name = prefix + std::to_string(index);
+      OGRGeometry* geometry = feature->GetGeometryRef();
+      const auto type = geometry ? wkbFlatten(geometry->getGeometryType()) : wkbNone;
+      if (type != wkbPolygon && type != wkbMultiPolygon)
+        throw input_error(path, stand.name + ": the geometry must be a Polygon or MultiPolygon");
+      if (to_wgs84 && geometry->transform(to_wgs84.get()) != OGRERR_NONE)
+        throw input_error(
+            path, stand.name + ": its coordinates cannot be brought to WGS84" + QuietGdal::last());
+      if (type == wkbPolygon)
+        add_polygon(*geometry->toPolygon(), stand.rings);
+      else
+        for (const OGRPolygon* polygon : *geometry->toMultiPolygon())
+          add_polygon(*polygon, stand.rings);
+      for (const Ring& ring : stand.rings)
+        if (ring.size() < 4)
+          throw input_error(path,
+                            stand.name + ": bad coordinates (a ring needs at least 4 positions)");
+      if (!to_wgs84 && !lon_lat(stand.rings))
+        throw input_error(path, stand.name +
+                                    ": the file has no CRS and its coordinates are not longitude "
+                                    "and latitude: give the file a CRS (a .prj for a Shapefile)");
+      for (int i = 0; i < feature->GetFieldCount(); ++i)
+        if (feature->IsFieldSetAndNotNull(i))
+          stand.properties[feature->GetFieldDefnRef(i)->GetNameRef()] = field_value(*feature, i);
+      features.push_back(std::move(stand));
+    }
+  }
+  return features;
+}
+
+}  // namespace glaswave
