@@ -72,6 +72,7 @@ py::dict run(const std::optional<std::string>& path, const std::optional<std::st
   result["ray_queries"] = summary.ray_queries;
   result["wall_s"] = summary.wall_s;
   result["vertical_datum"] = summary.vertical_datum;
+  result["warnings"] = summary.warnings;
   return result;
 }
 
@@ -86,6 +87,7 @@ py::dict check(const std::optional<std::string>& path, const std::optional<std::
   result["shots"] = summary.shots;
   result["sequence_length"] = summary.sequence_length;
   result["shots_off_terrain"] = summary.shots_off_terrain;
+  result["warnings"] = summary.warnings;
   return result;
 }
 

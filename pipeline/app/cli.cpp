@@ -123,6 +123,12 @@ std::string element_word(const RayEvent& event) {
   return word;
 }
 
+// Warnings go to stderr, one line each, as errors do.
+void print_warnings(const std::vector<std::string>& warnings) {
+  for (const std::string& warning : warnings)
+    std::fprintf(stderr, "glaswave: warning: %s\n", warning.c_str());
+}
+
 // --debug-ray SHOT:RAY: one line per event on stdout, columns as README.md describes them.
 int debug_ray_command(const Arguments& arguments) {
   const auto [shot, ray] = parse_shot_and_ray(arguments.debug_ray);
@@ -173,6 +179,7 @@ int run(const Arguments& arguments, const std::string& command_line) {
     ProgressBar bar(!arguments.quiet);
     summary = run_simulation(config, request, std::ref(bar));
   }
+  print_warnings(summary.warnings);
   // Plots are drawn from the finished products; a failure there leaves the products whole.
   if (config.output.plots) write_plots(request.out_dir);
   const double wall_s = std::max(summary.wall_s, 1e-9);
@@ -211,6 +218,7 @@ int check(const Arguments& arguments) {
   if (arguments.config_file.empty())
     throw config_error("check", "give CONFIG, or --schema for the configuration's JSON Schema");
   const CheckSummary summary = check_inputs(load(arguments));
+  print_warnings(summary.warnings);
   std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain",
               arguments.config_file.c_str(), static_cast<long long>(summary.shots),
               static_cast<long long>(summary.shots_off_terrain));

@@ -69,8 +69,14 @@ CheckSummary check_inputs(const Config& config) {
   CheckSummary summary;
   summary.shots = track->size();
   summary.sequence_length = track->sequence_length();
-  for (std::int64_t record = 0; record < track->size(); ++record)
-    summary.shots_off_terrain += track->footprint(record).on_terrain ? 0 : 1;
+  std::vector<std::array<double, 2>> centres;
+  for (std::int64_t record = 0; record < track->size(); ++record) {
+    const Footprint footprint = track->footprint(record);
+    summary.shots_off_terrain += footprint.on_terrain ? 0 : 1;
+    if (footprint.on_terrain)
+      centres.push_back({footprint.ground.lat_deg, footprint.ground.lon_deg});
+  }
+  if (const auto warning = stands_off_track(config, centres)) summary.warnings.push_back(*warning);
   return summary;
 }
 
@@ -110,14 +116,17 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
       make_writers(request.out_dir, settings, info);
 
   RunSummary summary;
+  std::vector<std::array<double, 2>> centres;
   summary.ray_queries = simulate_records(
       simulator, track, first, last, request.threads,
       [&](std::int64_t record, const ShotRecord& shot) {
         const std::int64_t index = record - first;
         for (const auto& writer : writers) writer->write(index, shot);
         if (shot.quality_flag != quality_good) ++summary.shots_flagged;
+        centres.push_back({shot.lat_deg, shot.lon_deg});
       },
       progress);
+  if (const auto warning = stands_off_track(config, centres)) summary.warnings.push_back(*warning);
 
   summary.shots = last - first;
   summary.vertical_datum = terrain->vertical_datum().description;

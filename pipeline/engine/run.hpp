@@ -26,7 +26,8 @@ struct RunSummary {
   std::int64_t shots_flagged = 0;
   std::int64_t ray_queries = 0;
   double wall_s = 0.0;
-  std::string vertical_datum;  // what the terrain's heights were measured from, in words
+  std::string vertical_datum;         // what the terrain's heights were measured from, in words
+  std::vector<std::string> warnings;  // what the user should know, one line each
 };
 
 // Called after each batch of shots with (shots done, shots in all).
@@ -60,6 +61,7 @@ struct CheckSummary {
   std::int64_t shots = 0;              // records of the track (an orbit's: those on the terrain)
   std::int64_t sequence_length = 0;    // shot numbers of the track
   std::int64_t shots_off_terrain = 0;  // records whose beam misses the terrain
+  std::vector<std::string> warnings;   // what the user should know, one line each
 };
 
 // Opens every input of the configuration (DEM, crowns and stands, ephemeris) and plans the

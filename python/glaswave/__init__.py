@@ -14,6 +14,7 @@ line's `glaswave: error:` line and the `place` it names.
 import json
 import os
 import tempfile
+import warnings
 from collections.abc import Mapping
 
 from . import _glaswave
@@ -78,6 +79,12 @@ def _threads(threads):
     return threads
 
 
+def _warn(summary):
+    """The engine's warnings (a stands file under no shot...) as Python warnings."""
+    for message in summary.pop("warnings", []):
+        warnings.warn(message, UserWarning, stacklevel=3)
+
+
 def run(config, shots=None, threads=0, overrides=None):
     """Simulates the configuration's shots and returns shots.nc as an xarray.Dataset.
 
@@ -105,8 +112,9 @@ def run(config, shots=None, threads=0, overrides=None):
     # Dataset is read into memory before it goes.
     with tempfile.TemporaryDirectory(prefix="glaswave-") as scratch:
         out_dir = os.path.join(scratch, "run")
-        _glaswave.run(path, document, folder, assignments, out_dir, threads, first, last,
-                      command_line)
+        summary = _glaswave.run(path, document, folder, assignments, out_dir, threads, first,
+                                last, command_line)
+        _warn(summary)
         return xarray.load_dataset(os.path.join(out_dir, "shots.nc"))
 
 
@@ -117,4 +125,6 @@ def check(config, overrides=None):
     with the track's `shots`, `sequence_length` and `shots_off_terrain`.
     """
     path, document, folder = _source(config)
-    return _glaswave.check(path, document, folder, _assignments(overrides))
+    summary = _glaswave.check(path, document, folder, _assignments(overrides))
+    _warn(summary)
+    return summary

@@ -162,3 +162,14 @@ def test_version_and_arguments():
         glaswave.run(small_config(), shots=range(0, 3, 2))
     with pytest.raises(TypeError):
         glaswave.run(42)
+
+
+def test_stands_under_no_shot_are_a_python_warning(tmp_path):
+    # A stands file far from the track (the wrong place or CRS) is said, as the command says it.
+    stands = tmp_path / "away.geojson"
+    square = [[10.0, 10.0], [10.1, 10.0], [10.1, 10.1], [10.0, 10.1], [10.0, 10.0]]
+    stands.write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"pai": 1},
+         "geometry": {"type": "Polygon", "coordinates": [square]}}]}))
+    with pytest.warns(UserWarning, match=r"^/canopy/stands: none of the 1 stands"):
+        glaswave.check(small_config(canopy={"stands": str(stands)}))

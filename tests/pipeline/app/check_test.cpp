@@ -156,6 +156,45 @@ TEST_F(Check, GpkgFootprintsAreWritten) {
   EXPECT_STREQ(crs->GetAuthorityCode(nullptr), "4326");
 }
 
+// A stands file that no shot falls in (the wrong place, or the wrong CRS) is said, by check and by
+// run alike, and is no error; one under the track is not mentioned.
+TEST_F(Check, StandsAwayFromEveryShotAreAWarning) {
+  auto stand_at = [&](const std::string& name, double lon, double lat) {
+    const std::string file = (dir_ / name).string();
+    std::ofstream(file) << json({{"type", "FeatureCollection"},
+                                 {"features",
+                                  {{{"type", "Feature"},
+                                    {"properties", {{"pai", 1}}},
+                                    {"geometry",
+                                     {{"type", "Polygon"},
+                                      {"coordinates",
+                                       {{{lon - 0.1, lat - 0.1},
+                                         {lon + 0.1, lat - 0.1},
+                                         {lon + 0.1, lat + 0.1},
+                                         {lon - 0.1, lat + 0.1},
+                                         {lon - 0.1, lat - 0.1}}}}}}}}}})
+                               .dump();
+    return file;
+  };
+  const std::string away = stand_at("away.geojson", 10.0, 10.0);
+  const std::string config = write_config({{"canopy", {{"stands", away}}}});
+  const std::string warning = "glaswave: warning: /canopy/stands: none of the 1 stands of " + away +
+                              " lies under any of the 1 shots";
+  const CommandOutcome check = run_glaswave("check " + config);
+  EXPECT_EQ(check.status, 0) << check.output;
+  EXPECT_NE(check.output.find(warning), std::string::npos) << check.output;
+  const CommandOutcome run =
+      run_glaswave("run " + config + " --quiet --out " + (dir_ / "away").string());
+  EXPECT_EQ(run.status, 0) << run.output;
+  EXPECT_NE(run.output.find(warning), std::string::npos) << run.output;
+
+  const std::string under = stand_at("under.geojson", 8.0, 46.0);
+  const CommandOutcome quiet =
+      run_glaswave("check " + write_config({{"canopy", {{"stands", under}}}}));
+  EXPECT_EQ(quiet.status, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("warning"), std::string::npos) << quiet.output;
+}
+
 TEST_F(Check, SchemaIsPrinted) {
   const CommandOutcome schema = run_glaswave("check --schema");
   ASSERT_EQ(schema.status, 0) << schema.output;
