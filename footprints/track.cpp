@@ -88,6 +88,13 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
       ephemeris_ = read_ephemeris(settings_.ephemeris);
       sequence_length_ = static_cast<std::int64_t>(ephemeris_.size());
       break;
+    case TrackType::granule:
+      granule_ = read_granule(settings_.granule, settings_.beams);
+      sequence_length_ = static_cast<std::int64_t>(granule_.size());
+      settings_.points.clear();
+      for (const GranuleShot& shot : granule_)
+        settings_.points.push_back({shot.lat_deg, shot.lon_deg});
+      break;
   }
 
   if (settings_.type == TrackType::orbit) {
@@ -157,7 +164,8 @@ bool Track::place_spacecraft(std::int64_t shot, Footprint& f) const {
       f.spacecraft_ecef = ecef_from_geodetic(f.spacecraft);
       break;
     }
-    case TrackType::points: {
+    case TrackType::points:
+    case TrackType::granule: {
       const GroundPoint& point = settings_.points.at(static_cast<std::size_t>(shot));
       const double height_m = terrain_.height_m(point.lat_deg, point.lon_deg);
       // No ground under the target: the spacecraft is placed as if the ground were the ellipsoid,
@@ -196,7 +204,13 @@ bool Track::place_spacecraft(std::int64_t shot, Footprint& f) const {
 Footprint Track::locate_shot(std::int64_t shot) const {
   Footprint f;
   f.shot_number = shot;
+  f.source_shot_number = shot;
   f.time_s = settings_.start_time_s + static_cast<double>(shot) / settings_.rate_hz;
+  if (settings_.type == TrackType::granule) {
+    const GranuleShot& g = granule_.at(static_cast<std::size_t>(shot));
+    f.source_shot_number = g.shot_number;
+    f.time_s = g.time_s;
+  }
   f.off_nadir_deg = settings_.off_nadir_deg;
   if (!place_spacecraft(shot, f)) return f;
   if (const auto hit = intersect_terrain(terrain_, f.spacecraft_ecef, f.beam_ecef, limits_)) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "footprints/ephemeris.hpp"
+#include "footprints/granule.hpp"
 #include "footprints/orbit.hpp"
 #include "footprints/terrain_intersection.hpp"
 #include "footprints/track_settings.hpp"
@@ -18,6 +19,9 @@ namespace glaswave {
 
 struct Footprint {
   std::int64_t shot_number = 0;
+  // The instrument's own number of the shot: a granule's (GEDI shot_number, GLAH14
+  // i_rec_ndx * 40 + the shot in its record); shot_number for the synthetic tracks.
+  std::int64_t source_shot_number = 0;
   double time_s = 0.0;  // seconds since 2000-01-01T12:00:00Z
   Geodetic spacecraft;
   Vec3 spacecraft_ecef{};
@@ -41,7 +45,9 @@ double off_nadir_angle_deg(const Vec3& spacecraft_ecef, const Vec3& beam_ecef);
 //   rate_hz; orbit         shot k is at start_time + k / rate_hz, k < track.shots; only the shots
 //   whose
 //                 footprint falls on the terrain become records, the others are skipped;
-//   ephemeris     shot k is the file's k-th row, at its time.
+//   ephemeris     shot k is the file's k-th row, at its time;
+//   granule       shot k is the granule's k-th footprint with a position (beam by beam), at its
+//                 time, aimed at its latitude and longitude as a point is.
 // A shot number is the same whichever part of the track a run simulates (`--shots A:B`).
 // Records are the shots a run writes, in shot order: every shot of pass, points and ephemeris
 // (those that miss the terrain flagged), the kept shots of an orbit.
@@ -79,6 +85,7 @@ class Track {
   std::int64_t sequence_length_ = 0;
   std::unique_ptr<Orbit> orbit_;          // orbit
   std::vector<EphemerisRow> ephemeris_;   // ephemeris
+  std::vector<GranuleShot> granule_;      // granule
   std::vector<std::int64_t> kept_shots_;  // orbit: shot numbers of the records, ascending
   double pass_spacing_m_ = 0.0;           // pass
 };

@@ -9,7 +9,7 @@
 
 namespace glaswave {
 
-enum class TrackType { pass, points, orbit, ephemeris };
+enum class TrackType { pass, points, orbit, ephemeris, granule };
 
 struct GroundPoint {
   double lat_deg = 0.0;
@@ -43,6 +43,8 @@ struct TrackSettings {
   std::vector<GroundPoint> points;  // type points
   OrbitElements orbit;              // type orbit
   std::string ephemeris;            // type ephemeris: CSV path (format in footprints/ephemeris.hpp)
+  std::string granule;              // type granule: HDF5 path (layouts in footprints/granule.hpp)
+  std::vector<std::string> beams;   // type granule: the beams (groups) to take; empty: all
 };
 
 }  // namespace glaswave

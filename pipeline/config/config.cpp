@@ -521,7 +521,8 @@ TrackSettings read_track(JsonReader& root) {
   t.type = r.choice<TrackType>("type", {{"pass", TrackType::pass},
                                         {"points", TrackType::points},
                                         {"orbit", TrackType::orbit},
-                                        {"ephemeris", TrackType::ephemeris}});
+                                        {"ephemeris", TrackType::ephemeris},
+                                        {"granule", TrackType::granule}});
   t.start_lat_deg = r.number("start_lat_deg");
   t.start_lon_deg = r.number("start_lon_deg");
   t.heading_deg = r.number("heading_deg");
@@ -539,6 +540,10 @@ TrackSettings read_track(JsonReader& root) {
   t.ephemeris = non_empty_path(r, "ephemeris");
   if (t.type == TrackType::ephemeris && t.ephemeris.empty())
     r.fail("ephemeris", "is required when type is \"ephemeris\"");
+  t.granule = non_empty_path(r, "file");
+  t.beams = r.string_array("beams");
+  if (t.type == TrackType::granule && t.granule.empty())
+    r.fail("file", "is required when type is \"granule\"");
   r.finish();
   return t;
 }
@@ -856,6 +861,7 @@ Config load_config_document(json document, const std::filesystem::path& folder,
     resolve_path(c.canopy->stands, r["canopy"], "stands", folder);
   }
   resolve_path(c.track.ephemeris, r["track"], "ephemeris", folder);
+  resolve_path(c.track.granule, r["track"], "file", folder);
   if (c.canopy && !c.canopy->stands.empty())
     c.canopy->stand_areas = read_stands(c.canopy->stands, r["canopy"], c.sensor.bands);
   return c;

@@ -251,6 +251,22 @@ std::optional<std::string> JsonReader::optional_string(const std::string& key) {
   return value->get<std::string>();
 }
 
+std::vector<std::string> JsonReader::string_array(const std::string& key) {
+  const Key& k = declared(key, KeyType::string_array);
+  const json* value = find_required(key, k);
+  std::vector<std::string> strings;
+  if (value && !value->is_null()) {
+    if (!value->is_array()) fail(key, "must be an array of strings, got " + describe(*value));
+    for (const json& item : *value) {
+      if (!item.is_string() || item.get<std::string>().empty())
+        fail(key, "must be an array of non-empty strings, got " + describe(item) + " in it");
+      strings.push_back(item.get<std::string>());
+    }
+  }
+  resolved_[key] = strings;
+  return strings;
+}
+
 JsonReader JsonReader::object(const std::string& key) {
   const Key& k = declared(key, KeyType::object);
   const json& value = raw(key);

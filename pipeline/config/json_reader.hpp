@@ -71,6 +71,8 @@ class JsonReader {
   std::string string(const std::string& key);
   std::string string(const std::string& key, const std::string& fallback);
   std::optional<std::string> optional_string(const std::string& key);
+  // An array of non-empty strings; empty when absent.
+  std::vector<std::string> string_array(const std::string& key);
 
   // A string that names one of the declared choices, each mapped to its value by `values`.
   template <typename T>

@@ -143,6 +143,10 @@ Key path(std::string name, std::string description) {
   return k;
 }
 
+Key string_array(std::string name, std::string description) {
+  return make(std::move(name), KeyType::string_array, "", std::move(description));
+}
+
 Key spectral(std::string name, double fallback, Range range, std::string unit,
              std::string description) {
   Key k = make(std::move(name), KeyType::spectral, std::move(unit), std::move(description));
@@ -355,8 +359,8 @@ Key track_keys() {
   const OrbitElements o;
   return object(
       "track", "the shots: where they are and how the beam points",
-      {choice("type", "pass", {"pass", "points", "orbit", "ephemeris"},
-              "how shots are placed: `pass`, `points`, `orbit` or `ephemeris`"),
+      {choice("type", "pass", {"pass", "points", "orbit", "ephemeris", "granule"},
+              "how shots are placed: `pass`, `points`, `orbit`, `ephemeris` or `granule`"),
        number("start_lat_deg", t.start_lat_deg, closed(-90, 90), "deg",
               "`pass`: the spacecraft flies the geodesic from here along the heading"),
        number("start_lon_deg", t.start_lon_deg, closed(-180, 360), "deg",
@@ -406,7 +410,19 @@ Key track_keys() {
             "8601 UTC or seconds since 2000-01-01T12:00:00Z, the spacecraft's WGS84 Earth-fixed "
             "position (m), and optionally the beam direction (Earth-fixed, any length); without "
             "it the beam points by `off_nadir_deg` and `pointing_azimuth_deg`. Lines starting "
-            "with `#` are skipped; errors name `file:line`")});
+            "with `#` are skipped; errors name `file:line`"),
+       path("file",
+            "`granule`: a GEDI L2A granule (groups `BEAMxxxx` with `shot_number`, "
+            "`lat_lowestmode`, `lon_lowestmode`, `delta_time`) or a GLAS GLAH14 granule "
+            "(`Data_40HZ` with `Geolocation/d_lat`, `d_lon`, `Time/d_UTCTime_40`, `i_rec_ndx`), "
+            "HDF5: one shot per footprint, aimed at its latitude and longitude from `altitude_m` "
+            "as a point is, at its time, its `shot_number` the granule's (GLAH14: `i_rec_ndx` * "
+            "40 + the shot in its record); footprints whose position is a fill value are "
+            "skipped"),
+       string_array("beams",
+                    "`granule`: the beams to take, by group name (`[\"BEAM0101\"]`; GLAH14's one "
+                    "is `Data_40HZ`); a beam not in the file is exit status 3")
+           .with_default_text("all")});
 }
 
 Key output_keys() {
@@ -554,6 +570,9 @@ json key_schema(const Key& k) {
       if (k.min_items > 0) s["minItems"] = k.min_items;
       if (k.max_items != std::numeric_limits<std::size_t>::max()) s["maxItems"] = k.max_items;
       break;
+    case KeyType::string_array:
+      s = {{"type", "array"}, {"items", {{"type", "string"}, {"minLength", 1}}}};
+      break;
     case KeyType::choice_or_object:
       s["anyOf"] = json::array({{{"type", "string"}, {"enum", k.choices}}, object_schema(k)});
       break;
@@ -656,6 +675,8 @@ std::string allowed_cell(const Key& k) {
     }
     case KeyType::choice_or_object:
       return choices + ", or an object";
+    case KeyType::string_array:
+      return "array of strings";
   }
   return "";
 }

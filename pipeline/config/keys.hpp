@@ -46,6 +46,7 @@ enum class KeyType {
   object,            // an object whose keys are `children`
   object_array,      // an array of objects whose keys are `children`
   choice_or_object,  // one of `choices`, or an object whose keys are `children`
+  string_array,      // an array of non-empty strings
 };
 
 struct Key {
@@ -91,6 +92,7 @@ Key choice(std::string name, std::optional<std::string> fallback, std::vector<st
            std::string description);
 Key time(std::string name, std::optional<std::string> fallback, std::string description);
 Key path(std::string name, std::string description);
+Key string_array(std::string name, std::string description);
 Key spectral(std::string name, double fallback, Range range, std::string unit,
              std::string description);
 Key number_pair(std::string name, std::array<double, 2> fallback, Range range, std::string unit,

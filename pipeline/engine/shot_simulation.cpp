@@ -145,6 +145,7 @@ SceneOptics ShotSimulator::scene_optics() const {
 ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray_queries) const {
   ShotRecord record;
   record.shot_number = footprint.shot_number;
+  record.source_shot_number = footprint.source_shot_number;
   record.time_s = footprint.time_s;
   record.sc_lat_deg = footprint.spacecraft.lat_deg;
   record.sc_lon_deg = footprint.spacecraft.lon_deg;

@@ -27,10 +27,11 @@ const ProductField kProductFields[] = {
      .geojson = GeojsonProperty::none},
     {.name = "shot_number",
      .type = S::int64,
-     .field = &R::shot_number,
+     .field = &R::source_shot_number,
      .source = F::shot,
      .units = "1",
-     .long_name = "shot number in the track, from 0",
+     .long_name = "the instrument's shot number: a granule track's own (GEDI shot_number, GLAH14 "
+                  "i_rec_ndx * 40 + the shot in its record), else the shot in the track, from 0",
      .gedi_name = "shot_number",
      .glas_name = "i_rec_ndx"},
     {.name = "time",

@@ -34,8 +34,9 @@ enum QualityReason : std::uint8_t {
 
 struct ShotRecord {
   std::int64_t shot_number = 0;
-  double time_s = 0.0;                                        // seconds since 2000-01-01T12:00:00Z
-  double lat_deg = 0.0, lon_deg = 0.0, elev_m = 0.0;          // footprint centre
+  std::int64_t source_shot_number = 0;                // the instrument's (a granule's), Footprint's
+  double time_s = 0.0;                                // seconds since 2000-01-01T12:00:00Z
+  double lat_deg = 0.0, lon_deg = 0.0, elev_m = 0.0;  // footprint centre
   double sc_lat_deg = 0.0, sc_lon_deg = 0.0, sc_alt_m = 0.0;  // spacecraft
   double off_nadir_deg = 0.0, range_m = 0.0;
   double slope_deg = 0.0, aspect_deg = 0.0;

@@ -640,7 +640,26 @@ TEST(Track, Pass) {
       error_of(doc(R"({"track": {"start_time": "21/10/2005"}})")).rfind("/track/start_time: ", 0),
       0u);
   EXPECT_EQ(error_of(doc(R"({"track": {"type": "spiral"}})")),
-            "/track/type: must be one of pass, points, orbit, ephemeris, got \"spiral\"");
+            "/track/type: must be one of pass, points, orbit, ephemeris, granule, got \"spiral\"");
+}
+
+TEST(Track, GranuleNeedsAFileAndTakesBeamsAsStrings) {
+  const Config c = parse_config(
+      doc(R"({"track": {"type": "granule", "file": "g.h5", "beams": ["BEAM0101", "BEAM1011"]}})"));
+  EXPECT_EQ(c.track.type, TrackType::granule);
+  EXPECT_EQ(c.track.granule, "g.h5");
+  EXPECT_EQ(c.track.beams, (std::vector<std::string>{"BEAM0101", "BEAM1011"}));
+  EXPECT_EQ(c.resolved["track"]["beams"], json::array({"BEAM0101", "BEAM1011"}));
+  EXPECT_TRUE(
+      parse_config(doc(R"({"track": {"type": "granule", "file": "g.h5"}})")).track.beams.empty());
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "granule"}})")),
+            "/track/file: is required when type is \"granule\"");
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "granule", "file": "g.h5", "beams": "BEAM0101"}})"))
+                .rfind("/track/beams: must be an array of strings", 0),
+            0u);
+  EXPECT_EQ(error_of(doc(R"({"track": {"type": "granule", "file": "g.h5", "beams": [3]}})"))
+                .rfind("/track/beams: must be an array of non-empty strings", 0),
+            0u);
 }
 
 TEST(Track, PointsSetTheNumberOfShots) {

@@ -121,7 +121,7 @@ TEST(Schema, IsWellFormedJsonOfDraft202012) {
                 "/properties/sensor/properties/pulse_sigma_ns/exclusiveMinimum")),
             0);
   EXPECT_EQ(schema.at(json::json_pointer("/properties/track/properties/type/enum")),
-            json::array({"pass", "points", "orbit", "ephemeris"}));
+            json::array({"pass", "points", "orbit", "ephemeris", "granule"}));
   EXPECT_EQ(
       schema.at(json::json_pointer("/properties/output/properties/footprints_format/default")),
       "GeoJSON");

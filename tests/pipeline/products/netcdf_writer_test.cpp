@@ -51,6 +51,7 @@ double power(int record, int band, int bin, int part, int order = 0) {
 ShotRecord make_record(int record, int orders) {
   ShotRecord shot;
   shot.shot_number = 100 + record;
+  shot.source_shot_number = shot.shot_number;  // a synthetic track: the instrument's is the shot
   shot.time_s = 183254400.0 + 0.025 * record;
   shot.lat_deg = 34.3 + 0.0015 * record;
   shot.lon_deg = -118.2 + 0.0003 * record;

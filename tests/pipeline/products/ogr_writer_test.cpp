@@ -60,6 +60,7 @@ std::vector<std::array<double, 2>> octagon(double lon, double lat) {
 ShotRecord make_record(int record) {
   ShotRecord shot;
   shot.shot_number = 100 + record;
+  shot.source_shot_number = shot.shot_number;  // a synthetic track: the instrument's is the shot
   shot.time_s = 183254400.0 + 0.025 * record;
   shot.lat_deg = 34.3 + 0.0015 * record;
   shot.lon_deg = -118.123456789012 + 0.0003 * record;
