@@ -25,17 +25,11 @@ class NetcdfWriter final : public ProductWriter {
   NetcdfWriter(const NetcdfWriter&) = delete;
   NetcdfWriter& operator=(const NetcdfWriter&) = delete;
 
-  // Writes record `index` (0 <= index < info.shots), each index exactly once, in any order.
-  // Not thread-safe: calls must come one at a time. Per-band arrays must match the run's
-  // bands and bins; a flagged shot (quality_flag != good) may leave them empty, which
-  // leaves fill (NaN) in the file.
+  // As ProductWriter says. Per-band arrays must match the run's bands and bins; a flagged shot
+  // may leave them empty, which leaves fill (NaN) in the file.
   void write(std::int64_t index, const ShotRecord& shot) override;
-
-  // Writes the run statistics attributes, closes the file and renames it to the final
-  // name. Throws Error (run) if a record was never written or the file cannot be completed.
+  // Also writes the run statistics as global attributes.
   void finish(const RunStats& stats) override;
-
-  // Closes the file without flushing it and removes the .part.
   void abort() noexcept override;
 
  private:

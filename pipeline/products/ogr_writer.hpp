@@ -25,19 +25,13 @@ class OgrWriter final : public ProductWriter {
   OgrWriter(const OgrWriter&) = delete;
   OgrWriter& operator=(const OgrWriter&) = delete;
 
-  // Adds record `index` (0 <= index < info.shots), each index exactly once, in any order.
-  // Not thread-safe: calls must come one at a time. A record goes to the file as soon as all
-  // those before it have come, so only shots that arrive early are held in memory. An empty
+  // As ProductWriter says. Features come out in record order: a record goes to the file as
+  // soon as all those before it have come, so only early ones are held in memory. An empty
   // footprint ring (a flagged shot) gives a null geometry; a non-empty one must be closed, with
   // at least 4 positions, all finite. Exterior rings are written counter-clockwise.
   void write(std::int64_t index, const ShotRecord& shot) override;
-
-  // Completes the dataset and renames it to its final name. Throws Error (run) if a record was
-  // never written or the file cannot be completed. The statistics are not part of this
-  // product; the parameter keeps the writers interchangeable.
+  // The statistics are not part of this product.
   void finish(const RunStats& stats) override;
-
-  // Closes the dataset and removes the .part.
   void abort() noexcept override;
 
  private:
