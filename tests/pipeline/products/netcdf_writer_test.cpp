@@ -816,24 +816,6 @@ TEST_F(NetcdfWriterTest, UnfinishedWriterLeavesNothing) {
   EXPECT_FALSE(fs::exists(file()));
 }
 
-TEST_F(NetcdfWriterTest, FinishWithMissingRecordFailsAndLeavesNothing) {
-  {
-    NetcdfWriter writer(file(), make_info(kOrders));
-    writer.write(0, make_record(0, kOrders));
-    writer.write(2, make_record(2, kOrders));
-    try {
-      writer.finish(RunStats{});
-      FAIL() << "finish accepted a product with record 1 missing";
-    } catch (const Error& error) {
-      EXPECT_EQ(error.kind(), ErrorKind::run);
-      EXPECT_EQ(error.place(), file().string());
-      EXPECT_NE(std::string(error.what()).find("record 1"), std::string::npos) << error.what();
-    }
-  }
-  EXPECT_FALSE(fs::exists(part()));
-  EXPECT_FALSE(fs::exists(file()));
-}
-
 TEST_F(NetcdfWriterTest, BadRecordsAreErrorsNamingFileAndVariable) {
   NetcdfWriter writer(file(), make_info(kOrders));
   EXPECT_THROW(writer.write(3, make_record(0, kOrders)), Error);

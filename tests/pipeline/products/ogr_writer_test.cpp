@@ -569,24 +569,6 @@ TEST_F(OgrWriterTest, UnfinishedWriterLeavesNothing) {
   EXPECT_FALSE(fs::exists(file()));
 }
 
-TEST_F(OgrWriterTest, FinishWithMissingRecordFailsAndLeavesNothing) {
-  {
-    OgrWriter writer(file(), FootprintsFormat::geojson, make_info());
-    writer.write(0, make_record(0));
-    writer.write(2, make_record(2));
-    try {
-      writer.finish(RunStats{});
-      FAIL() << "finish accepted a product with record 1 missing";
-    } catch (const Error& error) {
-      EXPECT_EQ(error.kind(), ErrorKind::run);
-      EXPECT_EQ(error.place(), file().string());
-      EXPECT_NE(std::string(error.what()).find("record 1"), std::string::npos) << error.what();
-    }
-  }
-  EXPECT_FALSE(fs::exists(part()));
-  EXPECT_FALSE(fs::exists(file()));
-}
-
 TEST_F(OgrWriterTest, BadRecordsAreErrors) {
   OgrWriter writer(file(), FootprintsFormat::geojson, make_info());
   EXPECT_THROW(writer.write(3, make_record(0)), Error);

@@ -292,5 +292,30 @@ TEST_F(ProductWritersTest, AbortRemovesThePartAndRefusesMore) {
   EXPECT_TRUE(files().empty());
 }
 
+// Every writer, whatever its format, refuses to finish a product with a record missing, and
+// leaves neither the product nor its .part behind.
+TEST_F(ProductWritersTest, FinishWithAMissingRecordFailsAndLeavesNothing) {
+  for (const FootprintsFormat format : {FootprintsFormat::geojson, FootprintsFormat::gpkg}) {
+    {
+      auto writers = make_writers(dir_.path(), {.footprints_format = format}, info());
+      ASSERT_EQ(writers.size(), 2u);
+      for (const auto& writer : writers) {
+        writer->write(0, flagged(0));
+        try {
+          writer->finish(RunStats{});
+          ADD_FAILURE() << "finish accepted a product with record 1 missing";
+        } catch (const Error& error) {
+          EXPECT_EQ(error.kind(), ErrorKind::run);
+          // The place is the product's final path.
+          EXPECT_EQ(fs::path(error.place()).parent_path(), dir_.path()) << error.place();
+          EXPECT_EQ(error.place().find(".part"), std::string::npos) << error.place();
+          EXPECT_NE(std::string(error.what()).find("record 1"), std::string::npos) << error.what();
+        }
+      }
+    }
+    EXPECT_TRUE(files().empty());
+  }
+}
+
 }  // namespace
 }  // namespace glaswave
