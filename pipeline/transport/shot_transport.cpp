@@ -44,96 +44,6 @@ struct Tally {
   std::int64_t ray_queries = 0;
 };
 
-// A leaf met by free-path sampling: how far along the ray, and in which foliage.
-struct Interaction {
-  double distance_m;
-  int material;
-  int crown;  // -1 for the layer
-};
-
-// Where the accumulated optical depth along the ray reaches `target`, within the spans
-// (overlapping spans add their extinctions), and which foliage the ray met there, chosen in
-// proportion to each one's extinction at that point; empty if the depth is never reached.
-template <class Uniform>
-std::optional<Interaction> free_path(const std::vector<VolumeSpan>& spans,
-                                     const std::vector<double>& projection, double target,
-                                     Uniform&& uniform) {
-  if (spans.empty()) return std::nullopt;
-  // One sweep over span ends: extinction added where a span starts, removed where it ends.
-  thread_local std::vector<std::pair<double, double>> events;
-  events.clear();
-  for (const VolumeSpan& span : spans) {
-    const double extinction = span.area_density_m2_m3 * projection[span.material];
-    events.emplace_back(span.start_m, extinction);
-    events.emplace_back(span.end_m, -extinction);
-  }
-  std::sort(events.begin(), events.end());
-  double extinction = 0.0, depth = 0.0, t_previous = events.front().first;
-  for (const auto& [t, change] : events) {
-    if (extinction > 0.0 && t > t_previous) {
-      const double step = extinction * (t - t_previous);
-      if (depth + step >= target) {
-        const double at = t_previous + (target - depth) / extinction;
-        // The spans covering the point share the interaction by their extinction.
-        double pick = uniform() * extinction;
-        const VolumeSpan* met = &spans.front();
-        for (const VolumeSpan& span : spans) {
-          if (span.start_m > at || span.end_m <= at) continue;
-          met = &span;
-          pick -= span.area_density_m2_m3 * projection[span.material];
-          if (pick < 0.0) break;
-        }
-        return Interaction{at, met->material, met->crown};
-      }
-      depth += step;
-    }
-    t_previous = t;
-    extinction += change;
-  }
-  return std::nullopt;
-}
-
-// Optical depth along a connection ray whose first `shared_m` metres run close to a path
-// already sampled, at separation angle `separation_rad`: over a length l the two paths are
-// l * separation apart, and where that is less than a leaf they see the same gaps, so only a
-// fraction 1 - exp(-l separation / leaf_size) of the foliage there is new (Kuusk's hotspot).
-double connection_depth(const std::vector<VolumeSpan>& spans, const std::vector<double>& projection,
-                        const std::vector<Foliage>& foliage, double shared_m,
-                        double separation_rad) {
-  double depth = 0.0;
-  for (const VolumeSpan& span : spans) {
-    const double leaf_size_m = foliage[span.material].leaf_size_m;
-    const double rate =
-        leaf_size_m > 0.0 ? separation_rad / leaf_size_m : std::numeric_limits<double>::infinity();
-    const double a = span.start_m, b = std::min(span.end_m, shared_m);
-    double length =
-        std::max(0.0, span.end_m - std::max(span.start_m, shared_m));  // beyond the shared part
-    if (b > a) {
-      if (std::isinf(rate))
-        length += b - a;
-      else if (rate > 0.0)
-        length += (b - a) - (std::exp(-rate * a) - std::exp(-rate * b)) / rate;
-    }
-    depth += span.area_density_m2_m3 * projection[span.material] * length;
-  }
-  return depth;
-}
-
-// A direction about `normal`, cosine-weighted.
-Vec3 cosine_direction(const Vec3& normal, double u1, double u2) {
-  const Vec3 helper = std::abs(normal[2]) < 0.9 ? Vec3{0.0, 0.0, 1.0} : Vec3{1.0, 0.0, 0.0};
-  const Vec3 across = normalized(cross(helper, normal));
-  const Vec3 along = cross(normal, across);
-  const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
-  return (r * std::cos(phi)) * across + (r * std::sin(phi)) * along +
-         std::sqrt(std::max(0.0, 1.0 - u1)) * normal;
-}
-
-// Embree's float geometry needs a path leaving a surface to start a little off it.
-constexpr double surface_offset_m = 1e-4;
-// Farther than anything in a shot's scene.
-constexpr double far_m = 1.0e5;
-
 // One path of a ray, between two interactions.
 struct Path {
   bool beam_path = true;  // the first path: drawn by the beam, scores the single scattering
@@ -172,8 +82,6 @@ class PathTracer {
   void score_direct(const Path& path, const Vertex& vertex, int order, Tally& tally);
   double laser_transmission(const Path& path, const Vertex& vertex, int order,
                             const Vec3& up_to_laser, Tally& tally);
-  double element_response(const Vertex& vertex, std::size_t band, const Vec3& laser_light,
-                          const Vec3& toward_detector, const Vec3& up_to_laser) const;
   void bin(const Path& path, int order, int bin, Tally& tally) const;
   bool scatter(Path& path, const Vertex& vertex, RayRandom& random);
   bool survives_roulette(const Path& path, RayRandom& random);
@@ -339,7 +247,8 @@ void PathTracer::score_direct(const Path& path, const Vertex& vertex, int order,
   const Vec3 toward_detector = -1.0 * path.direction;
   for (std::size_t band = 0; band < bands_; ++band)
     response_[band] = throughput_[band] *
-                      element_response(vertex, band, laser_light, toward_detector, up_to_laser) *
+                      element_response(vertex.element, vertex.material, optics_, band,
+                                       vertex.normal, laser_light, toward_detector) *
                       scale;
   if (tally_bin >= 0) bin(path, order, tally_bin, tally);
   if (observer_) {
@@ -377,20 +286,6 @@ double PathTracer::laser_transmission(const Path& path, const Vertex& vertex, in
                                                    order == 1 ? 0.0 : separation_rad));
 }
 
-// What the element sends toward the detector of the laser's light, per unit throughput:
-// bi-Lambertian leaves, Lambertian soil and bark.
-double PathTracer::element_response(const Vertex& vertex, std::size_t band, const Vec3& laser_light,
-                                    const Vec3& toward_detector, const Vec3& up_to_laser) const {
-  if (vertex.element == RayElement::leaf)
-    return bilambertian_response(vertex.normal, laser_light, toward_detector,
-                                 vertex.material->reflectance[band],
-                                 vertex.material->transmittance[band]);
-  const double reflectance = vertex.element == RayElement::ground
-                                 ? optics_.soil_reflectance[band]
-                                 : vertex.material->trunk_reflectance[band];
-  return reflectance * std::max(0.0, dot(vertex.normal, up_to_laser));
-}
-
 // The scored return into its time bin: the total, the canopy or ground part (by the first
 // element the path met), and its scattering order when orders are kept apart.
 void PathTracer::bin(const Path& path, int order, int bin, Tally& tally) const {
@@ -407,33 +302,11 @@ void PathTracer::bin(const Path& path, int order, int bin, Tally& tally) const {
 // direction is drawn by the element's scattering, the throughput carrying the rest; false when
 // the element scatters nothing.
 bool PathTracer::scatter(Path& path, const Vertex& vertex, RayRandom& random) {
-  const Foliage* material = vertex.material;
-  if (vertex.element == RayElement::leaf) {
-    // Reflection sends the path back to the side it came from, transmission through.
-    double reflected = 0.0, transmitted = 0.0;
-    for (std::size_t band = 0; band < bands_; ++band) {
-      reflected += throughput_[band] * material->reflectance[band];
-      transmitted += throughput_[band] * material->transmittance[band];
-    }
-    if (reflected + transmitted <= 0.0) return false;
-    const double p_reflect = reflected / (reflected + transmitted);
-    const bool reflect = random.uniform() < p_reflect;
-    const Vec3 back = -1.0 * path.direction;  // the side the path arrived from
-    const Vec3 facing = dot(vertex.normal, back) >= 0.0 ? vertex.normal : -1.0 * vertex.normal;
-    const double v1 = random.uniform(), v2 = random.uniform();
-    path.direction = cosine_direction(reflect ? facing : -1.0 * facing, v1, v2);
-    for (std::size_t band = 0; band < bands_; ++band)
-      throughput_[band] *= reflect ? material->reflectance[band] / p_reflect
-                                   : material->transmittance[band] / (1.0 - p_reflect);
-    path.min_distance_m = 0.0;
-  } else {
-    const double v1 = random.uniform(), v2 = random.uniform();
-    path.direction = cosine_direction(vertex.normal, v1, v2);
-    for (std::size_t band = 0; band < bands_; ++band)
-      throughput_[band] *= vertex.element == RayElement::ground ? optics_.soil_reflectance[band]
-                                                                : material->trunk_reflectance[band];
-    path.min_distance_m = surface_offset_m;  // off the surface it leaves
-  }
+  if (!sample_scattering(vertex.element, vertex.material, optics_, vertex.normal, random,
+                         path.direction, throughput_))
+    return false;
+  // A leaf is no surface; a path leaving a surface starts off it.
+  path.min_distance_m = vertex.element == RayElement::leaf ? 0.0 : surface_offset_m;
   path.position = vertex.point;
   emit(RayEventKind::scatter, path, path.position, &vertex);
   return true;

@@ -9,10 +9,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "canopy/leaf_angles.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"
 #include "pipeline/transport/ray_event.hpp"
+#include "pipeline/transport/scattering.hpp"
 
 namespace glaswave {
 
@@ -21,25 +21,6 @@ struct ShotGeometry {
   Vec3 sensor_m{};       // spacecraft position
   Vec3 axis{};           // beam axis, unit, spacecraft -> ground
   double range_m = 0.0;  // to the footprint centre: times are relative to 2 * range_m / c
-};
-
-// One kind of foliage (a stand's), values per band. Its elements are plant-area weighted:
-// leaves are bi-Lambertian, bark inside crowns Lambertian and opaque, so reflectance =
-// f_green rho_leaf + f_bark rho_bark and transmittance = f_green tau_leaf.
-struct Foliage {
-  std::vector<double> reflectance;
-  std::vector<double> transmittance;
-  std::vector<double> trunk_reflectance;  // Lambertian bark of the trunks
-  const LeafAngles* leaf_angles = nullptr;
-  // Leaf size: paths in and out that run within a leaf's width of each other see the same
-  // gaps (the hotspot); 0 is the point-leaf turbid limit.
-  double leaf_size_m = 0.0;
-};
-
-// Optical properties of the scene, one value per band.
-struct SceneOptics {
-  std::vector<double> soil_reflectance;  // Lambertian
-  std::vector<Foliage> foliage;          // indexed by the crowns' and trunks' material
 };
 
 // The received signal of one shot: [band][bin] power (W) and [band] energy (J).

@@ -1,0 +1,83 @@
+// The scattering kernels shared by the transports.
+#include "pipeline/transport/scattering.hpp"
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace glaswave {
+
+double connection_depth(const std::vector<VolumeSpan>& spans, const std::vector<double>& projection,
+                        const std::vector<Foliage>& foliage, double shared_m,
+                        double separation_rad) {
+  double depth = 0.0;
+  for (const VolumeSpan& span : spans) {
+    const double leaf_size_m = foliage[span.material].leaf_size_m;
+    const double rate =
+        leaf_size_m > 0.0 ? separation_rad / leaf_size_m : std::numeric_limits<double>::infinity();
+    const double a = span.start_m, b = std::min(span.end_m, shared_m);
+    double length =
+        std::max(0.0, span.end_m - std::max(span.start_m, shared_m));  // beyond the shared part
+    if (b > a) {
+      if (std::isinf(rate))
+        length += b - a;
+      else if (rate > 0.0)
+        length += (b - a) - (std::exp(-rate * a) - std::exp(-rate * b)) / rate;
+    }
+    depth += span.area_density_m2_m3 * projection[span.material] * length;
+  }
+  return depth;
+}
+
+Vec3 cosine_direction(const Vec3& normal, double u1, double u2) {
+  const Vec3 helper = std::abs(normal[2]) < 0.9 ? Vec3{0.0, 0.0, 1.0} : Vec3{1.0, 0.0, 0.0};
+  const Vec3 across = normalized(cross(helper, normal));
+  const Vec3 along = cross(normal, across);
+  const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
+  return (r * std::cos(phi)) * across + (r * std::sin(phi)) * along +
+         std::sqrt(std::max(0.0, 1.0 - u1)) * normal;
+}
+
+bool sample_scattering(RayElement element, const Foliage* material, const SceneOptics& optics,
+                       const Vec3& normal, RayRandom& random, Vec3& direction,
+                       std::span<double> throughput) {
+  const std::size_t bands = throughput.size();
+  if (element == RayElement::leaf) {
+    // Reflection sends the path back to the side it came from, transmission through.
+    double reflected = 0.0, transmitted = 0.0;
+    for (std::size_t band = 0; band < bands; ++band) {
+      reflected += throughput[band] * material->reflectance[band];
+      transmitted += throughput[band] * material->transmittance[band];
+    }
+    if (reflected + transmitted <= 0.0) return false;
+    const double p_reflect = reflected / (reflected + transmitted);
+    const bool reflect = random.uniform() < p_reflect;
+    const Vec3 back = -1.0 * direction;  // the side the path arrived from
+    const Vec3 facing = dot(normal, back) >= 0.0 ? normal : -1.0 * normal;
+    const double v1 = random.uniform(), v2 = random.uniform();
+    direction = cosine_direction(reflect ? facing : -1.0 * facing, v1, v2);
+    for (std::size_t band = 0; band < bands; ++band)
+      throughput[band] *= reflect ? material->reflectance[band] / p_reflect
+                                  : material->transmittance[band] / (1.0 - p_reflect);
+  } else {
+    const double v1 = random.uniform(), v2 = random.uniform();
+    direction = cosine_direction(normal, v1, v2);
+    for (std::size_t band = 0; band < bands; ++band)
+      throughput[band] *= element == RayElement::ground ? optics.soil_reflectance[band]
+                                                        : material->trunk_reflectance[band];
+  }
+  return true;
+}
+
+double element_response(RayElement element, const Foliage* material, const SceneOptics& optics,
+                        std::size_t band, const Vec3& normal, const Vec3& incoming,
+                        const Vec3& outgoing) {
+  if (element == RayElement::leaf)
+    return bilambertian_response(normal, incoming, outgoing, material->reflectance[band],
+                                 material->transmittance[band]);
+  const double reflectance = element == RayElement::ground ? optics.soil_reflectance[band]
+                                                           : material->trunk_reflectance[band];
+  return reflectance * std::max(0.0, dot(normal, -1.0 * incoming));
+}
+
+}  // namespace glaswave
