@@ -3,7 +3,7 @@
 // the dimensions. A shot's numbers are then the same bits for any thread count and any split of
 // the track. The transport keys rays by (seed, shot, ray); the detector bins by (seed, shot,
 // band and bin); stands tiles by (seed, tile, kind of canopy); roughness lattice nodes by
-// (seed, node, zone).
+// (seed, node, zone); the sun's photons of `brf` by (seed, batch, photon).
 #pragma once
 
 #include <cstdint>
@@ -27,6 +27,7 @@ enum class RandomPurpose : std::uint64_t {
   detector = 0xd37ec70b5eed5a17ULL,
   stand = 0x57a9d7ee5c0ffee1ULL,
   roughness = 0x2009e1a7715ce5adULL,
+  sun = 0x5a7b1e55f0c0ffeeULL,  // `brf`: photons traced from the sun
 };
 
 // Two signed indices (a 2-D grid's row and column, each within +-2^31) as one key.

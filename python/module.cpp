@@ -1,6 +1,6 @@
-// _glaswave, the C++ half of the Python module: the engine run into a directory, and check, with
-// glaswave's errors raised as Python exceptions of a fitting class. glaswave/__init__.py is the
-// face users see; it reads the products back into an xarray.Dataset.
+// _glaswave, the C++ half of the Python module: the engine run into a directory, brf, and check,
+// with glaswave's errors raised as Python exceptions of a fitting class. glaswave/__init__.py is
+// the face users see; it reads the products back into an xarray.Dataset.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/config/config.hpp"
+#include "pipeline/engine/brf.hpp"
 #include "pipeline/engine/run.hpp"
 
 namespace py = pybind11;
@@ -76,6 +77,24 @@ py::dict run(const std::optional<std::string>& path, const std::optional<std::st
   return result;
 }
 
+// `glaswave brf` without its products: brf.json's document as JSON text.
+std::string brf(const std::optional<std::string>& path, const std::optional<std::string>& document,
+                const std::string& folder, const std::vector<std::string>& overrides, int threads) {
+  try {
+    py::gil_scoped_release release;
+    const Config config = load(path, document, folder, overrides);
+    BrfRequest request;
+    request.threads = threads;
+    const ProgressCallback progress = [](std::int64_t, std::int64_t) {
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) throw Interrupted{};
+    };
+    return run_brf(config, request, progress).document.dump();
+  } catch (const Interrupted&) {
+    throw py::error_already_set();
+  }
+}
+
 py::dict check(const std::optional<std::string>& path, const std::optional<std::string>& document,
                const std::string& folder, const std::vector<std::string>& overrides) {
   CheckSummary summary;
@@ -137,6 +156,8 @@ PYBIND11_MODULE(_glaswave, m) {
         arg("threads"), arg("first_shot"), arg("last_shot"), arg("command_line"),
         "Runs the engine and writes shots.nc under out_dir (which must not exist); returns the "
         "run's summary.");
+  m.def("brf", &brf, arg("path"), arg("document"), arg("folder"), arg("overrides"), arg("threads"),
+        "Runs `glaswave brf` without writing its products; returns brf.json's text.");
   m.def("check", &check, arg("path"), arg("document"), arg("folder"), arg("overrides"),
         "Loads the configuration and opens its inputs, simulating nothing; returns what it found.");
 }

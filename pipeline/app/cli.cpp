@@ -1,4 +1,4 @@
-// Command line: run, check, --help, --version.
+// Command line: run, sweep, brf, check, --help, --version.
 #include "pipeline/app/cli.hpp"
 
 #include <unistd.h>
@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/config/keys.hpp"
+#include "pipeline/engine/brf.hpp"
 #include "pipeline/engine/ray_debug.hpp"
 #include "pipeline/engine/run.hpp"
 #include "pipeline/engine/sweep.hpp"
@@ -81,11 +82,11 @@ std::string joined(int argc, char** argv) {
   return line.str();
 }
 
-// A progress bar on a terminal: shots done, shots/s, time left.
+// A progress bar on a terminal: shots (or photons) done, per second, time left.
 class ProgressBar {
  public:
-  explicit ProgressBar(bool enabled)
-      : enabled_(enabled && isatty(STDERR_FILENO)), started_(now()) {}
+  explicit ProgressBar(bool enabled, const char* unit = "shots")
+      : enabled_(enabled && isatty(STDERR_FILENO)), unit_(unit), started_(now()) {}
   ~ProgressBar() {
     if (drawn_) std::fprintf(stderr, "\n");
   }
@@ -96,9 +97,10 @@ class ProgressBar {
     const double left_s = rate > 0.0 ? (total - done) / rate : 0.0;
     constexpr int width = 30;
     const int filled = static_cast<int>(width * done / std::max<std::int64_t>(total, 1));
-    std::fprintf(stderr, "\r[%s%s] %lld/%lld shots  %.1f shots/s  %.0f s left ",
+    std::fprintf(stderr, "\r[%s%s] %lld/%lld %s  %.1f %s/s  %.0f s left ",
                  std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(),
-                 static_cast<long long>(done), static_cast<long long>(total), rate, left_s);
+                 static_cast<long long>(done), static_cast<long long>(total), unit_, rate, unit_,
+                 left_s);
     std::fflush(stderr);
     drawn_ = true;
   }
@@ -109,6 +111,7 @@ class ProgressBar {
         .count();
   }
   bool enabled_;
+  const char* unit_;
   bool drawn_ = false;
   double started_;
 };
@@ -242,9 +245,45 @@ int sweep(const Arguments& arguments, const std::vector<std::string>& variations
                 (std::filesystem::path(arguments.config_file).stem().string() + "-sweep")
           : std::filesystem::path(arguments.out_dir);
   request.threads = arguments.threads;
-  run_sweep(request);
+  {
+    ProgressBar bar(!arguments.quiet);
+    run_sweep(request, std::ref(bar));
+  }
   std::printf("glaswave: sensitivity.csv and sensitivity.md in %s\n",
               request.out_dir.string().c_str());
+  return 0;
+}
+
+// brf: the sun's photons through the scene of the first footprint; brf.json and scene.tif.
+int brf(const Arguments& arguments) {
+  const Config config = load(arguments);
+  BrfRequest request;
+  request.threads = arguments.threads;
+  request.out_dir =
+      arguments.out_dir.empty()
+          ? std::filesystem::path("out") /
+                (std::filesystem::path(arguments.config_file).stem().string() + "-brf")
+          : std::filesystem::path(arguments.out_dir);
+  BrfSummary summary;
+  {
+    ProgressBar bar(!arguments.quiet, "photons");
+    summary = run_brf(config, request, std::ref(bar));
+  }
+  for (const auto& band : summary.document["bands"]) {
+    std::printf("band %s: albedo %.4f", band["name"].get<std::string>().c_str(),
+                band["albedo"].get<double>());
+    for (const auto& view : band["views"])
+      std::printf("; BRF(%g, %g) %.4f +- %.4f", view["zenith_deg"].get<double>(),
+                  view["azimuth_deg"].get<double>(), view["brf"].get<double>(),
+                  view["brf_stderr"].get<double>());
+    std::printf("\n");
+  }
+  const double wall_s = std::max(summary.wall_s, 1e-9);
+  std::printf(
+      "glaswave: %lld photons in %.2f s, %.3g photons/s, %.3g ray queries/s; brf.json and "
+      "scene.tif in %s\n",
+      static_cast<long long>(summary.photons), summary.wall_s, summary.photons / wall_s,
+      summary.ray_queries / wall_s, request.out_dir.string().c_str());
   return 0;
 }
 
@@ -255,16 +294,12 @@ class Commands {
     add_run();
     add_check();
     add_sweep();
-    // A command of the contract that a later version brings: named, so that asking for it says
-    // so.
-    brf_ = app.add_subcommand("brf", "scene reflectance under the sun (not available yet)");
-    brf_->allow_extras();
+    add_brf();
   }
 
   // Runs the command the line chose.
   int dispatch(const std::string& command_line) {
-    if (*brf_)
-      throw config_error(brf_->get_name(), "this command is not available in this version yet");
+    if (*brf_) return brf(arguments_);
     if (*run_) return run(arguments_, command_line);
     if (*sweep_) return sweep(arguments_, variations_);
     return check(arguments_);
@@ -323,6 +358,17 @@ class Commands {
     sweep_->add_option("--out", arguments_.out_dir,
                        "output directory (default out/<config name>-sweep)");
     add_threads(sweep_);
+    sweep_->add_flag("--quiet", arguments_.quiet, "no progress bar");
+  }
+
+  void add_brf() {
+    brf_ = app_.add_subcommand(
+        "brf", "scene reflectance under the sun (FLIGHT's mode): brf.json and scene.tif");
+    add_config(brf_, true);
+    brf_->add_option("--out", arguments_.out_dir,
+                     "output directory (default out/<config name>-brf)");
+    add_threads(brf_);
+    brf_->add_flag("--quiet", arguments_.quiet, "no progress bar");
   }
 
   CLI::App& app_;

@@ -605,6 +605,7 @@ BrfSettings read_brf(JsonReader& root) {
   }
   b.photons = r.integer("photons");
   b.image_resolution_m = r.number("image_resolution_m");
+  b.scene_size_m = r.number("scene_size_m");
   r.finish();
   return b;
 }

@@ -467,7 +467,7 @@ Key brf_keys() {
   const BrfSettings b;
   const BrfView v;
   return object(
-      "brf", "`glaswave brf` (FLIGHT's solar mode; not available in this version yet)",
+      "brf", "`glaswave brf` (FLIGHT's solar mode)",
       {number("sun_zenith_deg", b.sun_zenith_deg, half_open(0, 90), "deg", "sun zenith angle"),
        number("sun_azimuth_deg", b.sun_azimuth_deg, any_finite(), "deg", "sun azimuth"),
        object_array(
@@ -479,7 +479,10 @@ Key brf_keys() {
        integer("photons", b.photons, 1, run_limits::rays_per_shot, "",
                "photons traced from the sun"),
        number("image_resolution_m", b.image_resolution_m, above(0), "m",
-              "pixel size of `scene.tif`")});
+              "pixel size of `scene.tif`"),
+       number("scene_size_m", b.scene_size_m, above(0), "m",
+              "side of the square scene around the track's first footprint that the sun "
+              "lights (periodic over a synthetic plane); rounded up to whole pixels")});
 }
 
 }  // namespace

@@ -38,6 +38,9 @@ class ShotSimulator {
   RunInfo run_info(std::int64_t shots, const std::string& command_line) const;
 
   const LidarModel& lidar() const { return lidar_; }
+  // The scene's optics and its forest (empty over bare ground), as every shot sees them.
+  const SceneOptics& optics() const { return optics_; }
+  const std::optional<Forest>& forest() const { return forest_; }
 
  private:
   struct ShotScene;

@@ -20,8 +20,9 @@ struct CaseReturns {
   std::vector<double> tr, cr, gr;  // per band, mean over the track's good shots (J)
 };
 
+// `progress` is told (shots done, shots in all) for this case's track.
 CaseReturns simulate_case(const SweepRequest& request, const std::string& key,
-                          const std::string& value) {
+                          const std::string& value, const ProgressCallback& progress) {
   std::vector<std::string> overrides = request.overrides;
   if (!key.empty()) overrides.push_back(key + "=" + value);
   const Config config = load_config(request.config_file, overrides);
@@ -46,7 +47,7 @@ CaseReturns simulate_case(const SweepRequest& request, const std::string& key,
           ++counted[b];
         }
       },
-      nullptr);
+      progress);
   for (std::size_t b = 0; b < bands; ++b) {
     const double n = counted[b] > 0 ? static_cast<double>(counted[b]) : std::nan("");
     returns.tr[b] /= n;
@@ -173,7 +174,7 @@ std::string sensitivity_markdown(const Config& base_config,
 
 }  // namespace
 
-void run_sweep(const SweepRequest& request) {
+void run_sweep(const SweepRequest& request, const ProgressCallback& progress) {
   if (request.variations.empty()) throw config_error("--vary", "give at least one KEY=V1,V2,...");
   // Every case is checked before any is simulated: a typo in the last value costs nothing.
   const Config base_config = load_config(request.config_file, request.overrides);
@@ -185,11 +186,20 @@ void run_sweep(const SweepRequest& request) {
     }
 
   OutputDirectory directory(request.out_dir);
-  const CaseReturns base = simulate_case(request, "", "");
+  // Progress over every case, each counted as many shots as the one running.
+  std::int64_t case_count = 1, case_index = 0;
+  for (const Variation& variation : request.variations)
+    case_count += static_cast<std::int64_t>(variation.values.size());
+  auto case_progress = [&](std::int64_t done, std::int64_t total) {
+    if (progress) progress(case_index * total + done, case_count * total);
+  };
+  const CaseReturns base = simulate_case(request, "", "", case_progress);
   std::vector<CaseReturns> cases;
   for (const Variation& variation : request.variations)
-    for (const std::string& value : variation.values)
-      cases.push_back(simulate_case(request, variation.key, value));
+    for (const std::string& value : variation.values) {
+      ++case_index;
+      cases.push_back(simulate_case(request, variation.key, value, case_progress));
+    }
 
   write_text(request.out_dir / "sensitivity.csv",
              sensitivity_csv(base_config.sensor.bands, base, cases));

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,6 +27,8 @@ struct SweepRequest {
   int threads = 0;
 };
 
-void run_sweep(const SweepRequest& request);
+// `progress`, when set, is told (shots done, shots in all) over every case.
+void run_sweep(const SweepRequest& request,
+               const std::function<void(std::int64_t, std::int64_t)>& progress = {});
 
 }  // namespace glaswave

@@ -3,6 +3,7 @@
     import glaswave
     ds = glaswave.run("forest.json", shots=range(0, 100), overrides={"canopy.pai": 2.0})
     ds.rx_waveform.sel(band=1064)        # an xarray.Dataset, as shots.nc
+    glaswave.brf("forest.json")["bands"][0]["albedo"]   # brf.json as a dict
     glaswave.check({"canopy": {"pai": -1}})   # raises glaswave.ConfigError: /canopy/pai: ...
 
 The C++ engine does the work (with the GIL released; Ctrl-C stops it); errors come back as
@@ -21,7 +22,7 @@ from . import _glaswave
 from ._glaswave import ConfigError, InputError, RunError
 
 __version__ = _glaswave.__version__
-__all__ = ["run", "check", "ConfigError", "InputError", "RunError", "__version__"]
+__all__ = ["run", "brf", "check", "ConfigError", "InputError", "RunError", "__version__"]
 
 
 def _source(config):
@@ -116,6 +117,18 @@ def run(config, shots=None, threads=0, overrides=None):
                                 last, command_line)
         _warn(summary)
         return xarray.load_dataset(os.path.join(out_dir, "shots.nc"))
+
+
+def brf(config, threads=0, overrides=None):
+    """The scene's reflectance under the sun, as `glaswave brf` computes it (FLIGHT's mode).
+
+    Returns the dict that brf.json holds: {"bands": [{"name", "albedo", "views": [{"zenith_deg",
+    "azimuth_deg", "brf", "brf_stderr"}]}]}; scene.tif is not made. `config`, `threads` and
+    `overrides` as for run(); results do not depend on `threads`.
+    """
+    path, document, folder = _source(config)
+    return json.loads(_glaswave.brf(path, document, folder, _assignments(overrides),
+                                    _threads(threads)))
 
 
 def check(config, overrides=None):

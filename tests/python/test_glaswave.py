@@ -13,7 +13,7 @@ import pytest
 import xarray as xr
 
 import glaswave
-from conftest import assert_datasets_identical, run_command, small_config
+from conftest import assert_datasets_identical, glaswave_binary, run_command, small_config
 
 
 def test_run_returns_the_bits_of_the_command(write_config, tmp_path):
@@ -173,3 +173,18 @@ def test_stands_under_no_shot_are_a_python_warning(tmp_path):
          "geometry": {"type": "Polygon", "coordinates": [square]}}]}))
     with pytest.warns(UserWarning, match=r"^/canopy/stands: none of the 1 stands"):
         glaswave.check(small_config(canopy={"stands": str(stands)}))
+
+
+def test_brf_returns_what_the_command_writes_in_brf_json(write_config, tmp_path):
+    config = small_config()
+    config["brf"] = {"photons": 2000, "scene_size_m": 20.0, "image_resolution_m": 2.0}
+    path = write_config(config)
+    out = tmp_path / "brf"
+    done = subprocess.run([glaswave_binary(), "brf", str(path), "--quiet", "--out", str(out)],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    from_command = json.loads((out / "brf.json").read_text())
+    assert glaswave.brf(path, threads=1) == from_command
+    assert [band["name"] for band in from_command["bands"]] == ["532", "1064"]
+    with pytest.raises(glaswave.ConfigError, match="/brf/photons"):
+        glaswave.brf(config, overrides={"brf.photons": 0})

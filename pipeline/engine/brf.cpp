@@ -1,0 +1,168 @@
+// The BRF run: the scene of the first footprint built as a shot's is, the sun's photons traced
+// through it, the products written.
+#include "pipeline/engine/brf.hpp"
+
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <numbers>
+#include <optional>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "pipeline/engine/inputs.hpp"
+#include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/products/raster_writer.hpp"
+#include "pipeline/scene/vegetation.hpp"
+#include "pipeline/transport/brf_transport.hpp"
+#include "terrain/ground_mesh.hpp"
+#include "terrain/roughness.hpp"
+
+namespace glaswave {
+namespace {
+
+// Pixels along each side of scene.tif at most (2^26 pixels a band).
+constexpr double max_image_pixels = 8192;
+
+// Unit vector toward zenith and azimuth (degrees, clockwise from north) in east-north-up.
+Vec3 toward(double zenith_deg, double azimuth_deg) {
+  const double deg = std::numbers::pi / 180.0;
+  const double s = std::sin(zenith_deg * deg);
+  return {s * std::sin(azimuth_deg * deg), s * std::cos(azimuth_deg * deg),
+          std::cos(zenith_deg * deg)};
+}
+
+void write_json(const std::filesystem::path& path, const nlohmann::json& document) {
+  AtomicFile file(path);
+  std::FILE* out = std::fopen(file.part_path().c_str(), "w");
+  if (!out) throw run_error(path.string(), "cannot write");
+  const std::string text = document.dump(2) + "\n";
+  const bool written = std::fwrite(text.data(), 1, text.size(), out) == text.size();
+  if (std::fclose(out) != 0 || !written) throw run_error(path.string(), "cannot write");
+  file.commit();
+}
+
+nlohmann::json brf_document(const Config& config, const BrfResult& result) {
+  nlohmann::json bands = nlohmann::json::array();
+  for (std::size_t band = 0; band < config.sensor.bands.size(); ++band) {
+    nlohmann::json views = nlohmann::json::array();
+    for (std::size_t v = 0; v < config.brf.views.size(); ++v)
+      views.push_back({{"zenith_deg", config.brf.views[v].zenith_deg},
+                       {"azimuth_deg", config.brf.views[v].azimuth_deg},
+                       {"brf", result.brf[band][v]},
+                       {"brf_stderr", result.brf_stderr[band][v]}});
+    bands.push_back({{"name", config.sensor.bands[band].name},
+                     {"albedo", result.albedo[band]},
+                     {"views", views}});
+  }
+  return {{"bands", bands}};
+}
+
+// The scene around the footprint: the tile and, beyond its sides, enough for the crowns that
+// reach into it (periodic) or for the light that wanders out (a DEM).
+struct BrfScene {
+  LocalFrame frame;
+  BrfTile tile;
+  std::unique_ptr<Scene> scene;
+};
+
+BrfScene build_brf_scene(const Config& config, const Terrain& terrain,
+                         const ShotSimulator& simulator, const Footprint& footprint,
+                         const RayDevice& device, int pixels) {
+  BrfScene built{LocalFrame(footprint.ground), {}, nullptr};
+  built.tile.half_size_m = 0.5 * pixels * config.brf.image_resolution_m;
+  built.tile.periodic = config.terrain.plane.has_value();
+  const SurfaceOrientation orientation = fit_surface_orientation(
+      terrain, built.frame, footprint.range_m * simulator.lidar().beam_sigma_rad());
+  // Across a periodic plane's tile the ground climbs as the plane does (a DEM's tile is lit and
+  // seen through its level top).
+  const double deg = std::numbers::pi / 180.0;
+  const double fall = built.tile.periodic ? std::tan(orientation.slope_deg * deg) : 0.0;
+  built.tile.ground_slope_x = -fall * std::sin(orientation.aspect_deg * deg);
+  built.tile.ground_slope_y = -fall * std::cos(orientation.aspect_deg * deg);
+  const double half_size_m = built.tile.half_size_m + (built.tile.periodic ? 5.0 : 100.0);
+  const RoughnessField roughness(config.terrain.roughness, config.seed);
+  const GroundMesh ground = build_ground_mesh(terrain, built.frame, half_size_m, terrain.detail_m(),
+                                              &roughness, half_size_m);
+  const Vegetation vegetation =
+      simulator.forest()
+          ? build_vegetation(*simulator.forest(), terrain, built.frame, half_size_m, orientation)
+          : Vegetation{};
+  built.scene = std::make_unique<Scene>(device, ground, vegetation);
+  return built;
+}
+
+}  // namespace
+
+BrfSummary run_brf(const Config& config, const BrfRequest& request,
+                   const ProgressCallback& progress) {
+  const auto started = std::chrono::steady_clock::now();
+  const double pixels_per_side = std::ceil(config.brf.scene_size_m / config.brf.image_resolution_m);
+  if (pixels_per_side > max_image_pixels)
+    throw config_error("/brf/image_resolution_m",
+                       "scene.tif would be " +
+                           std::to_string(static_cast<long long>(pixels_per_side)) +
+                           " pixels across brf.scene_size_m; at most " +
+                           std::to_string(static_cast<int>(max_image_pixels)));
+  const int pixels = static_cast<int>(pixels_per_side);
+  const std::unique_ptr<Terrain> terrain = open_terrain(config);
+  const ShotSimulator simulator(config, *terrain);
+  const std::unique_ptr<Track> track = plan_track(config, *terrain);
+  const Footprint footprint = track->footprint(0);
+  if (!footprint.on_terrain)
+    throw config_error("/track",
+                       "the track's first footprint misses the terrain: no scene for brf");
+
+  std::optional<OutputDirectory> directory;
+  if (!request.out_dir.empty()) directory.emplace(request.out_dir);
+  const RayDevice device;
+  const BrfScene built = build_brf_scene(config, *terrain, simulator, footprint, device, pixels);
+  BrfOptions options;
+  options.sun_direction = -1.0 * toward(config.brf.sun_zenith_deg, config.brf.sun_azimuth_deg);
+  for (const BrfView& view : config.brf.views)
+    options.views.push_back(toward(view.zenith_deg, view.azimuth_deg));
+  options.photons = config.brf.photons;
+  options.max_order = config.simulation.max_order;
+  options.seed = config.seed;
+  options.image_pixels = pixels;
+
+  const int cores = tbb::this_task_arena::max_concurrency();
+  tbb::task_arena arena(request.threads > 0 ? std::min(request.threads, cores) : cores);
+  BrfResult result;
+  arena.execute([&] {
+    result = simulate_brf(*built.scene, simulator.optics(), built.tile, options, progress);
+  });
+
+  BrfSummary summary;
+  summary.document = brf_document(config, result);
+  summary.photons = options.photons;
+  summary.ray_queries = result.ray_queries;
+  // The local frame's east and north are, to a millimetre over the tile, those of a transverse
+  // Mercator projection centred on the footprint.
+  char crs[256];
+  std::snprintf(crs, sizeof crs,
+                "+proj=tmerc +lat_0=%.10f +lon_0=%.10f +k=1 +x_0=0 +y_0=0 +datum=WGS84 +units=m "
+                "+no_defs",
+                footprint.ground.lat_deg, footprint.ground.lon_deg);
+  summary.crs = crs;
+  if (directory) {
+    RasterImage image;
+    image.columns = image.rows = pixels;
+    const double h = built.tile.half_size_m, pixel_m = config.brf.image_resolution_m;
+    image.geotransform = {-h, pixel_m, 0.0, h, 0.0, -pixel_m};
+    image.crs = summary.crs;
+    for (const Band& band : config.sensor.bands) image.band_names.push_back(band.name);
+    image.bands = result.image;
+    write_json(request.out_dir / "brf.json", summary.document);
+    write_geotiff(request.out_dir / "scene.tif", image);
+    directory->keep();
+  }
+  summary.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return summary;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,63 @@
+// FLIGHT's solar mode (`glaswave brf`): photons traced forward from the sun into a scene, each
+// scattering up to max_order, and each interaction scored toward every view direction by a local
+// estimate (the element's scattering toward the view times the transmittance along it). The
+// connection toward the view shares the gaps of the path that brought the photon (the leaf-size
+// correlation of the lidar transport, PHYSICS.md section 3), so the hotspot is kept. Over a
+// periodic tile of a plane a path leaving one side comes back in at the opposite one, so that
+// nothing leaks out of the scene's sides.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "pipeline/scene/scene.hpp"
+#include "pipeline/transport/scattering.hpp"
+
+namespace glaswave {
+
+// The square tile [-half_size_m, half_size_m]^2 of the scene's local frame the sun lights.
+struct BrfTile {
+  double half_size_m = 50.0;
+  // Paths leaving a side come back in at the opposite one (a synthetic plane). Otherwise they
+  // go on through the scene built around the tile and are scored wherever they are.
+  bool periodic = true;
+  // The ground's gradient (dz/dx, dz/dy): a path wrapped across the tile keeps its height above
+  // the ground.
+  double ground_slope_x = 0.0, ground_slope_y = 0.0;
+};
+
+struct BrfOptions {
+  Vec3 sun_direction{0.0, 0.0, -1.0};  // travel direction of the sunlight, unit
+  std::vector<Vec3> views;             // unit, toward the viewer
+  std::int64_t photons = 1000000;
+  int max_order = 8;
+  std::uint64_t seed = 1;
+  int image_pixels = 100;  // nadir image: pixels along each side of the tile
+};
+
+// Per band: the albedo (energy leaving the top after up to max_order scatterings over energy
+// entering), each view's bidirectional reflectance factor (the radiance over that of a white
+// Lambertian plane under the same sun) and its standard error (from the spread of the photons'
+// scores), and the nadir BRF of each pixel of the tile (row 0 to the north, column 0 to the
+// west).
+struct BrfResult {
+  std::vector<double> albedo;
+  std::vector<std::vector<double>> brf, brf_stderr;  // [band][view]
+  std::vector<std::vector<double>> image;            // [band][row * image_pixels + column]
+  std::int64_t ray_queries = 0;
+};
+
+// Photons are traced in batches of this many; photon p of the run draws from
+// RandomStream(seed, p / batch, p % batch, RandomPurpose::sun).
+inline constexpr std::int64_t brf_batch_photons = 1024;
+
+// Called after each group of batches with (photons done, photons in all).
+using BrfProgress = std::function<void(std::int64_t, std::int64_t)>;
+
+// Traces options.photons photons through the scene on the current TBB arena. The result is the
+// same bits for any thread count: batches are tallied apart and summed in order.
+BrfResult simulate_brf(const Scene& scene, const SceneOptics& optics, const BrfTile& tile,
+                       const BrfOptions& options, const BrfProgress& progress = {});
+
+}  // namespace glaswave
