@@ -401,7 +401,7 @@ std::array<double, 2> DemTerrain::Impl::node_coordinates(double lat_deg, double 
   const auto [x, y] = crs->from_wgs84(lon_deg, lat_deg);
   if (!std::isfinite(x) || !std::isfinite(y)) return {nan, nan};
   const auto& g = inverse;
-  auto at = [&](double x_shifted) {
+  auto at = [&, y = y](double x_shifted) {  // y copied: clang 14 cannot capture a binding
     // Pixel coordinates count from the raster's corner; nodes sit at pixel centres.
     return std::array<double, 2>{g[0] + x_shifted * g[1] + y * g[2] - 0.5,
                                  g[3] + x_shifted * g[4] + y * g[5] - 0.5};

@@ -1,0 +1,169 @@
+#!/usr/bin/python3
+"""Writes the seed corpus of the fuzz targets into tests/fuzz/corpus/<target>/: a few valid
+inputs and a few broken ones per target, small, made by hand here (the DEMs with GDAL's Python
+bindings, python3-gdal). Regression inputs found by fuzzing live beside them, named
+regression-*, and are not touched. Run from anywhere: /usr/bin/python3 tests/fuzz/make_corpus.py
+"""
+import json
+import math
+import pathlib
+import random
+
+from osgeo import gdal, osr
+
+HERE = pathlib.Path(__file__).resolve().parent / "corpus"
+
+
+def write(target, name, content):
+    folder = HERE / target
+    folder.mkdir(parents=True, exist_ok=True)
+    data = content if isinstance(content, bytes) else content.encode()
+    (folder / name).write_bytes(data)
+
+
+def ecef(lat_deg, lon_deg, h_m):
+    a, f = 6378137.0, 1 / 298.257223563
+    e2 = f * (2 - f)
+    lat, lon = math.radians(lat_deg), math.radians(lon_deg)
+    n = a / math.sqrt(1 - e2 * math.sin(lat) ** 2)
+    return ((n + h_m) * math.cos(lat) * math.cos(lon), (n + h_m) * math.cos(lat) * math.sin(lon),
+            (n * (1 - e2) + h_m) * math.sin(lat))
+
+
+def config_corpus():
+    demo = json.loads((HERE.parent.parent.parent / "share/demo/demo.json").read_text())
+    write("config", "demo.json", json.dumps(demo, indent=1))
+    write("config", "empty.json", "{}")
+    write("config", "plane.json", json.dumps({
+        "terrain": {"plane": {"origin_lat_deg": 45, "slope_deg": 10, "aspect_deg": 90},
+                    "roughness": {"rms_m": 0.45, "correlation_m": 0.5}},
+        "canopy": None, "simulation": {"rays_per_shot": 500, "max_order": 2}}))
+    write("config", "stands.json", json.dumps({
+        "terrain": {"dem": "dem.tif", "vertical_datum": "egm96"},
+        "canopy": {"pai": 2, "crown_shape": "cone", "stands": "stands.geojson"},
+        "output": {"footprints_format": "GPKG", "plots": False}}))
+    write("config", "ephemeris.json", json.dumps({
+        "sensor": {"preset": "gedi", "bins": 1000}, "terrain": {"plane": {"elevation_m": 200}},
+        "track": {"type": "ephemeris", "ephemeris": "eph.csv"},
+        "detector": {"enabled": True, "bits": 8, "saturation_W": 1e-6, "photon_noise": True}}))
+    write("config", "points.json", json.dumps({
+        "seed": 7, "terrain": {"plane": {}}, "track": {"type": "points", "points": [{"lat_deg": 1, "lon_deg": 2}]},
+        "brf": {"views": [{"zenith_deg": 10, "azimuth_deg": 5}]}}))
+    write("config", "broken-truncated.json", '{"canopy": {"pai": 3, "lad": "sph')
+    write("config", "broken-types.json", '{"seed": "one", "sensor": [], "canopy": {"pai": -1}}')
+    write("config", "broken-unknown.json", '{"canopi": {}, "track": {"type": "orbitt"}}')
+    write("config", "broken-numbers.json", '{"seed": 1e999, "simulation": {"rays_per_shot": 0x10}}')
+
+
+def csv_corpus():
+    write("csv", "crowns-xy.csv", "x,y,base_m,radius_m,half_height_m\n# one tree\n0,0,5,8,8\n"
+          "12.5, -3 ,4,2.5,3\r\n")
+    write("csv", "crowns-lonlat.csv", "lon,lat,base_m,radius_m,half_height_m\n7.0,45.0,5,3,4\n")
+    write("csv", "numbers.csv", "a,b,c\n+1,-2.5e3,  0x10 \n1e308,1e309,nan\n,,\n#x\n\n")
+    write("csv", "broken-crowns.csv", "lon,lat,base_m,radius_m\n0,0,5,eight,8\n1,2\n")
+    write("csv", "broken-binary.csv", bytes(range(256)))
+
+
+def ephemeris_corpus():
+    rows = ["# ICESat-like shots", "time,x_m,y_m,z_m"]
+    for i in range(3):
+        rows.append("%.3f,%.4f,%.4f,%.4f" % ((183124800.0 + 0.025 * i,) + ecef(45 + 0.0015 * i, 7,
+                                                                                   600000)))
+    write("ephemeris", "positions.csv", "\n".join(rows) + "\n")
+    x, y, z = ecef(-30, 150, 500000)
+    write("ephemeris", "pointing.csv",
+          "x_m, y_m, z_m, time, pointing_x, pointing_y, pointing_z\r\n\n"
+          "%.4f,%.4f,%.4f,2005-10-21T12:00:00.025Z,%.6f,%.6f,%.6f\n" % (x, y, z, -x, -y, -z))
+    write("ephemeris", "broken-header.csv", "time,x_m,y_m\n1,2,3\n")
+    write("ephemeris", "broken-underground.csv", "time,x_m,y_m,z_m\n0,1,2,3\n")
+    write("ephemeris", "broken-pointing.csv",
+          "time,x_m,y_m,z_m,pointing_x,pointing_y,pointing_z\n"
+          "2005-13-40T25:61:61Z,7000000,0,0,0,0,0\n")
+
+
+def feature(ring, **properties):
+    return {"type": "Feature", "properties": properties,
+            "geometry": {"type": "Polygon", "coordinates": [ring]}}
+
+
+def stands_corpus():
+    square = [[7, 45], [7.001, 45], [7.001, 45.001], [7, 45.001], [7, 45]]
+    write("stands", "two-stands.geojson", json.dumps({"type": "FeatureCollection", "features": [
+        feature(square, pai=1.5, crown_shape="cone"),
+        feature([[x + 0.002, y] for x, y in square], cover=0.3,
+                leaf_reflectance='{"532": 0.1, "1064": 0.4}')]}))
+    write("stands", "multipolygon.geojson", json.dumps({"type": "FeatureCollection", "features": [{
+        "type": "Feature", "properties": {},
+        "geometry": {"type": "MultiPolygon", "coordinates": [[square], [[[x, y + 0.01]
+                                                                          for x, y in square]]]}}],
+        "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:OGC:1.3:CRS84"}}}))
+    write("stands", "utm.geojson", json.dumps({"type": "FeatureCollection", "crs": {
+        "type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}}, "features": [
+        feature([[500000, 5000000], [500100, 5000000], [500100, 5000100], [500000, 5000000]])]}))
+    write("stands", "empty.geojson", '{"type": "FeatureCollection", "features": []}')
+    write("stands", "broken-point.geojson", json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {}, "geometry": {"type": "Point",
+                                                           "coordinates": [1, 2]}}]}))
+    write("stands", "broken-ring.geojson", json.dumps({"type": "FeatureCollection", "features": [
+        feature([[0, 0], [1, 1], [0, 0]], pai=-3)]}))
+    write("stands", "broken-lonlat.geojson", json.dumps({"type": "FeatureCollection", "features": [
+        feature([[500, 45], [501, 45], [501, 46], [500, 45]], crown_shape="layer")]}))
+
+
+def dem_corpus():
+    gdal.UseExceptions()
+    driver = gdal.GetDriverByName("GTiff")
+    made = []
+
+    def make(name, epsg, transform, kind=gdal.GDT_Float32, nodata=None, bands=1, size=(6, 5)):
+        path = "/vsimem/" + name
+        dataset = driver.Create(path, size[0], size[1], bands, kind)
+        dataset.SetGeoTransform(transform)
+        if epsg:
+            srs = osr.SpatialReference()
+            srs.SetFromUserInput(epsg)
+            dataset.SetSpatialRef(srs)
+        for b in range(1, bands + 1):
+            band = dataset.GetRasterBand(b)
+            if nodata is not None:
+                band.SetNoDataValue(nodata)
+            values = [[100 + 3 * i + 2 * j for i in range(size[0])] for j in range(size[1])]
+            if nodata is not None:
+                values[1][1] = nodata
+            band.WriteRaster(0, 0, size[0], size[1],
+                             b"".join(gdal_pack(kind, v) for row in values for v in row))
+        dataset = None
+        f = gdal.VSIFOpenL(path, "rb")
+        gdal.VSIFSeekL(f, 0, 2)
+        length = gdal.VSIFTellL(f)
+        gdal.VSIFSeekL(f, 0, 0)
+        data = bytes(gdal.VSIFReadL(1, length, f))
+        gdal.VSIFCloseL(f)
+        gdal.Unlink(path)
+        write("dem", name, data)
+        made.append(data)
+
+    make("geographic.tif", "EPSG:4326", (7.0, 0.001, 0, 45.0, 0, -0.001))
+    make("utm-nodata.tif", "EPSG:32632", (500000, 30, 0, 5000000, 0, -30), nodata=-9999)
+    make("egm96-int16.tif", "EPSG:4326+5773", (-118.2, 0.0003, 0, 34.3, 0, -0.0003),
+         kind=gdal.GDT_Int16)
+    make("two-bands.tif", "EPSG:3857", (0, 10, 0, 0, 0, -10), bands=2)
+    make("broken-no-crs.tif", None, (0, 1, 0, 0, 0, -1))
+    write("dem", "broken-truncated.tif", made[0][: len(made[0]) // 2])
+    # Inputs that are not TIFFs describe a raster to the target (FuzzedDataProvider).
+    rng = random.Random(13)
+    for i in range(4):
+        write("dem", "described-%d" % i, bytes(rng.randrange(256) for _ in range(400)))
+
+
+def gdal_pack(kind, value):
+    import struct
+    return struct.pack({gdal.GDT_Float32: "<f", gdal.GDT_Int16: "<h"}[kind], value)
+
+
+if __name__ == "__main__":
+    config_corpus()
+    csv_corpus()
+    ephemeris_corpus()
+    stands_corpus()
+    dem_corpus()
