@@ -116,6 +116,10 @@ const std::vector<std::string_view> geographic_header{"lon", "lat", "base_m", "r
                                                       "half_height_m"};
 const std::vector<std::string_view> metric_header{"x", "y", "base_m", "radius_m", "half_height_m"};
 
+// Bounds of a crowns file's values: beyond them a row is a mistake (1e308), not a tree.
+constexpr double max_offset_m = 1.0e6;
+constexpr double max_tree_m = 1000.0;
+
 // A crown from a row of the crowns file: degrees, or metres about the plane's origin.
 Tree read_crown(const CsvReader& csv, const std::vector<std::string_view>& fields,
                 const std::optional<GeographicLib::LocalCartesian>& origin) {
@@ -127,16 +131,29 @@ Tree read_crown(const CsvReader& csv, const std::vector<std::string_view>& field
   for (int i = 0; i < 5; ++i) values[i] = csv.number(fields[i], names[i]);
   Tree tree;
   if (!origin) {
+    if (values[0] < -180.0 || values[0] > 360.0)
+      throw input_error(place, "lon must be in [-180, 360]");
     if (values[1] < -90.0 || values[1] > 90.0) throw input_error(place, "lat must be in [-90, 90]");
     tree.lon_deg = values[0];
     tree.lat_deg = values[1];
   } else {
+    // Metres about the plane's origin: a scene is at most a few kilometres across.
+    for (int i = 0; i < 2; ++i)
+      if (std::abs(values[i]) > max_offset_m)
+        throw input_error(place, std::string(names[i]) + " must be within " +
+                                     std::to_string(static_cast<int>(max_offset_m)) +
+                                     " m of the plane's origin");
     double h = 0.0;
     origin->Reverse(values[0], values[1], 0.0, tree.lat_deg, tree.lon_deg, h);
   }
   if (values[2] < 0.0) throw input_error(place, "base_m must be >= 0");
   if (values[3] <= 0.0) throw input_error(place, "radius_m must be > 0");
   if (values[4] <= 0.0) throw input_error(place, "half_height_m must be > 0");
+  for (int i = 2; i < 5; ++i)
+    if (values[i] > max_tree_m)
+      throw input_error(place, std::string(names[i]) +
+                                   " must be <= " + std::to_string(static_cast<int>(max_tree_m)) +
+                                   " m: no tree is that large");
   tree.crown_base_m = values[2];
   tree.crown_radius_m = values[3];
   tree.crown_half_height_m = values[4];

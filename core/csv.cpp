@@ -1,6 +1,7 @@
 // CSV rows and locale-independent numbers, with errors at file:line.
 #include "core/csv.hpp"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 
@@ -38,13 +39,47 @@ std::vector<std::string_view> split_csv_line(std::string_view line) {
   }
 }
 
+std::string field_excerpt(std::string_view field, std::string_view also) {
+  constexpr std::size_t max_length = 32;
+  bool plain = field.size() <= max_length;
+  for (char c : field)
+    plain = plain && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' ||
+                      c == '+' || c == '-' || also.find(c) != std::string_view::npos);
+  if (plain) return "\"" + std::string(field) + "\"";
+  return "a field of " + std::to_string(field.size()) + " characters";
+}
+
 CsvReader::CsvReader(const std::filesystem::path& file, std::string what)
-    : path_(file.string()), what_(std::move(what)), in_(file) {
+    : path_(file.string()), what_(std::move(what)) {
+  std::error_code error;
+  if (std::filesystem::exists(file, error) && !std::filesystem::is_regular_file(file, error))
+    throw input_error(path_, "cannot read " + what_ + ": not a regular file");
+  if (std::filesystem::is_regular_file(file, error) &&
+      std::filesystem::file_size(file, error) > max_file_bytes)
+    throw input_error(path_, what_ + " is larger than the limit of " +
+                                 std::to_string(max_file_bytes >> 20) + " MiB");
+  in_.open(file, std::ios::binary);
   if (!in_) throw input_error(path_, "cannot open " + what_);
 }
 
+// The next line into line_, without its newline; false at the end of the file. A line longer
+// than max_line_bytes is refused before it is held.
+bool CsvReader::read_line() {
+  line_.clear();
+  std::streambuf* buffer = in_.rdbuf();
+  for (int c = buffer->sbumpc(); c != std::char_traits<char>::eof(); c = buffer->sbumpc()) {
+    if (c == '\n') return true;
+    if (line_.size() == max_line_bytes)
+      throw input_error(path_ + ":" + std::to_string(line_number_ + 1),
+                        "a line longer than " + std::to_string(max_line_bytes) + " bytes: not " +
+                            what_ + " (CSV text)");
+    line_.push_back(static_cast<char>(c));
+  }
+  return !line_.empty();
+}
+
 bool CsvReader::next_row(std::vector<std::string_view>& fields) {
-  while (std::getline(in_, line_)) {
+  while (read_line()) {
     ++line_number_;
     const std::string_view text = trimmed(line_);
     if (text.empty() || text.front() == '#') continue;
@@ -57,8 +92,8 @@ bool CsvReader::next_row(std::vector<std::string_view>& fields) {
 
 double CsvReader::number(std::string_view field, std::string_view name) const {
   if (const auto value = parse_number(field)) return *value;
-  throw input_error(place(), std::string(name) + ": expected a finite number, got \"" +
-                                 std::string(field) + "\"");
+  throw input_error(place(),
+                    std::string(name) + ": expected a finite number, got " + field_excerpt(field));
 }
 
 }  // namespace glaswave

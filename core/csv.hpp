@@ -3,6 +3,7 @@
 // every error naming the file and line.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -21,9 +22,19 @@ std::optional<double> parse_number(std::string_view text);
 // The fields of one line, split at commas and trimmed of spaces, tabs and carriage returns.
 std::vector<std::string_view> split_csv_line(std::string_view line);
 
+// A field of a file for an error message: quoted when it is short and plain (letters, digits,
+// "_.+-" and `also`), else only its length, so that a file of another kind (a system file) is
+// never echoed.
+std::string field_excerpt(std::string_view field, std::string_view also = "");
+
 class CsvReader {
  public:
-  // Opens the file; `what` names it in errors ("the ephemeris file").
+  // Lines and files beyond these are not CSV of glaswave's (a row is a few numbers): refused.
+  static constexpr std::size_t max_line_bytes = 4096;
+  static constexpr std::uintmax_t max_file_bytes = std::uintmax_t{1} << 30;
+
+  // Opens the file, a regular file of at most max_file_bytes (a device such as /dev/zero would
+  // be read for ever); `what` names it in errors ("the ephemeris file").
   CsvReader(const std::filesystem::path& file, std::string what);
 
   // The next row that holds something, as fields that stay valid until the next call; false at
@@ -42,6 +53,7 @@ class CsvReader {
   std::string what_;
   std::ifstream in_;
   std::string line_;
+  bool read_line();
   long line_number_ = 0;
 };
 

@@ -44,11 +44,11 @@ Columns read_header(const std::vector<std::string_view>& parts, const std::strin
     for (int c = 0; c < column_count; ++c)
       if (parts[i] == column_names[c]) column = c;
     if (column < 0) {
-      throw input_error(place, "unknown column \"" + std::string(parts[i]) +
-                                   "\"; the header row is " + header_help);
+      throw input_error(place, "column " + std::to_string(i + 1) + " is not a column name (" +
+                                   field_excerpt(parts[i]) + "); the header row is " + header_help);
     }
     if (columns.index[column] >= 0)
-      throw input_error(place, "column \"" + std::string(parts[i]) + "\" appears twice");
+      throw input_error(place, "column " + field_excerpt(parts[i]) + " appears twice");
     columns.index[column] = static_cast<int>(i);
   }
   for (int c = time_column; c <= z_column; ++c) {
@@ -71,10 +71,12 @@ double read_time(std::string_view text, const std::string& place) {
   if (const auto seconds = parse_number(text)) return *seconds;
   try {
     return parse_iso8601_utc(std::string(text));
-  } catch (const std::invalid_argument& e) {
-    throw input_error(
-        place,
-        std::string("time: expected seconds since 2000-01-01T12:00:00Z or ISO 8601; ") + e.what());
+  } catch (const std::invalid_argument&) {
+    // The field is named, not echoed whole: the file may be of another kind.
+    throw input_error(place,
+                      "time: expected seconds since 2000-01-01T12:00:00Z or ISO 8601 UTC "
+                      "(YYYY-MM-DDTHH:MM:SSZ), got " +
+                          field_excerpt(text, ":"));
   }
 }
 

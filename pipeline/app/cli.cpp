@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
+#include <new>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <tuple>
@@ -28,15 +30,48 @@ struct Arguments {
   std::string out_dir;
   std::vector<std::string> overrides;
   int threads = 0;
+  std::string threads_text;
   std::string shots;
+  std::string seed_text;
   std::optional<std::uint64_t> seed;
   bool resume = false;
   bool quiet = false;
-  bool json = false;           // run --json: the summary as one JSON object
-  std::string debug_ray;       // SHOT:RAY
-  bool schema = false;         // check --schema
-  bool keys_markdown = false;  // check --keys-markdown (hidden: scripts/readme-keys)
+  double progress_interval_s = 5.0;  // a progress line on a non-terminal (hidden option, tests)
+  bool json = false;                 // run --json: the summary as one JSON object
+  std::string debug_ray;             // SHOT:RAY
+  bool schema = false;               // check --schema
+  bool keys_markdown = false;        // check --keys-markdown (hidden: scripts/readme-keys)
 };
+
+// Text from the command line or a file for a one-line message on stderr: control characters
+// (escape codes, newlines) written as \xNN, so that nothing reaches the terminal raw.
+std::string one_line(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 || byte == 0x7f) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02x", byte);
+      out += escaped;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+// A decimal integer of an option, in [0, max]: digits only (CLI11 would take "0x10" as 16, an
+// empty text as the default, and saturate beyond 2^64 - 1).
+std::uint64_t decimal_option(const std::string& text, const char* option, std::uint64_t max) {
+  const std::string range = "must be an integer in [0, " + std::to_string(max) + "]";
+  std::uint64_t value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+  if (!digits) throw config_error(option, range + ", got \"" + text + "\"");
+  if (error != std::errc() || end != text.data() + text.size() || value > max)
+    throw config_error(option, range + ", got " + text);
+  return value;
+}
 
 // The two sides of "A:B" as non-negative integers, either absent when empty; `usage` is the
 // message when the text is not of that form.
@@ -46,6 +81,8 @@ std::pair<std::optional<std::int64_t>, std::optional<std::int64_t>> colon_pair(
   if (colon == std::string::npos) throw config_error(option, usage);
   auto number = [&](const std::string& part) -> std::optional<std::int64_t> {
     if (part.empty()) return std::nullopt;
+    if (part.find_first_not_of("0123456789") != std::string::npos)
+      throw config_error(option, usage);
     std::int64_t value = -1;
     const auto [end, error] = std::from_chars(part.data(), part.data() + part.size(), value);
     if (error != std::errc() || end != part.data() + part.size() || value < 0)
@@ -82,19 +119,36 @@ std::string joined(int argc, char** argv) {
   return line.str();
 }
 
-// A progress bar on a terminal: shots (or photons) done, per second, time left.
-class ProgressBar {
+// Progress on stderr, shots (or photons) done, per second, time left: a bar redrawn in place
+// on a terminal; elsewhere (a log file, a batch job) a plain line every `interval_s`, without
+// escape codes or carriage returns.
+class Progress {
  public:
-  explicit ProgressBar(bool enabled, const char* unit = "shots")
-      : enabled_(enabled && isatty(STDERR_FILENO)), unit_(unit), started_(now()) {}
-  ~ProgressBar() {
+  Progress(bool enabled, double interval_s, const char* unit = "shots")
+      : enabled_(enabled),
+        terminal_(isatty(STDERR_FILENO) != 0),
+        interval_s_(interval_s),
+        unit_(unit),
+        started_(now()),
+        last_line_(started_) {}
+  ~Progress() {
     if (drawn_) std::fprintf(stderr, "\n");
   }
   void operator()(std::int64_t done, std::int64_t total) {
     if (!enabled_) return;
-    const double elapsed_s = now() - started_;
+    const double time = now();
+    const double elapsed_s = time - started_;
     const double rate = elapsed_s > 0.0 ? done / elapsed_s : 0.0;
     const double left_s = rate > 0.0 ? (total - done) / rate : 0.0;
+    if (!terminal_) {
+      if (time - last_line_ < interval_s_ || done >= total) return;
+      last_line_ = time;
+      std::fprintf(stderr, "glaswave: %lld/%lld %s, %.1f %s/s, %.0f s left\n",
+                   static_cast<long long>(done), static_cast<long long>(total), unit_, rate, unit_,
+                   left_s);
+      std::fflush(stderr);
+      return;
+    }
     constexpr int width = 30;
     const int filled = static_cast<int>(width * done / std::max<std::int64_t>(total, 1));
     std::fprintf(stderr, "\r[%s%s] %lld/%lld %s  %.1f %s/s  %.0f s left ",
@@ -111,9 +165,12 @@ class ProgressBar {
         .count();
   }
   bool enabled_;
+  bool terminal_;
+  double interval_s_;
   const char* unit_;
   bool drawn_ = false;
   double started_;
+  double last_line_;
 };
 
 // An element as --debug-ray prints it, in one word: ground, trunk/foliage=K,
@@ -129,7 +186,7 @@ std::string element_word(const RayEvent& event) {
 // Warnings go to stderr, one line each, as errors do.
 void print_warnings(const std::vector<std::string>& warnings) {
   for (const std::string& warning : warnings)
-    std::fprintf(stderr, "glaswave: warning: %s\n", warning.c_str());
+    std::fprintf(stderr, "glaswave: warning: %s\n", one_line(warning).c_str());
 }
 
 // --debug-ray SHOT:RAY: one line per event on stdout, columns as README.md describes them.
@@ -179,8 +236,8 @@ int run(const Arguments& arguments, const std::string& command_line) {
 
   RunSummary summary;
   {
-    ProgressBar bar(!arguments.quiet);
-    summary = run_simulation(config, request, std::ref(bar));
+    Progress progress(!arguments.quiet, arguments.progress_interval_s);
+    summary = run_simulation(config, request, std::ref(progress));
   }
   print_warnings(summary.warnings);
   // Plots are drawn from the finished products; a failure there leaves the products whole.
@@ -246,8 +303,8 @@ int sweep(const Arguments& arguments, const std::vector<std::string>& variations
           : std::filesystem::path(arguments.out_dir);
   request.threads = arguments.threads;
   {
-    ProgressBar bar(!arguments.quiet);
-    run_sweep(request, std::ref(bar));
+    Progress progress(!arguments.quiet, arguments.progress_interval_s);
+    run_sweep(request, std::ref(progress));
   }
   std::printf("glaswave: sensitivity.csv and sensitivity.md in %s\n",
               request.out_dir.string().c_str());
@@ -266,7 +323,7 @@ int brf(const Arguments& arguments) {
           : std::filesystem::path(arguments.out_dir);
   BrfSummary summary;
   {
-    ProgressBar bar(!arguments.quiet, "photons");
+    Progress bar(!arguments.quiet, arguments.progress_interval_s, "photons");
     summary = run_brf(config, request, std::ref(bar));
   }
   for (const auto& band : summary.document["bands"]) {
@@ -299,6 +356,7 @@ class Commands {
 
   // Runs the command the line chose.
   int dispatch(const std::string& command_line) {
+    read_given();
     if (*brf_) return brf(arguments_);
     if (*run_) return run(arguments_, command_line);
     if (*sweep_) return sweep(arguments_, variations_);
@@ -313,32 +371,47 @@ class Commands {
                         "override a configuration key: KEY=VALUE (dotted KEY)");
   }
   void add_threads(CLI::App* command) {
-    command
-        ->add_option("--threads", arguments_.threads, "threads (0: every core; at most the cores)")
-        ->check(CLI::Range(0, 65536));
+    given_.push_back(command->add_option("--threads", arguments_.threads_text,
+                                         "threads (0: every core; at most the cores)"));
+  }
+
+  // Options given empty are refused rather than taken as absent; numbers are read as decimal.
+  void read_given() {
+    for (const CLI::Option* option : given_) {
+      if (option->count() == 0) continue;
+      const std::string name = option->get_name();
+      for (const std::string& value : option->as<std::vector<std::string>>())
+        if (value.empty()) throw config_error(name, "must not be empty");
+      if (name == "--threads")
+        arguments_.threads =
+            static_cast<int>(decimal_option(arguments_.threads_text, "--threads", max_threads));
+      if (name == "--seed")
+        arguments_.seed = decimal_option(arguments_.seed_text, "--seed",
+                                         std::numeric_limits<std::uint64_t>::max());
+    }
   }
 
   void add_run() {
     run_ = app_.add_subcommand("run", "simulate the track's shots and write the products");
     add_config(run_, true);
-    run_->add_option("--out", arguments_.out_dir, "output directory (default out/<config name>)");
+    given_.push_back(run_->add_option("--out", arguments_.out_dir,
+                                      "output directory (default out/<config name>)"));
     add_threads(run_);
-    run_->add_option("--shots", arguments_.shots, "simulate shot numbers A to B-1 only (A:B)");
-    run_->add_option("--seed", arguments_.seed, "random seed (overrides the configuration's)")
-        ->check(CLI::Validator(
-            [](std::string& text) {
-              // An unsigned option would take -1 as 2^64 - 1.
-              return text.rfind('-', 0) == 0 ? "must be a non-negative integer, got " + text
-                                             : std::string();
-            },
-            "UINT"));
+    given_.push_back(
+        run_->add_option("--shots", arguments_.shots, "simulate shot numbers A to B-1 only (A:B)"));
+    given_.push_back(run_->add_option("--seed", arguments_.seed_text,
+                                      "random seed (overrides the configuration's)"));
     run_->add_flag("--resume", arguments_.resume, "finish an interrupted run");
-    run_->add_flag("--quiet", arguments_.quiet, "no progress bar");
+    run_->add_flag("--quiet", arguments_.quiet, "no progress bar (nor progress lines)");
+    run_->add_option("--progress-interval", arguments_.progress_interval_s)
+        ->check(CLI::Range(0.0, 3600.0))
+        ->group("");
     run_->add_flag("--json", arguments_.json,
                    "print the summary as one JSON object on stdout instead of the summary line");
-    run_->add_option("--debug-ray", arguments_.debug_ray,
-                     "re-run ray RAY of shot SHOT alone and print its events, one a line; "
-                     "writes no products (SHOT:RAY)");
+    given_.push_back(
+        run_->add_option("--debug-ray", arguments_.debug_ray,
+                         "re-run ray RAY of shot SHOT alone and print its events, one a line; "
+                         "writes no products (SHOT:RAY)"));
   }
 
   void add_check() {
@@ -355,8 +428,8 @@ class Commands {
         "sweep", "sensitivity study: the base case and each varied value, one key at a time");
     add_config(sweep_, true);
     sweep_->add_option("--vary", variations_, "a key and its values: KEY=V1,V2,...")->required();
-    sweep_->add_option("--out", arguments_.out_dir,
-                       "output directory (default out/<config name>-sweep)");
+    given_.push_back(sweep_->add_option("--out", arguments_.out_dir,
+                                        "output directory (default out/<config name>-sweep)"));
     add_threads(sweep_);
     sweep_->add_flag("--quiet", arguments_.quiet, "no progress bar");
   }
@@ -365,8 +438,8 @@ class Commands {
     brf_ = app_.add_subcommand(
         "brf", "scene reflectance under the sun (FLIGHT's mode): brf.json and scene.tif");
     add_config(brf_, true);
-    brf_->add_option("--out", arguments_.out_dir,
-                     "output directory (default out/<config name>-brf)");
+    given_.push_back(brf_->add_option("--out", arguments_.out_dir,
+                                      "output directory (default out/<config name>-brf)"));
     add_threads(brf_);
     brf_->add_flag("--quiet", arguments_.quiet, "no progress bar");
   }
@@ -378,6 +451,8 @@ class Commands {
   CLI::App* check_ = nullptr;
   CLI::App* sweep_ = nullptr;
   CLI::App* brf_ = nullptr;
+  std::vector<CLI::Option*> given_;  // options refused when given empty
+  static constexpr std::uint64_t max_threads = 65536;
 };
 
 }  // namespace
@@ -393,16 +468,21 @@ int run_command_line(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    std::fprintf(stderr, "glaswave: error: %s (see glaswave --help)\n", e.what());
+    std::fprintf(stderr, "glaswave: error: %s (see glaswave --help)\n", one_line(e.what()).c_str());
     return 2;
   }
   try {
     return commands.dispatch(joined(argc, argv));
   } catch (const Error& e) {
-    std::fprintf(stderr, "glaswave: error: %s\n", e.what());
+    std::fprintf(stderr, "glaswave: error: %s\n", one_line(e.what()).c_str());
     return e.exit_status();
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "glaswave: error: out of memory; the configuration's limits (README, "
+                 "\"Limits\") assume the machine's memory is free\n");
+    return static_cast<int>(ErrorKind::run);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "glaswave: error: %s\n", e.what());
+    std::fprintf(stderr, "glaswave: error: %s\n", one_line(e.what()).c_str());
     return static_cast<int>(ErrorKind::run);
   }
 }

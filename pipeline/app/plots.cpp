@@ -1,5 +1,6 @@
 // write_plots: runs the matplotlib script as a child process (posix_spawn with an argument
-// vector, so no shell sees the paths) and turns its failure, with its stderr, into an Error.
+// vector, so no shell sees the paths) and turns its failure into a one-line Error, the whole of
+// its stderr in plots.log.
 #include "pipeline/app/plots.hpp"
 
 #include <fcntl.h>
@@ -9,6 +10,7 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <fstream>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -24,6 +26,8 @@ namespace fs = std::filesystem;
 
 // Enough of a Python traceback to see where it failed, without flooding the message.
 constexpr std::size_t kMaxStderrChars = 4000;
+// The part of it in the one-line message.
+constexpr std::size_t kMaxMessageChars = 300;
 
 std::string describe_errno(int error) { return std::generic_category().message(error); }
 
@@ -153,9 +157,20 @@ void write_plots(const fs::path& out_dir) {
   const std::string how = WIFEXITED(status)
                               ? "exited with status " + std::to_string(WEXITSTATUS(status))
                               : "was killed by signal " + std::to_string(WTERMSIG(status));
-  const std::string message = trimmed(std::move(errors));
-  throw run_error("plots",
-                  script.filename().string() + " " + how + (message.empty() ? "" : ": " + message));
+  // The message is one line: the script's last line (a traceback ends with the exception);
+  // the whole of its output goes to plots.log beside the products.
+  const std::string message = trimmed(errors);
+  std::string last = message.substr(message.find_last_of('\n') + 1);
+  if (last.size() > kMaxMessageChars) last = last.substr(0, kMaxMessageChars) + "...";
+  std::string log_note;
+  if (!message.empty() && message.find('\n') != std::string::npos) {
+    const fs::path log = out_dir / "plots.log";
+    std::ofstream out(log, std::ios::binary);
+    out << message << '\n';
+    if (out) log_note = " (its whole output in " + log.string() + ")";
+  }
+  throw run_error("plots", script.filename().string() + " " + how +
+                               (last.empty() ? "" : ": " + last) + log_note);
 }
 
 }  // namespace glaswave

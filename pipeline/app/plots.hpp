@@ -12,7 +12,8 @@ namespace glaswave {
 // variable GLASWAVE_SHARE when set and non-empty, else the source tree's share/ folder
 // (GLASWAVE_SHARE_DIR, fixed at build time). Python is /usr/bin/python3 when it exists (the
 // one that has Debian's matplotlib), else python3 on PATH. Throws Error (run, place "plots")
-// with the script's stderr when the script cannot be started or fails.
+// when the script cannot be started or fails: one line, the last of the script's stderr, the
+// whole of it in out_dir/plots.log.
 void write_plots(const std::filesystem::path& out_dir);
 
 }  // namespace glaswave

@@ -2,18 +2,26 @@
 // range next to the member it sets (PDAL style), presets expanded, every error at its JSON path.
 #include "pipeline/config/config.hpp"
 
+#include <sched.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
 #include <system_error>
+#include <thread>
 #include <vector>
 
 #include "core/error.hpp"
 #include "core/names.hpp"
+#include "footprints/ephemeris.hpp"
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/keys.hpp"
@@ -27,6 +35,9 @@ using nlohmann::json;
 namespace {
 
 constexpr double wgs84_equatorial_radius_m = 6378137.0;
+// A configuration of a million `points` takes about 50 MB; nlohmann-json holds about ten times
+// the text's size.
+constexpr std::uintmax_t max_config_bytes = std::uintmax_t{256} << 20;
 
 // ---- numbers nlohmann-json refuses ---------------------------------------------------------
 
@@ -512,6 +523,12 @@ void read_orbit(JsonReader& r, TrackSettings& t, const std::string& start_time) 
       r.fail("eccentricity", "puts the perigee (" + format_number(perigee_m) +
                                  " m from the Earth's centre) inside the Earth");
     }
+    const double apogee_height_m =
+        o.semi_major_axis_m * (1.0 + o.eccentricity) - wgs84_equatorial_radius_m;
+    if (apogee_height_m > run_limits::altitude_m)
+      r.fail("eccentricity", "puts the apogee " + format_number(apogee_height_m) +
+                                 " m high, above the limit of " +
+                                 format_number(run_limits::altitude_m) + " m");
   }
 }
 
@@ -671,12 +688,22 @@ json read_json_file(const std::filesystem::path& file) {
     throw config_error(file.string(),
                        "cannot read: " + std::generic_category().message(errno ? errno : ENOENT));
   }
+  // A device or a pipe (/dev/zero) would be read for ever; a configuration is a file, and a
+  // small one.
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw config_error(file.string(), "cannot read: not a regular file");
+  if (std::filesystem::file_size(file, ec) > max_config_bytes)
+    throw config_error(file.string(), "is larger than the limit of " +
+                                          std::to_string(max_config_bytes >> 20) +
+                                          " MiB for a configuration");
   std::ostringstream buffer;
   buffer << in.rdbuf();
   if (in.bad()) throw config_error(file.string(), "cannot read: input/output error");
   const std::string text = buffer.str();
   try {
-    return json::parse(text);
+    return parse_json_checked(text);
+  } catch (const Error& e) {
+    throw config_error(e.place(), e.message() + " (" + file.string() + ")");
   } catch (const json::parse_error& e) {
     // nlohmann-json's own "line 3, column 0" goes astray when the bad token ends a line, so the
     // place is counted here from the byte offset, which is exact: the last byte it read.
@@ -690,6 +717,16 @@ json read_json_file(const std::filesystem::path& file) {
     const auto at = cause.find("parse error");
     const auto colon = cause.find(": ", at == std::string::npos ? 0 : at);
     if (colon != std::string::npos) cause = cause.substr(colon + 2);
+    // nlohmann-json quotes what it last read, which may be a whole line of a file of another
+    // kind: a few characters are enough to find the place.
+    const auto last_read = cause.find("; last read: '");
+    if (last_read != std::string::npos) {
+      const std::size_t begin = last_read + 14;
+      const std::size_t end = cause.rfind('\'');
+      std::string excerpt = cause.substr(begin, end > begin ? end - begin : 0);
+      if (excerpt.size() > 12) excerpt = "..." + excerpt.substr(excerpt.size() - 12);
+      cause = cause.substr(0, begin) + excerpt + "'";
+    }
     for (char& c : cause)
       if (c == '\n' || c == '\r') c = ' ';
     throw config_error(file.string(), "malformed JSON at line " + std::to_string(line) +
@@ -725,7 +762,9 @@ void apply_override(json& document, const std::string& assignment) {
 
   json value;
   try {
-    value = json::parse(text);
+    value = parse_json_checked(text, dotted_to_pointer(parts));
+  } catch (const Error& e) {
+    throw config_error(e.place(), e.message() + " (from --set " + key + ")");
   } catch (const json::parse_error&) {
     value = text;  // not JSON: a bare string such as a path or a name
   } catch (const json::out_of_range&) {
@@ -792,7 +831,114 @@ Config parse_config(const json& document) {
   return c;
 }
 
+namespace {
+
+// The highest the spacecraft flies: the track's altitude, an orbit's apogee, an ephemeris's
+// highest row. An ephemeris that cannot be read is left to the track, which names its fault.
+double highest_spacecraft_m(const Config& c) {
+  const TrackSettings& t = c.track;
+  if (t.type == TrackType::orbit)
+    return t.orbit.semi_major_axis_m * (1.0 + t.orbit.eccentricity) - wgs84_equatorial_radius_m;
+  if (t.type != TrackType::ephemeris || t.ephemeris.empty()) return t.altitude_m;
+  double height_m = 0.0;
+  try {
+    for (const EphemerisRow& row : read_ephemeris(t.ephemeris))
+      height_m = std::max(height_m, geodetic_from_ecef(row.spacecraft_ecef).h_m);
+  } catch (const Error&) {
+    return t.altitude_m;
+  }
+  return height_m;
+}
+
+// Trees a square metre: randomly placed crowns of cover c and radius r are -ln(1 - c) / (pi r^2)
+// a square metre; a layer or a crowns file has none at random.
+double tree_density_m2(const CanopySettings& canopy) {
+  if (canopy.crown_shape == CrownShape::layer || !canopy.crowns_file.empty()) return 0.0;
+  return -std::log1p(-canopy.cover) /
+         (std::numbers::pi * canopy.crown_radius_m * canopy.crown_radius_m);
+}
+
+// The cores this process may run on: a run's threads unless --threads says fewer.
+int usable_cores() {
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
+// The memory this process may have: the machine's, or less under a cgroup's limit or ulimit -v.
+double available_memory_bytes() {
+  double bytes = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+  std::ifstream cgroup("/sys/fs/cgroup/memory.max");
+  std::string limit;
+  if (cgroup >> limit && limit != "max") {
+    double value = 0.0;
+    const auto [end, error] = std::from_chars(limit.data(), limit.data() + limit.size(), value);
+    if (error == std::errc() && value > 0.0) bytes = std::min(bytes, value);
+  }
+  rlimit address_space{};
+  if (getrlimit(RLIMIT_AS, &address_space) == 0 && address_space.rlim_cur != RLIM_INFINITY)
+    bytes = std::min(bytes, static_cast<double>(address_space.rlim_cur));
+  return bytes;
+}
+
+std::string gibibytes(double bytes) {
+  return format_number(std::round(bytes / 1073741824.0 * 10) / 10) + " GiB";
+}
+
+}  // namespace
+
+RunMemory estimate_run_memory(const Config& c) {
+  RunMemory m;
+  // The patch a shot's rays reach (pipeline/engine/shot_simulation.cpp): 1.2 times the reach of
+  // the field of view's edge at the range, longer along a sloped plane, with 100 m for the
+  // light that wanders through vegetation.
+  const double pi = std::numbers::pi;
+  const double range_m = highest_spacecraft_m(c) / std::cos(c.track.off_nadir_deg * pi / 180.0);
+  const double slope_deg = c.terrain.plane ? std::min(c.terrain.plane->slope_deg, 85.0) : 0.0;
+  m.scene_half_size_m =
+      1.2 * range_m * std::tan(0.5 * c.sensor.ifov_rad) / std::cos(slope_deg * pi / 180.0) + 2.0 +
+      (c.canopy ? 100.0 : 0.0);
+  double density = 0.0;
+  if (c.canopy) {
+    density = tree_density_m2(*c.canopy);
+    for (const StandArea& stand : c.canopy->stand_areas)
+      density = std::max(density, tree_density_m2(stand.canopy));
+  }
+  const double side_m = 2.0 * m.scene_half_size_m;
+  m.trees = density * side_m * side_m;
+  m.scene_bytes = m.trees * run_limits::tree_bytes;
+  m.waveform_bytes = shot_size(c).bytes * run_limits::waveform_copies;
+  m.threads = usable_cores();
+  m.bytes = m.threads * (m.scene_bytes + m.waveform_bytes);
+  m.available_bytes = available_memory_bytes();
+  // The key to change: the crowns when they are many on a scene of a usual size, the waveforms
+  // when they weigh most, else what makes the scene wide.
+  if (m.waveform_bytes > m.scene_bytes)
+    m.place = "/sensor/bins";
+  else if (m.scene_half_size_m < 1000.0)
+    m.place = "/canopy/crown_radius_m";
+  else if (range_m > 2.0e6)
+    m.place = c.track.type == TrackType::orbit       ? "/track/semi_major_axis_m"
+              : c.track.type == TrackType::ephemeris ? "/track/ephemeris"
+                                                     : "/track/altitude_m";
+  else
+    m.place = "/sensor/ifov_rad";
+  return m;
+}
+
 void check_run(const Config& config) {
+  const RunMemory memory = estimate_run_memory(config);
+  if (memory.bytes > memory.available_bytes) {
+    std::ostringstream why;
+    why << "a run would hold about " << gibibytes(memory.bytes) << " (" << memory.threads
+        << " threads x a shot's scene of " << format_number(std::round(memory.trees))
+        << " trees over " << format_number(std::round(2.0 * memory.scene_half_size_m))
+        << " m across, at " << format_number(run_limits::tree_bytes / 1024.0)
+        << " KiB a tree, and its waveforms' " << mebibytes(memory.waveform_bytes)
+        << "), more than the " << gibibytes(memory.available_bytes)
+        << " of memory this process may have";
+    throw config_error(memory.place, why.str());
+  }
   const OutputSettings& o = config.output;
   if (!o.netcdf && !o.geojson)
     throw config_error("/output",
@@ -822,6 +968,13 @@ std::vector<StandArea> read_stands(const std::string& path, const json& scene_ca
     const std::string& where = feature.name;
     StandArea area;
     area.rings = std::move(feature.rings);
+    // A stand overrides the scene's canopy inside it: its own stands or crowns would be
+    // silently ignored.
+    for (const char* key : {"stands", "crowns_file"})
+      if (feature.properties.contains(key))
+        throw input_error(path, where + ": property " + key +
+                                    " cannot be set by a stand (the scene's canopy has one " + key +
+                                    " for all of it)");
     json canopy = scene_canopy;
     canopy.erase("stands");
     canopy.erase("crowns_file");

@@ -6,8 +6,10 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <stdexcept>
+#include <unordered_set>
 
 #include "core/error.hpp"
 #include "core/names.hpp"
@@ -27,6 +29,82 @@ std::string json_pointer_child(const std::string& path, const std::string& key) 
       escaped += c;
   }
   return path + "/" + escaped;
+}
+
+namespace {
+
+// What a parse has opened and not yet closed: one frame an object or array, with the keys an
+// object gave so far and the index an array has reached.
+class NestingCheck {
+ public:
+  explicit NestingCheck(std::string prefix) : prefix_(std::move(prefix)) {}
+
+  bool operator()(int /*depth*/, json::parse_event_t event, json& parsed) {
+    using event_t = json::parse_event_t;
+    switch (event) {
+      case event_t::object_start:
+      case event_t::array_start:
+        // The place named is the outermost levels only: the message stays one short line.
+        if (stack_.size() >= max_json_depth)
+          throw config_error(pointer(3) + "/...", "nests deeper than " +
+                                                      std::to_string(max_json_depth) +
+                                                      " levels of objects and arrays");
+        stack_.push_back({event == event_t::object_start, false, "", 0, {}});
+        break;
+      case event_t::key: {
+        Frame& frame = stack_.back();
+        frame.key = parsed.get<std::string>();
+        frame.keyed = true;
+        if (!frame.keys.insert(frame.key).second)
+          throw config_error(pointer(stack_.size()),
+                             "duplicate key: the object gives \"" + frame.key + "\" twice");
+        break;
+      }
+      case event_t::object_end:
+      case event_t::array_end:
+        stack_.pop_back();
+        element_done();
+        break;
+      case event_t::value:
+        element_done();
+        break;
+    }
+    return true;
+  }
+
+ private:
+  struct Frame {
+    bool object;
+    bool keyed;  // an object: whether a key was read
+    std::string key;
+    std::size_t index;
+    std::unordered_set<std::string> keys;
+  };
+
+  void element_done() {
+    if (!stack_.empty() && !stack_.back().object) ++stack_.back().index;
+  }
+
+  // The JSON pointer of the value being read, through its outermost `levels` levels.
+  std::string pointer(std::size_t levels) const {
+    std::string p = prefix_;
+    for (std::size_t i = 0; i < std::min(levels, stack_.size()); ++i) {
+      const Frame& f = stack_[i];
+      if (f.object && !f.keyed) break;
+      p = f.object ? json_pointer_child(p, f.key) : p + "/" + std::to_string(f.index);
+    }
+    return p;
+  }
+
+  std::string prefix_;
+  std::vector<Frame> stack_;
+};
+
+}  // namespace
+
+json parse_json_checked(const std::string& text, const std::string& prefix) {
+  NestingCheck check(prefix);
+  return json::parse(text, std::ref(check));
 }
 
 std::string describe(const json& value) {

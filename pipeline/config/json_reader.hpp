@@ -17,6 +17,17 @@
 
 namespace glaswave {
 
+// How deep objects and arrays may nest in JSON text the program reads (a configuration, a --set
+// value, a stand's field): the deepest key of a configuration is 4 levels down, and
+// nlohmann-json's serializer and copies recurse, so a deeper value would overflow the stack.
+inline constexpr std::size_t max_json_depth = 64;
+
+// Parses JSON text as nlohmann-json does, and also refuses, before anything recurses, nesting
+// deeper than max_json_depth and an object that gives a key twice: a config_error at the JSON
+// pointer of the place (under `prefix`), "nests deeper than 64 levels" or "duplicate key".
+// Malformed text throws nlohmann-json's parse_error, a number that overflows its out_of_range.
+nlohmann::json parse_json_checked(const std::string& text, const std::string& prefix = "");
+
 // The JSON pointer of `key` inside the object at `path` ("/canopy" + "pai" -> "/canopy/pai"),
 // with '~' and '/' escaped as RFC 6901 asks.
 std::string json_pointer_child(const std::string& path, const std::string& key);

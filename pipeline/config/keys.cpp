@@ -208,10 +208,11 @@ Key sensor_keys() {
       {std::move(preset),
        number("pulse_sigma_ns", s.pulse_sigma_ns, above(0), "ns",
               "RMS width of the Gaussian pulse"),
-       number("divergence_sigma_rad", s.divergence_sigma_rad, above(0), "rad",
-              "beam angular RMS width per axis (intensity ∝ exp(−θ²/2σ²))"),
-       number("ifov_rad", s.ifov_rad, above(0), "rad",
-              "detector full field of view (top-hat cone)"),
+       number("divergence_sigma_rad", s.divergence_sigma_rad, open_closed(0, run_limits::angle_rad),
+              "rad", "beam angular RMS width per axis (intensity ∝ exp(−θ²/2σ²))"),
+       number("ifov_rad", s.ifov_rad, open_closed(0, run_limits::angle_rad), "rad",
+              "detector full field of view (top-hat cone); the scene a shot builds grows with "
+              "it (see Limits)"),
        number("telescope_area_m2", s.telescope_area_m2, above(0), "m²", "receiver aperture"),
        number("bin_ns", s.bin_ns, above(0), "ns", "width of a recording bin"),
        integer("bins", s.bins, 1, run_limits::waveform_bins, "",
@@ -239,7 +240,8 @@ Key simulation_keys() {
   return object("simulation", "the Monte Carlo transport",
                 {integer("rays_per_shot", s.rays_per_shot, 1, run_limits::rays_per_shot, "",
                          "Monte Carlo rays a shot (error falls as n^−1/2)"),
-                 integer("max_order", s.max_order, 1, int_max, "", "highest scattering order")});
+                 integer("max_order", s.max_order, 1, run_limits::max_order, "",
+                         "highest scattering order")});
 }
 
 Key terrain_keys() {
@@ -377,8 +379,8 @@ Key track_keys() {
               "spacing of shots along track; from the orbital ground speed and `rate_hz` when "
               "not given")
            .with_default_text("from speed"),
-       number("altitude_m", t.altitude_m, above(0), "m",
-              "spacecraft height above WGS84 (`pass`, `points`)"),
+       number("altitude_m", t.altitude_m, open_closed(0, run_limits::altitude_m), "m",
+              "spacecraft height above WGS84 (`pass`, `points`, `granule`)"),
        time("start_time", "2000-01-01T12:00:00Z", "ISO 8601 UTC time of shot 0"),
        number("off_nadir_deg", t.off_nadir_deg, half_open(0, 45), "deg",
               "beam tilted from geodetic nadir, for every type; a track none of whose shots "
@@ -390,7 +392,10 @@ Key track_keys() {
            {number("lat_deg", std::nullopt, closed(-90, 90), "deg", "latitude").with_required(),
             number("lon_deg", std::nullopt, closed(-180, 360), "deg", "longitude").with_required()})
            .with_items(1, run_limits::track_shots),
-       number("semi_major_axis_m", o.semi_major_axis_m, above(wgs84_equatorial_radius_m), "m",
+       number("semi_major_axis_m", o.semi_major_axis_m,
+              open_closed(wgs84_equatorial_radius_m,
+                          wgs84_equatorial_radius_m + run_limits::altitude_m),
+              "m",
               "`orbit`: mean elements at `epoch` in the true-equator mean-equinox frame (as "
               "two-line elements), propagated with the J2 secular drift of node, perigee and "
               "mean anomaly, turned Earth-fixed with GMST (UT1 taken as UTC)"),

@@ -9,9 +9,11 @@
 #include <ogrsf_frmts.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "core/error.hpp"
+#include "pipeline/config/json_reader.hpp"
 
 namespace glaswave {
 namespace {
@@ -76,8 +78,12 @@ json field_value(const OGRFeature& feature, int i) {
       const std::string text = feature.GetFieldAsString(i);
       const auto first = text.find_first_not_of(" \t\r\n");
       if (first != std::string::npos && (text[first] == '{' || text[first] == '[')) {
-        json parsed = json::parse(text, nullptr, false);
-        if (!parsed.is_discarded()) return parsed;
+        // Nesting and duplicate keys are checked before anything recurses (an Error); text that
+        // is not JSON stays text.
+        try {
+          return parse_json_checked(text, "");
+        } catch (const json::exception&) {
+        }
       }
       return text;
     }
@@ -97,6 +103,36 @@ bool lon_lat(const std::vector<Ring>& rings) {
     for (const auto& [x, y] : ring)
       if (!(std::abs(x) <= 180 && std::abs(y) <= 90)) return false;
   return true;
+}
+
+// A position brought to WGS84 that is not on the Earth: longitude outside [-180, 360] (the
+// configuration's range), latitude outside [-90, 90], or not finite. Empty when all are.
+std::string off_earth(const std::vector<Ring>& rings) {
+  for (const Ring& ring : rings)
+    for (const auto& [lon, lat] : ring)
+      if (!(lon >= -180.0 && lon <= 360.0 && lat >= -90.0 && lat <= 90.0)) {
+        char text[96];
+        std::snprintf(text, sizeof text, "longitude %.6g, latitude %.6g", lon, lat);
+        return text;
+      }
+  return "";
+}
+
+// The feature's attribute fields, as the JSON of the canopy keys they override; a field whose
+// JSON nests too deep or repeats a key is the file's fault, at the feature.
+json feature_properties(const OGRFeature& feature, const std::string& path,
+                        const std::string& name) {
+  json properties = json::object();
+  for (int i = 0; i < feature.GetFieldCount(); ++i) {
+    if (!feature.IsFieldSetAndNotNull(i)) continue;
+    const std::string field = feature.GetFieldDefnRef(i)->GetNameRef();
+    try {
+      properties[field] = field_value(feature, i);
+    } catch (const Error& e) {
+      throw input_error(path, name + ": property " + field + e.place() + ": " + e.message());
+    }
+  }
+  return properties;
 }
 
 }  // namespace
@@ -155,9 +191,11 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
         throw input_error(path, stand.name +
                                     ": the file has no CRS and its coordinates are not longitude "
                                     "and latitude: give the file a CRS (a .prj for a Shapefile)");
-      for (int i = 0; i < feature->GetFieldCount(); ++i)
-        if (feature->IsFieldSetAndNotNull(i))
-          stand.properties[feature->GetFieldDefnRef(i)->GetNameRef()] = field_value(*feature, i);
+      if (const std::string where = off_earth(stand.rings); !where.empty())
+        throw input_error(path, stand.name + ": a position is not on the Earth (" + where +
+                                    " in WGS84): longitude must be in [-180, 360], latitude in "
+                                    "[-90, 90]");
+      stand.properties = feature_properties(*feature, path, stand.name);
       features.push_back(std::move(stand));
     }
   }

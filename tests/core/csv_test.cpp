@@ -67,5 +67,40 @@ TEST(CsvReader, SkipsBlankAndCommentLinesAndNamesTheLineOfAnError) {
   }
 }
 
+// A device is read for ever and a line of megabytes is no CSV of ours: both refused before they
+// are held, naming the file (and line).
+TEST(CsvReader, RefusesDevicesAndOverlongLines) {
+  try {
+    CsvReader zero("/dev/zero", "the test file");
+    FAIL() << "/dev/zero was opened";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::input);
+    EXPECT_EQ(std::string(e.what()), "/dev/zero: cannot read the test file: not a regular file");
+  }
+  const test_support::ScratchDir dir("glaswave_csv_test");
+  const fs::path file = dir / "long.csv";
+  std::ofstream(file) << "x,y\n1,2\n" << std::string(CsvReader::max_line_bytes + 1, '7') << "\n";
+  CsvReader csv(file, "the test file");
+  std::vector<std::string_view> fields;
+  ASSERT_TRUE(csv.next_row(fields));
+  ASSERT_TRUE(csv.next_row(fields));
+  try {
+    csv.next_row(fields);
+    FAIL() << "an overlong line was read";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              file.string() + ":3: a line longer than 4096 bytes: not the test file (CSV text)");
+  }
+}
+
+TEST(FieldExcerpt, QuotesPlainShortFieldsOnly) {
+  EXPECT_EQ(field_excerpt("x_m"), "\"x_m\"");
+  EXPECT_EQ(field_excerpt("-1.5e3"), "\"-1.5e3\"");
+  EXPECT_EQ(field_excerpt("root:$6$abc"), "a field of 11 characters");
+  EXPECT_EQ(field_excerpt("\x1b[31m"), "a field of 5 characters");
+  EXPECT_EQ(field_excerpt(std::string(33, 'a')), "a field of 33 characters");
+  EXPECT_EQ(field_excerpt("2005-10-21T12:00:00Z", ":"), "\"2005-10-21T12:00:00Z\"");
+}
+
 }  // namespace
 }  // namespace glaswave

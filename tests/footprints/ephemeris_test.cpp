@@ -124,7 +124,7 @@ TEST_F(Ephemeris, ErrorsNameTheFileAndLine) {
       {"time,x_m,y_m,z_m\n2005-10-21T12:00:00," + good + "\n", path + ":2: time:"},
       {"time,x_m,y_m,z_m\n0," + good + ",5\n",
        path + ":2: expected 4 fields as in the header, got 5"},
-      {"time,x_m,y_m,z_m,px\n", path + ":1: unknown column \"px\""},
+      {"time,x_m,y_m,z_m,px\n", path + ":1: column 5 is not a column name (\"px\")"},
       {"time,x_m,y_m,z_m,pointing_x\n", path + ":1: the pointing vector needs all three columns"},
       {"time,x_m,y_m,z_m,time\n", path + ":1: column \"time\" appears twice"},
       {"time,x_m,y_m,z_m\n0,6978.137,0,0\n", path + ":2: the spacecraft position is"},

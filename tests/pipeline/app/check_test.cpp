@@ -68,7 +68,7 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
        "/output/per_order: a shot's waveforms would take"},
       {{{"simulation", {{"rays_per_shot", 1e13}}}},
        2,
-       "/simulation/rays_per_shot: must be <= 1000000000000"},
+       "/simulation/rays_per_shot: must be <= 1000000000"},
       {{{"terrain", {{"vertical_datum", "egm96"}}}},
        2,
        "/terrain/vertical_datum: applies to terrain.dem only"},

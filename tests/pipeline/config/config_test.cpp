@@ -462,7 +462,7 @@ TEST(Errors, OutOfRange) {
             "/brf/sun_zenith_deg: must be in [0, 90), got 90");
   EXPECT_EQ(error_of(doc(R"({"brf": {"photons": 0}})")), "/brf/photons: must be >= 1, got 0");
   EXPECT_EQ(error_of(doc(R"({"track": {"semi_major_axis_m": 6000000}})")),
-            "/track/semi_major_axis_m: must be > 6378137, got 6000000");
+            "/track/semi_major_axis_m: must be in (6378137, 46378137], got 6000000");
   EXPECT_EQ(error_of(doc(R"({"track": {"eccentricity": 1}})")),
             "/track/eccentricity: must be in [0, 1), got 1");
 }

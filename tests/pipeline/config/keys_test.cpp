@@ -333,7 +333,7 @@ TEST(RunSize, TheLimitIsInTheMessage) {
   EXPECT_EQ(error_of(doc(R"({"sensor": {"bins": 16777217}})")),
             "/sensor/bins: must be <= 16777216, got 16777217");
   EXPECT_EQ(error_of(doc(R"({"simulation": {"rays_per_shot": 1e13}})")),
-            "/simulation/rays_per_shot: must be <= 1000000000000, got 10000000000000.0");
+            "/simulation/rays_per_shot: must be <= 1000000000, got 10000000000000.0");
   EXPECT_EQ(error_of(doc(R"({"track": {"shots": 2e9}})")),
             "/track/shots: must be <= 1000000000, got 2000000000.0");
   json many = doc("{}");

@@ -1,0 +1,246 @@
+// Hostile and careless input end to end (issue 13): each ends `check` and `run` alike with its
+// exit status and one line naming the key or the file, no product, no escape code, and nothing
+// of a file of another kind echoed; and a run whose stderr is not a terminal reports its
+// progress as plain lines.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/scratch_dir.hpp"
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace test_support;
+
+class HostileInput : public ::testing::Test {
+ protected:
+  json base() const {
+    return {
+        {"sensor", {{"preset", "glas"}}},
+        {"simulation", {{"rays_per_shot", 100}}},
+        {"terrain", {{"plane", {{"origin_lat_deg", 46.0}, {"origin_lon_deg", 8.0}}}}},
+        {"canopy", nullptr},
+        {"track", {{"start_lat_deg", 46.0}, {"start_lon_deg", 8.0}, {"shots", 1}}},
+    };
+  }
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path file = dir_ / name;
+    std::ofstream(file) << text;
+    return file.string();
+  }
+  std::string write_config(const json& changes) {
+    json config = base();
+    config.merge_patch(changes);
+    return write("config.json", config.dump(2));
+  }
+  // A stands file of one square feature about the track's start, with `properties`, its
+  // corners shifted by `lon_shift_deg`.
+  std::string write_stand(const json& properties, double lon_shift_deg = 0.0) {
+    const double w = 7.99 + lon_shift_deg, e = 8.01 + lon_shift_deg;
+    const json feature = {
+        {"type", "Feature"},
+        {"properties", properties},
+        {"geometry",
+         {{"type", "Polygon"},
+          {"coordinates", {{{w, 45.99}, {e, 45.99}, {e, 46.01}, {w, 46.01}, {w, 45.99}}}}}}};
+    return write("stands.geojson",
+                 json{{"type", "FeatureCollection"}, {"features", {feature}}}.dump());
+  }
+
+  // check and run of `config` (with `options`) end alike: `status`, one line that starts with
+  // "glaswave: error: " + `message`, no escape code, and no output directory.
+  void expect_refused(const std::string& config, const std::string& options, int status,
+                      const std::string& message) {
+    const CommandOutcome check = run_glaswave("check " + config + " " + options);
+    const CommandOutcome run =
+        run_glaswave("run " + config + " --quiet --out " + out().string() + " " + options);
+    for (const CommandOutcome& outcome : {check, run}) {
+      EXPECT_EQ(outcome.status, status) << message << ": " << outcome.output;
+      EXPECT_EQ(outcome.output.rfind("glaswave: error: " + message, 0), 0u) << outcome.output;
+      EXPECT_EQ(std::count(outcome.output.begin(), outcome.output.end(), '\n'), 1)
+          << outcome.output;
+      EXPECT_EQ(outcome.output.find('\x1b'), std::string::npos) << outcome.output;
+    }
+    EXPECT_FALSE(fs::exists(out())) << message;
+  }
+  fs::path out() const { return dir_ / "out"; }
+
+  ScratchDir dir_{"glaswave_hostile"};
+};
+
+// Item 3: run sizes that cannot be physical or would not fit in memory, refused by check and
+// run before anything is allocated, the limit in the message.
+TEST_F(HostileInput, RunSizesBeyondTheLimitsAreRefusedByCheckAndRun) {
+  expect_refused(write_config({{"sensor", {{"bins", 100000000}}}}), "", 2,
+                 "/sensor/bins: must be <= 16777216, got 100000000");
+  expect_refused(write_config({{"sensor", {{"ifov_rad", 3}}}}), "", 2,
+                 "/sensor/ifov_rad: must be in (0, 0.05], got 3");
+  expect_refused(write_config({{"track", {{"altitude_m", 1e10}}}}), "", 2,
+                 "/track/altitude_m: must be in (0, 40000000]");
+  expect_refused(write_config({{"simulation", {{"rays_per_shot", 1000000000000}}}}), "", 2,
+                 "/simulation/rays_per_shot: must be <= 1000000000, got 1000000000000");
+  // A forest of 1 cm crowns under the glas footprint: about 1e9 trees a shot.
+  expect_refused(write_config({{"canopy", {{"crown_radius_m", 0.01}}}}), "", 2,
+                 "/canopy/crown_radius_m: a run would hold about");
+  expect_refused(write_config({{"output", {{"netcdf", false}, {"geojson", false}}}}), "", 2,
+                 "/output: nothing to write");
+}
+
+// Item 5: a value nested 100 000 levels deep under a known key, in the file or from --set.
+TEST_F(HostileInput, DeepNestingIsRefusedBeforeAnythingRecurses) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  for (const char* key : {"seed", "canopy"}) {
+    const std::string config = write("deep.json", "{\"" + std::string(key) + "\": " + deep + "}");
+    expect_refused(config, "", 2, "/" + std::string(key) + "/0/0/...: nests deeper than 64 levels");
+  }
+  const std::string points =
+      write("points.json", "{\"track\": {\"type\": \"points\", \"points\": " + deep + "}}");
+  expect_refused(points, "", 2, "/track/points/0/...: nests deeper than 64 levels");
+  // The command line has a limit of its own (128 KiB an argument): 60 000 levels.
+  const std::string set_deep = std::string(60000, '[') + std::string(60000, ']');
+  expect_refused(write_config(json::object()), "--set seed=" + set_deep, 2,
+                 "/seed/0/0/0/...: nests deeper than 64 levels");
+}
+
+// Item 7: the rest of the list, one by one.
+TEST_F(HostileInput, EachItemOfTheListGetsAClearError) {
+  expect_refused(write("dup.json", R"({"seed": 1, "canopy": {"pai": 1, "pai": 2}})"), "", 2,
+                 "/canopy/pai: duplicate key");
+  expect_refused(write_config({{"track",
+                                {{"type", "points"},
+                                 {"shots", nullptr},
+                                 {"points", {{{"lat_deg", 46}, {"lon_deg", 8}, {"name", "a"}}}}}}}),
+                 "", 2, "/track/points/0/name: unknown key \"name\"");
+  for (const char* key : {"crowns_file", "stands"}) {
+    const std::string stands = write_stand({{key, "other"}});
+    expect_refused(write_config({{"canopy", {{"stands", stands}}}}), "", 3,
+                   stands + ": feature 0: property " + key + " cannot be set by a stand");
+  }
+  const std::string far = write_stand({{"pai", 1}}, 492.0);
+  expect_refused(write_config({{"canopy", {{"stands", far}}}}), "", 3,
+                 far + ": feature 0: a position is not on the Earth (longitude 499.99");
+  const std::string crowns =
+      write("crowns.csv", "x,y,base_m,radius_m,half_height_m\n1e308,0,10,5,5\n");
+  expect_refused(write_config({{"canopy", {{"crowns_file", crowns}}}}), "", 3,
+                 crowns + ":2: x must be within 1000000 m of the plane's origin");
+  expect_refused(write_config({{"canopy", {{"crowns_file", "/dev/zero"}}}}), "", 3,
+                 "/dev/zero: cannot read the crowns file: not a regular file");
+  // A number in JSON is decimal: 0x10 is malformed JSON, from a file; a string from --set.
+  const std::string hex = write("hex.json", R"({"seed": 0x10})");
+  expect_refused(hex, "", 2, hex + ": malformed JSON at line 1");
+  expect_refused(write_config(json::object()), "--set seed=0x10", 2,
+                 "/seed: must be an integer, got \"0x10\"");
+  // An escape code in a key reaches stderr written out, not raw.
+  expect_refused(write_config({{"canopy", {{"p\x1b[31mai", 1}}}}), "", 2,
+                 "/canopy/p\\x1b[31mai: unknown key");
+}
+
+// Item 4: the ephemeris error names the file, line and what was expected, never the content of
+// a file of another kind (here a password-hash line).
+TEST_F(HostileInput, AFileOfAnotherKindIsNeverEchoed) {
+  const std::string secret = "root:$6$Zm9vYmFyYmF6$c2VjcmV0aGFzaHZhbHVl:19000:0:99999:7:::";
+  const std::string shadow = write("shadow", secret + "\n");
+  const std::string config =
+      write_config({{"track", {{"type", "ephemeris"}, {"ephemeris", shadow}}}});
+  expect_refused(config, "", 3, shadow + ":1: column 1 is not a column name");
+  const CommandOutcome check = run_glaswave("check " + config);
+  EXPECT_EQ(check.output.find("Zm9v"), std::string::npos) << check.output;
+  EXPECT_EQ(check.output.find("root"), std::string::npos) << check.output;
+  // Read as a configuration: the JSON error quotes a few characters at most.
+  const CommandOutcome as_json = run_glaswave("check " + shadow);
+  EXPECT_EQ(as_json.status, 2) << as_json.output;
+  EXPECT_EQ(as_json.output.find("Zm9v"), std::string::npos) << as_json.output;
+}
+
+// Item 7's command line: numbers are decimal and in range, and empty values are refused.
+TEST_F(HostileInput, CommandLineValuesAreCheckedNotDefaulted) {
+  const std::string config = write_config(json::object());
+  struct Case {
+    std::string options, message;
+  };
+  const std::vector<Case> cases = {
+      {"--seed 18446744073709551616",
+       "--seed: must be an integer in [0, 18446744073709551615], got 18446744073709551616"},
+      {"--seed 0x10", "--seed: must be an integer in [0, 18446744073709551615], got \"0x10\""},
+      {"--seed -1", "--seed: must be an integer in [0, 18446744073709551615], got \"-1\""},
+      {"--threads 0x10", "--threads: must be an integer in [0, 65536], got \"0x10\""},
+      {"--seed \"\"", "--seed: must not be empty"},
+      {"--shots \"\"", "--shots: must not be empty"},
+      {"--shots 0x1:2", "--shots: expected A:B"},
+  };
+  for (const Case& c : cases) {
+    const CommandOutcome run =
+        run_glaswave("run " + config + " --quiet --out " + out().string() + " " + c.options);
+    EXPECT_EQ(run.status, 2) << c.options << ": " << run.output;
+    EXPECT_EQ(run.output.rfind("glaswave: error: " + c.message, 0), 0u) << run.output;
+    EXPECT_EQ(std::count(run.output.begin(), run.output.end(), '\n'), 1) << run.output;
+    EXPECT_FALSE(fs::exists(out())) << c.options;
+  }
+  // --out "" is not "out/config".
+  const fs::path here = fs::current_path();
+  fs::current_path(dir_.path());
+  const CommandOutcome run = run_glaswave("run " + config + " --quiet --out \"\"");
+  fs::current_path(here);
+  EXPECT_EQ(run.status, 2) << run.output;
+  EXPECT_EQ(run.output, "glaswave: error: --out: must not be empty\n");
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// Progress on a stderr that is not a terminal: plain lines (shots done/total, shots/s, time
+// left), no carriage return, no escape code.
+TEST_F(HostileInput, ProgressOnANonTerminalIsPlainLines) {
+  const std::string config = write_config({{"track", {{"shots", 24}}}});
+  const CommandOutcome run =
+      run_glaswave("run " + config + " --threads 1 --progress-interval 0 --out " + out().string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_EQ(run.output.find('\r'), std::string::npos) << run.output;
+  EXPECT_EQ(run.output.find('\x1b'), std::string::npos) << run.output;
+  // Batches of 8 shots on one thread: after 8 and 16 of 24.
+  EXPECT_NE(run.output.find("glaswave: 8/24 shots, "), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("glaswave: 16/24 shots, "), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find(" shots/s, "), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find(" s left\n"), std::string::npos) << run.output;
+}
+
+// A plot script that fails with a traceback: one line, the traceback in plots.log.
+TEST_F(HostileInput, APlotErrorIsOneLineAndItsDetailALogFile) {
+  const fs::path share = dir_ / "share";
+  fs::create_directories(share / "plots");
+  std::ofstream(share / "plots" / "plot_products.py")
+      << "import sys\nprint('Traceback (most recent call last):', file=sys.stderr)\n"
+         "print('  File \"x.py\", line 1', file=sys.stderr)\n"
+         "print('ValueError: no plot today', file=sys.stderr)\nsys.exit(1)\n";
+  const std::string config = write_config({{"output", {{"plots", true}}}});
+  const std::string command = "GLASWAVE_SHARE=" + share.string() + " " +
+                              std::string(GLASWAVE_BINARY) + " run " + config + " --quiet --out " +
+                              out().string() + " 2>&1 >/dev/null";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  const int status = pclose(pipe);
+  EXPECT_EQ(WEXITSTATUS(status), 4) << output;
+  EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 1) << output;
+  EXPECT_NE(output.find("plot_products.py exited with status 1: ValueError: no plot today"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find((out() / "plots.log").string()), std::string::npos) << output;
+  std::ifstream log(out() / "plots.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("Traceback"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace glaswave
