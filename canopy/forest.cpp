@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <string>
 
@@ -17,31 +18,20 @@ namespace {
 
 constexpr double metres_per_degree = metres_per_degree_latitude;  // ample for a search radius
 
-// Even-odd rule over all rings.
-bool inside(const StandArea& area, double lon_deg, double lat_deg) {
-  bool in = false;
-  for (const auto& ring : area.rings) {
-    for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-      const auto& a = ring[i];
-      const auto& b = ring[j];
-      if ((a[1] > lat_deg) != (b[1] > lat_deg) &&
-          lon_deg < (b[0] - a[0]) * (lat_deg - a[1]) / (b[1] - a[1]) + a[0])
-        in = !in;
-    }
-  }
-  return in;
-}
-
 }  // namespace
 
 Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
                const std::optional<PlaneSettings>& plane)
-    : areas_(canopy.stand_areas) {
+    : areas_(std::make_shared<StandIndex>(canopy.stand_areas)) {
   std::vector<const CanopySettings*> settings{&canopy};
   for (const StandArea& area : canopy.stand_areas) settings.push_back(&area.canopy);
+  // Tabulating a distribution takes milliseconds: thousands of stands share a few.
+  std::map<std::pair<LeafAngleDistribution, double>, std::shared_ptr<const LeafAngles>> tables;
   for (std::size_t k = 0; k < settings.size(); ++k) {
     const CanopySettings& s = *settings[k];
-    Kind kind{s, LeafAngles(s.lad, s.lad_mean_deg), std::nullopt, {}, 0.0};
+    auto& table = tables[{s.lad, s.lad_mean_deg}];
+    if (!table) table = std::make_shared<const LeafAngles>(s.lad, s.lad_mean_deg);
+    Kind kind{s, table, std::nullopt, {}, 0.0};
     kind.settings.stand_areas.clear();
     if (s.crown_shape == CrownShape::layer) {
       if (!canopy.stand_areas.empty())
@@ -77,19 +67,29 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
 }
 
 int Forest::kind_at(double lat_deg, double lon_deg) const {
-  // Later stands lie over earlier ones.
-  for (std::size_t k = areas_.size(); k-- > 0;)
-    if (inside(areas_[k], lon_deg, lat_deg)) return static_cast<int>(k + 1);
-  return 0;
+  return areas_->area_at(lon_deg, lat_deg);
 }
 
 std::vector<Tree> Forest::trees_near(double lat_deg, double lon_deg, double radius_m) const {
   std::vector<Tree> trees;
+  // A stand's trees come only from the tiles trees_near visits, and grow only inside its
+  // polygons: stands whose boxes miss those tiles give none.
+  std::vector<bool> near(kinds_.size(), true);
+  if (areas_->size() > 0) {
+    const TileBox box = stand_tiles_near(lat_deg, lon_deg, radius_m);
+    std::fill(near.begin() + 1, near.end(), false);
+    for (int area : areas_->areas_meeting(box.lon0_deg, box.lat0_deg, box.lon1_deg, box.lat1_deg))
+      near[area + 1] = true;
+  }
   for (std::size_t k = 0; k < kinds_.size(); ++k) {
     const Kind& kind = kinds_[k];
-    if (kind.settings.crown_shape == CrownShape::layer) continue;
+    if (kind.settings.crown_shape == CrownShape::layer || !near[k]) continue;
+    // A stand's trees only from the tiles that meet its box.
+    const std::optional<TileBox> box =
+        k > 0 ? std::optional<TileBox>(areas_->box(static_cast<int>(k) - 1)) : std::nullopt;
     std::vector<Tree> candidates =
-        kind.stand ? kind.stand->trees_near(lat_deg, lon_deg, radius_m) : std::vector<Tree>{};
+        kind.stand ? kind.stand->trees_near(lat_deg, lon_deg, radius_m, box ? &*box : nullptr)
+                   : std::vector<Tree>{};
     for (const Tree& tree : kind.explicit_trees) {
       const double north_m = (tree.lat_deg - lat_deg) * metres_per_degree;
       const double east_m = (tree.lon_deg - lon_deg) * metres_per_degree *

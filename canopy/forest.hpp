@@ -5,11 +5,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "canopy/leaf_angles.hpp"
 #include "canopy/stand.hpp"
+#include "canopy/stand_index.hpp"
 #include "terrain/terrain_settings.hpp"
 
 namespace glaswave {
@@ -23,11 +25,13 @@ class Forest {
 
   std::size_t kinds() const { return kinds_.size(); }
   const CanopySettings& canopy(int kind) const { return kinds_[kind].settings; }
-  const LeafAngles& leaf_angles(int kind) const { return kinds_[kind].leaf_angles; }
+  // Kinds with the same leaf angle distribution share one (the same object).
+  const LeafAngles& leaf_angles(int kind) const { return *kinds_[kind].leaf_angles; }
   // Plant area per unit crown volume of a kind's crowns.
   double area_density_m2_m3(int kind) const { return kinds_[kind].area_density_m2_m3; }
 
-  // The kind of canopy at a point: the stand whose polygons hold it, else 0.
+  // The kind of canopy at a point: the stand whose polygons hold it, else 0 (through the
+  // stands' spatial index: thousands of stands cost about what one does).
   int kind_at(double lat_deg, double lon_deg) const;
 
   // Trees whose stems stand within `radius_m` of a point (a few more may come back).
@@ -36,13 +40,13 @@ class Forest {
  private:
   struct Kind {
     CanopySettings settings;
-    LeafAngles leaf_angles;
+    std::shared_ptr<const LeafAngles> leaf_angles;
     std::optional<Stand> stand;        // random trees
     std::vector<Tree> explicit_trees;  // from a crowns file
     double area_density_m2_m3 = 0.0;
   };
   std::vector<Kind> kinds_;
-  std::vector<StandArea> areas_;
+  std::shared_ptr<const StandIndex> areas_;  // shared by copies of the forest
 };
 
 // Reads a crowns file: CSV with a header `lon,lat,base_m,radius_m,half_height_m` (degrees) or

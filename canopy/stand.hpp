@@ -23,13 +23,24 @@ struct Tree {
   int kind = 0;  // which foliage it bears (Forest's kinds)
 };
 
+// A box in longitude and latitude (degrees).
+struct TileBox {
+  double lon0_deg, lat0_deg, lon1_deg, lat1_deg;
+};
+
+// The tiles Stand::trees_near visits for a point and radius: every tree it returns lies in them.
+TileBox stand_tiles_near(double lat_deg, double lon_deg, double radius_m);
+
 class Stand {
  public:
   // `kind` tells the stands of one run apart (Forest's kinds of canopy): each has its own trees.
   Stand(const CanopySettings& canopy, std::uint64_t seed, std::uint64_t kind = 0);
 
-  // Trees whose stems stand within `radius_m` of a point (a few tiles more may come back).
-  std::vector<Tree> trees_near(double lat_deg, double lon_deg, double radius_m) const;
+  // Trees whose stems stand within `radius_m` of a point (a few tiles more may come back); only
+  // those of tiles that meet `within` when it is given (a stand's box: the same trees as without
+  // it, less those that cannot be inside).
+  std::vector<Tree> trees_near(double lat_deg, double lon_deg, double radius_m,
+                               const TileBox* within = nullptr) const;
 
   // Poisson density that gives the crown cover: 1 - exp(-n pi r^2) = cover.
   double trees_per_m2() const { return trees_per_m2_; }

@@ -6,9 +6,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <optional>
+#include <sstream>
+#include <string>
 
+#include "core/error.hpp"
 #include "core/random.hpp"
 #include "core/samplers.hpp"
 
@@ -32,15 +36,18 @@ struct Zone {
   }
 };
 
-// Standard normal white noise at a lattice node, a pure function of its arguments.
-double white_noise(std::uint64_t seed, const Zone& zone, std::int64_t i, std::int64_t j) {
-  RandomStream random(seed, pair_key(i, j), zone.index(), RandomPurpose::roughness);
+// Standard normal white noise at a lattice node, a pure function of its arguments. The coarser
+// lattices (level > 0) have their own noise; the finest keeps the key it always had.
+double white_noise(std::uint64_t seed, const Zone& zone, int level, std::int64_t i,
+                   std::int64_t j) {
+  RandomStream random(seed, pair_key(i, j), zone.index() + 64 * static_cast<std::uint64_t>(level),
+                      RandomPurpose::roughness);
   return standard_normal(random);
 }
 
 // The Gaussian-smoothed noise of the ni x nj lattice nodes from (i0, j0) (node (i0 + a, j0 + b)
 // at b * ni + a): white noise with a margin of half the kernel, convolved along each axis in turn.
-std::vector<double> smoothed_noise(std::uint64_t seed, const Zone& zone,
+std::vector<double> smoothed_noise(std::uint64_t seed, const Zone& zone, int level,
                                    const std::vector<double>& kernel, std::int64_t i0,
                                    std::int64_t j0, int ni, int nj) {
   const int half_taps = static_cast<int>(kernel.size() / 2);
@@ -49,7 +56,7 @@ std::vector<double> smoothed_noise(std::uint64_t seed, const Zone& zone,
   for (int j = 0; j < wj; ++j)
     for (int i = 0; i < wi; ++i)
       noise[static_cast<std::size_t>(j) * wi + i] =
-          white_noise(seed, zone, i0 - half_taps + i, j0 - half_taps + j);
+          white_noise(seed, zone, level, i0 - half_taps + i, j0 - half_taps + j);
   std::vector<double> along_i(static_cast<std::size_t>(ni) * wj, 0.0);
   for (int j = 0; j < wj; ++j)
     for (int i = 0; i < ni; ++i) {
@@ -262,27 +269,24 @@ LatticeRegion fit_region_maps(const GroundMesh& base, const LocalFrame& frame, d
           QuadraticMap(local_points, grid_points, half_size_m), h};
 }
 
-// The lattice nodes covering the square of half-width `half_size_m`, shrunk about the origin
-// while they are more than `max_nodes`.
-void cover_square(LatticeRegion& region, double half_size_m, std::int64_t max_nodes) {
+// The lattice nodes covering the square of half-width `half_size_m` about the origin.
+void cover_square(LatticeRegion& region, double half_size_m) {
   const double h = region.h;
-  for (double shrink = 1.0;; shrink *= 0.95) {
-    const double r_m = half_size_m * shrink;
-    double gx0 = std::numeric_limits<double>::infinity(), gy0 = gx0, gx1 = -gx0, gy1 = -gx0;
-    for (const auto& [x, y] :
-         {std::array<double, 2>{-r_m, -r_m}, {r_m, -r_m}, {r_m, r_m}, {-r_m, r_m}}) {
-      const auto g = region.to_grid(x, y);
-      gx0 = std::min(gx0, g[0] + region.centre.x_m);
-      gx1 = std::max(gx1, g[0] + region.centre.x_m);
-      gy0 = std::min(gy0, g[1] + region.centre.y_m);
-      gy1 = std::max(gy1, g[1] + region.centre.y_m);
-    }
-    region.i0 = static_cast<std::int64_t>(std::floor(gx0 / h));
-    region.i1 = static_cast<std::int64_t>(std::ceil(gx1 / h));
-    region.j0 = static_cast<std::int64_t>(std::floor(gy0 / h));
-    region.j1 = static_cast<std::int64_t>(std::ceil(gy1 / h));
-    if (static_cast<std::int64_t>(region.ni()) * region.nj() <= max_nodes) return;
+  double gx0 = std::numeric_limits<double>::infinity(), gy0 = gx0, gx1 = -gx0, gy1 = -gx0;
+  for (const auto& [x, y] : {std::array<double, 2>{-half_size_m, -half_size_m},
+                             {half_size_m, -half_size_m},
+                             {half_size_m, half_size_m},
+                             {-half_size_m, half_size_m}}) {
+    const auto g = region.to_grid(x, y);
+    gx0 = std::min(gx0, g[0] + region.centre.x_m);
+    gx1 = std::max(gx1, g[0] + region.centre.x_m);
+    gy0 = std::min(gy0, g[1] + region.centre.y_m);
+    gy1 = std::max(gy1, g[1] + region.centre.y_m);
   }
+  region.i0 = static_cast<std::int64_t>(std::floor(gx0 / h));
+  region.i1 = static_cast<std::int64_t>(std::ceil(gx1 / h));
+  region.j0 = static_cast<std::int64_t>(std::floor(gy0 / h));
+  region.j1 = static_cast<std::int64_t>(std::ceil(gy1 / h));
 }
 
 std::uint32_t add_vertex(GroundMesh& mesh, double x, double y, double z) {
@@ -387,62 +391,99 @@ void add_base_outside(const GroundMesh& base, const LatticeRegion& region, Groun
 
 }  // namespace
 
-RoughnessField::RoughnessField(const RoughnessSettings& settings, std::uint64_t seed)
-    : rms_m_(settings.rms_m),
-      correlation_m_(settings.correlation_m),
-      spacing_m_(settings.correlation_m / 3.0),
-      seed_(seed) {
-  if (!enabled()) return;
+RoughnessField::Lattice::Lattice(double correlation_m, double rms_m, int nodes_per_correlation)
+    : spacing_m(correlation_m / nodes_per_correlation) {
   // Noise smoothed by exp(-2 r^2 / L^2) has covariance exp(-r^2 / L^2); taps down to 1e-4.
   const int half_taps =
-      static_cast<int>(std::ceil(std::sqrt(std::log(1e4) / 2.0) * correlation_m_ / spacing_m_));
+      static_cast<int>(std::ceil(std::sqrt(std::log(1e4) / 2.0) * correlation_m / spacing_m));
   for (int k = -half_taps; k <= half_taps; ++k) {
-    const double r_m = k * spacing_m_;
-    kernel_.push_back(std::exp(-2.0 * r_m * r_m / (correlation_m_ * correlation_m_)));
+    const double r_m = k * spacing_m;
+    kernel.push_back(std::exp(-2.0 * r_m * r_m / (correlation_m * correlation_m)));
   }
   // Covariance of smoothed nodes d apart along one axis: A(d) = sum_k a_k a_(k+d); in 2-D it is
   // A(di) A(dj). Over a lattice triangle the linear surface through nodes f_a has mean variance
   // sum_ab E[l_a l_b] C_ab, with E[l_a^2] = 1/6 and E[l_a l_b] = 1/12 for uniform barycentric
   // coordinates l: var(node) * (1/2 + (rho_10 + rho_01 + rho_11) / 6).
   double a0 = 0.0, a1 = 0.0;
-  for (std::size_t k = 0; k < kernel_.size(); ++k) {
-    a0 += kernel_[k] * kernel_[k];
-    if (k + 1 < kernel_.size()) a1 += kernel_[k] * kernel_[k + 1];
+  for (std::size_t k = 0; k < kernel.size(); ++k) {
+    a0 += kernel[k] * kernel[k];
+    if (k + 1 < kernel.size()) a1 += kernel[k] * kernel[k + 1];
   }
   const double rho = a1 / a0;
   const double surface_variance = a0 * a0 * (0.5 + (2.0 * rho + rho * rho) / 6.0);
-  scale_ = rms_m_ / std::sqrt(surface_variance);
+  scale = rms_m / std::sqrt(surface_variance);
 }
 
-double RoughnessField::height_m(double lat_deg, double lon_deg) const {
+RoughnessField::RoughnessField(const RoughnessSettings& settings, std::uint64_t seed)
+    : rms_m_(settings.rms_m), correlation_m_(settings.correlation_m), seed_(seed) {
+  if (!enabled()) return;
+  for (int nodes : nodes_per_correlation) lattices_.emplace_back(correlation_m_, rms_m_, nodes);
+}
+
+double RoughnessField::height_m(double lat_deg, double lon_deg, int level) const {
   if (!enabled()) return 0.0;
+  const Lattice& lattice = lattices_.at(level);
   const Zone zone = zone_of(lat_deg, lon_deg);
   const GridPoint p = grid_point(zone, lat_deg, lon_deg);
-  const double u = p.x_m / spacing_m_, v = p.y_m / spacing_m_;
+  const double u = p.x_m / lattice.spacing_m, v = p.y_m / lattice.spacing_m;
   const auto i = static_cast<std::int64_t>(std::floor(u)),
              j = static_cast<std::int64_t>(std::floor(v));
   // The four nodes of the cell, on the lattice triangle holding the point, as the mesh has it.
-  const std::vector<double> node = smoothed_noise(seed_, zone, kernel_, i, j, 2, 2);
-  return scale_ * cell_height(u - i, v - j, [&](int di, int dj) { return node[2 * dj + di]; });
+  const std::vector<double> node = smoothed_noise(seed_, zone, level, lattice.kernel, i, j, 2, 2);
+  return lattice.scale *
+         cell_height(u - i, v - j, [&](int di, int dj) { return node[2 * dj + di]; });
+}
+
+namespace {
+
+std::string metres(double value_m) {
+  std::ostringstream text;
+  text << std::setprecision(3) << value_m << " m";
+  return text.str();
+}
+
+}  // namespace
+
+Error RoughnessField::too_fine(double half_size_m, std::int64_t nodes_a_side) const {
+  const double side_m = 2.0 * half_size_m;
+  return setting_error(
+      ErrorKind::config, "roughness/correlation_m",
+      metres(correlation_m_) + " is too short to mesh under this beam: its field of view, " +
+          metres(side_m) + " across, would need " + std::to_string(nodes_a_side) +
+          " lattice nodes a side even at one node per correlation length, and the limit is " +
+          std::to_string(max_nodes_a_side) + " (about " +
+          metres(correlation_m_ * static_cast<double>(nodes_a_side) / max_nodes_a_side) +
+          " at least; or a narrower field of view)");
 }
 
 GroundMesh RoughnessField::roughen(const GroundMesh& base, const LocalFrame& frame,
                                    double half_size_m, double base_spacing_m) const {
   if (!enabled() || base.triangles.empty() || half_size_m <= 0.0) return base;
-  LatticeRegion region = fit_region_maps(base, frame, half_size_m, spacing_m_);
-  cover_square(region, half_size_m, max_nodes);
+  // The finest lattice whose nodes over the region stay within the limit.
+  std::optional<LatticeRegion> fitted;
+  int level = 0;
+  for (;; ++level) {
+    fitted.emplace(fit_region_maps(base, frame, half_size_m, lattices_[level].spacing_m));
+    cover_square(*fitted, half_size_m);
+    const std::int64_t nodes_a_side =
+        std::max(fitted->i1 - fitted->i0, fitted->j1 - fitted->j0) + 1;
+    if (nodes_a_side <= max_nodes_a_side) break;
+    if (level + 1 == static_cast<int>(lattices_.size())) throw too_fine(half_size_m, nodes_a_side);
+  }
+  const LatticeRegion& region = *fitted;
+  const Lattice& lattice = lattices_[level];
   const int ni = region.ni(), nj = region.nj();
 
   // The relief of every node, tapering to nothing over the region's outer 2 correlation lengths.
   std::vector<double> relief_m =
-      smoothed_noise(seed_, region.zone, kernel_, region.i0, region.j0, ni, nj);
+      smoothed_noise(seed_, region.zone, level, lattice.kernel, region.i0, region.j0, ni, nj);
   const int ramp_nodes =
       std::max(1, static_cast<int>(std::lround(2.0 * correlation_m_ / region.h)));
   for (int j = 0; j < nj; ++j)
     for (int i = 0; i < ni; ++i) {
       const int edge = std::min({i, ni - 1 - i, j, nj - 1 - j});
       const double taper = std::min(1.0, static_cast<double>(edge) / ramp_nodes);
-      relief_m[static_cast<std::size_t>(j) * ni + i] *= scale_ * taper;
+      relief_m[static_cast<std::size_t>(j) * ni + i] *= lattice.scale * taper;
     }
 
   GroundMesh mesh;

@@ -10,12 +10,21 @@
 // lattice (diagonal from node (i, j) to (i + 1, j + 1)), which is exactly what the mesh holds.
 // The values are scaled so that the RMS of that piecewise-linear surface over any large area
 // is rms_m: Gardner's roughness term (PHYSICS.md section 2) sees the mesh, not the nodes.
+//
+// A mesh has at most max_nodes_a_side lattice nodes a side. Where the region under the beam
+// needs more, the relief is meshed on a coarser lattice of the same construction (its own
+// noise), a node every correlation_m / 2, else every correlation_m: the RMS height stays the
+// setting's, only detail finer than the correlation length goes. Where even that needs more, the
+// configuration is refused (an error naming roughness/correlation_m and the limit): roughness is
+// never smoothed away.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
 
+#include "core/error.hpp"
 #include "terrain/ground_mesh.hpp"
 #include "terrain/terrain_settings.hpp"
 
@@ -28,31 +37,42 @@ class RoughnessField {
   bool enabled() const { return rms_m_ > 0.0; }
   double rms_m() const { return rms_m_; }
   double correlation_m() const { return correlation_m_; }
-  double spacing_m() const { return spacing_m_; }  // of the lattice (and of the mesh it makes)
+  // Of the finest lattice (and of the mesh it makes): correlation_m / 3.
+  double spacing_m() const { return correlation_m_ / nodes_per_correlation[0]; }
 
-  // The relief (m, up) at a geodetic position. A convolution per point: for tests and single
-  // points, not for meshes.
-  double height_m(double lat_deg, double lon_deg) const;
+  // The relief (m, up) at a geodetic position, on lattice `level` (0: the finest; see
+  // nodes_per_correlation). A convolution per point: for tests and single points, not meshes.
+  double height_m(double lat_deg, double lon_deg, int level = 0) const;
 
   // The base mesh with the relief added within `half_size_m` of the frame's origin: that part is
-  // re-meshed on the lattice, heights from the base plus the relief, and the base triangles are
-  // clipped to the rest. The relief tapers to nothing over the region's outer 2 correlation
-  // lengths, so that the two meet without a step. At most `max_nodes` lattice nodes: a larger
-  // region is shrunk about the origin (the lattice spacing, which defines the field, never
-  // changes). Where the base's own spacing `base_spacing_m` is finer than the lattice, the
-  // region is meshed that finely, so that the base's relief is kept.
+  // re-meshed on the finest lattice with at most max_nodes_a_side nodes a side over it, heights
+  // from the base plus the relief, and the base triangles are clipped to the rest. The relief
+  // tapers to nothing over the region's outer 2 correlation lengths, so that the two meet
+  // without a step. Where the base's own spacing `base_spacing_m` is finer than the lattice, the
+  // region is meshed that finely (up to 1024 nodes a side), so that the base's relief is kept.
+  // Throws (naming roughness/correlation_m) where no lattice fits.
   GroundMesh roughen(const GroundMesh& base, const LocalFrame& frame, double half_size_m,
                      double base_spacing_m = std::numeric_limits<double>::infinity()) const;
 
-  static constexpr std::int64_t max_nodes = 512 * 512;
+  // 1024 nodes a side: about 2 million triangles, some 200 MB of mesh and ray-tracing index.
+  static constexpr std::int64_t max_nodes_a_side = 1024;
+  // The lattices, finest first: nodes a correlation length.
+  static constexpr std::array<int, 3> nodes_per_correlation = {3, 2, 1};
 
  private:
+  // One lattice: its spacing, smoothing kernel and scale.
+  struct Lattice {
+    Lattice(double correlation_m, double rms_m, int nodes_per_correlation);
+    double spacing_m;
+    std::vector<double> kernel;  // taps -K..K along one axis
+    double scale = 0.0;          // smoothed noise -> metres
+  };
+  Error too_fine(double half_size_m, std::int64_t nodes_a_side) const;
+
   double rms_m_;
   double correlation_m_;
-  double spacing_m_;
   std::uint64_t seed_;
-  std::vector<double> kernel_;  // taps -K..K along one axis
-  double scale_ = 0.0;          // smoothed noise -> metres
+  std::vector<Lattice> lattices_;  // as nodes_per_correlation
 };
 
 }  // namespace glaswave

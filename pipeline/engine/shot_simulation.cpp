@@ -261,8 +261,11 @@ ShotSimulator::ShotScene ShotSimulator::build_scene(const Footprint& footprint) 
           ? patch_half_size_m(terrain_, lidar_, footprint, shot.frame,
                               std::min(lidar_.max_angle_rad(), 4.5 * lidar_.beam_sigma_rad()))
           : 0.0;
-  const GroundMesh ground = build_ground_mesh(terrain_, shot.frame, half_size_m,
-                                              terrain_.detail_m(), &roughness, rough_half_size_m);
+  // Roughness too fine to mesh under this beam is refused there, named in /terrain.
+  const GroundMesh ground = at_section("/terrain", [&] {
+    return build_ground_mesh(terrain_, shot.frame, half_size_m, terrain_.detail_m(), &roughness,
+                             rough_half_size_m);
+  });
   const Vegetation vegetation =
       forest_ ? build_vegetation(*forest_, terrain_, shot.frame, half_size_m, shot.orientation)
               : Vegetation{};

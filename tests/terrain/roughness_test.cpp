@@ -44,6 +44,24 @@ TEST(Roughness, FieldRmsOverALargeAreaIsTheSetting) {
   EXPECT_FALSE(RoughnessField({0.0, 2.0}, 3).enabled());
 }
 
+// The coarser lattices (a node every L/2 and every L) keep the setting's RMS over a large area,
+// each with its own noise.
+TEST(Roughness, CoarserLatticesKeepTheRms) {
+  const RoughnessField field({0.45, 0.5}, 3);
+  const LocalFrame frame({34.3, -118.2, 0.0});
+  for (int level : {1, 2}) {
+    std::mt19937_64 rng(7);
+    double sum_sq = 0.0;
+    constexpr int samples = 20000;  // spread 0.5 %
+    for (int k = 0; k < samples; ++k) {
+      const Geodetic p = random_point(frame, 750.0, rng);
+      sum_sq += std::pow(field.height_m(p.lat_deg, p.lon_deg, level), 2);
+    }
+    EXPECT_NEAR(std::sqrt(sum_sq / samples) / 0.45, 1.0, 0.015) << "level " << level;
+    EXPECT_NE(field.height_m(34.3, -118.2, level), field.height_m(34.3, -118.2, 0));
+  }
+}
+
 // Correlation against the Gaussian covariance exp(-r^2 / L^2): 1/e at one correlation length
 // (the piecewise-linear surface between nodes L/3 apart lowers it a little), nothing at 3 L.
 TEST(Roughness, CorrelationFallsOverTheCorrelationLength) {
@@ -181,6 +199,49 @@ TEST(Roughness, KeepsTheReliefOfAFinerGround) {
     worst_m = std::max(worst_m, std::abs(centroid[2] - ground[2]));
   }
   EXPECT_LT(worst_m, 0.3);
+}
+
+// A region that needs more than 1024 nodes a side at L/3 is meshed at L/2 (then L), the relief
+// under it of the setting's RMS; one that needs more even at L is refused, naming the setting and
+// the limit, never smoothed.
+TEST(Roughness, AWideBeamGetsACoarserLatticeOrARefusal) {
+  const PlaneTerrain plane({45.0, 7.0, 600.0, 0.0, 0.0});
+  const LocalFrame frame({45.0, 7.0, 600.0});
+  const RoughnessField field({0.45, 0.5}, 11);
+  const GroundMesh mesh = build_ground_mesh(plane, frame, 130.0, 1.0e9, &field, 120.0);
+  // 240 m / 0.1667 m = 1440 nodes a side at L/3; 960 at L/2 (1.85 million triangles).
+  const std::size_t triangles = mesh.triangles.size() / 3;
+  EXPECT_GT(triangles, 2u * 950 * 950);
+  EXPECT_LT(triangles, 2u * 1000 * 1000);
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(-110.0, 110.0);
+  // The mesh carries the L/2 lattice's relief.
+  for (int k = 0; k < 20; ++k) {
+    const double x = u(rng), y = u(rng);
+    const Cover c = cover(mesh, x, y, -1e-7);
+    ASSERT_GE(c.count, 1);
+    const Geodetic on_mesh = frame.to_geodetic({x, y, c.z});
+    const double relief_m = on_mesh.h_m - plane.height_m(on_mesh.lat_deg, on_mesh.lon_deg);
+    EXPECT_NEAR(relief_m, field.height_m(on_mesh.lat_deg, on_mesh.lon_deg, 1), 2e-3);
+  }
+  double sum_sq = 0.0;
+  constexpr int samples = 1500;
+  for (int k = 0; k < samples; ++k) {
+    const double x = u(rng), y = u(rng);
+    const Geodetic g = frame.to_geodetic({x, y, 0.0});
+    const double relief_m = field.height_m(g.lat_deg, g.lon_deg, 1);
+    sum_sq += relief_m * relief_m;
+  }
+  // 1500 points over ~200 000 correlation cells: the RMS within 2 % (1 sigma), here 6 %.
+  EXPECT_NEAR(std::sqrt(sum_sq / samples) / 0.45, 1.0, 0.06);
+  const RoughnessField too_fine({0.45, 0.2}, 11);
+  try {
+    build_ground_mesh(plane, frame, 130.0, 1.0e9, &too_fine, 120.0);
+    FAIL() << "a 0.2 m correlation under a 240 m field of view was meshed";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.place(), "roughness/correlation_m");
+    EXPECT_NE(error.message().find("limit is 1024"), std::string::npos) << error.message();
+  }
 }
 
 TEST(Roughness, NoRoughnessLeavesTheMeshAlone) {

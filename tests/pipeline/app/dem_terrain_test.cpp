@@ -184,16 +184,18 @@ TEST(DemShots, RoughnessBroadensThePulseAsGardner) {
   struct Case {
     json terrain;
     double rms_m;
+    double correlation_m = 2.0;
   };
+  // Correlations of 0.5 m and 1 m: the relief's region under the field of view (292 m across)
+  // would need 1750 and 880 nodes a side at L/3; the first is meshed at L (585 a side).
   const std::vector<Case> cases = {
-      {plane_terrain(0.0, 0.0), 0.0},
-      {plane_terrain(0.0, 0.0), 0.5},
-      {plane_terrain(0.0, 0.0), 1.0},
-      {{{"dem", (dir / "level.tif").string()}}, 1.0},
+      {plane_terrain(0.0, 0.0), 0.0},       {plane_terrain(0.0, 0.0), 0.5},
+      {plane_terrain(0.0, 0.0), 1.0},       {{{"dem", (dir / "level.tif").string()}}, 1.0},
+      {plane_terrain(0.0, 0.0), 0.45, 0.5}, {plane_terrain(0.0, 0.0), 0.45, 1.0},
   };
   for (const Case& c : cases) {
     json document = shots_at(c.terrain, origin, 40000);
-    document["terrain"]["roughness"] = {{"rms_m", c.rms_m}, {"correlation_m", 2.0}};
+    document["terrain"]["roughness"] = {{"rms_m", c.rms_m}, {"correlation_m", c.correlation_m}};
     document["simulation"]["max_order"] = 1;
     const SimulatedTrack shot = simulate_track(document);
     const double roughness_term_ns = 2.0 * c.rms_m / c_m_s * 1e9;
@@ -201,7 +203,8 @@ TEST(DemShots, RoughnessBroadensThePulseAsGardner) {
     for (int band = 0; band < 2; ++band) {
       const double width_ns =
           waveform_moments(shot.records[0].rx_waveform_W[band], shot.bin_time_ns).rms_ns;
-      EXPECT_NEAR(width_ns / expected_ns, 1.0, 0.02) << c.terrain.dump() << " rms " << c.rms_m;
+      EXPECT_NEAR(width_ns / expected_ns, 1.0, 0.02)
+          << c.terrain.dump() << " rms " << c.rms_m << " correlation " << c.correlation_m;
     }
     // The footprint's height is the terrain's, not the relief's.
     EXPECT_NEAR(shot.records[0].elev_m, 1200.0, 0.01);
