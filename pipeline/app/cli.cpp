@@ -11,13 +11,16 @@
 #include <limits>
 #include <new>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
+#include <string_view>
 #include <tuple>
 
 #include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/engine/brf.hpp"
+#include "pipeline/engine/cluster.hpp"
 #include "pipeline/engine/ray_debug.hpp"
 #include "pipeline/engine/run.hpp"
 #include "pipeline/engine/sweep.hpp"
@@ -113,9 +116,12 @@ Config load(const Arguments& arguments) {
   return load_config(arguments.config_file, overrides);
 }
 
+// The command line for the products' history; without --resume, so that a resumed run's
+// products are those of the run it finishes.
 std::string joined(int argc, char** argv) {
   std::ostringstream line;
-  for (int i = 0; i < argc; ++i) line << (i ? " " : "") << argv[i];
+  for (int i = 0; i < argc; ++i)
+    if (std::string_view(argv[i]) != "--resume") line << (i ? " " : "") << argv[i];
   return line.str();
 }
 
@@ -221,11 +227,20 @@ int debug_ray_command(const Arguments& arguments) {
 }
 
 int run(const Arguments& arguments, const std::string& command_line) {
-  if (arguments.resume)
-    throw config_error("--resume", "resuming a run is not available in this version yet");
   if (!arguments.debug_ray.empty()) return debug_ray_command(arguments);
-  const Config config = load(arguments);
+  // Under mpirun every process loads the configuration; a failure ends them all (one message).
+  Cluster& cluster = Cluster::world();
+  std::optional<Config> loaded;
+  std::exception_ptr failure;
+  try {
+    loaded = load(arguments);
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  cluster.agree(failure);
+  const Config& config = *loaded;
   RunRequest request;
+  request.resume = arguments.resume;
   request.threads = arguments.threads;
   request.command_line = command_line;
   request.out_dir =
@@ -236,9 +251,10 @@ int run(const Arguments& arguments, const std::string& command_line) {
 
   RunSummary summary;
   {
-    Progress progress(!arguments.quiet, arguments.progress_interval_s);
+    Progress progress(!arguments.quiet && cluster.rank() == 0, arguments.progress_interval_s);
     summary = run_simulation(config, request, std::ref(progress));
   }
+  if (cluster.rank() != 0) return 0;  // rank 0 reports
   print_warnings(summary.warnings);
   // Plots are drawn from the finished products; a failure there leaves the products whole.
   if (config.output.plots) write_plots(request.out_dir);
@@ -257,12 +273,18 @@ int run(const Arguments& arguments, const std::string& command_line) {
     std::printf("%s\n", object.dump().c_str());
     return 0;
   }
+  // A resumed run's rate is that of the shots it simulated.
+  const std::string resumed =
+      summary.shots_resumed > 0
+          ? " (" + std::to_string(summary.shots_resumed) + " kept from the interrupted run)"
+          : std::string();
   std::printf(
-      "glaswave: %lld shots in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; %s; "
+      "glaswave: %lld shots%s in %.2f s, %.1f shots/s, %.3g ray queries/s, %lld flagged; %s; "
       "products in %s\n",
-      static_cast<long long>(summary.shots), summary.wall_s, summary.shots / wall_s,
-      summary.ray_queries / wall_s, static_cast<long long>(summary.shots_flagged),
-      summary.vertical_datum.c_str(), request.out_dir.string().c_str());
+      static_cast<long long>(summary.shots), resumed.c_str(), summary.wall_s,
+      (summary.shots - summary.shots_resumed) / wall_s, summary.ray_queries / wall_s,
+      static_cast<long long>(summary.shots_flagged), summary.vertical_datum.c_str(),
+      request.out_dir.string().c_str());
   return 0;
 }
 
@@ -357,6 +379,11 @@ class Commands {
   // Runs the command the line chose.
   int dispatch(const std::string& command_line) {
     read_given();
+    if (Cluster::world().size() > 1 && (!*run_ || !arguments_.debug_ray.empty()))
+      Cluster::world().agree(std::make_exception_ptr(
+          config_error("mpirun",
+                       "only `glaswave run` shares its shots among processes; run "
+                       "this command without mpirun")));
     if (*brf_) return brf(arguments_);
     if (*run_) return run(arguments_, command_line);
     if (*sweep_) return sweep(arguments_, variations_);
@@ -468,22 +495,31 @@ int run_command_line(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    std::fprintf(stderr, "glaswave: error: %s (see glaswave --help)\n", one_line(e.what()).c_str());
+    if (Cluster::world().rank() == 0)                // every process of mpirun has the same line
+      std::fprintf(stderr, "glaswave: error: %s (see glaswave --help)\n",
+                   one_line(e.what()).c_str());
     return 2;
   }
+  // Under mpirun rank 0 alone reports an error every process met; one that this process met
+  // alone ends them all.
+  Cluster& cluster = Cluster::world();
+  const auto report = [&](const char* what, int status) {
+    if (cluster.rank() == 0 || !cluster.failed_together())
+      std::fprintf(stderr, "glaswave: error: %s\n", what);
+    if (cluster.rank() != 0 && !cluster.failed_together()) cluster.abort(status);
+    return status;
+  };
   try {
     return commands.dispatch(joined(argc, argv));
   } catch (const Error& e) {
-    std::fprintf(stderr, "glaswave: error: %s\n", one_line(e.what()).c_str());
-    return e.exit_status();
+    return report(one_line(e.what()).c_str(), e.exit_status());
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr,
-                 "glaswave: error: out of memory; the configuration's limits (README, "
-                 "\"Limits\") assume the machine's memory is free\n");
-    return static_cast<int>(ErrorKind::run);
+    return report(
+        "out of memory; the configuration's limits (README, \"Limits\") assume the machine's "
+        "memory is free",
+        static_cast<int>(ErrorKind::run));
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "glaswave: error: %s\n", one_line(e.what()).c_str());
-    return static_cast<int>(ErrorKind::run);
+    return report(one_line(e.what()).c_str(), static_cast<int>(ErrorKind::run));
   }
 }
 

@@ -1,4 +1,5 @@
-// The run: shots simulated in batches on a thread pool, written in shot order.
+// The run: shots simulated in batches on a thread pool (and shared among mpirun's processes),
+// journalled, and written in shot order by rank 0.
 #include "pipeline/engine/run.hpp"
 
 #include <tbb/global_control.h>
@@ -7,52 +8,208 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <memory>
+#include <span>
 
 #include "core/error.hpp"
 #include "footprints/track.hpp"
+#include "pipeline/engine/cluster.hpp"
 #include "pipeline/engine/inputs.hpp"
+#include "pipeline/engine/journal.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/products/product_writer.hpp"
+#include "pipeline/products/record_codec.hpp"
 
 namespace glaswave {
+namespace {
 
-OutputDirectory::OutputDirectory(std::filesystem::path path) : path_(std::move(path)) {
+namespace fs = std::filesystem;
+
+bool is_part(const fs::directory_entry& entry) { return entry.path().extension() == ".part"; }
+
+// Records [a, b) of the track on the arena's threads; adds their ray queries to `queries`.
+std::vector<ShotRecord> simulate_range(const ShotSimulator& simulator, const Track& track,
+                                       std::int64_t a, std::int64_t b, tbb::task_arena& arena,
+                                       std::int64_t& queries) {
+  if (a >= b) return {};
+  const std::vector<Footprint> footprints = track.footprints(a, b);
+  std::vector<ShotRecord> records(footprints.size());
+  std::atomic<std::int64_t> ray_queries{0};
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, footprints.size(), [&](std::size_t i) {
+      std::int64_t n = 0;
+      records[i] = simulator.simulate(footprints[i], &n);
+      ray_queries += n;
+    });
+  });
+  queries += ray_queries;
+  return records;
+}
+
+// Threads of this process: `threads` (0: its share of the machine's cores, the cores divided
+// among the run's processes on this machine), never more than the cores.
+int threads_of_process(int threads, int processes_here) {
+  // More threads than cores would only wait for each other (and TBB would warn on stderr).
+  const int cores = tbb::this_task_arena::max_concurrency();
+  return threads > 0 ? std::min(threads, cores) : std::max(1, cores / std::max(1, processes_here));
+}
+
+// Receives a batch of records in order: the index of its first, the records, the ray queries
+// they took.
+using BatchConsumer = std::function<void(std::int64_t, std::span<const ShotRecord>, std::int64_t)>;
+
+// Records [first, last) shared among the cluster's processes: each batch is cut into one block
+// per rank, every rank simulates its block, rank 0 gathers the records in order and alone
+// hands them to `consume` and reports progress. A failure anywhere ends every rank.
+void simulate_shared(Cluster& cluster, const ShotSimulator& simulator, const Track& track,
+                     std::int64_t first, std::int64_t last, int threads,
+                     const BatchConsumer& consume, const ProgressCallback& progress,
+                     std::int64_t progress_first) {
+  threads = threads_of_process(threads, cluster.local_size());
+  tbb::task_arena arena(threads);
+  // Batches keep memory bounded on long tracks and hand records on in record order.
+  const std::int64_t block = std::max<std::int64_t>(8, 4 * threads);
+  const std::int64_t batch_size = block * cluster.size();
+  for (std::int64_t batch_first = first; batch_first < last; batch_first += batch_size) {
+    const std::int64_t batch_last = std::min(batch_first + batch_size, last);
+    const std::int64_t a = std::min(batch_first + cluster.rank() * block, batch_last);
+    const std::int64_t b = std::min(a + block, batch_last);
+    std::exception_ptr failure;
+    std::vector<ShotRecord> records;
+    std::int64_t queries = 0;
+    std::string bytes;
+    try {
+      records = simulate_range(simulator, track, a, b, arena, queries);
+      if (cluster.size() > 1) {
+        bytes.append(reinterpret_cast<const char*>(&queries), sizeof queries);
+        for (const ShotRecord& record : records) encode_record(record, bytes);
+      }
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    cluster.agree(failure);
+    if (cluster.size() > 1) {
+      std::vector<std::string> parts = cluster.gather(bytes);
+      records.clear();
+      queries = 0;
+      for (const std::string& part : parts) {  // rank 0 only: the others get none
+        std::int64_t part_queries = 0;
+        std::memcpy(&part_queries, part.data(), sizeof part_queries);
+        queries += part_queries;
+        std::size_t offset = sizeof part_queries;
+        while (offset < part.size()) records.push_back(decode_record(part, offset));
+      }
+    }
+    try {
+      if (cluster.rank() == 0) {
+        consume(batch_first, records, queries);
+        if (progress) progress(batch_last - progress_first, last - progress_first);
+      }
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    cluster.agree(failure);
+  }
+}
+
+// What every process sets up before a shot is simulated.
+struct RunSetup {
+  std::unique_ptr<Terrain> terrain;
+  Config used;
+  std::unique_ptr<ShotSimulator> simulator;
+  std::unique_ptr<Track> track;
+  std::int64_t first = 0, last = 0;  // records
+};
+
+std::unique_ptr<RunSetup> set_up(const Config& config, const RunRequest& request) {
+  check_run(config);  // first, as check_inputs does: check and run refuse alike
+  auto setup = std::make_unique<RunSetup>();
+  setup->terrain = open_terrain(config);
+  // The products record what the DEM's heights were measured from, as the terrain chose it (its
+  // own vertical CRS wins over terrain.vertical_datum). The simulator grows the forest before
+  // the track is planned, in check_inputs' order, so that both name the same first fault.
+  setup->used = config;
+  setup->used.resolved["terrain"]["vertical_datum"] = setup->terrain->vertical_datum().key;
+  setup->simulator = std::make_unique<ShotSimulator>(setup->used, *setup->terrain);
+  // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
+  setup->track = plan_track(config, *setup->terrain);
+  const Track& track = *setup->track;
+  const std::int64_t length = track.sequence_length();
+  const auto selected =
+      track.records_of_shots(request.first_shot.value_or(0), request.last_shot.value_or(length));
+  setup->first = selected.first;
+  setup->last = selected.second;
+  if (setup->first >= setup->last)
+    throw config_error("--shots", "selects no shot of the track's " + std::to_string(length) +
+                                      (track.size() < length ? " (" + std::to_string(track.size()) +
+                                                                   " on the terrain)"
+                                                             : std::string()));
+  return setup;
+}
+
+// Rank 0's side of a run: the directory, the journal and the writers. A new run that fails
+// removes its journal with the rest; a resumed one keeps it, to be resumed again.
+struct RunOutput {
+  std::unique_ptr<OutputDirectory> directory;
+  std::unique_ptr<RunJournal> journal;
+  std::vector<std::unique_ptr<ProductWriter>> writers;
+  bool resumed = false;
+  bool complete = false;
+  std::int64_t written = 0;  // records handed to the writers
+
+  ~RunOutput() {
+    writers.clear();  // their .part files go first
+    if (journal && !complete && !resumed) journal->remove();
+  }
+};
+
+}  // namespace
+
+OutputDirectory::OutputDirectory(std::filesystem::path path, bool resume) : path_(std::move(path)) {
   std::error_code error;
-  if (std::filesystem::exists(path_, error))
-    throw config_error(path_.string(),
-                       "output directory exists; remove it or choose another --out");
-  std::filesystem::create_directories(path_, error);
+  if (fs::exists(path_, error)) {
+    has_journal_ = fs::exists(path_ / RunJournal::kFileName, error);
+    bool only_parts = true;  // a run killed before its journal was made
+    for (const auto& entry : fs::directory_iterator(path_, error))
+      only_parts = only_parts && entry.is_regular_file() && is_part(entry);
+    if (resume && !has_journal_ && !only_parts)
+      throw config_error(path_.string(),
+                         "holds no interrupted run to resume (no " +
+                             std::string(RunJournal::kFileName) +
+                             "): its products are finished, or it is not a glaswave run");
+    if (!resume && has_journal_)
+      throw config_error(path_.string(),
+                         "holds an interrupted run: finish it with the same command and "
+                         "--resume, or remove the directory");
+    if (!resume)
+      throw config_error(path_.string(),
+                         "output directory exists; remove it or choose another --out");
+    kept_ = true;  // it was there before this run
+    return;
+  }
+  fs::create_directories(path_, error);
   if (error)
     throw config_error(path_.string(), "cannot create the output directory: " + error.message());
 }
 
 OutputDirectory::~OutputDirectory() {
   std::error_code ignored;
-  if (!kept_ && std::filesystem::is_empty(path_, ignored)) std::filesystem::remove(path_, ignored);
+  if (!kept_ && fs::is_empty(path_, ignored)) fs::remove(path_, ignored);
 }
 
 std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track,
                               std::int64_t first, std::int64_t last, int threads,
                               const RecordConsumer& consume, const ProgressCallback& progress) {
-  // More threads than cores would only wait for each other (and TBB would warn on stderr).
-  const int cores = tbb::this_task_arena::max_concurrency();
-  threads = threads > 0 ? std::min(threads, cores) : cores;
+  threads = threads_of_process(threads, 1);
   tbb::task_arena arena(threads);
   // Batches keep memory bounded on long tracks and hand records on in record order.
   const std::int64_t batch_size = std::max<std::int64_t>(8, 4 * threads);
-  std::atomic<std::int64_t> ray_queries{0};
+  std::int64_t ray_queries = 0;
   for (std::int64_t batch_first = first; batch_first < last; batch_first += batch_size) {
     const std::int64_t batch_last = std::min(batch_first + batch_size, last);
-    const std::vector<Footprint> footprints = track.footprints(batch_first, batch_last);
-    std::vector<ShotRecord> records(footprints.size());
-    arena.execute([&] {
-      tbb::parallel_for(std::size_t{0}, footprints.size(), [&](std::size_t i) {
-        std::int64_t queries = 0;
-        records[i] = simulator.simulate(footprints[i], &queries);
-        ray_queries += queries;
-      });
-    });
+    const std::vector<ShotRecord> records =
+        simulate_range(simulator, track, batch_first, batch_last, arena, ray_queries);
     for (std::size_t i = 0; i < records.size(); ++i)
       consume(batch_first + static_cast<std::int64_t>(i), records[i]);
     if (progress) progress(batch_last - first, last - first);
@@ -80,64 +237,117 @@ CheckSummary check_inputs(const Config& config) {
   return summary;
 }
 
-RunSummary run_simulation(const Config& config, const RunRequest& request,
-                          const ProgressCallback& progress) {
-  const auto started = std::chrono::steady_clock::now();
-  check_run(config);  // first, as check_inputs does: check and run refuse alike
+namespace {
 
-  const std::unique_ptr<Terrain> terrain = open_terrain(config);
-  // The products record what the DEM's heights were measured from, as the terrain chose it (its
-  // own vertical CRS wins over terrain.vertical_datum). The simulator grows the forest before
-  // the track is planned, in check_inputs' order, so that both name the same first fault.
-  Config used = config;
-  used.resolved["terrain"]["vertical_datum"] = terrain->vertical_datum().key;
-  const ShotSimulator simulator(used, *terrain);
-  // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
-  const std::unique_ptr<Track> planned = plan_track(config, *terrain);
-  const Track& track = *planned;
-  const std::int64_t length = track.sequence_length();
-  const auto selected =
-      track.records_of_shots(request.first_shot.value_or(0), request.last_shot.value_or(length));
-  const std::int64_t first = selected.first, last = selected.second;  // records
-  if (first >= last)
-    throw config_error("--shots", "selects no shot of the track's " + std::to_string(length) +
-                                      (track.size() < length ? " (" + std::to_string(track.size()) +
-                                                                   " on the terrain)"
-                                                             : std::string()));
+// The identity a journal is checked against: what decides the records (the resolved
+// configuration, the records selected) and how they are stored (the version).
+std::string run_identity(const RunInfo& info, std::int64_t first, std::int64_t last) {
+  return info.config_json + "\n" + std::to_string(first) + ":" + std::to_string(last) +
+         "\nglaswave " + GLASWAVE_VERSION + " journal 1";
+}
 
-  OutputDirectory directory(request.out_dir);
-  RunInfo info = simulator.run_info(last - first, request.command_line);
-  info.vertical_datum = terrain->vertical_datum().description;
+// Rank 0: the output directory made (or taken, to resume), the journal and the writers begun,
+// and an interrupted run's records handed to the writers again.
+std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& request,
+                                       const RunInfo& info, RunSummary& summary,
+                                       std::vector<std::array<double, 2>>& centres) {
+  auto output = std::make_unique<RunOutput>();
+  output->directory = std::make_unique<OutputDirectory>(request.out_dir, request.resume);
+  const fs::path journal_path = request.out_dir / RunJournal::kFileName;
+  const std::string identity = run_identity(info, setup.first, setup.last);
+  output->resumed = output->directory->has_journal();
+  if (!output->resumed) output->journal = std::make_unique<RunJournal>(journal_path, identity);
+  // The products are written again from the journal: an interrupted run's parts go.
+  std::error_code ignored;
+  if (request.resume)
+    for (const auto& entry : fs::directory_iterator(request.out_dir, ignored))
+      if (is_part(entry)) fs::remove(entry.path(), ignored);
+  const Config& config = setup.used;
   const ProductSettings settings{config.output.netcdf, config.output.geojson,
                                  config.output.footprints_format == "GPKG"
                                      ? FootprintsFormat::gpkg
                                      : FootprintsFormat::geojson};
-  const std::vector<std::unique_ptr<ProductWriter>> writers =
-      make_writers(request.out_dir, settings, info);
+  output->writers = make_writers(request.out_dir, settings, info);
+  if (output->resumed) {
+    RunOutput& out = *output;
+    out.journal = RunJournal::resume(
+        journal_path, identity,
+        [&](const ShotRecord& shot) {
+          for (const auto& writer : out.writers) writer->write(out.written, shot);
+          ++out.written;
+          if (shot.quality_flag != quality_good) ++summary.shots_flagged;
+          centres.push_back({shot.lat_deg, shot.lon_deg});
+        },
+        summary.ray_queries);
+    summary.shots_resumed = out.written;
+  }
+  return output;
+}
 
+}  // namespace
+
+RunSummary run_simulation(const Config& config, const RunRequest& request,
+                          const ProgressCallback& progress) {
+  const auto started = std::chrono::steady_clock::now();
+  Cluster& cluster = Cluster::world();
+  std::unique_ptr<RunSetup> setup;
+  std::exception_ptr failure;
+  try {
+    setup = set_up(config, request);
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  cluster.agree(failure);
+  const std::int64_t first = setup->first, last = setup->last;
+
+  RunInfo info = setup->simulator->run_info(last - first, request.command_line);
+  info.vertical_datum = setup->terrain->vertical_datum().description;
   RunSummary summary;
   std::vector<std::array<double, 2>> centres;
-  summary.ray_queries = simulate_records(
-      simulator, track, first, last, request.threads,
-      [&](std::int64_t record, const ShotRecord& shot) {
-        const std::int64_t index = record - first;
-        for (const auto& writer : writers) writer->write(index, shot);
-        if (shot.quality_flag != quality_good) ++summary.shots_flagged;
-        centres.push_back({shot.lat_deg, shot.lon_deg});
+  std::unique_ptr<RunOutput> output;
+  try {
+    if (cluster.rank() == 0) output = open_output(*setup, request, info, summary, centres);
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  cluster.agree(failure);
+  const std::int64_t done = cluster.broadcast(output ? output->written : 0);
+
+  simulate_shared(
+      cluster, *setup->simulator, *setup->track, first + done, last, request.threads,
+      [&](std::int64_t, std::span<const ShotRecord> records, std::int64_t queries) {
+        for (const ShotRecord& shot : records) {
+          for (const auto& writer : output->writers) writer->write(output->written, shot);
+          ++output->written;
+          if (shot.quality_flag != quality_good) ++summary.shots_flagged;
+          centres.push_back({shot.lat_deg, shot.lon_deg});
+        }
+        output->journal->append(records, queries);
+        summary.ray_queries += queries;
       },
-      progress);
-  if (const auto warning = stands_off_track(config, centres)) summary.warnings.push_back(*warning);
+      progress, first);
 
   summary.shots = last - first;
-  summary.vertical_datum = terrain->vertical_datum().description;
-  summary.wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  RunStats stats;
-  stats.ray_queries = summary.ray_queries;
-  stats.wall_s = summary.wall_s;
-  stats.shots_flagged = summary.shots_flagged;
-  for (const auto& writer : writers) writer->finish(stats);
-  directory.keep();
+  summary.vertical_datum = setup->terrain->vertical_datum().description;
+  try {
+    if (cluster.rank() == 0) {
+      if (const auto warning = stands_off_track(config, centres))
+        summary.warnings.push_back(*warning);
+      summary.wall_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      RunStats stats;
+      stats.ray_queries = summary.ray_queries;
+      stats.wall_s = summary.wall_s;
+      stats.shots_flagged = summary.shots_flagged;
+      for (const auto& writer : output->writers) writer->finish(stats);
+      output->complete = true;
+      output->journal->remove();
+      output->directory->keep();
+    }
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  cluster.agree(failure);
   return summary;
 }
 

@@ -1,5 +1,7 @@
-// The engine: a track planned, its shots simulated in parallel and handed in shot order to the
-// product writers, progress reported through a callback. The command line and Python call it.
+// The engine: a track planned, its shots simulated in parallel (and, under mpirun, shared among
+// the processes) and handed in shot order to the product writers, progress reported through a
+// callback. A journal of the finished shots lets a killed run be resumed. The command line and
+// Python call it.
 #pragma once
 
 #include <cstdint>
@@ -19,6 +21,9 @@ struct RunRequest {
   int threads = 0;                                    // 0: every core
   std::optional<std::int64_t> first_shot, last_shot;  // --shots A:B, half-open
   std::string command_line;                           // for the products' history
+  // Finish the interrupted run in out_dir (its journal): the shots it finished are kept. When
+  // out_dir does not exist the run starts from the beginning.
+  bool resume = false;
 };
 
 struct RunSummary {
@@ -28,6 +33,7 @@ struct RunSummary {
   double wall_s = 0.0;
   std::string vertical_datum;         // what the terrain's heights were measured from, in words
   std::vector<std::string> warnings;  // what the user should know, one line each
+  std::int64_t shots_resumed = 0;     // shots taken from an interrupted run's journal
 };
 
 // Called after each batch of shots with (shots done, shots in all).
@@ -42,18 +48,23 @@ std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track
                               const RecordConsumer& consume, const ProgressCallback& progress);
 
 // A run's output directory: refused when it exists, made, and removed again if the run leaves
-// it empty (a run that fails: the writers remove their parts).
+// it empty (a run that fails: the writers remove their parts). With `resume`, a directory that
+// holds an interrupted run (its journal, or nothing but .part files) is taken as it is and one
+// that does not exist is made; one that holds anything else is refused.
 class OutputDirectory {
  public:
-  explicit OutputDirectory(std::filesystem::path path);
+  explicit OutputDirectory(std::filesystem::path path, bool resume = false);
   ~OutputDirectory();
   OutputDirectory(const OutputDirectory&) = delete;
   OutputDirectory& operator=(const OutputDirectory&) = delete;
   void keep() { kept_ = true; }
+  // Whether an interrupted run's journal is there to resume.
+  bool has_journal() const { return has_journal_; }
 
  private:
   std::filesystem::path path_;
   bool kept_ = false;
+  bool has_journal_ = false;
 };
 
 // What `check` found: the configuration's inputs opened and its track planned.
@@ -68,8 +79,10 @@ struct CheckSummary {
 // track, simulating nothing: what `check` does. Throws Error as a run would.
 CheckSummary check_inputs(const Config& config);
 
-// Simulates the shots and writes the products under request.out_dir, which must not exist.
-// On failure nothing is left under a product's final name.
+// Simulates the shots and writes the products under request.out_dir, which must not exist
+// (unless request.resume). On failure nothing is left under a product's final name; a failed
+// new run leaves nothing at all, a killed one its .part files and journal for --resume. Under
+// mpirun every process calls it: the shots are shared, rank 0 writes and reports progress.
 RunSummary run_simulation(const Config& config, const RunRequest& request,
                           const ProgressCallback& progress);
 

@@ -5,8 +5,11 @@
 #include "pipeline/products/netcdf_writer.hpp"
 
 #include <netcdf.h>
+#include <sys/resource.h>
+#include <sys/statvfs.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +25,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/write_error.hpp"
 #include "pipeline/products/product_fields.hpp"
 
 namespace glaswave {
@@ -154,6 +158,8 @@ class NcHandle {
 
   int* out() { return &id_; }
   int id() const { return id_; }
+  // Lets the file go without closing it (see NetcdfWriter::Impl's destructor).
+  void abandon() { id_ = -1; }
   // The id is never used again after nc_close, even when closing failed.
   int close() {
     if (id_ < 0) return NC_NOERR;
@@ -165,6 +171,19 @@ class NcHandle {
  private:
   int id_ = -1;
 };
+
+// Whether writing what HDF5 still holds into `file` could fail: less than this room left on its
+// file system (HDF5's caches are tens of megabytes at most), or a file size limit.
+bool flush_may_fail(const std::filesystem::path& file) {
+  constexpr double kRoomNeeded_B = 1e9;
+  struct statvfs fs {};
+  if (::statvfs(file.parent_path().empty() ? "." : file.parent_path().c_str(), &fs) != 0)
+    return true;
+  rlimit limit{};
+  const bool limited = ::getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY;
+  return limited ||
+         static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize) < kRoomNeeded_B;
+}
 
 }  // namespace
 
@@ -181,6 +200,15 @@ struct NetcdfWriter::Impl {
   };
 
   explicit Impl(std::filesystem::path final_path) : file(std::move(final_path)) {}
+  // An unfinished file is given up. Aborting still flushes HDF5's caches, and a flush that
+  // fails crashes both netCDF-C's close (H5Iget_name from reportopenobjects) and HDF5's own at
+  // exit (H5F__close_cb). Where a flush could fail (little room left, a file size limit) the
+  // file is abandoned instead: removed unclosed (the command ends without HDF5's exit handlers).
+  ~Impl() {
+    if (nc.id() >= 0 && flush_may_fail(file.part_path())) nc.abandon();
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
 
   // Declared before the handle so that it is destroyed after it: the file is closed before
   // an unfinished .part is removed.
@@ -204,8 +232,12 @@ struct NetcdfWriter::Impl {
     throw run_error(file.final_path().string(), message);
   }
 
+  // A failed call; HDF5 says only "HDF error", the write under it left errno (a full disk).
   void check(int status, const std::string& what) const {
-    if (status != NC_NOERR) fail(what + ": " + nc_strerror(status));
+    if (status == NC_NOERR) return;
+    const int error_number = errno;
+    if (no_space(error_number)) fail(write_failure(error_number) + " (" + what + ")");
+    fail(what + ": " + nc_strerror(status));
   }
 
   int dim(const char* name) const {
@@ -626,6 +658,9 @@ void NetcdfWriter::finish(const RunStats& stats) {
   impl.check(nc_put_att_longlong(id, NC_GLOBAL, "stats_shots_flagged", NC_INT64, 1, &shots_flagged),
              "global attribute 'stats_shots_flagged'");
   impl.check(nc_enddef(id), "ending definitions");
+  // Everything is written before the close: a close whose flush fails crashes in HDF5, a
+  // failed sync only says so.
+  impl.check(nc_sync(id), "writing " + impl.file.part_path().string());
   impl.check(impl.nc.close(), "closing " + impl.file.part_path().string());
   impl.file.commit();
   impl.finished = true;

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -23,6 +24,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/write_error.hpp"
 #include "pipeline/products/product_fields.hpp"
 
 namespace glaswave {
@@ -277,11 +279,21 @@ struct OgrWriter::Impl {
     return result;
   }
 
+  // GDAL buffers its writes and does not always say when one fails: the errno of the write
+  // under it does (a full disk). Call with errno cleared before the GDAL call.
+  void check_room() const {
+    if (no_space(errno)) throw write_error(file.part_path().string(), errno);
+  }
+
   void emit(OGRFeature& feature) {
     const GdalMessages messages;
-    if (layer->CreateFeature(&feature) != OGRERR_NONE)
+    errno = 0;
+    if (layer->CreateFeature(&feature) != OGRERR_NONE) {
+      check_room();
       fail(messages.failure("cannot write record " + std::to_string(next) + " to " +
                             file.part_path().string()));
+    }
+    check_room();
     ++next;
   }
 };
@@ -332,11 +344,15 @@ void OgrWriter::finish(const RunStats& /*stats*/) {
   const std::string part = impl.file.part_path().string();
   {
     const GdalMessages messages;
-    if (impl.format == FootprintsFormat::gpkg && impl.dataset->CommitTransaction() != OGRERR_NONE)
+    errno = 0;
+    if (impl.format == FootprintsFormat::gpkg && impl.dataset->CommitTransaction() != OGRERR_NONE) {
+      impl.check_room();
       impl.fail(messages.failure("cannot write " + part));
+    }
     // Closing writes what GDAL still holds: a full disk shows up here.
     impl.layer = nullptr;
     impl.dataset.reset();
+    impl.check_room();
     if (messages.failed()) impl.fail(messages.failure("cannot write " + part));
   }
   impl.file.commit();

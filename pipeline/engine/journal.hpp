@@ -1,0 +1,59 @@
+// The run journal: the records of the shots a run has finished, kept beside the products'
+// .part files so that a run killed at any moment (SIGKILL, a machine lost) can be finished
+// with --resume and still write products identical to an uninterrupted run. It is a header
+// (the run's identity: a hash of the configuration and the shots) and frames of records, one
+// per batch, each with its checksum; a frame torn by the kill is dropped on resume. Frames are
+// flushed to the disk at most about once a second.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "pipeline/products/shot_record.hpp"
+
+namespace glaswave {
+
+class RunJournal {
+ public:
+  // The journal's name in the output directory.
+  static constexpr const char* kFileName = "glaswave.journal";
+
+  // Creates `path` for a run of identity `identity` (any text; only its hash is kept).
+  RunJournal(std::filesystem::path path, const std::string& identity);
+  ~RunJournal();
+  RunJournal(const RunJournal&) = delete;
+  RunJournal& operator=(const RunJournal&) = delete;
+
+  // Opens the journal at `path` to go on with it: checks that it belongs to a run of the same
+  // identity (Error (config) naming --resume if not), hands every record it holds to `consume`
+  // in order, drops a torn last frame, and returns the journal ready to append.
+  // `ray_queries` receives the ray queries of the records handed on.
+  static std::unique_ptr<RunJournal> resume(const std::filesystem::path& path,
+                                            const std::string& identity,
+                                            const std::function<void(const ShotRecord&)>& consume,
+                                            std::int64_t& ray_queries);
+
+  // Appends a frame of records (the next of the run, in order) and the ray queries they took.
+  // Throws Error (run) naming the journal when it cannot be written (a full disk).
+  void append(std::span<const ShotRecord> records, std::int64_t ray_queries);
+
+  // Flushes what was appended to the disk.
+  void sync();
+
+  // Removes the journal: the run is complete.
+  void remove();
+
+ private:
+  RunJournal(std::filesystem::path path, int fd);
+  void write_all(const std::string& bytes);
+
+  std::filesystem::path path_;
+  int fd_ = -1;
+  double last_sync_s_ = 0.0;
+};
+
+}  // namespace glaswave

@@ -1,0 +1,96 @@
+// mpirun -np 2 glaswave run: the shots shared between two processes, products identical in
+// every bit to one process's (PRODUCT.md 2); an error is reported once and ends both.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/pipeline/app/product_compare.hpp"
+#include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/scratch_dir.hpp"
+
+namespace glaswave {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace test_support;
+
+// Two processes on this machine whatever its cores; shared memory between them only; root
+// (a container) allowed; mpirun's own notices off (-q).
+CommandOutcome run_mpi(int processes, const std::string& arguments) {
+  const std::string root = geteuid() == 0 ? " --allow-run-as-root" : "";
+  const std::string command = "mpirun -q --oversubscribe --mca btl self,vader" + root + " -np " +
+                              std::to_string(processes) + " " + GLASWAVE_BINARY + " " + arguments +
+                              " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+class Mpi : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (std::system("command -v mpirun >/dev/null 2>&1") != 0)
+      GTEST_FAIL() << "no mpirun (scripts/setup installs openmpi-bin)";
+    // A forest on rough ground with per-order output: every field a record has, 21 shots so
+    // that the last batch is cut short.
+    const nlohmann::json config = {
+        {"seed", 7},
+        {"sensor", {{"preset", "glas"}}},
+        {"simulation", {{"rays_per_shot", 300}, {"max_order", 3}}},
+        {"terrain",
+         {{"plane", {{"origin_lat_deg", -20.0}, {"origin_lon_deg", 30.0}, {"slope_deg", 10.0}}},
+          {"roughness", {{"rms_m", 0.3}, {"correlation_m", 3.0}}}}},
+        {"canopy", {{"cover", 0.5}}},
+        {"track",
+         {{"type", "pass"},
+          {"start_lat_deg", -20.0},
+          {"start_lon_deg", 30.0},
+          {"shots", 21},
+          {"spacing_m", 100.0}}},
+        {"output", {{"per_order", true}}},
+    };
+    config_ = (dir_ / "pass.json").string();
+    std::ofstream(config_) << config.dump(2);
+  }
+
+  ScratchDir dir_{"glaswave_mpi"};
+  std::string config_;
+};
+
+TEST_F(Mpi, TwoProcessesWriteTheProductsOfOne) {
+  const CommandOutcome one =
+      run_glaswave("run " + config_ + " --quiet --threads 1 --out " + (dir_ / "one").string());
+  ASSERT_EQ(one.status, 0) << one.output;
+  const CommandOutcome two =
+      run_mpi(2, "run " + config_ + " --quiet --threads 1 --out " + (dir_ / "two").string());
+  ASSERT_EQ(two.status, 0) << two.output;
+  // Rank 0 alone reports: one summary line.
+  EXPECT_EQ(std::count(two.output.begin(), two.output.end(), '\n'), 1) << two.output;
+  EXPECT_NE(two.output.find("21 shots in"), std::string::npos) << two.output;
+  expect_same_products(dir_ / "one", dir_ / "two");
+}
+
+TEST_F(Mpi, AnErrorIsReportedOnceAndEndsEveryProcess) {
+  const CommandOutcome bad = run_mpi(
+      2, "run " + config_ + " --quiet --set canopy.pai=-1 --out " + (dir_ / "bad").string());
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_EQ(bad.output, "glaswave: error: /canopy/pai: must be >= 0, got -1\n");
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  // An existing output directory is found by rank 0 alone: every process still ends.
+  fs::create_directories(dir_ / "taken");
+  const CommandOutcome taken =
+      run_mpi(2, "run " + config_ + " --quiet --out " + (dir_ / "taken").string());
+  EXPECT_EQ(taken.status, 2) << taken.output;
+  EXPECT_EQ(std::count(taken.output.begin(), taken.output.end(), '\n'), 1) << taken.output;
+  EXPECT_NE(taken.output.find("output directory exists"), std::string::npos) << taken.output;
+}
+
+}  // namespace
+}  // namespace glaswave
