@@ -100,7 +100,8 @@ TEST_F(Ephemeris, WithoutPointingShotsPointAsAPassDoes) {
   settings.ephemeris = file.string();
   settings.off_nadir_deg = 1.5;
   settings.pointing_azimuth_deg = 300.0;
-  const Track track(settings, testing::LevelTerrain(0.0));
+  const testing::LevelTerrain terrain(0.0);  // the track keeps a reference: not a temporary
+  const Track track(settings, terrain);
   const Footprint f = track.footprint(0);
   ASSERT_TRUE(f.on_terrain);
   EXPECT_NEAR(
