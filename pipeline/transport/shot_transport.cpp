@@ -30,18 +30,35 @@ struct Tally {
         ground(bands * size, 0.0),
         order(bands * orders * size, 0.0) {}
 
+  // Only the bins `other` scored into are added: elsewhere it holds zeros, and adding a zero
+  // changes no bit, so a shot of few rays sums little.
   Tally& operator+=(const Tally& other) {
-    for (std::size_t i = 0; i < total.size(); ++i) total[i] += other.total[i];
-    for (std::size_t i = 0; i < canopy.size(); ++i) canopy[i] += other.canopy[i];
-    for (std::size_t i = 0; i < ground.size(); ++i) ground[i] += other.ground[i];
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] += other.order[i];
     ray_queries += other.ray_queries;
+    if (other.last_bin < other.first_bin) return *this;
+    auto add_rows = [&](std::vector<double>& sum, const std::vector<double>& part) {
+      for (std::size_t row = 0; row * size < sum.size(); ++row)
+        for (std::size_t i = row * size + other.first_bin; i <= row * size + other.last_bin; ++i)
+          sum[i] += part[i];
+    };
+    add_rows(total, other.total);
+    add_rows(canopy, other.canopy);
+    add_rows(ground, other.ground);
+    add_rows(order, other.order);
+    first_bin = std::min(first_bin, other.first_bin);
+    last_bin = std::max(last_bin, other.last_bin);
     return *this;
   }
 
-  int size, orders;
+  void mark(int bin) {
+    first_bin = std::min(first_bin, static_cast<std::size_t>(bin));
+    last_bin = std::max(last_bin, static_cast<std::size_t>(bin));
+  }
+
+  std::size_t size;
+  int orders;
   std::vector<double> total, canopy, ground, order;
   std::int64_t ray_queries = 0;
+  std::size_t first_bin = std::numeric_limits<std::size_t>::max(), last_bin = 0;  // scored into
 };
 
 // One path of a ray, between two interactions.
@@ -289,6 +306,7 @@ double PathTracer::laser_transmission(const Path& path, const Vertex& vertex, in
 // The scored return into its time bin: the total, the canopy or ground part (by the first
 // element the path met), and its scattering order when orders are kept apart.
 void PathTracer::bin(const Path& path, int order, int bin, Tally& tally) const {
+  tally.mark(bin);
   for (std::size_t band = 0; band < bands_; ++band) {
     const std::size_t at = band * tally.size + bin;
     tally.total[at] += response_[band];
