@@ -1,10 +1,11 @@
 // Google Benchmark micro-benchmarks of the transport's and the products' kernels, each through
-// the public function the shot calls: the random stream, free-path sampling in a crown scene
-// (crown crossings and spans), scattering (a leaf normal drawn and its bi-Lambertian response),
+// the public function the shot calls: the random stream, crown crossings, free-path sampling
+// through a crown scene, scattering at a leaf (its normal, the next direction, the response),
 // binning, the pulse convolution, and the Gaussian decomposition. Run
 // build/tests/benchmarks/kernel_benchmarks (Google Benchmark's flags apply).
 #include <benchmark/benchmark.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "pipeline/products/gaussian_decomposition.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"
+#include "pipeline/transport/scattering.hpp"
 
 namespace {
 
@@ -50,9 +52,9 @@ void crown_interval(benchmark::State& state) {
 }
 BENCHMARK(crown_interval);
 
-// A 200 m square of ground under 400 ellipsoidal crowns (about the base case's density): the
-// spans of a downward ray, the input of free-path sampling.
-void free_path_spans(benchmark::State& state) {
+// A 200 m square of ground under 400 ellipsoidal crowns (about the base case's density): a
+// downward ray's spans through the crowns, and a free path sampled along them.
+void free_path_sampling(benchmark::State& state) {
   const glaswave::RayDevice device;
   glaswave::GroundMesh ground;
   ground.vertices_m = {-100, -100, 0, 100, -100, 0, 100, 100, 0, -100, 100, 0};
@@ -69,30 +71,48 @@ void free_path_spans(benchmark::State& state) {
     vegetation.crowns.push_back(crown);
   }
   const glaswave::Scene scene(device, ground, vegetation);
+  const std::vector<double> projection{0.5};  // G of a spherical distribution
   std::vector<glaswave::VolumeSpan> spans;
   glaswave::RayRandom random(1, 0, 0);
-  double depth = 0.0;
+  auto uniform = [&random] { return random.uniform(); };
+  double depth_m = 0.0;
   for (auto _ : state) {
     const glaswave::Vec3 origin{60.0 * random.uniform() - 30.0, 60.0 * random.uniform() - 30.0,
                                 30.0};
     scene.volume_spans(origin, {0.0, 0.0, -1.0}, 40.0, spans);
-    for (const glaswave::VolumeSpan& span : spans) depth += span.end_m - span.start_m;
+    if (const auto leaf =
+            glaswave::free_path(spans, projection, -std::log1p(-random.uniform()), uniform))
+      depth_m += leaf->distance_m;
   }
-  benchmark::DoNotOptimize(depth);
+  benchmark::DoNotOptimize(depth_m);
 }
-BENCHMARK(free_path_spans);
+BENCHMARK(free_path_sampling);
 
-// Scattering at a leaf: the normal a ray meets (spherical distribution), its response.
+// Scattering at a leaf: the normal a ray meets (spherical distribution), the next direction
+// drawn by the leaf's bi-Lambertian scattering, and the response toward the detector.
 void leaf_scattering(benchmark::State& state) {
   const glaswave::LeafAngles angles(glaswave::LeafAngleDistribution::spherical, 57.3);
+  glaswave::Foliage foliage;
+  foliage.reflectance = {0.08, 0.45};
+  foliage.transmittance = {0.05, 0.45};
+  foliage.leaf_angles = &angles;
+  const glaswave::SceneOptics optics{{0.12, 0.25}, {foliage}};
   glaswave::RayRandom random(1, 0, 0);
   auto uniform = [&random] { return random.uniform(); };
   const glaswave::Vec3 down = glaswave::normalized({0.1, 0.2, -1.0});
   const glaswave::Vec3 up{-down[0], -down[1], -down[2]};
+  double response = 0.0;
   for (auto _ : state) {
     const glaswave::Vec3 normal = angles.sample_normal(down, uniform);
-    benchmark::DoNotOptimize(glaswave::bilambertian_response(normal, down, up, 0.45, 0.4));
+    std::array<double, 2> throughput{1.0, 1.0};
+    glaswave::Vec3 direction = down;
+    glaswave::sample_scattering(glaswave::RayElement::leaf, &optics.foliage[0], optics, normal,
+                                random, direction, throughput);
+    response += glaswave::element_response(glaswave::RayElement::leaf, &optics.foliage[0], optics,
+                                           1, normal, down, up) +
+                direction[2];
   }
+  benchmark::DoNotOptimize(response);
 }
 BENCHMARK(leaf_scattering);
 

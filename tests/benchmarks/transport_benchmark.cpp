@@ -44,19 +44,25 @@ struct Sizes {
 constexpr Sizes full_sizes{40, 10000, 400, 1000, 10000, 8, 4000000};
 constexpr Sizes quick_sizes{2, 500, 20, 200, 200, 2, 100000};
 
-// A pass over a plane (45 N, 7 E, 172 m between shots) with the north2010 sensor.
+// A pass northward over a plane facing east (45 N, 7 E, 172 m between shots), so that every shot
+// meets the same ground, with the north2010 sensor.
 glaswave::Config pass_config(int shots, int rays, int max_order, double slope_deg, bool forest) {
   nlohmann::json document = {
       {"seed", 1},
       {"sensor", {{"preset", "north2010"}}},
       {"simulation", {{"rays_per_shot", rays}, {"max_order", max_order}}},
       {"terrain",
-       {{"plane", {{"origin_lat_deg", 45.0}, {"origin_lon_deg", 7.0}, {"slope_deg", slope_deg}}}}},
+       {{"plane",
+         {{"origin_lat_deg", 45.0},
+          {"origin_lon_deg", 7.0},
+          {"slope_deg", slope_deg},
+          {"aspect_deg", 90.0}}}}},
       {"canopy", forest ? nlohmann::json::object() : nlohmann::json()},  // {}: Table 1
       {"track",
        {{"type", "pass"},
         {"start_lat_deg", 45.0},
         {"start_lon_deg", 7.0},
+        {"heading_deg", 0.0},
         {"shots", shots},
         {"spacing_m", 172.0}}},
   };
