@@ -2,6 +2,7 @@
 #include "canopy/leaf_angles.hpp"
 
 #include <algorithm>
+#include <array>
 #include <numbers>
 
 namespace glaswave {
@@ -10,6 +11,7 @@ namespace {
 constexpr double pi = std::numbers::pi;
 constexpr int inclination_steps = 2048;
 constexpr int projection_steps = 128;
+constexpr int guide_steps = 1024;  // a power of two
 
 }  // namespace
 
@@ -33,23 +35,38 @@ LeafAngles::LeafAngles(LeafAngleDistribution distribution, double mean_deg)
   // over leaf azimuths: (1/2pi) * integral |cos t cos tL + sin t sin tL cos phi| dphi.
   projection_table_.assign(projection_steps + 1, 0.0);
   constexpr int azimuth_steps = 128;
+  constexpr int leaf_steps = inclination_steps / 8;
+  const double leaf_step = 0.5 * pi / leaf_steps;
+  // The cosines and the density at the quadrature's nodes, once (the same values each time).
+  std::array<double, azimuth_steps> cos_phi;
+  for (int k = 0; k < azimuth_steps; ++k)
+    cos_phi[k] = std::cos(2.0 * pi * (k + 0.5) / azimuth_steps);
+  std::array<double, leaf_steps> cos_leaf, sin_leaf, weight;
+  for (int i = 0; i < leaf_steps; ++i) {
+    const double inclination = leaf_step * (i + 0.5);
+    cos_leaf[i] = std::cos(inclination);
+    sin_leaf[i] = std::sin(inclination);
+    weight[i] = density(inclination) / total;
+  }
   for (int m = 0; m <= projection_steps; ++m) {
     const double mu = static_cast<double>(m) / projection_steps;
     const double sin_zenith = std::sqrt(std::max(0.0, 1.0 - mu * mu));
     double g_sum = 0.0;
-    for (int i = 0; i < inclination_steps / 8; ++i) {
-      const double leaf_step = 0.5 * pi / (inclination_steps / 8);
-      const double inclination = leaf_step * (i + 0.5);
+    for (int i = 0; i < leaf_steps; ++i) {
       double psi = 0.0;
-      for (int k = 0; k < azimuth_steps; ++k) {
-        const double phi = 2.0 * pi * (k + 0.5) / azimuth_steps;
-        psi += std::abs(mu * std::cos(inclination) +
-                        sin_zenith * std::sin(inclination) * std::cos(phi));
-      }
-      g_sum += density(inclination) / total * (psi / azimuth_steps) * leaf_step;
+      for (int k = 0; k < azimuth_steps; ++k)
+        psi += std::abs(mu * cos_leaf[i] + sin_zenith * sin_leaf[i] * cos_phi[k]);
+      g_sum += weight[i] * (psi / azimuth_steps) * leaf_step;
     }
     projection_table_[m] = g_sum;
   }
+  // Where each 1 / guide_steps of the cumulative distribution starts, for normal_at's search.
+  inclination_guide_.resize(guide_steps + 1);
+  for (int j = 0; j <= guide_steps; ++j)
+    inclination_guide_[j] =
+        static_cast<int>(std::upper_bound(inclination_cdf_.begin(), inclination_cdf_.end(),
+                                          static_cast<double>(j) / guide_steps) -
+                         inclination_cdf_.begin());
 }
 
 double LeafAngles::density(double t) const {
@@ -84,9 +101,12 @@ double LeafAngles::projection(double cos_zenith) const {
 }
 
 Vec3 LeafAngles::normal_at(double u_inclination, double u_azimuth) const {
-  // Invert the tabulated cumulative distribution, linearly within a step.
+  // Invert the tabulated cumulative distribution, linearly within a step. The first value above
+  // u lies between the guide's entries about u (u * guide_steps is exact: a power of two).
+  const int g = std::clamp(static_cast<int>(u_inclination * guide_steps), 0, guide_steps - 1);
   const auto upper =
-      std::upper_bound(inclination_cdf_.begin(), inclination_cdf_.end(), u_inclination);
+      std::upper_bound(inclination_cdf_.begin() + inclination_guide_[g],
+                       inclination_cdf_.begin() + inclination_guide_[g + 1], u_inclination);
   const int i =
       std::clamp(static_cast<int>(upper - inclination_cdf_.begin()) - 1, 0, inclination_steps - 1);
   const double width = inclination_cdf_[i + 1] - inclination_cdf_[i];

@@ -43,6 +43,7 @@ class LeafAngles {
   double campbell_chi_ = 1.0;
   std::vector<double> inclination_cdf_;   // on a uniform grid of inclinations over [0, pi/2]
   std::vector<double> projection_table_;  // G on a uniform grid of |cos zenith| over [0, 1]
+  std::vector<int> inclination_guide_;    // first CDF entry above j / guide_steps, for each j
 };
 
 }  // namespace glaswave

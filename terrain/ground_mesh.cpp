@@ -122,7 +122,9 @@ SurfaceOrientation fit_surface_orientation(const Terrain& terrain, const LocalFr
   // The beam's trace on the ground lengthens as 1 / cos(off-nadir); 3.5 sigma leaves out 0.2 %
   // of its weight.
   const double reach_m = 3.5 * sigma_m / std::max(0.2, std::abs(axis[2]));
-  const GroundMesh mesh = terrain.mesh(frame, reach_m, std::min(terrain.detail_m(), sigma_m / 4.0));
+  // Nodes a sigma apart are enough for terrains sampled between their nodes (a plane): each
+  // triangle is cut into parts of sigma / 4 below. A DEM meshes on its own nodes.
+  const GroundMesh mesh = terrain.mesh(frame, reach_m, std::min(terrain.detail_m(), sigma_m));
   BeamWeightedPlaneFit fit{Eigen::Vector3d(axis[0], axis[1], axis[2]), sigma_m};
   auto vertex = [&](std::uint32_t index) {
     return Eigen::Vector3d(mesh.vertices_m[3 * index], mesh.vertices_m[3 * index + 1],

@@ -47,7 +47,12 @@ std::vector<double> LidarModel::power_W(const std::vector<double>& tally_J) cons
   std::vector<double> power(sensor_.bins, 0.0);
   const double bin_s = sensor_.bin_ns * 1e-9;
   const int width = static_cast<int>(kernel_.size());
+  // Scored tally bins so far: a window bin that reaches none stays 0 (a few-ray shot's tally is
+  // mostly zeros), the sum over zeros being 0 to the bit.
+  std::vector<int> scored(tally_J.size() + 1, 0);
+  for (std::size_t j = 0; j < tally_J.size(); ++j) scored[j + 1] = scored[j] + (tally_J[j] != 0.0);
   for (int i = 0; i < sensor_.bins; ++i) {
+    if (scored[i + width] == scored[i]) continue;
     // Window bin i is tally bin i + margin; the kernel reaches margin bins either side.
     double energy_J = 0.0;
     for (int k = 0; k < width; ++k) energy_J += kernel_[k] * tally_J[i + width - 1 - k];

@@ -17,6 +17,9 @@ namespace {
 // Rays are tallied in a fixed number of contiguous groups, summed in order: the result is the
 // same bits for any thread count, and memory does not grow with the rays.
 constexpr std::int64_t ray_groups = 64;
+// Shots of fewer rays are traced on the calling thread: the engine runs shots in parallel, and
+// splitting a short shot costs more than it saves.
+constexpr std::int64_t parallel_rays = 2048;
 
 // Normalised returns of a group of rays, per band and tally bin. A return's weight is its
 // part of E_t T A_T f_fov / (pi R^2) per ray: a Lambertian surface of reflectance rho seen
@@ -30,18 +33,46 @@ struct Tally {
         ground(bands * size, 0.0),
         order(bands * orders * size, 0.0) {}
 
+  // Only the bins `other` scored into are added: elsewhere it holds zeros, and adding a zero
+  // changes no bit, so a shot of few rays sums little.
   Tally& operator+=(const Tally& other) {
-    for (std::size_t i = 0; i < total.size(); ++i) total[i] += other.total[i];
-    for (std::size_t i = 0; i < canopy.size(); ++i) canopy[i] += other.canopy[i];
-    for (std::size_t i = 0; i < ground.size(); ++i) ground[i] += other.ground[i];
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] += other.order[i];
     ray_queries += other.ray_queries;
+    if (other.last_bin < other.first_bin) return *this;
+    auto add_rows = [&](std::vector<double>& sum, const std::vector<double>& part) {
+      for (std::size_t row = 0; row * size < sum.size(); ++row)
+        for (std::size_t i = row * size + other.first_bin; i <= row * size + other.last_bin; ++i)
+          sum[i] += part[i];
+    };
+    add_rows(total, other.total);
+    add_rows(canopy, other.canopy);
+    add_rows(ground, other.ground);
+    add_rows(order, other.order);
+    first_bin = std::min(first_bin, other.first_bin);
+    last_bin = std::max(last_bin, other.last_bin);
     return *this;
   }
 
-  int size, orders;
+  // Back to zeros, as constructed.
+  void clear() {
+    for (std::vector<double>* part : {&total, &canopy, &ground, &order})
+      for (std::size_t row = 0; row * size < part->size() && first_bin <= last_bin; ++row)
+        std::fill(part->begin() + row * size + first_bin, part->begin() + row * size + last_bin + 1,
+                  0.0);
+    first_bin = std::numeric_limits<std::size_t>::max();
+    last_bin = 0;
+    ray_queries = 0;
+  }
+
+  void mark(int bin) {
+    first_bin = std::min(first_bin, static_cast<std::size_t>(bin));
+    last_bin = std::max(last_bin, static_cast<std::size_t>(bin));
+  }
+
+  std::size_t size;
+  int orders;
   std::vector<double> total, canopy, ground, order;
   std::int64_t ray_queries = 0;
+  std::size_t first_bin = std::numeric_limits<std::size_t>::max(), last_bin = 0;  // scored into
 };
 
 // One path of a ray, between two interactions.
@@ -289,6 +320,7 @@ double PathTracer::laser_transmission(const Path& path, const Vertex& vertex, in
 // The scored return into its time bin: the total, the canopy or ground part (by the first
 // element the path met), and its scattering order when orders are kept apart.
 void PathTracer::bin(const Path& path, int order, int bin, Tally& tally) const {
+  tally.mark(bin);
   for (std::size_t band = 0; band < bands_; ++band) {
     const std::size_t at = band * tally.size + bin;
     tally.total[at] += response_[band];
@@ -451,15 +483,27 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
                             const TransportOptions& options, std::int64_t shot_number) {
   const int orders = options.per_order ? options.max_order : 0;
   const std::int64_t groups = std::min(ray_groups, options.rays);
+  auto first_ray = [&](std::int64_t group) { return group * options.rays / groups; };
+  Tally tally(lidar.band_count(), lidar.tally_size(), orders);
+  if (options.rays < parallel_rays) {
+    // The groups one after the other through one scratch tally, each added as it ends: the
+    // same sums in the same order as below, without a tally a group.
+    Tally group_tally(lidar.band_count(), lidar.tally_size(), orders);
+    PathTracer tracer(scene, lidar, geometry, optics, options, shot_number, nullptr);
+    for (std::int64_t group = 0; group < groups; ++group) {
+      for (std::int64_t ray = first_ray(group); ray < first_ray(group + 1); ++ray)
+        tracer.trace_ray(ray, group_tally);
+      tally += group_tally;
+      group_tally.clear();
+    }
+    return shot_waveforms(tally, lidar, geometry.range_m, options.rays);
+  }
   std::vector<Tally> group_tallies(groups, Tally(lidar.band_count(), lidar.tally_size(), orders));
   tbb::parallel_for(std::int64_t{0}, groups, [&](std::int64_t group) {
     PathTracer tracer(scene, lidar, geometry, optics, options, shot_number, nullptr);
-    const std::int64_t first_ray = group * options.rays / groups;
-    const std::int64_t last_ray = (group + 1) * options.rays / groups;
-    for (std::int64_t ray = first_ray; ray < last_ray; ++ray)
+    for (std::int64_t ray = first_ray(group); ray < first_ray(group + 1); ++ray)
       tracer.trace_ray(ray, group_tallies[group]);
   });
-  Tally tally(lidar.band_count(), lidar.tally_size(), orders);
   for (const Tally& group : group_tallies) tally += group;
   return shot_waveforms(tally, lidar, geometry.range_m, options.rays);
 }

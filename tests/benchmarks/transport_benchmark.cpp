@@ -1,82 +1,272 @@
-// Transport benchmark: shots/s and ray queries/s of a pass over bare ground (the baseline) and
-// over the seed's base forest (Tables 1 and 2), on one thread and on every core, all measured in
-// this run so that the ratios hold on a shared machine. Not a test: run it with
-// build/tests/transport_benchmark [shots] [rays_per_shot].
+// The benchmark that ./scripts/benchmark runs: whole runs (run_simulation, NetCDF and GeoJSON
+// written, no plots) of the seed's base case, a bare 20 degree slope against flat ground, 19-ray
+// shots, one thread against every core, a raw Embree probe beside them, and the share of each
+// stage of a shot. Every figure is measured in this one run, so that the ratios hold on a shared
+// machine whose absolute speed drifts. Not a test: `--quick` is the short mode that ctest runs.
+#include <embree3/rtcore.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <random>
+#include <string>
 
 #include "footprints/track.hpp"
+#include "pipeline/engine/run.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/products/product_writer.hpp"
+#include "pipeline/products/waveform_metrics.hpp"
+#include "terrain/ground_mesh.hpp"
 
 namespace {
 
-struct Figures {
-  double shots_per_s;
-  double queries_per_s;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// How much each case runs: the full benchmark, or the short mode that CI runs in seconds.
+struct Sizes {
+  int base_shots, base_rays;    // the seed's base case (north2010, Table 1 forest, order 8)
+  int slope_shots, slope_rays;  // bare ground, order 1, flat and 20 degrees
+  int short_shots;              // 19 rays a shot over flat bare ground
+  int stage_shots;              // shots timed stage by stage, one thread
+  std::int64_t probe_rays;      // raw Embree queries
 };
 
-Figures measure(const glaswave::Config& config, int threads) {
+constexpr Sizes full_sizes{40, 10000, 400, 1000, 10000, 8, 4000000};
+constexpr Sizes quick_sizes{2, 500, 20, 200, 200, 2, 100000};
+
+// A pass northward over a plane facing east (45 N, 7 E, 172 m between shots), so that every shot
+// meets the same ground, with the north2010 sensor.
+glaswave::Config pass_config(int shots, int rays, int max_order, double slope_deg, bool forest) {
+  nlohmann::json document = {
+      {"seed", 1},
+      {"sensor", {{"preset", "north2010"}}},
+      {"simulation", {{"rays_per_shot", rays}, {"max_order", max_order}}},
+      {"terrain",
+       {{"plane",
+         {{"origin_lat_deg", 45.0},
+          {"origin_lon_deg", 7.0},
+          {"slope_deg", slope_deg},
+          {"aspect_deg", 90.0}}}}},
+      {"canopy", forest ? nlohmann::json::object() : nlohmann::json()},  // {}: Table 1
+      {"track",
+       {{"type", "pass"},
+        {"start_lat_deg", 45.0},
+        {"start_lon_deg", 7.0},
+        {"heading_deg", 0.0},
+        {"shots", shots},
+        {"spacing_m", 172.0}}},
+  };
+  return glaswave::parse_config(document);
+}
+
+fs::path scratch_path(const char* what) {
+  static int count = 0;
+  return fs::temp_directory_path() / ("glaswave-benchmark-" + std::to_string(getpid()) + "-" +
+                                      what + "-" + std::to_string(count++));
+}
+
+struct RunFigures {
+  std::int64_t shots = 0, queries = 0;
+  double seconds = 0.0;
+  double shots_per_s() const { return shots / seconds; }
+  double queries_per_s() const { return queries / seconds; }
+};
+
+// A whole run as `glaswave run` makes it (terrain, forest, track, shots, products), timed.
+RunFigures whole_run(const glaswave::Config& config, int threads) {
+  glaswave::RunRequest request;
+  request.out_dir = scratch_path("run");
+  request.threads = threads;
+  const auto start = Clock::now();
+  const glaswave::RunSummary summary = glaswave::run_simulation(config, request, {});
+  RunFigures figures{summary.shots, summary.ray_queries, seconds_since(start)};
+  fs::remove_all(request.out_dir);
+  return figures;
+}
+
+// Raw Embree: the ground mesh under the base case's first footprint, queried with rays from
+// just above it, aimed downward across the footprint, on every core. The ceiling that the
+// transport's own query rate is compared with.
+double embree_probe_queries_per_s(const glaswave::Config& config, std::int64_t rays) {
   const auto terrain = glaswave::make_terrain(config.terrain);
   const glaswave::Track track(config.track, *terrain);
-  const auto footprints = track.footprints(0, track.size());
-  const glaswave::ShotSimulator simulator(config, *terrain);
-  tbb::task_arena arena(threads);
-  std::vector<std::int64_t> queries(footprints.size(), 0);
-  const auto start = std::chrono::steady_clock::now();
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, footprints.size(),
-                      [&](std::size_t i) { simulator.simulate(footprints[i], &queries[i]); });
+  const glaswave::LocalFrame frame(track.footprint(0).ground);
+  const glaswave::GroundMesh mesh = glaswave::build_ground_mesh(*terrain, frame, 150.0, 5.0);
+  RTCDevice device = rtcNewDevice(nullptr);
+  RTCScene scene = rtcNewScene(device);
+  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  std::memcpy(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                      3 * sizeof(float), mesh.vertices_m.size() / 3),
+              mesh.vertices_m.data(), mesh.vertices_m.size() * sizeof(float));
+  std::memcpy(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                      3 * sizeof(unsigned), mesh.triangles.size() / 3),
+              mesh.triangles.data(), mesh.triangles.size() * sizeof(unsigned));
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(scene, geometry);
+  rtcReleaseGeometry(geometry);
+  rtcCommitScene(scene);
+  const float top_m = static_cast<float>(mesh.max_height_m + 30.0);
+  std::int64_t hits = 0;  // read, so that the queries are not optimised away
+  const auto start = Clock::now();
+  constexpr std::int64_t chunk = 4096;
+  tbb::parallel_for(std::int64_t{0}, (rays + chunk - 1) / chunk, [&](std::int64_t c) {
+    std::mt19937_64 engine(static_cast<std::uint64_t>(c));
+    std::uniform_real_distribution<float> across(-30.0f, 30.0f), tilt(-0.05f, 0.05f);
+    std::int64_t found = 0;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (std::int64_t i = 0; i < chunk; ++i) {
+      RTCRayHit query{};
+      query.ray.org_x = across(engine);
+      query.ray.org_y = across(engine);
+      query.ray.org_z = top_m;
+      query.ray.dir_x = tilt(engine);
+      query.ray.dir_y = tilt(engine);
+      query.ray.dir_z = -1.0f;
+      query.ray.tfar = 1.0e5f;
+      query.ray.mask = ~0u;
+      query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(scene, &context, &query);
+      found += query.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    }
+    __atomic_add_fetch(&hits, found, __ATOMIC_RELAXED);
   });
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::int64_t total = 0;
-  for (std::int64_t q : queries) total += q;
-  return {footprints.size() / seconds, total / seconds};
+  const double seconds = seconds_since(start);
+  rtcReleaseScene(scene);
+  rtcReleaseDevice(device);
+  const std::int64_t queries = (rays + chunk - 1) / chunk * chunk;
+  return hits > 0 ? queries / seconds : 0.0;
+}
+
+// Seconds spent in each stage of `shots` shots on one thread: locating the footprints, the
+// shot's scene and transport, its waveform processing (decomposition and metrics, timed again
+// on a copy of the record), and writing the products.
+struct StageSeconds {
+  double footprints = 0.0, transport = 0.0, processing = 0.0, writing = 0.0;
+  double total() const { return footprints + transport + processing + writing; }
+};
+
+StageSeconds stage_seconds(const glaswave::Config& config, int shots) {
+  StageSeconds stages;
+  const auto terrain = glaswave::make_terrain(config.terrain);
+  const glaswave::Track track(config.track, *terrain);
+  const glaswave::ShotSimulator simulator(config, *terrain);
+  auto start = Clock::now();
+  const std::vector<glaswave::Footprint> footprints = track.footprints(0, shots);
+  stages.footprints = seconds_since(start);
+  glaswave::WaveformProcessing processing;
+  processing.pulse_sigma_ns = config.sensor.pulse_sigma_ns;
+  processing.noise_free = !config.detector.enabled;
+  std::vector<glaswave::ShotRecord> records;
+  double simulate_s = 0.0;
+  for (const glaswave::Footprint& footprint : footprints) {
+    start = Clock::now();
+    records.push_back(simulator.simulate(footprint));
+    simulate_s += seconds_since(start);
+    glaswave::ShotRecord copy = records.back();
+    start = Clock::now();
+    glaswave::process_shot_waveforms(copy, config.sensor.bin_ns, processing);
+    stages.processing += seconds_since(start);
+  }
+  stages.transport = simulate_s - stages.processing;
+  const fs::path out = scratch_path("stages");
+  fs::create_directories(out);
+  start = Clock::now();
+  {
+    const auto writers = glaswave::make_writers(out, {}, simulator.run_info(shots, "benchmark"));
+    for (std::size_t i = 0; i < records.size(); ++i)
+      for (const auto& writer : writers) writer->write(static_cast<std::int64_t>(i), records[i]);
+    for (const auto& writer : writers) writer->finish({});
+  }
+  stages.writing = seconds_since(start);
+  fs::remove_all(out);
+  return stages;
+}
+
+void print_run(const char* name, int rays, int threads, const RunFigures& f) {
+  std::printf("%-34s %6lld %6d %7d %10.1f %12.3g %12.3g\n", name, static_cast<long long>(f.shots),
+              rays, threads, f.shots_per_s(), static_cast<double>(f.queries) / f.shots,
+              f.queries_per_s());
+}
+
+void print_stages(const char* name, const StageSeconds& s, int shots) {
+  const double total = s.total();
+  std::printf("%-22s %10.1f %12.1f %14.1f %9.1f %12.3g\n", name, 100.0 * s.footprints / total,
+              100.0 * s.transport / total, 100.0 * s.processing / total, 100.0 * s.writing / total,
+              total / shots);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int shots = argc > 1 ? std::atoi(argv[1]) : 40;
-  const int rays = argc > 2 ? std::atoi(argv[2]) : 10000;
-  nlohmann::json document = {
-      {"seed", 1},
-      {"sensor", {{"preset", "north2010"}}},
-      {"simulation", {{"rays_per_shot", rays}}},
-      {"terrain",
-       {{"plane", {{"origin_lat_deg", 45.0}, {"origin_lon_deg", 7.0}, {"slope_deg", 5.0}}}}},
-      {"canopy", nullptr},
-      {"track",
-       {{"type", "pass"},
-        {"start_lat_deg", 45.0},
-        {"start_lon_deg", 7.0},
-        {"shots", shots},
-        {"spacing_m", 172.0}}},
-  };
-  const glaswave::Config bare = glaswave::parse_config(document);
-  document["canopy"] = nlohmann::json::object();  // Table 1
-  const glaswave::Config forest = glaswave::parse_config(document);
+  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  if (argc > 1 && !quick) {
+    std::fprintf(stderr, "usage: %s [--quick]\n", argv[0]);
+    return 2;
+  }
+  const Sizes n = quick ? quick_sizes : full_sizes;
   const int cores = tbb::this_task_arena::max_concurrency();
+  const glaswave::Config base = pass_config(n.base_shots, n.base_rays, 8, 5.0, true);
+  const glaswave::Config flat = pass_config(n.slope_shots, n.slope_rays, 1, 0.0, false);
+  const glaswave::Config slope = pass_config(n.slope_shots, n.slope_rays, 1, 20.0, false);
+  const glaswave::Config short_shots = pass_config(n.short_shots, 19, 8, 0.0, false);
 
-  std::printf("glaswave transport benchmark: %d shots, %d rays a shot, %d cores\n", shots, rays,
-              cores);
-  std::printf("%-24s %8s %12s %16s\n", "case", "threads", "shots/s", "ray queries/s");
-  const Figures bare_one = measure(bare, 1), bare_all = measure(bare, cores);
-  const Figures forest_one = measure(forest, 1), forest_all = measure(forest, cores);
-  auto row = [](const char* name, int threads, const Figures& f) {
-    std::printf("%-24s %8d %12.1f %16.3g\n", name, threads, f.shots_per_s, f.queries_per_s);
-  };
-  row("bare ground (baseline)", 1, bare_one);
-  row("bare ground", cores, bare_all);
-  row("base forest", 1, forest_one);
-  row("base forest", cores, forest_all);
-  std::printf("forest / bare, shots/s (1 thread): %.3f\n",
-              forest_one.shots_per_s / bare_one.shots_per_s);
-  std::printf("thread scaling, forest shots/s (%d / 1): %.2f\n", cores,
-              forest_all.shots_per_s / forest_one.shots_per_s);
+  std::printf(
+      "glaswave benchmark%s: %d cores; whole runs (NetCDF and GeoJSON, no plots), "
+      "north2010 sensor, passes over planes\n",
+      quick ? " (--quick)" : "", cores);
+  std::printf("%-34s %6s %6s %7s %10s %12s %12s\n", "case", "shots", "rays", "threads", "shots/s",
+              "queries/shot", "queries/s");
+  // Cases side by side, each ratio's two halves run one after the other.
+  const RunFigures base_all = whole_run(base, cores);
+  const double probe = embree_probe_queries_per_s(base, n.probe_rays);
+  const RunFigures base_one = whole_run(base, 1);
+  const RunFigures flat_run = whole_run(flat, cores);
+  const RunFigures slope_run = whole_run(slope, cores);
+  const RunFigures short_run = whole_run(short_shots, cores);
+  print_run("base case (forest, order 8)", n.base_rays, cores, base_all);
+  print_run("base case, one thread", n.base_rays, 1, base_one);
+  print_run("bare flat ground (order 1)", n.slope_rays, cores, flat_run);
+  print_run("bare 20 degree slope (order 1)", n.slope_rays, cores, slope_run);
+  print_run("bare flat ground, 19-ray shots", 19, cores, short_run);
+  std::printf("%-34s %6s %6s %7d %10s %12s %12.3g\n", "raw Embree probe (ground mesh)", "", "",
+              cores, "", "", probe);
+
+  std::printf("ratios:\n");
+  const double probe_ratio = base_all.queries_per_s() / probe;
+  const double slope_ratio = slope_run.seconds / flat_run.seconds;
+  const double scaling = base_all.shots_per_s() / base_one.shots_per_s();
+  std::printf("  base case queries/s / raw Embree probe: %.3f\n", probe_ratio);
+  std::printf("  20 degree slope / flat ground, time:     %.2f\n", slope_ratio);
+  std::printf("  thread scaling, base case (%d / 1):      %.2f\n", cores, scaling);
+
+  std::printf("stage shares, one thread (%% of each case's time; %d and %d shots):\n",
+              n.stage_shots, 100 * n.stage_shots);
+  std::printf("%-22s %10s %12s %14s %9s %12s\n", "case", "footprints", "scene+transp",
+              "decomp+metrics", "writing", "s/shot");
+  const StageSeconds base_stages = stage_seconds(base, n.stage_shots);
+  const StageSeconds short_stages = stage_seconds(short_shots, 100 * n.stage_shots);
+  print_stages("base case", base_stages, n.stage_shots);
+  print_stages("19-ray shots", short_stages, 100 * n.stage_shots);
+
+  // The short mode is a CI check that every figure came out.
+  for (double figure : {probe_ratio, slope_ratio, scaling, short_run.shots_per_s(),
+                        base_stages.total(), short_stages.total()}) {
+    if (!(std::isfinite(figure) && figure > 0.0)) {
+      std::printf("a figure is missing\n");
+      return 1;
+    }
+  }
+  std::printf("every figure measured\n");
   return 0;
 }

@@ -82,7 +82,8 @@ TEST(SurfaceOrientation, RecoversSlopeAndAspectOfPlanes) {
     const LocalFrame frame({-33.0, 151.0, 0.0});
     const SurfaceOrientation fit = fit_surface_orientation(plane, frame, 16.5);
     EXPECT_NEAR(fit.slope_deg, 25.0, 0.01) << aspect_deg;
-    EXPECT_NEAR(fit.aspect_deg, aspect_deg, 0.01) << aspect_deg;
+    // Aspect is an angle: 359.99999 is 0 to within 1e-5 degree.
+    EXPECT_NEAR(std::remainder(fit.aspect_deg - aspect_deg, 360.0), 0.0, 0.01) << aspect_deg;
   }
 }
 
