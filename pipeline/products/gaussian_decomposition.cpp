@@ -1,82 +1,180 @@
-// Gaussian decomposition through GSL's trust-region least squares (multifit_nlinear, Levenberg-
-// Marquardt steps with Moré scaling), with analytic Jacobians.
+// Gaussian decomposition: first guesses from the curvature of the smoothed waveform, a small
+// Levenberg-Marquardt fit of our own (analytic Jacobian, normal equations in fixed arrays, over
+// the signal's window only), then components added from the residual and pruned.
 #include "pipeline/products/gaussian_decomposition.hpp"
 
-#include <gsl/gsl_errno.h>
-#include <gsl/gsl_multifit_nlinear.h>
-#include <gsl/gsl_vector.h>
-
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <memory>
-#include <mutex>
+#include <limits>
 #include <numbers>
 
 namespace glaswave {
 namespace {
 
-// GSL's default error handler aborts the process; library code must return instead. Its
-// handler is a process-wide setting, made once.
-void silence_gsl() {
-  static std::once_flag once;
-  std::call_once(once, [] { gsl_set_error_handler_off(); });
-}
-
-struct WorkspaceFree {
-  void operator()(gsl_multifit_nlinear_workspace* w) const { gsl_multifit_nlinear_free(w); }
-};
-struct VectorFree {
-  void operator()(gsl_vector* v) const { gsl_vector_free(v); }
-};
-
-// What the GSL callbacks see: the data (scaled to order 1) over the fitted bins.
-struct FitData {
-  std::span<const double> y;  // scaled values of the fitted bins
-  int first = 0;              // bin index of y[0]
-};
-
 // Beyond this many sigma a Gaussian is below 1e-14 of its peak: taken as 0, which spares most
-// of the exponentials of a narrow component over a long waveform.
+// of the exponentials of a narrow component over a long window.
 constexpr double kCutoffSigmas = 8.0;
+constexpr int kMaxParameters = 3 * kMaxFitComponents;
+// Jacobian evaluations per fit: a fit from fair guesses converges in 5 to 20; the cap bounds
+// the cost of a hopeless one.
+constexpr int kMaxIterations = 40;
 
-// Parameters per component: amplitude, centre and width, all free. (A width held above the
-// pulse's through sigma^2 = min^2 + w^2 has a zero derivative where a flat surface's return sits,
-// at the pulse's width, and the fit then crawls there for hundreds of iterations.)
+using Vector = std::array<double, kMaxParameters>;
+using Matrix = std::array<std::array<double, kMaxParameters>, kMaxParameters>;
 
-int residuals(const gsl_vector* x, void* params, gsl_vector* f) {
-  const auto& data = *static_cast<const FitData*>(params);
-  const std::size_t components = x->size / 3;
-  for (std::size_t i = 0; i < data.y.size(); ++i) {
-    const double t = data.first + static_cast<double>(i);
-    double model = 0.0;
-    for (std::size_t k = 0; k < components; ++k) {
-      const double a = gsl_vector_get(x, 3 * k), c = gsl_vector_get(x, 3 * k + 1);
-      const double s = gsl_vector_get(x, 3 * k + 2);
-      const double u = (t - c) / s;
-      if (std::abs(u) < kCutoffSigmas) model += a * std::exp(-0.5 * u * u);
-    }
-    gsl_vector_set(f, i, model - data.y[i]);
+// The fit's problem: data scaled to order 1 over bins first..last, p = 3 * components
+// parameters (amplitude, centre, sigma of each), and the Gaussians' unit profiles at the point
+// last evaluated (exp[k * bins + i - first]; zero beyond the cutoff), allocated once per fit.
+struct Problem {
+  std::span<const double> values;
+  int first = 0, last = 0, p = 0;
+  double inverse_scale = 1.0;
+  std::vector<double> profile;
+  std::array<int, kMaxFitComponents> lo{}, hi{};  // each component's bins within the cutoff
+
+  int bins() const { return last - first + 1; }
+};
+
+// Fills component k's unit profile exp(-(i - c)^2 / (2 s^2)) over its reach by the recurrence
+// g(i + 1) = g(i) r(i), r(i + 1) = r(i) exp(-1 / s^2): two exponentials per component instead
+// of one per bin (the round-off over a few hundred bins stays near 1e-14).
+void fill_profile(Problem& problem, int k, double center, double sigma) {
+  double* e = problem.profile.data() + static_cast<std::size_t>(k) * problem.bins();
+  std::fill(e, e + problem.bins(), 0.0);
+  const double reach = kCutoffSigmas * sigma;
+  const int lo = std::max(problem.first, static_cast<int>(std::ceil(center - reach)));
+  const int hi = std::min(problem.last, static_cast<int>(std::floor(center + reach)));
+  problem.lo[k] = lo, problem.hi[k] = hi;
+  if (lo > hi) return;
+  const double inverse_variance = 1.0 / (sigma * sigma);
+  const double d = lo - center;
+  double g = std::exp(-0.5 * d * d * inverse_variance);
+  double ratio = std::exp(-(d + 0.5) * inverse_variance);
+  const double step = std::exp(-inverse_variance);
+  for (int i = lo; i <= hi; ++i) {
+    e[i - problem.first] = g;
+    g *= ratio;
+    ratio *= step;
   }
-  return GSL_SUCCESS;
 }
 
-int jacobian(const gsl_vector* x, void* params, gsl_matrix* J) {
-  const auto& data = *static_cast<const FitData*>(params);
-  const std::size_t components = x->size / 3;
-  for (std::size_t i = 0; i < data.y.size(); ++i) {
-    const double t = data.first + static_cast<double>(i);
-    for (std::size_t k = 0; k < components; ++k) {
-      const double a = gsl_vector_get(x, 3 * k), c = gsl_vector_get(x, 3 * k + 1);
-      const double s = gsl_vector_get(x, 3 * k + 2);
-      const double d = t - c;
-      const double e =
-          std::abs(d) < kCutoffSigmas * std::abs(s) ? std::exp(-0.5 * d * d / (s * s)) : 0.0;
-      gsl_matrix_set(J, i, 3 * k, e);
-      gsl_matrix_set(J, i, 3 * k + 1, a * e * d / (s * s));
-      gsl_matrix_set(J, i, 3 * k + 2, a * e * d * d / (s * s * s));
+// Sum of squared residuals at x, the profiles left at x; +inf when a width is not positive or a
+// value not finite.
+double cost(Problem& problem, const Vector& x) {
+  for (int k = 0; k < problem.p; k += 3)
+    if (!(x[k + 2] > 1e-3) || !std::isfinite(x[k]) || !std::isfinite(x[k + 1]))
+      return std::numeric_limits<double>::infinity();
+  for (int k = 0; k < problem.p / 3; ++k) fill_profile(problem, k, x[3 * k + 1], x[3 * k + 2]);
+  const int n = problem.bins();
+  double sum = 0.0;
+  for (int j = 0; j < n; ++j) {
+    double model = 0.0;
+    for (int k = 0; k < problem.p / 3; ++k) model += x[3 * k] * problem.profile[k * n + j];
+    const double r = model - problem.values[problem.first + j] * problem.inverse_scale;
+    sum += r * r;
+  }
+  return sum;
+}
+
+// J^T J (upper triangle) and J^T r at x (whose profiles the problem holds), one bin's row at a
+// time: only the parameters of the components within reach of the bin take part.
+void normal_equations(const Problem& problem, const Vector& x, Matrix& jtj, Vector& jtr) {
+  for (int a = 0; a < problem.p; ++a) {
+    jtr[a] = 0.0;
+    for (int b = a; b < problem.p; ++b) jtj[a][b] = 0.0;
+  }
+  const int n = problem.bins();
+  std::array<double, kMaxParameters> row{};
+  std::array<int, kMaxParameters> index{};
+  for (int i = problem.first; i <= problem.last; ++i) {
+    int active = 0;
+    double model = 0.0;
+    for (int k = 0; k < problem.p / 3; ++k) {
+      if (i < problem.lo[k] || i > problem.hi[k]) continue;
+      const double a = x[3 * k], s = x[3 * k + 2], u = (i - x[3 * k + 1]) / s;
+      const double e = problem.profile[k * n + i - problem.first];
+      model += a * e;
+      row[active] = e, index[active++] = 3 * k;
+      row[active] = a * e * u / s, index[active++] = 3 * k + 1;
+      row[active] = a * e * u * u / s, index[active++] = 3 * k + 2;
+    }
+    const double r = model - problem.values[i] * problem.inverse_scale;
+    for (int m = 0; m < active; ++m) {
+      jtr[index[m]] += row[m] * r;
+      for (int q = m; q < active; ++q) jtj[index[m]][index[q]] += row[m] * row[q];
     }
   }
-  return GSL_SUCCESS;
+}
+
+// Solves (J^T J + lambda D) delta = -J^T r by Cholesky; false when not positive definite.
+bool solve_step(const Matrix& jtj, const Vector& jtr, const Vector& diagonal, double lambda, int p,
+                Vector& delta) {
+  Matrix l{};
+  for (int a = 0; a < p; ++a) {
+    for (int b = 0; b <= a; ++b) {
+      double sum = b == a ? jtj[a][a] + lambda * diagonal[a] : jtj[b][a];
+      for (int c = 0; c < b; ++c) sum -= l[a][c] * l[b][c];
+      if (b == a) {
+        if (!(sum > 0.0)) return false;
+        l[a][a] = std::sqrt(sum);
+      } else {
+        l[a][b] = sum / l[b][b];
+      }
+    }
+  }
+  Vector z{};
+  for (int a = 0; a < p; ++a) {
+    double sum = -jtr[a];
+    for (int c = 0; c < a; ++c) sum -= l[a][c] * z[c];
+    z[a] = sum / l[a][a];
+  }
+  for (int a = p - 1; a >= 0; --a) {
+    double sum = z[a];
+    for (int c = a + 1; c < p; ++c) sum -= l[c][a] * delta[c];
+    delta[a] = sum / l[a][a];
+  }
+  return true;
+}
+
+// Levenberg-Marquardt with Moré's scaling (the largest diagonal of J^T J seen so far): a
+// rejected step raises lambda and tries again with the same Jacobian. Stops when a step moves
+// every parameter by less than 1e-8 of itself (far finer than a waveform resolves), when the
+// cost stops falling, or at the cap.
+void levenberg_marquardt(Problem& problem, Vector& x) {
+  Matrix jtj{};
+  Vector jtr{}, diagonal{}, delta{}, trial{};
+  double current = cost(problem, x);
+  if (!std::isfinite(current)) return;
+  double lambda = 1e-3;
+  for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
+    normal_equations(problem, x, jtj, jtr);
+    for (int a = 0; a < problem.p; ++a) diagonal[a] = std::max(diagonal[a], jtj[a][a]);
+    bool accepted = false, converged = false;
+    for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
+      if (solve_step(jtj, jtr, diagonal, lambda, problem.p, delta)) {
+        converged = true;
+        for (int a = 0; a < problem.p; ++a) {
+          trial[a] = x[a] + delta[a];
+          if (std::abs(delta[a]) > 1e-8 * (std::abs(x[a]) + 1e-8)) converged = false;
+        }
+        const double next = cost(problem, trial);
+        if (next <= current) {
+          accepted = true;
+          // Less than 1e-9 of the misfit gained: as good as the data allows.
+          const bool stalled = next > current * (1.0 - 1e-9);
+          x = trial;
+          current = next;
+          lambda = std::max(lambda / 3.0, 1e-12);
+          if (stalled) converged = true;
+          break;
+        }
+      }
+      if (converged) break;
+      lambda *= 4.0;
+    }
+    if (!accepted || converged) return;
+  }
 }
 
 double model_at(const std::vector<GaussianComponent>& components, double x) {
@@ -95,39 +193,15 @@ double sum_of_squares(std::span<const double> values, int first, int last,
   return sum;
 }
 
-// Half width at half maximum of the peak at `peak` in `s` (the nearer side, since the other
-// may run into a neighbouring peak), in bins; the whole range when it never falls to half.
-double half_width(std::span<const double> s, int peak, int first, int last) {
-  const double half = 0.5 * s[peak];
-  double best = static_cast<double>(last - first + 1);
-  for (int i = peak - 1; i >= first; --i) {
-    if (s[i] <= half) {
-      best = std::min(best, peak - i - (half - s[i]) / (s[i + 1] - s[i] + 1e-300));
-      break;
-    }
-  }
-  for (int i = peak + 1; i <= last; ++i) {
-    if (s[i] <= half) {
-      best = std::min(best, i - peak - (half - s[i]) / (s[i - 1] - s[i] + 1e-300));
-      break;
-    }
-  }
-  return std::max(best, 0.5);
-}
-
-// A first guess for a peak at bin `peak` of the smoothed waveform: the width seen through the
-// filter with the filter taken out, never below the pulse.
-GaussianComponent guess(std::span<const double> values, std::span<const double> smoothed, int peak,
-                        int first, int last, const DecompositionSettings& settings) {
-  const double seen = half_width(smoothed, peak, first, last) / std::sqrt(2.0 * std::numbers::ln2);
+// A smoothed Gaussian of seen width `seen` with the filter taken out, never narrower than the
+// pulse allows; its amplitude undoes the filter's lowering of the peak (sigma / seen).
+GaussianComponent unsmoothed(double smoothed_amplitude, double center_bin, double seen,
+                             const DecompositionSettings& settings) {
   const double filter = settings.smooth_sigma_bins;
   const double sigma = std::sqrt(std::max(seen * seen - filter * filter,
                                           1.2 * settings.min_sigma_bins * settings.min_sigma_bins));
-  // The filter lowers a peak by sigma / sqrt(sigma^2 + filter^2): undo that on the smoothed value,
-  // which is steadier under noise than the raw bin.
-  const double amplitude =
-      std::max(values[peak], smoothed[peak] * std::sqrt(sigma * sigma + filter * filter) / sigma);
-  return {amplitude, static_cast<double>(peak), sigma};
+  return {smoothed_amplitude * std::sqrt(sigma * sigma + filter * filter) / sigma, center_bin,
+          sigma};
 }
 
 // The peak of a component as the smoothing filter shows it: what the threshold is compared with.
@@ -167,56 +241,26 @@ std::vector<double> gaussian_smooth(std::span<const double> values, double sigma
 
 std::vector<GaussianComponent> fit_gaussians(std::span<const double> values, int first, int last,
                                              const std::vector<GaussianComponent>& initial) {
-  silence_gsl();
-  const std::size_t n = static_cast<std::size_t>(last - first + 1);
-  const std::size_t p = 3 * initial.size();
-  if (initial.empty() || n < p || first < 0 || last >= static_cast<int>(values.size()))
+  const int p = 3 * static_cast<int>(initial.size());
+  if (initial.empty() || p > kMaxParameters || last - first + 1 < p || first < 0 ||
+      last >= static_cast<int>(values.size()))
     return initial;
-
   // Scaled to order 1, so that the tolerances mean the same for any power level.
   double scale = 0.0;
   for (int i = first; i <= last; ++i) scale = std::max(scale, std::abs(values[i]));
   if (!(scale > 0.0) || !std::isfinite(scale)) return initial;
-  std::vector<double> y(n);
-  for (std::size_t i = 0; i < n; ++i) y[i] = values[first + i] / scale;
-  FitData data{y, first};
-
-  std::unique_ptr<gsl_vector, VectorFree> x(gsl_vector_alloc(p));
+  Problem problem{values, first, last, p, 1.0 / scale, {}, {}, {}};
+  problem.profile.resize(initial.size() * static_cast<std::size_t>(problem.bins()));
+  Vector x{};
   for (std::size_t k = 0; k < initial.size(); ++k) {
-    const GaussianComponent& g = initial[k];
-    gsl_vector_set(x.get(), 3 * k, g.amplitude / scale);
-    gsl_vector_set(x.get(), 3 * k + 1, g.center_bin);
-    gsl_vector_set(x.get(), 3 * k + 2, g.sigma_bins);
+    x[3 * k] = initial[k].amplitude / scale;
+    x[3 * k + 1] = initial[k].center_bin;
+    x[3 * k + 2] = std::abs(initial[k].sigma_bins);
   }
-
-  gsl_multifit_nlinear_fdf fdf{};
-  fdf.f = residuals;
-  fdf.df = jacobian;
-  fdf.fvv = nullptr;
-  fdf.n = n;
-  fdf.p = p;
-  fdf.params = &data;
-  gsl_multifit_nlinear_parameters parameters = gsl_multifit_nlinear_default_parameters();
-  parameters.scale = gsl_multifit_nlinear_scale_more;
-  // Normal equations by Cholesky: a few times faster than the default QR on a few hundred bins,
-  // and accurate enough with the data scaled to order 1.
-  parameters.solver = gsl_multifit_nlinear_solver_cholesky;
-  std::unique_ptr<gsl_multifit_nlinear_workspace, WorkspaceFree> workspace(
-      gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &parameters, n, p));
-  if (!workspace || gsl_multifit_nlinear_init(x.get(), &fdf, workspace.get()) != GSL_SUCCESS)
-    return initial;
-  int info = 0;
-  // Not converging within the iterations (GSL_EMAXITER) or making no more progress
-  // (GSL_ENOPROG) still leaves the best point found, which is what is wanted. A step below
-  // 1e-7 of a parameter is far finer than a waveform resolves (1e-5 bin on a centre).
-  gsl_multifit_nlinear_driver(100, 1e-7, 1e-7, 0.0, nullptr, nullptr, &info, workspace.get());
-  const gsl_vector* solution = gsl_multifit_nlinear_position(workspace.get());
-
+  levenberg_marquardt(problem, x);
   std::vector<GaussianComponent> fitted;
   for (std::size_t k = 0; k < initial.size(); ++k) {
-    GaussianComponent g{gsl_vector_get(solution, 3 * k) * scale,
-                        gsl_vector_get(solution, 3 * k + 1),
-                        std::abs(gsl_vector_get(solution, 3 * k + 2))};
+    const GaussianComponent g{x[3 * k] * scale, x[3 * k + 1], std::abs(x[3 * k + 2])};
     if (!std::isfinite(g.amplitude) || !std::isfinite(g.center_bin) || !std::isfinite(g.sigma_bins))
       return initial;
     fitted.push_back(g);
@@ -226,29 +270,79 @@ std::vector<GaussianComponent> fit_gaussians(std::span<const double> values, int
 
 namespace {
 
-// Initial guesses: the local maxima of the smoothed waveform above the level, strongest first,
-// at most max_components. A monotonic signal (cut by the window's edge) gives its highest bin;
-// none above the level gives none.
-std::vector<int> initial_peaks(std::span<const double> smoothed, int first, int last,
-                               const DecompositionSettings& settings) {
+// First guesses from the curvature of the smoothed waveform (as GLA14 and GEDI L2A): each
+// stretch between two inflection points where it bends down holds one Gaussian, centred where
+// it bends most, its width half the distance between the inflections (a Gaussian's inflections
+// lie at +-sigma), its height the larger of the smoothed value and the curvature's estimate
+// (-s'' sigma^2), never above the value there. A shoulder in a neighbour's flank, which is no
+// local maximum, is found as well. Strongest (by area) first, at most max_components; those
+// whose height does not clear the level are none.
+std::vector<GaussianComponent> curvature_guesses(std::span<const double> smoothed, int first,
+                                                 int last, const DecompositionSettings& settings) {
   const int n = static_cast<int>(smoothed.size());
-  const double level = settings.significance_level;
-  std::vector<int> peaks;
-  for (int i = std::max(first, 1); i <= std::min(last, n - 2); ++i) {
-    if (smoothed[i] > level && smoothed[i] > smoothed[i - 1] && smoothed[i] >= smoothed[i + 1])
-      peaks.push_back(i);
+  auto curvature = [&](int i) { return smoothed[i + 1] - 2.0 * smoothed[i] + smoothed[i - 1]; };
+  std::vector<GaussianComponent> guesses;
+  const int lo = std::max(first, 1), hi = std::min(last, n - 2);
+  for (int i = lo; i <= hi; ++i) {
+    if (!(curvature(i) < 0.0)) continue;
+    const int begin = i;
+    int deepest = i;
+    while (i + 1 <= hi && curvature(i + 1) < 0.0) {
+      ++i;
+      if (curvature(i) < curvature(deepest)) deepest = i;
+    }
+    // Inflections interpolated where the curvature crosses 0 (or the window's edge).
+    const double left =
+        begin > lo ? begin - 1 + curvature(begin - 1) / (curvature(begin - 1) - curvature(begin))
+                   : static_cast<double>(begin);
+    const double right =
+        i < hi ? i + curvature(i) / (curvature(i) - curvature(i + 1)) : static_cast<double>(i);
+    const double seen = std::max(0.5 * (right - left), 0.5);
+    // Vertex of a parabola through the curvature's three values about its minimum.
+    double center = deepest;
+    if (deepest > lo && deepest < hi) {
+      const double a = curvature(deepest - 1), b = curvature(deepest), c = curvature(deepest + 1);
+      const double denominator = a - 2.0 * b + c;
+      if (denominator > 0.0) center += std::clamp(0.5 * (a - c) / denominator, -0.5, 0.5);
+    }
+    const double height =
+        std::min(smoothed[deepest], std::max(-curvature(deepest) * seen * seen, 0.0));
+    if (!(height > settings.significance_level)) continue;
+    guesses.push_back(unsmoothed(height, center, seen, settings));
   }
-  if (peaks.empty()) {
-    int best = first;
-    for (int i = first; i <= last; ++i)
-      if (smoothed[i] > smoothed[best]) best = i;
-    if (!(smoothed[best] > level)) return {};
-    peaks.push_back(best);
+  std::sort(
+      guesses.begin(), guesses.end(),
+      [](const GaussianComponent& a, const GaussianComponent& b) { return a.area() > b.area(); });
+  if (static_cast<int>(guesses.size()) > settings.max_components)
+    guesses.resize(settings.max_components);
+  return guesses;
+}
+
+// Half width at half maximum of the peak at `peak` in `s` (the nearer side, since the other
+// may run into a neighbouring peak), in bins; the whole range when it never falls to half.
+double half_width(std::span<const double> s, int peak, int first, int last) {
+  const double half = 0.5 * s[peak];
+  double best = static_cast<double>(last - first + 1);
+  for (int i = peak - 1; i >= first; --i) {
+    if (s[i] <= half) {
+      best = std::min(best, peak - i - (half - s[i]) / (s[i + 1] - s[i] + 1e-300));
+      break;
+    }
   }
-  std::sort(peaks.begin(), peaks.end(), [&](int a, int b) { return smoothed[a] > smoothed[b]; });
-  if (static_cast<int>(peaks.size()) > settings.max_components)
-    peaks.resize(settings.max_components);
-  return peaks;
+  for (int i = peak + 1; i <= last; ++i) {
+    if (s[i] <= half) {
+      best = std::min(best, i - peak - (half - s[i]) / (s[i - 1] - s[i] + 1e-300));
+      break;
+    }
+  }
+  return std::max(best, 0.5);
+}
+
+// A guess for the highest bin of a smoothed residual: its width from the half maximum.
+GaussianComponent peak_guess(std::span<const double> smoothed, int peak, int first, int last,
+                             const DecompositionSettings& settings) {
+  const double seen = half_width(smoothed, peak, first, last) / std::sqrt(2.0 * std::numbers::ln2);
+  return unsmoothed(smoothed[peak], peak, seen, settings);
 }
 
 // Signal the fit leaves in the residual (a peak hidden in its neighbour's flank, most often)
@@ -257,19 +351,25 @@ std::vector<GaussianComponent> add_residual_components(std::span<const double> v
                                                        int last,
                                                        std::vector<GaussianComponent> components,
                                                        const DecompositionSettings& settings) {
-  const int n = static_cast<int>(values.size());
   double misfit = sum_of_squares(values, first, last, components);
-  std::vector<double> residual(n, 0.0);
+  // Only the window and the smoothing filter's reach beyond it are needed.
+  const int reach = static_cast<int>(std::ceil(4.0 * settings.smooth_sigma_bins));
+  const int lo = std::max(first - reach, 0);
+  const int hi = std::min(last + reach, static_cast<int>(values.size()) - 1);
+  std::vector<double> residual(hi - lo + 1);
   while (static_cast<int>(components.size()) < settings.max_components) {
-    for (int i = 0; i < n; ++i) residual[i] = values[i] - model_at(components, i);
+    for (int i = lo; i <= hi; ++i) residual[i - lo] = values[i] - model_at(components, i);
     const std::vector<double> smooth_residual =
         gaussian_smooth(residual, settings.smooth_sigma_bins);
     int best = first;
     for (int i = first; i <= last; ++i)
-      if (smooth_residual[i] > smooth_residual[best]) best = i;
-    if (!(smooth_residual[best] > settings.significance_level)) break;
+      if (smooth_residual[i - lo] > smooth_residual[best - lo]) best = i;
+    if (!(smooth_residual[best - lo] > settings.significance_level)) break;
     std::vector<GaussianComponent> trial = components;
-    trial.push_back(guess(residual, smooth_residual, best, first, last, settings));
+    GaussianComponent added =
+        peak_guess(smooth_residual, best - lo, first - lo, last - lo, settings);
+    added.center_bin += lo;
+    trial.push_back(added);
     trial = fit_gaussians(values, first, last, trial);
     const double trial_misfit = sum_of_squares(values, first, last, trial);
     if (!(trial_misfit < 0.98 * misfit)) break;
@@ -283,8 +383,8 @@ std::vector<GaussianComponent> add_residual_components(std::span<const double> v
 // the level, it holds its share of the energy, and it stays on the signal.
 bool significant(const GaussianComponent& g, double total_area, int first, int last,
                  const DecompositionSettings& settings) {
-  return g.amplitude > 0.0 &&
-         smoothed_peak(g, settings.smooth_sigma_bins) > settings.significance_level &&
+  const double peak = smoothed_peak(g, settings.smooth_sigma_bins);
+  return g.amplitude > 0.0 && peak > settings.significance_level &&
          g.area() >= settings.min_area_fraction * total_area && g.center_bin >= first &&
          g.center_bin <= last && g.sigma_bins >= 0.5 * settings.min_sigma_bins &&
          g.sigma_bins < (last - first + 1);
@@ -293,10 +393,10 @@ bool significant(const GaussianComponent& g, double total_area, int first, int l
 // Components that are not significant go, and the rest are fitted again without them, until
 // all that are left are significant. When none passes on its own (a noisy return the components
 // shared out between them), the signal is still there: it is described by the one Gaussian of
-// its strongest peak.
+// its highest smoothed bin.
 std::vector<GaussianComponent> drop_insignificant(std::span<const double> values,
                                                   std::span<const double> smoothed, int first,
-                                                  int last, int strongest_peak,
+                                                  int last,
                                                   std::vector<GaussianComponent> components,
                                                   const DecompositionSettings& settings) {
   for (int round = 0; round < settings.max_components && !components.empty(); ++round) {
@@ -307,8 +407,11 @@ std::vector<GaussianComponent> drop_insignificant(std::span<const double> values
       if (significant(g, total_area, first, last, settings)) kept.push_back(g);
     if (kept.size() == components.size()) break;
     if (kept.empty()) {
-      std::vector<GaussianComponent> single = fit_gaussians(
-          values, first, last, {guess(values, smoothed, strongest_peak, first, last, settings)});
+      const int peak =
+          static_cast<int>(std::max_element(smoothed.begin() + first, smoothed.begin() + last + 1) -
+                           smoothed.begin());
+      std::vector<GaussianComponent> single =
+          fit_gaussians(values, first, last, {peak_guess(smoothed, peak, first, last, settings)});
       components.clear();
       if (!single.empty() && single.front().amplitude > 0.0 &&
           std::isfinite(single.front().sigma_bins) && single.front().center_bin >= first &&
@@ -329,15 +432,20 @@ std::vector<GaussianComponent> decompose_waveform(std::span<const double> values
   first = std::max(first, 0);
   last = std::min(last, n - 1);
   if (last - first < 2 || settings.max_components < 1) return {};
-  const std::vector<double> smoothed = gaussian_smooth(values, settings.smooth_sigma_bins);
-  const std::vector<int> peaks = initial_peaks(smoothed, first, last, settings);
-  if (peaks.empty()) return {};
-  std::vector<GaussianComponent> components;
-  for (int peak : peaks) components.push_back(guess(values, smoothed, peak, first, last, settings));
+  DecompositionSettings capped = settings;
+  capped.max_components = std::min(settings.max_components, kMaxFitComponents);
+  const std::vector<double> smoothed = gaussian_smooth(values, capped.smooth_sigma_bins);
+  std::vector<GaussianComponent> components = curvature_guesses(smoothed, first, last, capped);
+  if (components.empty()) {
+    // A return cut by the window's edge may not bend down inside it: its highest bin.
+    const int peak = static_cast<int>(
+        std::max_element(smoothed.begin() + first, smoothed.begin() + last + 1) - smoothed.begin());
+    if (!(smoothed[peak] > capped.significance_level)) return {};
+    components.push_back(peak_guess(smoothed, peak, first, last, capped));
+  }
   components = fit_gaussians(values, first, last, components);
-  components = add_residual_components(values, first, last, std::move(components), settings);
-  components = drop_insignificant(values, smoothed, first, last, peaks.front(),
-                                  std::move(components), settings);
+  components = add_residual_components(values, first, last, std::move(components), capped);
+  components = drop_insignificant(values, smoothed, first, last, std::move(components), capped);
   std::sort(components.begin(), components.end(),
             [](const GaussianComponent& a, const GaussianComponent& b) {
               return a.center_bin < b.center_bin;

@@ -1,14 +1,18 @@
 // Decomposition of a waveform into a sum of Gaussians (Hofton et al. 2000, as GLA14 and GEDI
-// L2A do): initial guesses from the peaks of a smoothed waveform, a non-linear least-squares fit
-// with GSL's multifit_nlinear, components added where the residual still holds signal and
-// dropped when they are not significant. Works in bin units; the caller turns them into times
-// and elevations.
+// L2A do): initial guesses from the inflection points and curvature of a smoothed waveform, a
+// Levenberg-Marquardt fit of our own over the signal's window (analytic Jacobian, at most
+// kMaxFitComponents Gaussians in fixed arrays, no allocation per iteration, an iteration cap),
+// components added where the residual still holds signal and dropped when they are not
+// significant. Works in bin units; the caller turns them into times and elevations.
 #pragma once
 
 #include <span>
 #include <vector>
 
 namespace glaswave {
+
+// The most Gaussians one fit takes (its fixed arrays' size); max_components is capped at it.
+constexpr int kMaxFitComponents = 6;
 
 // One component: amplitude * exp(-(x - center)^2 / (2 sigma^2)), x the bin index.
 struct GaussianComponent {
@@ -41,7 +45,8 @@ std::vector<double> gaussian_smooth(std::span<const double> values, double sigma
 
 // Least-squares fit of `initial.size()` Gaussians to values[first..last] (inclusive), from the
 // initial guesses, every parameter free. Returns the fitted components, or the initial ones
-// unchanged when GSL fails outright. `values` has the noise level removed.
+// unchanged when the fit cannot start (more than kMaxFitComponents, fewer bins than parameters,
+// nothing but zeros) or ends on a non-finite value. `values` has the noise level removed.
 std::vector<GaussianComponent> fit_gaussians(std::span<const double> values, int first, int last,
                                              const std::vector<GaussianComponent>& initial);
 

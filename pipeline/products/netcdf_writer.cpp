@@ -444,13 +444,16 @@ struct NetcdfWriter::Impl {
         put_flags(variable.varid, "quality_flag", values, "not_valid valid");
       }
       if (std::string_view(variable.def->name) == "quality_reason") {
-        const unsigned char values[] = {reason_none, reason_off_terrain, reason_nodata};
-        put_flags(variable.varid, "quality_reason", values, "none off_terrain nodata");
+        const unsigned char values[] = {reason_none, reason_off_terrain, reason_nodata,
+                                        reason_no_signal, reason_low_signal};
+        put_flags(variable.varid, "quality_reason", values,
+                  "none off_terrain nodata no_signal low_signal");
         put_text(variable.varid, "quality_reason", "comment",
                  "off_terrain: the beam's axis met no terrain (off the DEM, or into a nodata "
                  "hole); nodata: it met the terrain, but nodata or the DEM's edge lies within 3 "
-                 "sigma of the beam. Values 3 and up are kept for reasons "
-                 "found in the waveform (no signal, low signal, saturated).");
+                 "sigma of the beam; no_signal: no band's waveform rises above its threshold; "
+                 "low_signal: no band's peak stands 8 noise sd above the noise. Values 5 and up "
+                 "are kept for more reasons found in the waveform (saturated).");
       }
     }
   }

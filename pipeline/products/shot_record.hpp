@@ -24,12 +24,14 @@ enum QualityFlag : std::uint8_t {
   quality_good = 1,
 };
 
-// quality_reason values: why a shot is not valid. Values 3 and up are kept for the reasons a
-// waveform test would give (no signal, low signal, saturated); nothing detects them yet.
+// quality_reason values: why a shot is not valid. Values from 3 are those the waveform gives
+// (waveform_metrics.hpp); 5 and up are kept for more (saturated).
 enum QualityReason : std::uint8_t {
   reason_none = 0,
   reason_off_terrain = 1,  // the beam's axis met no terrain: off the DEM, or into a nodata hole
   reason_nodata = 2,       // it met the terrain, but nodata or the DEM's edge is within 3 sigma
+  reason_no_signal = 3,    // no band's waveform rises above its threshold
+  reason_low_signal = 4,   // no band's peak stands low_signal_sigmas above the detector's noise
 };
 
 struct ShotRecord {

@@ -263,6 +263,8 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
   m.threshold_W = noise.mean + above;
   m.energy_tr_J = m.energy_cr_J = m.energy_gr_J = 0.0;
   if (!(peak > m.threshold_W) || !(above > 0.0)) return m;  // no signal
+  m.signal = peak - noise.mean < settings.low_signal_sigmas * noise.sd ? SignalQuality::low
+                                                                       : SignalQuality::good;
 
   const Extent extent = signal_extent(smoothed, m.threshold_W);
   m.sig_begin_bin = extent.begin;
@@ -286,10 +288,16 @@ std::vector<double> process_shot_waveforms(ShotRecord& record, double bin_ns,
   fill_fields(record, FieldSource::metrics, ProductShape{.bands = bands});
   std::vector<double> noise_mean_W(bands, nan);
   if (record.quality_flag != quality_good) return noise_mean_W;
+  SignalQuality best = SignalQuality::none;
   for (std::size_t band = 0; band < bands; ++band) {
     const WaveformMetrics m = process_waveform(record.rx_waveform_W[band], axis, settings);
     store_metrics(record, band, m);
     noise_mean_W[band] = m.noise_mean_W;
+    best = std::min(best, m.signal);  // good < low < none
+  }
+  if (bands > 0 && best != SignalQuality::good) {
+    record.quality_flag = quality_invalid;
+    record.quality_reason = best == SignalQuality::none ? reason_no_signal : reason_low_signal;
   }
   return noise_mean_W;
 }

@@ -29,6 +29,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -59,12 +60,19 @@ struct WaveformProcessing {
   double peak_fraction = 0.01;
   double noise_fraction = 0.15;  // of the bins at each end of the window, for the noise level
   double min_gaussian_area_fraction = 0.005;
+  // A waveform whose smoothed peak stands less than this many noise sd above the noise mean
+  // (the detector's noise, measured) is "low signal"; nothing above the threshold: "no signal".
+  double low_signal_sigmas = 8.0;
 };
+
+// What the waveform holds, for the shot's quality_flag and quality_reason.
+enum class SignalQuality { good, low, none };
 
 struct WaveformMetrics {
   double noise_mean_W = 0.0;
   double noise_sd_W = 0.0;   // of the smoothed waveform (the raw noise RMS through the filter)
   double threshold_W = 0.0;  // on the smoothed waveform, noise mean included
+  SignalQuality signal = SignalQuality::none;
   double energy_tr_J = 0.0, energy_cr_J = 0.0, energy_gr_J = 0.0;
   double waveform_index = 0.0;                                  // (CR - GR) / (CR + GR)
   double sig_begin_m = 0.0, sig_end_m = 0.0, centroid_m = 0.0;  // elevations
@@ -90,8 +98,9 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
 
 // Processes every band of record.rx_waveform_W (bins of `bin_ns`, between elev_bin0_m and
 // elev_lastbin_m) and stores the metrics in the record's per-band fields. A band whose waveform
-// is fill (a flagged shot) gets fill, with n_peaks 0. Returns each band's noise mean (W), 0 for
-// a noise-free waveform.
+// is fill (a flagged shot) gets fill, with n_peaks 0. A shot none of whose bands has signal is
+// flagged (quality_flag 0) "no signal"; one none of whose bands has more than a low signal, "low
+// signal"; the metrics stay. Returns each band's noise mean (W), 0 for a noise-free waveform.
 std::vector<double> process_shot_waveforms(ShotRecord& record, double bin_ns,
                                            const WaveformProcessing& settings);
 

@@ -83,8 +83,9 @@ def test_quality_flag_is_gedis_and_the_reason_says_why(write_config, tmp_path):
     flag, reason = ds["quality_flag"], ds["quality_reason"]
     assert list(flag.attrs["flag_values"]) == [0, 1]
     assert flag.attrs["flag_meanings"].split() == ["not_valid", "valid"]
-    assert list(reason.attrs["flag_values"]) == [0, 1, 2]
-    assert reason.attrs["flag_meanings"].split() == ["none", "off_terrain", "nodata"]
+    assert list(reason.attrs["flag_values"]) == [0, 1, 2, 3, 4]
+    assert reason.attrs["flag_meanings"].split() == [
+        "none", "off_terrain", "nodata", "no_signal", "low_signal"]
     # The hole's centre (shot 3) and past the raster (9): no terrain on the beam's axis; shot 8
     # has the raster's edge under its beam.
     assert list(flag.values) == [1, 1, 1, 0, 1, 1, 1, 1, 0, 0]

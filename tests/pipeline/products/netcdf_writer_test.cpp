@@ -478,15 +478,13 @@ TEST_F(NetcdfWriterTest, CfAttributes) {
   EXPECT_EQ(nc.text(flag, "flag_meanings"), "not_valid valid");
   const int reason = nc.var("quality_reason");
   EXPECT_EQ(nc.type_of("quality_reason"), NC_UBYTE);
-  unsigned char reason_values[3] = {9, 9, 9};
+  unsigned char reason_values[5] = {9, 9, 9, 9, 9};
   ASSERT_EQ(nc_inq_att(nc.id(), reason, "flag_values", &type, &length), NC_NOERR);
   EXPECT_EQ(type, NC_UBYTE);
-  ASSERT_EQ(length, 3u);
+  ASSERT_EQ(length, 5u);
   ASSERT_EQ(nc_get_att_uchar(nc.id(), reason, "flag_values", reason_values), NC_NOERR);
-  EXPECT_EQ(reason_values[0], 0);
-  EXPECT_EQ(reason_values[1], 1);
-  EXPECT_EQ(reason_values[2], 2);
-  EXPECT_EQ(nc.text(reason, "flag_meanings"), "none off_terrain nodata");
+  for (unsigned char k = 0; k < 5; ++k) EXPECT_EQ(reason_values[k], k);
+  EXPECT_EQ(nc.text(reason, "flag_meanings"), "none off_terrain nodata no_signal low_signal");
 }
 
 // What a GEDI or GLAS user's tools look for: the coordinates of the shot and band dimensions,

@@ -186,6 +186,46 @@ TEST(WaveformMetrics, NoSignal) {
   EXPECT_TRUE(std::isnan(fill.energy_tr_J));
 }
 
+// A shot none of whose bands rises above its threshold is flagged "no signal"; one whose best
+// peak stands under 8 detector-noise sd above the noise, "low signal"; a clear one stays valid.
+TEST(ProcessShotWaveforms, NoSignalAndLowSignalAreFlagged) {
+  auto shot = [](const std::vector<std::vector<double>>& waveforms) {
+    ShotRecord record;
+    record.elev_bin0_m = kAxis.elev_bin0_m;
+    record.elev_lastbin_m = kAxis.elev_lastbin_m;
+    record.rx_waveform_W = waveforms;
+    return record;
+  };
+  ShotRecord empty = shot({std::vector<double>(kBins, 0.0), std::vector<double>(kBins, 0.0)});
+  process_shot_waveforms(empty, kBinNs, noise_free());
+  EXPECT_EQ(empty.quality_flag, quality_invalid);
+  EXPECT_EQ(empty.quality_reason, reason_no_signal);
+
+  // Noise of 0.01e-6 W RMS is 0.0024e-6 W through the 5-bin filter: a pulse of 0.04e-6 W
+  // (0.028e-6 smoothed, 12 sd) is clear, one of 0.02e-6 W (6 sd) is above the 4-sd threshold
+  // but low.
+  const double noise_W = 0.01e-6;
+  auto noisy = [&](double amplitude_W, unsigned seed) {
+    auto values = gaussians({{amplitude_W, 200.0, kPulseNs}});
+    std::mt19937_64 engine(seed);
+    std::normal_distribution<double> normal(0.0, noise_W);
+    for (double& v : values) v += normal(engine);
+    return values;
+  };
+  WaveformProcessing detected = noise_free();
+  detected.noise_free = false;
+  ShotRecord low = shot({noisy(0.02e-6, 3), std::vector<double>(kBins, 0.0)});
+  process_shot_waveforms(low, kBinNs, detected);
+  EXPECT_EQ(low.quality_flag, quality_invalid);
+  EXPECT_EQ(low.quality_reason, reason_low_signal);
+  EXPECT_EQ(low.n_peaks[0], 1) << "the metrics stay";
+
+  ShotRecord clear = shot({noisy(0.02e-6, 3), noisy(0.04e-6, 4)});
+  process_shot_waveforms(clear, kBinNs, detected);
+  EXPECT_EQ(clear.quality_flag, quality_good) << "one clear band makes the shot valid";
+  EXPECT_EQ(clear.quality_reason, reason_none);
+}
+
 TEST(ProcessShotWaveforms, FillsEveryBandAndFillsFlaggedShots) {
   ShotRecord record;
   record.elev_bin0_m = kAxis.elev_bin0_m;
