@@ -331,7 +331,7 @@ def plot_brf_validation(rows, band, path):
     ax.set_ylim(low, high)
     ax.set_xlabel("BRF, glaswave brf (retro direction, nadir)")
     ax.set_ylabel("reflectance of the integrated waveform (eq. 1)")
-    ax.set_title(f"{band} nm: {len(rows)} scenes; mean difference {bias:+.4f} "
+    ax.set_title(f"{band} nm, {len(rows)} scenes\nmean difference {bias:+.4f} "
                  f"({relative:+.1f} % of the mean BRF)", fontsize=9)
     ax.legend(fontsize=8, loc="upper left")
     figure.tight_layout()
