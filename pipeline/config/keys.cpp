@@ -286,7 +286,8 @@ Key terrain_keys() {
            object(
                "roughness",
                "random relief added under the beam (a Gaussian random field with covariance "
-               "exp(−r²/L²), fixed by position and `seed`, meshed every L/3)",
+               "exp(−r²/L²), fixed by position and `seed`, meshed every L/3, or L/2 or L where the "
+               "field of view needs more than 1024 nodes a side, else refused)",
                {number("rms_m", g.rms_m, at_least(0), "m", "RMS height of the relief"),
                 number("correlation_m", g.correlation_m, above(0), "m", "correlation length L")}),
            spectral("soil_reflectance", 0.15, closed(0, 1), "", "Lambertian soil, per band")})
