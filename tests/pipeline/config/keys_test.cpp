@@ -284,7 +284,8 @@ TEST(Readme, KeyTableIsTheOneGeneratedFromTheDeclaration) {
         << "pipeline/config/keys.cpp: run ./scripts/readme-keys";
   }
   // Every key of the schema has its row.
-  for (const auto& [key, s] : configuration_schema()["properties"]["canopy"]["properties"].items())
+  const nlohmann::json schema = configuration_schema();  // the loop below must not outlive it
+  for (const auto& [key, s] : schema["properties"]["canopy"]["properties"].items())
     EXPECT_THAT(table, HasSubstr("| `canopy." + key + "` |")) << key;
 }
 
