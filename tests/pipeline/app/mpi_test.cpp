@@ -22,15 +22,8 @@ using namespace test_support;
 // (a container) allowed; mpirun's own notices off (-q).
 CommandOutcome run_mpi(int processes, const std::string& arguments) {
   const std::string root = geteuid() == 0 ? " --allow-run-as-root" : "";
-  const std::string command = "mpirun -q --oversubscribe --mca btl self,vader" + root + " -np " +
-                              std::to_string(processes) + " " + GLASWAVE_BINARY + " " + arguments +
-                              " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+  return run_command("mpirun -q --oversubscribe --mca btl self,vader" + root + " -np " +
+                     std::to_string(processes) + " " + GLASWAVE_BINARY + " " + arguments + " 2>&1");
 }
 
 class Mpi : public ::testing::Test {

@@ -18,37 +18,15 @@ namespace {
 nlohmann::json layer_scene(int shots) {
   nlohmann::json points = nlohmann::json::array();
   for (int k = 0; k < shots; ++k) points.push_back({{"lat_deg", 0.00045 * k}, {"lon_deg", 0.0}});
-  return {
-      {"seed", 11},
-      {"sensor",
-       {{"preset", "north2010"},
-        {"bands",
-         {{{"name", "1064"},
-           {"wavelength_nm", 1064},
-           {"pulse_energy_mJ", 72},
-           {"atmos_transmission_roundtrip", 0.9}}}}}},
-      {"simulation", {{"rays_per_shot", 2000}, {"max_order", 8}}},
-      {"terrain", {{"plane", {{"elevation_m", 0.0}}}, {"soil_reflectance", 0.3}}},
-      {"canopy",
-       {{"crown_shape", "layer"},
-        {"pai", 3.0},
-        {"lad", "spherical"},
-        {"crown_base_m", {0.0, 0.0}},
-        {"crown_half_height_m", 5.0},
-        {"green_fraction", 1.0},
-        {"bark_fraction", 0.0},
-        {"leaf_size_m", 0.05},
-        {"leaf_reflectance", 0.45},
-        {"leaf_transmittance", 0.4},
-        {"dbh_m", 0.0}}},
-      {"track", {{"type", "points"}, {"points", points}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
-      {"brf",
-       {{"sun_zenith_deg", 0.0},
-        {"views", {{{"zenith_deg", 0.0}, {"azimuth_deg", 0.0}}}},
-        {"photons", 30000},
-        {"scene_size_m", 40.0}}},
-  };
+  nlohmann::json document = test_support::layer_shot(3.0, 0.05, 0.45, 0.4, 0.3, 8, 2000);
+  document["seed"] = 11;
+  document["track"]["points"] = points;
+  document["output"] = {{"netcdf", false}, {"geojson", false}};
+  document["brf"] = {{"sun_zenith_deg", 0.0},
+                     {"views", {{{"zenith_deg", 0.0}, {"azimuth_deg", 0.0}}}},
+                     {"photons", 30000},
+                     {"scene_size_m", 40.0}};
+  return document;
 }
 
 // Each footprint's reflectance over f_fov against the retro BRF: their difference within three

@@ -16,37 +16,6 @@ namespace {
 constexpr double pi = std::numbers::pi;
 constexpr double c_m_s = 299792458.0;
 
-// A nadir shot over a layer of PAI `pai` and depth 10 m sitting on level soil.
-nlohmann::json layer_shot(double pai, double leaf_size_m, double rho, double tau, double soil,
-                          int max_order, std::int64_t rays) {
-  return {
-      {"seed", 5},
-      {"sensor",
-       {{"preset", "north2010"},
-        {"bands",
-         {{{"name", "1064"},
-           {"wavelength_nm", 1064},
-           {"pulse_energy_mJ", 72},
-           {"atmos_transmission_roundtrip", 0.9}}}}}},
-      {"simulation", {{"rays_per_shot", rays}, {"max_order", max_order}}},
-      {"terrain", {{"plane", {{"elevation_m", 0.0}}}, {"soil_reflectance", soil}}},
-      {"canopy",
-       {{"crown_shape", "layer"},
-        {"pai", pai},
-        {"lad", "spherical"},
-        {"crown_base_m", {0.0, 0.0}},
-        {"crown_half_height_m", 5.0},
-        {"green_fraction", 1.0},
-        {"bark_fraction", 0.0},
-        {"leaf_size_m", leaf_size_m},
-        {"leaf_reflectance", rho},
-        {"leaf_transmittance", tau},
-        {"dbh_m", 0.0}}},
-      {"track", {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}}},
-      {"output", {{"netcdf", false}, {"geojson", false}, {"per_order", true}}},
-  };
-}
-
 struct Simulated {
   ShotRecord record;
   std::vector<double> bin_time_ns;
@@ -82,7 +51,8 @@ TEST(TurbidLayer, SingleScatteringMatchesClosedForms) {
   EXPECT_NEAR(cases[1].canopy, 0.2331, 1e-4);
   EXPECT_NEAR(cases[1].ground, 0.06694, 1e-5);
   for (const Case& c : cases) {
-    const Simulated shot = simulate(layer_shot(L, c.leaf_size_m, rho, 0.45, soil, 1, 40000));
+    const Simulated shot =
+        simulate(test_support::layer_shot(L, c.leaf_size_m, rho, 0.45, soil, 1, 40000));
     const double canopy = shot.record.rx_energy_canopy_J[0] / shot.normalisation_J;
     const double ground = shot.record.rx_energy_ground_J[0] / shot.normalisation_J;
     EXPECT_NEAR(canopy / c.canopy, 1.0, 0.02) << "leaf size " << c.leaf_size_m;
@@ -103,7 +73,7 @@ TEST(TurbidLayer, CanopyReturnFollowsItsExponentialLawWithDepth) {
   const double L = 3.0, rho = 0.45, depth_m = 10.0, u = L / depth_m;
   for (double leaf_size_m : {0.0, 0.05}) {
     const double k = leaf_size_m > 0.0 ? u / 2.0 : u;  // attenuation per metre of depth
-    nlohmann::json document = layer_shot(L, leaf_size_m, rho, 0.45, 0.0, 1, 40000);
+    nlohmann::json document = test_support::layer_shot(L, leaf_size_m, rho, 0.45, 0.0, 1, 40000);
     document["sensor"]["pulse_sigma_ns"] = 0.05;
     const Simulated shot = simulate(document);
     const auto& waveform = shot.record.rx_waveform_canopy_W[0];
@@ -129,8 +99,8 @@ TEST(TurbidLayer, CanopyReturnFollowsItsExponentialLawWithDepth) {
 // trace the same paths up to order 5 (no roulette yet), so this checks the weights each order
 // carries, not the sampling; the sampling is checked against the integral below.
 TEST(TurbidLayer, OrderEnergiesScaleAsOmegaToTheK) {
-  const Simulated white = simulate(layer_shot(3.0, 0.05, 0.5, 0.5, 0.0, 5, 20000));
-  const Simulated grey = simulate(layer_shot(3.0, 0.05, 0.3, 0.3, 0.0, 5, 20000));
+  const Simulated white = simulate(test_support::layer_shot(3.0, 0.05, 0.5, 0.5, 0.0, 5, 20000));
+  const Simulated grey = simulate(test_support::layer_shot(3.0, 0.05, 0.3, 0.3, 0.0, 5, 20000));
   for (int k = 1; k <= 5; ++k) {
     double white_J = 0, grey_J = 0;
     for (double p : white.record.rx_waveform_order_W[0][k - 1]) white_J += p;
@@ -176,7 +146,7 @@ TEST(TurbidLayer, SecondOrderMatchesThePlaneParallelIntegral) {
     }
   }
   r2 *= pi * 2 * pi;
-  nlohmann::json document = layer_shot(L, 0.0, rho, tau, 0.0, 2, 40000);
+  nlohmann::json document = test_support::layer_shot(L, 0.0, rho, tau, 0.0, 2, 40000);
   document["sensor"]["ifov_rad"] = 0.0008;
   const Simulated shot = simulate(document);
   double second_J = 0.0;
@@ -187,8 +157,8 @@ TEST(TurbidLayer, SecondOrderMatchesThePlaneParallelIntegral) {
 // Per-order waveforms do not change with max_order (PHYSICS.md section 8), and the orders add
 // up to the total.
 TEST(TurbidLayer, OrdersDoNotDependOnMaxOrderAndSumToTheTotal) {
-  const Simulated three = simulate(layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 3, 5000));
-  const Simulated eight = simulate(layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 8, 5000));
+  const Simulated three = simulate(test_support::layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 3, 5000));
+  const Simulated eight = simulate(test_support::layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 8, 5000));
   for (int k = 0; k < 3; ++k) {
     const auto& a = three.record.rx_waveform_order_W[0][k];
     const auto& b = eight.record.rx_waveform_order_W[0][k];
@@ -207,7 +177,7 @@ TEST(TurbidLayer, OrdersDoNotDependOnMaxOrderAndSumToTheTotal) {
 // on a log-log plot is -0.5 +- 0.05. A layer, so that the scene does not change with the seed.
 TEST(TurbidLayer, ErrorFallsAsTheInverseSquareRootOfTheRays) {
   auto waveform = [](std::int64_t rays, int seed) {
-    nlohmann::json document = layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 8, rays);
+    nlohmann::json document = test_support::layer_shot(3.0, 0.05, 0.45, 0.45, 0.3, 8, rays);
     document["seed"] = seed;
     return simulate(document).record.rx_waveform_W[0];
   };

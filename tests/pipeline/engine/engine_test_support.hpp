@@ -71,14 +71,49 @@ struct CommandOutcome {
   std::string output;  // stdout and stderr together
 };
 
-inline CommandOutcome run_glaswave(const std::string& arguments) {
-  const std::string command = std::string(GLASWAVE_BINARY) + " " + arguments + " 2>&1";
+// Runs a shell command line, stdout and stderr together.
+inline CommandOutcome run_command(const std::string& command) {
   FILE* pipe = popen(command.c_str(), "r");
   std::string output;
   std::array<char, 4096> buffer;
   while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
   const int status = pclose(pipe);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+inline CommandOutcome run_glaswave(const std::string& arguments) {
+  return run_command(std::string(GLASWAVE_BINARY) + " " + arguments + " 2>&1");
+}
+
+// A nadir shot over a layer of PAI `pai` and depth 10 m sitting on level soil.
+inline nlohmann::json layer_shot(double pai, double leaf_size_m, double rho, double tau,
+                                 double soil, int max_order, std::int64_t rays) {
+  return {
+      {"seed", 5},
+      {"sensor",
+       {{"preset", "north2010"},
+        {"bands",
+         {{{"name", "1064"},
+           {"wavelength_nm", 1064},
+           {"pulse_energy_mJ", 72},
+           {"atmos_transmission_roundtrip", 0.9}}}}}},
+      {"simulation", {{"rays_per_shot", rays}, {"max_order", max_order}}},
+      {"terrain", {{"plane", {{"elevation_m", 0.0}}}, {"soil_reflectance", soil}}},
+      {"canopy",
+       {{"crown_shape", "layer"},
+        {"pai", pai},
+        {"lad", "spherical"},
+        {"crown_base_m", {0.0, 0.0}},
+        {"crown_half_height_m", 5.0},
+        {"green_fraction", 1.0},
+        {"bark_fraction", 0.0},
+        {"leaf_size_m", leaf_size_m},
+        {"leaf_reflectance", rho},
+        {"leaf_transmittance", tau},
+        {"dbh_m", 0.0}}},
+      {"track", {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}}},
+      {"output", {{"netcdf", false}, {"geojson", false}, {"per_order", true}}},
+  };
 }
 
 struct Moments {
