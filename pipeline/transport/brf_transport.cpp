@@ -76,10 +76,7 @@ class SunTracer {
   double view_transmission(const Event& event, const Vec3& arriving, const Vec3& view,
                            BatchTally& tally);
   void score(const Event& event, const Vec3& arriving, BatchTally& tally);
-  void project(const Vec3& direction) {
-    for (std::size_t m = 0; m < optics_.foliage.size(); ++m)
-      projection_[m] = optics_.foliage[m].leaf_angles->projection(direction[2]);
-  }
+  void project(const Vec3& direction) { project_foliage(optics_, direction[2], projection_); }
 
   const Scene& scene_;
   const SceneOptics& optics_;

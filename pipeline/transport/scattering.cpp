@@ -80,4 +80,14 @@ double element_response(RayElement element, const Foliage* material, const Scene
   return reflectance * std::max(0.0, dot(normal, -1.0 * incoming));
 }
 
+void project_foliage(const SceneOptics& optics, double cos_zenith,
+                     std::vector<double>& projection) {
+  for (std::size_t m = 0; m < optics.foliage.size(); ++m) {
+    const LeafAngles* angles = optics.foliage[m].leaf_angles;
+    projection[m] = m > 0 && angles == optics.foliage[m - 1].leaf_angles
+                        ? projection[m - 1]
+                        : angles->projection(cos_zenith);
+  }
+}
+
 }  // namespace glaswave

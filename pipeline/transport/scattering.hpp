@@ -36,6 +36,11 @@ struct SceneOptics {
   std::vector<Foliage> foliage;          // indexed by the crowns' and trunks' material
 };
 
+// Each foliage's projected leaf area G toward a direction of this cosine from the zenith, into
+// projection (one value a foliage). Thousands of stands share a few leaf angle tables (one
+// object each): one lookup a table.
+void project_foliage(const SceneOptics& optics, double cos_zenith, std::vector<double>& projection);
+
 // Embree's float geometry needs a path leaving a surface to start a little off it.
 constexpr double surface_offset_m = 1e-4;
 // Farther than anything in a shot's scene.

@@ -357,13 +357,7 @@ bool PathTracer::survives_roulette(const Path& path, RayRandom& random) {
 }
 
 void PathTracer::project(const Vec3& direction) {
-  // Thousands of stands share a few leaf angle tables (one object each): one lookup a table.
-  for (std::size_t m = 0; m < optics_.foliage.size(); ++m) {
-    const LeafAngles* angles = optics_.foliage[m].leaf_angles;
-    projection_[m] = m > 0 && angles == optics_.foliage[m - 1].leaf_angles
-                         ? projection_[m - 1]
-                         : angles->projection(direction[2]);
-  }
+  project_foliage(optics_, direction[2], projection_);
 }
 
 // The beam's irradiance in a direction, as a density over the field of view (per sr):
