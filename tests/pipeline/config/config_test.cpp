@@ -236,7 +236,7 @@ TEST(Defaults, EverythingElse) {
   EXPECT_EQ(c.brf.views[0].zenith_deg, 0.0);
   EXPECT_EQ(c.brf.photons, 1000000);
   EXPECT_EQ(c.brf.image_resolution_m, 1.0);
-  EXPECT_EQ(c.brf.scene_size_m, 100.0);
+  EXPECT_EQ(c.brf.scene_size_m, 300.0);
 }
 
 TEST(Defaults, CanopyNullIsBareGround) {
