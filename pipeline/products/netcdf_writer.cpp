@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <ctime>
 #include <limits>
+#include <map>
 #include <span>
 #include <string>
 #include <string_view>
@@ -34,9 +35,11 @@ namespace {
 // Level 2 already takes most of what deflate can from waveforms (long runs of zero power
 // before and after the return); higher levels cost time for little more.
 constexpr int kDeflateLevel = 2;
-// Per-shot scalars and [shot, band] values are chunked this many shots at a time: a whole
-// variable reads in a few chunks, one shot reads a few kilobytes.
-constexpr std::size_t kShotsPerScalarChunk = 1024;
+// Every per-shot variable is chunked whole shots at a time, as many as fit in this many bytes
+// (a power of two of them, at most kMostShotsPerChunk): a whole variable reads in a few chunks,
+// one shot in one chunk of at most this size (16 shots of two bands' waveforms).
+constexpr std::size_t kChunkTarget_B = 128 * 1024;
+constexpr std::size_t kMostShotsPerChunk = 1024;
 // The coordinates of a trajectory; they carry no `coordinates` attribute themselves.
 constexpr const char* kShotCoordinates = "time lat lon";
 // The grid mapping variable every geolocated variable names.
@@ -103,27 +106,33 @@ nc_type nc_type_of(StorageType type) {
   return NC_NAT;
 }
 
-// Copies a [band][...] nested vector into `out` in C order when its shape is `shape`.
-bool flatten(const std::vector<double>& values, std::span<const std::size_t> shape,
-             std::vector<double>& out) {
-  if (shape.size() != 1 || values.size() != shape[0]) return false;
-  out.insert(out.end(), values.begin(), values.end());
-  return true;
+// Whether a [band][...] nested vector has the shape `shape`.
+bool has_shape(const std::vector<double>& values, std::span<const std::size_t> shape) {
+  return shape.size() == 1 && values.size() == shape[0];
 }
-bool flatten(const std::vector<std::int32_t>& values, std::span<const std::size_t> shape,
-             std::vector<double>& out) {
-  if (shape.size() != 1 || values.size() != shape[0]) return false;
-  out.insert(out.end(), values.begin(), values.end());  // exact: every int32 is a double
-  return true;
+bool has_shape(const std::vector<std::int32_t>& values, std::span<const std::size_t> shape) {
+  return shape.size() == 1 && values.size() == shape[0];
 }
 template <class T>
-bool flatten(const std::vector<std::vector<T>>& values, std::span<const std::size_t> shape,
-             std::vector<double>& out) {
+bool has_shape(const std::vector<std::vector<T>>& values, std::span<const std::size_t> shape) {
   if (shape.empty() || values.size() != shape[0]) return false;
   for (const auto& inner : values) {
-    if (!flatten(inner, shape.subspan(1), out)) return false;
+    if (!has_shape(inner, shape.subspan(1))) return false;
   }
   return true;
+}
+
+// Copies a nested vector of a shape checked by has_shape() to `out` in C order; returns the end.
+double* copy_flat(const std::vector<double>& values, double* out) {
+  return std::copy(values.begin(), values.end(), out);
+}
+double* copy_flat(const std::vector<std::int32_t>& values, double* out) {
+  return std::copy(values.begin(), values.end(), out);  // exact: every int32 is a double
+}
+template <class T>
+double* copy_flat(const std::vector<std::vector<T>>& values, double* out) {
+  for (const auto& inner : values) out = copy_flat(inner, out);
+  return out;
 }
 
 std::string describe_shape(const std::vector<double>& values) {
@@ -188,10 +197,25 @@ bool flush_may_fail(const std::filesystem::path& file) {
 }  // namespace
 
 struct NetcdfWriter::Impl {
+  // Which of a ChunkBuffer's arrays holds a variable's values.
+  enum class Held : std::uint8_t { reals, int64s, bytes };
   struct DefinedVariable {
     const ProductField* def;
     int varid;
     std::vector<std::size_t> shape;  // lengths after the shot dimension
+    std::size_t per_shot = 1;        // values of one shot
+    std::size_t chunk_shots = 1;     // shots in one chunk, and in one write
+    Held held = Held::reals;
+    double fill = 0.0;  // what the file holds where a flagged shot carries no array
+  };
+  // One chunk's records of one variable, held until all of them have come: the chunk is then
+  // written whole in one call and compressed once (a call per value and shot took most of a
+  // short shot's time in HDF5's bookkeeping).
+  struct ChunkBuffer {
+    std::size_t first = 0, count = 0, filled = 0;  // records [first, first + count)
+    std::vector<double> reals;                     // every field but the integer scalars
+    std::vector<long long> int64s;
+    std::vector<unsigned char> bytes;
   };
   // The variables shared by every shot, written once the definitions end.
   struct RunVariables {
@@ -223,8 +247,10 @@ struct NetcdfWriter::Impl {
   };
   std::vector<Dimension> dims;
   std::vector<DefinedVariable> variables;
+  std::vector<std::map<std::size_t, ChunkBuffer>> open_chunks;  // per variable, by chunk
   std::vector<bool> written;
   bool finished = false;
+  bool broken = false;  // a chunk's write failed: the file lacks records already taken
   // What ACDD's discovery attributes say of the records written.
   Bounds time_s, lat_deg, lon_deg, elev_m;
 
@@ -287,16 +313,44 @@ struct NetcdfWriter::Impl {
     }
   }
 
-  // Arrays over bins are most of the file: one shot per chunk makes each write() fill whole
-  // chunks (no read-modify-write, any order), lets them be compressed, and reading one shot's
-  // waveform reads that shot's chunk alone. Smaller per-shot values go many shots to a chunk.
-  void chunk_by_shot(int varid, const char* name, const std::vector<std::size_t>& lengths) const {
-    const std::string what = std::string("variable '") + name + "'";
-    const bool waveform = lengths.size() >= 2;
-    std::vector<std::size_t> chunks = {waveform ? 1 : std::min(shots, kShotsPerScalarChunk)};
+  // Whole shots to a chunk, so that write() fills whole chunks (held until complete, in any
+  // order: no read-modify-write), compressed; returns the shots of a chunk.
+  std::size_t chunk_by_shot(int varid, const ProductField& def,
+                            const std::vector<std::size_t>& lengths) const {
+    const std::string what = std::string("variable '") + def.name + "'";
+    std::size_t shot_B = def.type == StorageType::uint8                                       ? 1
+                         : def.type == StorageType::int32 || def.type == StorageType::float32 ? 4
+                                                                                              : 8;
+    for (std::size_t n : lengths) shot_B *= n;
+    std::size_t chunk_shots = kMostShotsPerChunk;
+    while (chunk_shots > 1 && chunk_shots * shot_B > kChunkTarget_B) chunk_shots /= 2;
+    chunk_shots = std::min(shots, chunk_shots);
+    std::vector<std::size_t> chunks = {chunk_shots};
     chunks.insert(chunks.end(), lengths.begin(), lengths.end());
     check(nc_def_var_chunking(nc.id(), varid, NC_CHUNKED, chunks.data()), what + " chunking");
     check(nc_def_var_deflate(nc.id(), varid, 1, 1, kDeflateLevel), what + " compression");
+    return chunk_shots;
+  }
+
+  // The value HDF5 fills a variable with where nothing was written: its _FillValue, or
+  // netCDF's default for an integer type.
+  double fill_of(int varid, const ProductField& def) const {
+    int no_fill = 0;
+    const std::string what = std::string("variable '") + def.name + "' fill value";
+    if (def.type == StorageType::float32) {
+      float fill = 0.0f;
+      check(nc_inq_var_fill(nc.id(), varid, &no_fill, &fill), what);
+      return fill;
+    }
+    if (def.type == StorageType::int32) {
+      int fill = 0;
+      check(nc_inq_var_fill(nc.id(), varid, &no_fill, &fill), what);
+      return fill;
+    }
+    double fill = 0.0;
+    if (def.type == StorageType::float64)
+      check(nc_inq_var_fill(nc.id(), varid, &no_fill, &fill), what);
+    return fill;
   }
 
   void define_shot_variable(const ProductField& def) {
@@ -317,8 +371,18 @@ struct NetcdfWriter::Impl {
       put_text(varid, def.name, "coordinates", kShotCoordinates);
       put_text(varid, def.name, "grid_mapping", kCrsVariable);
     }
-    chunk_by_shot(varid, def.name, lengths);
-    variables.push_back({&def, varid, std::move(lengths)});
+    DefinedVariable variable{&def, varid, lengths};
+    variable.chunk_shots = chunk_by_shot(varid, def, lengths);
+    for (std::size_t n : lengths) variable.per_shot *= n;
+    std::visit(
+        [&](auto field) {
+          using T = std::remove_cvref_t<decltype(ShotRecord{}.*field)>;
+          if constexpr (std::is_same_v<T, std::int64_t>) variable.held = Held::int64s;
+          if constexpr (std::is_same_v<T, std::uint8_t>) variable.held = Held::bytes;
+        },
+        def.field);
+    variable.fill = fill_of(varid, def);
+    variables.push_back(std::move(variable));
   }
 
   void define_globals(const RunInfo& info) {
@@ -476,12 +540,13 @@ struct NetcdfWriter::Impl {
           "writing variable 'bin_time_ns'");
     check(nc_put_var_double(nc.id(), v.tx_time, info.tx_time_ns.data()),
           "writing variable 'tx_time_ns'");
-    std::vector<double> tx;
+    std::vector<double> tx(shape.bands * tx_bins);
     const std::size_t tx_shape[] = {shape.bands, tx_bins};
-    if (!flatten(info.tx_waveform_W, tx_shape, tx)) {
+    if (!has_shape(info.tx_waveform_W, tx_shape)) {
       fail("tx_waveform must be " + join_shape(tx_shape) + " (band x tx_bin), got " +
            describe_shape(info.tx_waveform_W));
     }
+    copy_flat(info.tx_waveform_W, tx.data());
     check(nc_put_var_double(nc.id(), v.tx_waveform, tx.data()), "writing variable 'tx_waveform'");
     std::vector<int> percentiles;
     for (std::size_t k = 0; k < shape.length("percentile"); ++k)
@@ -501,6 +566,7 @@ struct NetcdfWriter::Impl {
     const RunVariables run_variables = define_run_variables();
     for (const ProductField& def : product_fields()) define_shot_variable(def);
     define_special_attributes();
+    open_chunks.resize(variables.size());
     check(nc_enddef(nc.id()), "ending definitions");
     write_run_variables(info, run_variables);
   }
@@ -510,61 +576,96 @@ struct NetcdfWriter::Impl {
            " (shot " + std::to_string(shot.shot_number) + ")";
   }
 
-  // Every array of the record in C order, checked against its variable's shape before anything
-  // is written, so that a refused record leaves the file as it was. An empty array keeps the
-  // fill: a flagged shot may carry none.
-  std::vector<std::vector<double>> flatten_arrays(std::size_t index, const ShotRecord& shot) const {
-    std::vector<std::vector<double>> arrays(variables.size());
-    for (std::size_t i = 0; i < variables.size(); ++i) {
+  // Every array of the record checked against its variable's shape before anything is held,
+  // so that a refused record leaves the product as it was. An empty array keeps the fill: a
+  // flagged shot may carry none.
+  void check_shapes(std::size_t index, const ShotRecord& shot) const {
+    for (const DefinedVariable& variable : variables) {
       std::visit(
           [&](auto field) {
             const auto& value = shot.*field;
             if constexpr (!std::is_arithmetic_v<std::remove_cvref_t<decltype(value)>>) {
               if (value.empty() && shot.quality_flag != quality_good) return;
-              if (!flatten(value, variables[i].shape, arrays[i])) {
-                fail(writing(variables[i].def->name, index, shot) + ": expected " +
-                     join_shape(variables[i].shape) + " values, got " + describe_shape(value));
+              if (!has_shape(value, variable.shape)) {
+                fail(writing(variable.def->name, index, shot) + ": expected " +
+                     join_shape(variable.shape) + " values, got " + describe_shape(value));
               }
             }
           },
-          variables[i].def->field);
+          variable.def->field);
     }
-    return arrays;
   }
 
-  void put_value(std::size_t index, const ShotRecord& shot, const DefinedVariable& variable,
-                 const std::vector<double>& array) const {
+  // The buffer of the chunk that holds record `index` of variable `i`, begun full of fill.
+  ChunkBuffer& chunk_of(std::size_t i, std::size_t index) {
+    const DefinedVariable& variable = variables[i];
+    const std::size_t chunk = index / variable.chunk_shots;
+    auto [it, begun] = open_chunks[i].try_emplace(chunk);
+    ChunkBuffer& buffer = it->second;
+    if (begun) {
+      buffer.first = chunk * variable.chunk_shots;
+      buffer.count = std::min(variable.chunk_shots, shots - buffer.first);
+      if (variable.held == Held::int64s) buffer.int64s.assign(buffer.count, 0);
+      if (variable.held == Held::bytes) buffer.bytes.assign(buffer.count, 0);
+      if (variable.held == Held::reals)
+        buffer.reals.assign(buffer.count * variable.per_shot, variable.fill);
+    }
+    return buffer;
+  }
+
+  // Writes a complete chunk in one call.
+  void put_chunk(const DefinedVariable& variable, const ChunkBuffer& buffer) const {
+    std::vector<std::size_t> start(variable.shape.size() + 1, 0);
+    std::vector<std::size_t> count = {buffer.count};
+    start[0] = buffer.first;
+    count.insert(count.end(), variable.shape.begin(), variable.shape.end());
+    int status = NC_NOERR;
+    const int id = nc.id();
+    if (variable.held == Held::int64s)
+      status = nc_put_vara_longlong(id, variable.varid, start.data(), count.data(),
+                                    buffer.int64s.data());
+    else if (variable.held == Held::bytes)
+      status =
+          nc_put_vara_uchar(id, variable.varid, start.data(), count.data(), buffer.bytes.data());
+    else
+      status =
+          nc_put_vara_double(id, variable.varid, start.data(), count.data(), buffer.reals.data());
+    check(status, std::string("writing variable '") + variable.def->name + "' of records " +
+                      std::to_string(buffer.first) + " to " +
+                      std::to_string(buffer.first + buffer.count - 1));
+  }
+
+  // Record `index`'s value of variable `i` into its chunk's buffer; a chunk whose records
+  // have all come is written.
+  void hold_value(std::size_t i, std::size_t index, const ShotRecord& shot) {
+    const DefinedVariable& variable = variables[i];
+    ChunkBuffer& buffer = chunk_of(i, index);
+    const std::size_t slot = index - buffer.first;
     std::visit(
         [&](auto field) {
           const auto& value = shot.*field;
           using T = std::remove_cvref_t<decltype(value)>;
-          int status = NC_NOERR;
           if constexpr (std::is_same_v<T, std::int64_t>) {
-            const long long v = value;
-            status = nc_put_var1_longlong(nc.id(), variable.varid, &index, &v);
+            buffer.int64s[slot] = value;
           } else if constexpr (std::is_same_v<T, std::uint8_t>) {
-            const unsigned char v = value;
-            status = nc_put_var1_uchar(nc.id(), variable.varid, &index, &v);
+            buffer.bytes[slot] = value;
           } else if constexpr (std::is_same_v<T, double>) {
-            status = nc_put_var1_double(nc.id(), variable.varid, &index, &value);
-          } else {
-            if (array.empty()) return;
-            std::vector<std::size_t> start(variable.shape.size() + 1, 0);
-            std::vector<std::size_t> count = {1};
-            start[0] = index;
-            count.insert(count.end(), variable.shape.begin(), variable.shape.end());
-            status = nc_put_vara_double(nc.id(), variable.varid, start.data(), count.data(),
-                                        array.data());
+            buffer.reals[slot] = value;
+          } else if (!value.empty()) {
+            copy_flat(value, buffer.reals.data() + slot * variable.per_shot);
           }
-          check(status, writing(variable.def->name, index, shot));
         },
         variable.def->field);
+    if (++buffer.filled < buffer.count) return;
+    put_chunk(variable, buffer);
+    open_chunks[i].erase(index / variable.chunk_shots);
   }
 
   void write_record(std::size_t index, const ShotRecord& shot) {
-    const std::vector<std::vector<double>> arrays = flatten_arrays(index, shot);
-    for (std::size_t i = 0; i < variables.size(); ++i)
-      put_value(index, shot, variables[i], arrays[i]);
+    check_shapes(index, shot);
+    broken = true;  // until every value is held: a failed chunk write loses records taken
+    for (std::size_t i = 0; i < variables.size(); ++i) hold_value(i, index, shot);
+    broken = false;
     time_s.add(shot.time_s);
     lat_deg.add(shot.lat_deg);
     lon_deg.add(shot.lon_deg);
@@ -637,6 +738,7 @@ void NetcdfWriter::write(std::int64_t index, const ShotRecord& shot) {
     impl.fail("record index " + std::to_string(index) + " outside [0, " +
               std::to_string(impl.shots) + ")");
   }
+  if (impl.broken) impl.fail("a write failed before: the product lacks records");
   const auto record = static_cast<std::size_t>(index);
   if (impl.written[record]) impl.fail("record " + std::to_string(index) + " written twice");
   impl.write_record(record, shot);
@@ -646,6 +748,7 @@ void NetcdfWriter::write(std::int64_t index, const ShotRecord& shot) {
 void NetcdfWriter::finish(const RunStats& stats) {
   Impl& impl = this->impl();
   if (impl.finished) impl.fail("finished twice");
+  if (impl.broken) impl.fail("a write failed before: the product lacks records");
   for (std::size_t i = 0; i < impl.written.size(); ++i) {
     if (!impl.written[i]) impl.fail("record " + std::to_string(i) + " was never written");
   }

@@ -568,14 +568,15 @@ TEST_F(NetcdfWriterTest, TypesAndStorage) {
   EXPECT_EQ(nc.type_of("rx_energy"), NC_DOUBLE);
   EXPECT_EQ(nc.type_of("band_name"), NC_STRING);
 
-  // One shot per chunk, compressed with shuffle: long tracks stay small, written shot by shot.
+  // Whole shots per chunk, compressed with shuffle: long tracks stay small, one shot reads
+  // one chunk. This product's three records fit in one chunk of each variable.
   for (const char* name :
        {"rx_waveform", "rx_waveform_canopy", "rx_waveform_ground", "rx_waveform_order"}) {
     int storage = -1;
     std::size_t chunks[4] = {};
     ASSERT_EQ(nc_inq_var_chunking(nc.id(), nc.var(name), &storage, chunks), NC_NOERR);
     EXPECT_EQ(storage, NC_CHUNKED) << name;
-    EXPECT_EQ(chunks[0], 1u) << name;
+    EXPECT_EQ(chunks[0], 3u) << name;
     EXPECT_EQ(chunks[1], 2u) << name;
     int shuffle = 0, deflate = 0, level = 0;
     ASSERT_EQ(nc_inq_var_deflate(nc.id(), nc.var(name), &shuffle, &deflate, &level), NC_NOERR);
@@ -792,6 +793,45 @@ TEST_F(NetcdfWriterTest, FlaggedShotKeepsFill) {
   long long flagged = -1;
   ASSERT_EQ(nc_get_att_longlong(nc.id(), NC_GLOBAL, "stats_shots_flagged", &flagged), NC_NOERR);
   EXPECT_EQ(flagged, 1);
+}
+
+// Records are held until their chunk is complete (1024 shots of the scalars here, and of these
+// short waveforms): records in any order, across a chunk's edge and into a last chunk that is
+// not full, come back where they belong.
+TEST_F(NetcdfWriterTest, RecordsInAnyOrderFillEveryChunk) {
+  RunInfo info = make_info(0);
+  info.shots = 1100;
+  std::vector<int> order;
+  for (int record = 1; record < info.shots; record += 2) order.push_back(record);
+  for (int record = static_cast<int>(info.shots) - 2; record >= 0; record -= 2)
+    order.push_back(record);
+  constexpr int kFlagged = 1030;
+  {
+    NetcdfWriter writer(file(), info);
+    for (int record : order)
+      writer.write(record,
+                   record == kFlagged ? make_flagged_record(record) : make_record(record, 0));
+    writer.finish(RunStats{});
+  }
+  Reader nc(file());
+  std::vector<long long> numbers(info.shots);
+  ASSERT_EQ(nc_get_var_longlong(nc.id(), nc.var("shot_number"), numbers.data()), NC_NOERR);
+  for (int record = 0; record < info.shots; ++record)
+    ASSERT_EQ(numbers[record], 100 + record) << record;
+  const auto rx = nc.doubles("rx_waveform");
+  const auto rh = nc.doubles("rh");
+  for (int record : {0, 1023, 1024, 1029, 1099}) {
+    const ShotRecord shot = make_record(record, 0);
+    for (int bin = 0; bin < kBins; ++bin)
+      EXPECT_EQ(rx[(2 * record + 1) * kBins + bin],
+                static_cast<double>(static_cast<float>(shot.rx_waveform_W[1][bin])))
+          << record;
+    EXPECT_EQ(rh[(2 * record + 1) * 101 + 50],
+              static_cast<double>(static_cast<float>(shot.rh_m[1][50])))
+        << record;
+  }
+  for (int bin = 0; bin < 2 * kBins; ++bin) EXPECT_TRUE(std::isnan(rx[2 * kFlagged * kBins + bin]));
+  EXPECT_EQ(nc.doubles("lat")[kFlagged], make_record(kFlagged, 0).lat_deg);
 }
 
 TEST_F(NetcdfWriterTest, NoOrderDimensionWithoutPerOrderOutput) {
