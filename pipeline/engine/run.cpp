@@ -5,6 +5,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <atomic>
 #include <chrono>
@@ -59,57 +60,83 @@ int threads_of_process(int threads, int processes_here) {
 // they took.
 using BatchConsumer = std::function<void(std::int64_t, std::span<const ShotRecord>, std::int64_t)>;
 
+// One batch of records: this process's block of it simulated, then on rank 0 the whole batch
+// gathered from every rank.
+struct Batch {
+  std::int64_t first = 0, last = 0;  // the batch's records
+  std::vector<ShotRecord> records;
+  std::int64_t queries = 0;
+  std::string bytes;  // this block for rank 0, when there are other ranks
+  std::exception_ptr failure;
+};
+
 // Records [first, last) shared among the cluster's processes: each batch is cut into one block
 // per rank, every rank simulates its block, rank 0 gathers the records in order and alone
-// hands them to `consume` and reports progress. A failure anywhere ends every rank.
+// hands them to `consume` and reports progress, while every rank simulates the next batch (the
+// writing would otherwise leave all but one core idle). A failure anywhere ends every rank.
 void simulate_shared(Cluster& cluster, const ShotSimulator& simulator, const Track& track,
                      std::int64_t first, std::int64_t last, int threads,
                      const BatchConsumer& consume, const ProgressCallback& progress,
                      std::int64_t progress_first) {
+  if (first >= last) return;
   threads = threads_of_process(threads, cluster.local_size());
   tbb::task_arena arena(threads);
   // Batches keep memory bounded on long tracks and hand records on in record order.
   const std::int64_t block = std::max<std::int64_t>(8, 4 * threads);
   const std::int64_t batch_size = block * cluster.size();
-  for (std::int64_t batch_first = first; batch_first < last; batch_first += batch_size) {
-    const std::int64_t batch_last = std::min(batch_first + batch_size, last);
-    const std::int64_t a = std::min(batch_first + cluster.rank() * block, batch_last);
-    const std::int64_t b = std::min(a + block, batch_last);
-    std::exception_ptr failure;
-    std::vector<ShotRecord> records;
-    std::int64_t queries = 0;
-    std::string bytes;
+  auto simulate_batch = [&](std::int64_t batch_first, Batch& batch) {
+    batch.first = batch_first;
+    batch.last = std::min(batch_first + batch_size, last);
+    const std::int64_t a = std::min(batch_first + cluster.rank() * block, batch.last);
+    const std::int64_t b = std::min(a + block, batch.last);
     try {
-      records = simulate_range(simulator, track, a, b, arena, queries);
+      batch.records = simulate_range(simulator, track, a, b, arena, batch.queries);
       if (cluster.size() > 1) {
-        bytes.append(reinterpret_cast<const char*>(&queries), sizeof queries);
-        for (const ShotRecord& record : records) encode_record(record, bytes);
+        batch.bytes.append(reinterpret_cast<const char*>(&batch.queries), sizeof batch.queries);
+        for (const ShotRecord& record : batch.records) encode_record(record, batch.bytes);
       }
     } catch (...) {
-      failure = std::current_exception();
+      batch.failure = std::current_exception();
     }
-    cluster.agree(failure);
-    if (cluster.size() > 1) {
-      std::vector<std::string> parts = cluster.gather(bytes);
-      records.clear();
-      queries = 0;
-      for (const std::string& part : parts) {  // rank 0 only: the others get none
-        std::int64_t part_queries = 0;
-        std::memcpy(&part_queries, part.data(), sizeof part_queries);
-        queries += part_queries;
-        std::size_t offset = sizeof part_queries;
-        while (offset < part.size()) records.push_back(decode_record(part, offset));
-      }
+  };
+  // Every rank, in the same order: rank 0 gets the batch's records from every rank.
+  auto gather = [&](Batch& batch) {
+    cluster.agree(batch.failure);
+    if (cluster.size() == 1) return;
+    std::vector<std::string> parts = cluster.gather(batch.bytes);
+    batch.records.clear();
+    batch.queries = 0;
+    for (const std::string& part : parts) {  // rank 0 only: the others get none
+      std::int64_t part_queries = 0;
+      std::memcpy(&part_queries, part.data(), sizeof part_queries);
+      batch.queries += part_queries;
+      std::size_t offset = sizeof part_queries;
+      while (offset < part.size()) batch.records.push_back(decode_record(part, offset));
     }
+  };
+
+  Batch current;
+  simulate_batch(first, current);
+  gather(current);
+  for (;;) {
+    const bool more = current.last < last;
+    Batch next;
+    tbb::task_group simulating;
+    if (more) arena.execute([&] { simulating.run([&] { simulate_batch(current.last, next); }); });
+    std::exception_ptr failure;
     try {
       if (cluster.rank() == 0) {
-        consume(batch_first, records, queries);
-        if (progress) progress(batch_last - progress_first, last - progress_first);
+        consume(current.first, current.records, current.queries);
+        if (progress) progress(current.last - progress_first, last - progress_first);
       }
     } catch (...) {
       failure = std::current_exception();
     }
+    arena.execute([&] { simulating.wait(); });
     cluster.agree(failure);
+    if (!more) return;
+    gather(next);
+    current = std::move(next);
   }
 }
 
