@@ -572,6 +572,7 @@ OutputSettings read_output(JsonReader& root) {
   o.geojson = r.boolean("geojson");
   o.plots = r.boolean("plots");
   o.per_order = r.boolean("per_order");
+  o.metrics = r.boolean("metrics");
   o.footprints_format =
       r.choice<std::string>("footprints_format", {{"GeoJSON", "GeoJSON"}, {"GPKG", "GPKG"}});
   r.finish();
@@ -948,6 +949,10 @@ void check_run(const Config& config) {
         "/output/plots",
         "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
         "and output.geojson");
+  if (o.plots && !o.metrics)
+    throw config_error("/output/metrics",
+                       "plots draw the Gaussian fits and ground estimates: output.plots needs "
+                       "output.metrics");
   if (o.plots && o.footprints_format != "GeoJSON")
     throw config_error("/output/footprints_format",
                        "plots are drawn from footprints.geojson: output.plots needs "

@@ -45,6 +45,7 @@ struct OutputSettings {
   bool geojson = true;
   bool plots = false;
   bool per_order = false;
+  bool metrics = true;                        // the waveform metrics and Gaussian decomposition
   std::string footprints_format = "GeoJSON";  // "GeoJSON" or "GPKG"
 };
 

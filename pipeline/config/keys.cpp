@@ -439,6 +439,11 @@ Key output_keys() {
                  boolean("plots", o.plots,
                          "PNG plots (drawn from both products: needs `netcdf` and `geojson`)"),
                  boolean("per_order", o.per_order, "per-scattering-order waveforms"),
+                 boolean("metrics", o.metrics,
+                         "the waveform metrics and Gaussian decomposition (`energy_tr` ... `rh`); "
+                         "false skips them, leaving them fill (`n_peaks` 0): shots are then not "
+                         "flagged no or low signal, a detected waveform's `reflectance` is fill, "
+                         "and `plots` is refused"),
                  choice("footprints_format", o.footprints_format, {"GeoJSON", "GPKG"},
                         "the footprints' format: `footprints.geojson`, or `footprints.gpkg` "
                         "(GeoPackage)")});

@@ -178,7 +178,10 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
       simulate_shot(*shot.scene, lidar_, shot.geometry, optics_, options, footprint.shot_number);
   if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;
   record_waveforms(record, std::move(waveforms), footprint.shot_number);
-  process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
+  if (config_.output.metrics)
+    process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
+  else  // as a flagged shot's: fill
+    fill_fields(record, FieldSource::metrics, ProductShape{.bands = lidar_.band_count()});
   // The truth over the footprint, beside the estimates: what the beam really fell on.
   const VegetationTruth truth =
       measure_vegetation(*shot.scene, footprint.range_m * lidar_.beam_sigma_rad());
