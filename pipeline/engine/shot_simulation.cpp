@@ -116,7 +116,10 @@ struct ShotSimulator::ShotScene {
 };
 
 ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
-    : config_(config), terrain_(terrain), lidar_(lidar_settings(config.sensor)) {
+    : config_(config),
+      terrain_(terrain),
+      lidar_(lidar_settings(config.sensor)),
+      roughness_(std::make_unique<RoughnessField>(config.terrain.roughness, config.seed)) {
   forest_ = grow_forest(config);
   optics_ = scene_optics();
 }
@@ -258,7 +261,7 @@ ShotSimulator::ShotScene ShotSimulator::build_scene(const Footprint& footprint) 
       patch_half_size_m(terrain_, lidar_, footprint, shot.frame, lidar_.max_angle_rad()) +
       vegetation_margin_m;
   // Roughness is subdivided only where the beam is: beyond 4.5 sigma go 4e-5 of the rays.
-  const RoughnessField roughness(config_.terrain.roughness, config_.seed);
+  const RoughnessField& roughness = *roughness_;
   const double rough_half_size_m =
       roughness.enabled()
           ? patch_half_size_m(terrain_, lidar_, footprint, shot.frame,

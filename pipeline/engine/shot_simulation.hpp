@@ -16,6 +16,8 @@
 
 namespace glaswave {
 
+class RoughnessField;
+
 // The transport's and the detector's settings from the configuration's.
 LidarSettings lidar_settings(const SensorSettings& sensor);
 Detector::Settings detector_settings(const DetectorSettings& detector);
@@ -58,6 +60,8 @@ class ShotSimulator {
   const Terrain& terrain_;
   LidarModel lidar_;
   RayDevice device_;
+  // The same for every shot: made once (its lattices' kernels), not per shot.
+  std::unique_ptr<RoughnessField> roughness_;
   std::optional<Forest> forest_;  // when there is vegetation
   SceneOptics optics_;            // the same for every shot
 };
