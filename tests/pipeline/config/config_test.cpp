@@ -405,8 +405,8 @@ TEST(Errors, UnknownKeySuggestsTheNearest) {
             "/brf/views/1/zenith: unknown key \"zenith\"; did you mean \"zenith_deg\"?");
   // Nothing close: the known keys are listed instead of a guess.
   EXPECT_EQ(error_of(doc(R"({"output": {"xyz": true}})")),
-            "/output/xyz: unknown key \"xyz\"; known keys: footprints_format, geojson, netcdf, "
-            "per_order, plots");
+            "/output/xyz: unknown key \"xyz\"; known keys: footprints_format, geojson, metrics, "
+            "netcdf, per_order, plots");
 }
 
 TEST(Errors, WrongTypes) {
