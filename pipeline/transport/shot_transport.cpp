@@ -308,13 +308,14 @@ double PathTracer::laser_transmission(const Path& path, const Vertex& vertex, in
   if (!foliage_ || !(transmission > 0.0) || (order == 1 && !any_point_leaves_)) return transmission;
   scene_.volume_spans(vertex.point, up_to_laser, exit_m, spans_);
   ++tally.ray_queries;
-  // The connection runs beside the segment just sampled (traced back from the point).
+  // The connection runs beside the segment just sampled (traced back from the point); at the
+  // first order all the way, at no angle.
   const double separation_rad =
-      std::acos(std::clamp(dot(up_to_laser, -1.0 * path.direction), -1.0, 1.0));
+      order == 1 ? 0.0 : std::acos(std::clamp(dot(up_to_laser, -1.0 * path.direction), -1.0, 1.0));
   const double shared_m = order == 1 ? std::numeric_limits<double>::infinity() : vertex.segment_m;
   project(up_to_laser);
   return transmission * std::exp(-connection_depth(spans_, projection_, optics_.foliage, shared_m,
-                                                   order == 1 ? 0.0 : separation_rad));
+                                                   separation_rad));
 }
 
 // The scored return into its time bin: the total, the canopy or ground part (by the first
