@@ -54,18 +54,33 @@ double crown_volume_m3(CrownShape shape, double radius_m, double half_height_m) 
 
 std::optional<std::pair<double, double>> crown_interval(const Crown& crown, const Vec3& origin,
                                                         const Vec3& direction) {
+  return CrownCrossing(crown).interval(origin, direction);
+}
+
+CrownCrossing::CrownCrossing(const Crown& crown) : cone_(crown.shape == CrownShape::cone) {
   const double r = crown.radius_m, h = crown.half_height_m;
-  if (crown.shape == CrownShape::cone) {
-    // Inside: x^2 + y^2 <= k^2 (z_apex - z)^2, between the base and the apex.
-    const Vec3 apex = crown.base_m + Vec3{0.0, 0.0, 2.0 * h};
+  if (cone_) {
+    centre_ = crown.base_m + Vec3{0.0, 0.0, 2.0 * h};
     const double k = r / (2.0 * h);
-    const Vec3 o = origin - apex;
+    slope_sq_ = k * k;
+    base_z_ = crown.base_m[2];
+  } else {
+    centre_ = crown.base_m + Vec3{0.0, 0.0, h};
+    inverse_axes_ = {1.0 / r, 1.0 / r, 1.0 / h};
+  }
+}
+
+std::optional<std::pair<double, double>> CrownCrossing::interval(const Vec3& origin,
+                                                                 const Vec3& direction) const {
+  if (cone_) {
+    // Inside: x^2 + y^2 <= k^2 (z_apex - z)^2, between the base and the apex.
+    const double k2 = slope_sq_;
+    const Vec3 o = origin - centre_;
     const double a = direction[0] * direction[0] + direction[1] * direction[1] -
-                     k * k * direction[2] * direction[2];
-    const double b =
-        2.0 * (o[0] * direction[0] + o[1] * direction[1] - k * k * o[2] * direction[2]);
-    const double c = o[0] * o[0] + o[1] * o[1] - k * k * o[2] * o[2];
-    const auto height = slab(origin[2], direction[2], crown.base_m[2], apex[2]);
+                     k2 * direction[2] * direction[2];
+    const double b = 2.0 * (o[0] * direction[0] + o[1] * direction[1] - k2 * o[2] * direction[2]);
+    const double c = o[0] * o[0] + o[1] * o[1] - k2 * o[2] * o[2];
+    const auto height = slab(origin[2], direction[2], base_z_, centre_[2]);
     if (!height) return std::nullopt;
     if (a == 0.0) {  // a line parallel to the cone's side: f = b t + c
       if (b == 0.0) return c <= 0.0 ? height : std::nullopt;
@@ -80,10 +95,11 @@ std::optional<std::pair<double, double>> crown_interval(const Crown& crown, cons
     return intersect({roots->second, infinity}, *height);
   }
   // Ellipsoid: scaled to the unit sphere about its centre.
-  const Vec3 centre = crown.base_m + Vec3{0.0, 0.0, h};
-  const Vec3 o{(origin[0] - centre[0]) / r, (origin[1] - centre[1]) / r,
-               (origin[2] - centre[2]) / h};
-  const Vec3 d{direction[0] / r, direction[1] / r, direction[2] / h};
+  const Vec3 o{(origin[0] - centre_[0]) * inverse_axes_[0],
+               (origin[1] - centre_[1]) * inverse_axes_[1],
+               (origin[2] - centre_[2]) * inverse_axes_[2]};
+  const Vec3 d{direction[0] * inverse_axes_[0], direction[1] * inverse_axes_[1],
+               direction[2] * inverse_axes_[2]};
   return quadratic_roots(dot(d, d), 2.0 * dot(o, d), dot(o, o) - 1.0);
 }
 

@@ -27,4 +27,21 @@ double crown_volume_m3(CrownShape shape, double radius_m, double half_height_m);
 std::optional<std::pair<double, double>> crown_interval(const Crown& crown, const Vec3& origin,
                                                         const Vec3& direction);
 
+// A crown made ready for the many crossings of a shot: what crown_interval derives from the
+// crown's shape (an ellipsoid's centre and inverse semi-axes, a cone's apex and slope) computed
+// once. interval() is crown_interval.
+class CrownCrossing {
+ public:
+  explicit CrownCrossing(const Crown& crown);
+  std::optional<std::pair<double, double>> interval(const Vec3& origin,
+                                                    const Vec3& direction) const;
+
+ private:
+  bool cone_;
+  Vec3 centre_;            // an ellipsoid's centre, a cone's apex
+  Vec3 inverse_axes_{};    // ellipsoid: 1 / semi-axes
+  double slope_sq_ = 0.0;  // cone: (radius / height)^2
+  double base_z_ = 0.0;    // cone: height of the base
+};
+
 }  // namespace glaswave

@@ -60,6 +60,9 @@ LeafAngles::LeafAngles(LeafAngleDistribution distribution, double mean_deg)
     }
     projection_table_[m] = g_sum;
   }
+  inclination_nodes_.resize(inclination_steps + 1);
+  for (int i = 0; i <= inclination_steps; ++i)
+    inclination_nodes_[i] = {std::sin(step * i), std::cos(step * i)};
   // Where each 1 / guide_steps of the cumulative distribution starts, for normal_at's search.
   inclination_guide_.resize(guide_steps + 1);
   for (int j = 0; j <= guide_steps; ++j)
@@ -111,10 +114,11 @@ Vec3 LeafAngles::normal_at(double u_inclination, double u_azimuth) const {
       std::clamp(static_cast<int>(upper - inclination_cdf_.begin()) - 1, 0, inclination_steps - 1);
   const double width = inclination_cdf_[i + 1] - inclination_cdf_[i];
   const double f = width > 0.0 ? (u_inclination - inclination_cdf_[i]) / width : 0.5;
-  const double inclination = (i + f) * 0.5 * pi / inclination_steps;
-  const double azimuth = 2.0 * pi * u_azimuth;
-  return {std::sin(inclination) * std::cos(azimuth), std::sin(inclination) * std::sin(azimuth),
-          std::cos(inclination)};
+  // The inclination (i + f) step, its sine and cosine from the node's (no libm call).
+  const SinCos inclination =
+      rotate_small(inclination_nodes_[i], f * (0.5 * pi / inclination_steps));
+  const SinCos azimuth = sincos_turn(u_azimuth);
+  return {inclination.sin * azimuth.cos, inclination.sin * azimuth.sin, inclination.cos};
 }
 
 }  // namespace glaswave

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "canopy/canopy_settings.hpp"
+#include "canopy/turn_trig.hpp"
 #include "terrain/local_frame.hpp"
 
 namespace glaswave {
@@ -41,9 +42,10 @@ class LeafAngles {
 
   LeafAngleDistribution distribution_;
   double campbell_chi_ = 1.0;
-  std::vector<double> inclination_cdf_;   // on a uniform grid of inclinations over [0, pi/2]
-  std::vector<double> projection_table_;  // G on a uniform grid of |cos zenith| over [0, 1]
-  std::vector<int> inclination_guide_;    // first CDF entry above j / guide_steps, for each j
+  std::vector<double> inclination_cdf_;    // on a uniform grid of inclinations over [0, pi/2]
+  std::vector<double> projection_table_;   // G on a uniform grid of |cos zenith| over [0, 1]
+  std::vector<int> inclination_guide_;     // first CDF entry above j / guide_steps, for each j
+  std::vector<SinCos> inclination_nodes_;  // sin and cos of the CDF grid's inclinations
 };
 
 }  // namespace glaswave

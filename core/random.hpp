@@ -27,7 +27,8 @@ enum class RandomPurpose : std::uint64_t {
   detector = 0xd37ec70b5eed5a17ULL,
   stand = 0x57a9d7ee5c0ffee1ULL,
   roughness = 0x2009e1a7715ce5adULL,
-  sun = 0x5a7b1e55f0c0ffeeULL,  // `brf`: photons traced from the sun
+  sun = 0x5a7b1e55f0c0ffeeULL,          // `brf`: photons traced from the sun
+  beam_points = 0xb3a9501b01c0ffeeULL,  // the transport's scrambling of a shot's Sobol' points
 };
 
 // Two signed indices (a 2-D grid's row and column, each within +-2^31) as one key.

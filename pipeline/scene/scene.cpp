@@ -43,6 +43,7 @@ void attach_mesh(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsig
 struct SpanCollector {
   RTCIntersectContext context;  // first, so Embree's context pointer is ours
   const std::vector<Crown>* crowns;
+  const std::vector<CrownCrossing>* crossings;
   std::vector<VolumeSpan>* spans;
   Vec3 origin, direction;  // in double: the float ray is only for traversal
 };
@@ -63,7 +64,8 @@ void crown_intersect(const RTCIntersectFunctionNArguments* args) {
   auto* collector = reinterpret_cast<SpanCollector*>(args->context);
   const Crown& crown = (*collector->crowns)[args->primID];
   const auto* ray = reinterpret_cast<const RTCRay*>(args->rayhit);
-  const auto interval = crown_interval(crown, collector->origin, collector->direction);
+  const auto interval =
+      (*collector->crossings)[args->primID].interval(collector->origin, collector->direction);
   if (!interval) return;
   const double t0 = std::max(interval->first, static_cast<double>(ray->tnear));
   const double t1 = std::min(interval->second, static_cast<double>(ray->tfar));
@@ -102,6 +104,7 @@ RayDevice::~RayDevice() { rtcReleaseDevice(device_); }
 Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation& vegetation)
     : surfaces_(rtcNewScene(device.handle())),
       crowns_(vegetation.crowns),
+      crossings_(crowns_.begin(), crowns_.end()),
       trunk_materials_(vegetation.trunk_materials),
       layer_(vegetation.layer),
       top_m_(ground.max_height_m) {
@@ -203,6 +206,7 @@ void Scene::volume_spans(const Vec3& origin, const Vec3& direction, double max_d
     SpanCollector collector{};
     rtcInitIntersectContext(&collector.context);
     collector.crowns = &crowns_;
+    collector.crossings = &crossings_;
     collector.spans = &spans;
     collector.origin = origin;
     collector.direction = direction;

@@ -89,6 +89,7 @@ class Scene {
   RTCSceneTy* surfaces_;
   RTCSceneTy* crown_scene_ = nullptr;
   std::vector<Crown> crowns_;
+  std::vector<CrownCrossing> crossings_;  // one a crown, made once
   std::vector<int> trunk_materials_;
   std::optional<TurbidLayer> layer_;
   double top_m_;

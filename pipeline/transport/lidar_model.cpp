@@ -93,20 +93,23 @@ BeamSampler::BeamSampler(const LidarModel& lidar, const Vec3& axis)
 Vec3 BeamSampler::direction(double u1, double u2) const {
   // Radial density of a 2-D Gaussian truncated at the field of view, inverted.
   const double angle_rad = std::sqrt(-two_sigma_sq_ * std::log1p(-u1 * fov_fraction_));
-  return direction_at(angle_rad, 2.0 * std::numbers::pi * u2);
+  return direction_at(angle_rad, sincos_turn(u2));
 }
 
 Vec3 BeamSampler::uniform_direction(double u1, double u2) const {
   // Uniform in solid angle: 1 - cos(angle) = 2 sin^2(angle / 2) is uniform (written with sines,
   // which keep their precision at the microradians of a lidar's field of view).
   const double angle_rad = 2.0 * std::asin(std::sqrt(u1) * sin_quarter_fov_);
-  return direction_at(angle_rad, 2.0 * std::numbers::pi * u2);
+  return direction_at(angle_rad, sincos_turn(u2));
 }
 
 Vec3 BeamSampler::direction_at(double angle_rad, double azimuth_rad) const {
+  return direction_at(angle_rad, SinCos{std::sin(azimuth_rad), std::cos(azimuth_rad)});
+}
+
+Vec3 BeamSampler::direction_at(double angle_rad, const SinCos& azimuth) const {
   const double s = std::sin(angle_rad);
-  return std::cos(angle_rad) * axis_ + (s * std::cos(azimuth_rad)) * across_ +
-         (s * std::sin(azimuth_rad)) * along_;
+  return std::cos(angle_rad) * axis_ + (s * azimuth.cos) * across_ + (s * azimuth.sin) * along_;
 }
 
 }  // namespace glaswave

@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "canopy/turn_trig.hpp"
 #include "core/vec3.hpp"
 
 namespace glaswave {
@@ -83,6 +84,8 @@ class BeamSampler {
   Vec3 direction_at(double angle_rad, double azimuth_rad) const;
 
  private:
+  Vec3 direction_at(double angle_rad, const SinCos& azimuth) const;
+
   Vec3 axis_, across_, along_;
   double two_sigma_sq_;
   double fov_fraction_;

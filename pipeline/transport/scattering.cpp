@@ -33,8 +33,9 @@ Vec3 cosine_direction(const Vec3& normal, double u1, double u2) {
   const Vec3 helper = std::abs(normal[2]) < 0.9 ? Vec3{0.0, 0.0, 1.0} : Vec3{1.0, 0.0, 0.0};
   const Vec3 across = normalized(cross(helper, normal));
   const Vec3 along = cross(normal, across);
-  const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
-  return (r * std::cos(phi)) * across + (r * std::sin(phi)) * along +
+  const double r = std::sqrt(u1);
+  const SinCos phi = sincos_turn(u2);
+  return (r * phi.cos) * across + (r * phi.sin) * along +
          std::sqrt(std::max(0.0, 1.0 - u1)) * normal;
 }
 

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "core/random.hpp"
+#include "pipeline/transport/sobol_points.hpp"
 
 namespace glaswave {
 namespace {
@@ -117,6 +118,9 @@ class PathTracer {
   bool scatter(Path& path, const Vertex& vertex, RayRandom& random);
   bool survives_roulette(const Path& path, RayRandom& random);
   void project(const Vec3& direction);
+  double quasi_random(SobolPoints::Use use, RayRandom& random) const {
+    return points_.coordinate(static_cast<std::uint64_t>(ray_), use, random);
+  }
   double beam_density(const Vec3& direction) const;
   RayEvent event_at(RayEventKind kind, const Path& path, const Vec3& position,
                     const Vertex* vertex) const;
@@ -140,6 +144,8 @@ class PathTracer {
   std::vector<VolumeSpan> spans_;
   std::vector<double> throughput_, response_;
   std::vector<double> projection_;  // G of each foliage for one direction
+  const SobolPoints points_;        // the shot's quasi-random points
+  std::int64_t ray_ = 0;            // the ray being traced
 };
 
 PathTracer::PathTracer(const Scene& scene, const LidarModel& lidar, const ShotGeometry& geometry,
@@ -160,7 +166,8 @@ PathTracer::PathTracer(const Scene& scene, const LidarModel& lidar, const ShotGe
       foliage_(scene.has_volumes()),
       throughput_(bands_),
       response_(bands_),
-      projection_(optics.foliage.size()) {
+      projection_(optics.foliage.size()),
+      points_(options.seed, static_cast<std::uint64_t>(shot_number)) {
   for (const Foliage& f : optics.foliage)
     any_point_leaves_ = any_point_leaves_ || f.leaf_size_m == 0.0;
 }
@@ -174,6 +181,7 @@ PathTracer::PathTracer(const Scene& scene, const LidarModel& lidar, const ShotGe
 // bound (e^23 at the edge of GLAS's view); the mixture bounds the weight by 2 Omega_fov.
 void PathTracer::trace_ray(std::int64_t ray, Tally& tally) {
   RayRandom random(options_.seed, shot_number_, ray);
+  ray_ = ray;
   trace_path(true, random, tally);
   if (options_.max_order >= 2) trace_path(false, random, tally);
 }
@@ -207,7 +215,15 @@ void PathTracer::trace_path(bool beam_path, RayRandom& random, Tally& tally) {
 // The path's first direction, and where it crosses the top of the scene.
 Path PathTracer::sample_beam(bool beam_path, RayRandom& random) {
   const bool by_beam = beam_path || random.uniform() < 0.5;
-  const double u1 = random.uniform(), u2 = random.uniform();
+  // Where in the footprint and the field of view: the ray's own draws or its quasi-random point.
+  double u1 = 0.0, u2 = 0.0;
+  if (options_.quasi_random) {
+    u1 = quasi_random(beam_path ? SobolPoints::beam_u1 : SobolPoints::second_u1, random);
+    u2 = quasi_random(beam_path ? SobolPoints::beam_u2 : SobolPoints::second_u2, random);
+  } else {
+    u1 = random.uniform();
+    u2 = random.uniform();
+  }
   const Vec3 first_direction = by_beam ? beam_.direction(u1, u2) : beam_.uniform_direction(u1, u2);
   Path path;
   path.beam_path = beam_path;
@@ -234,7 +250,11 @@ std::optional<Vertex> PathTracer::find_vertex(const Path& path, RayRandom& rando
                         hit.kind == SurfaceKind::none ? far_m : hit.distance_m, spans_);
     ++tally.ray_queries;
     project(path.direction);
-    leaf = free_path(spans_, projection_, -std::log1p(-random.uniform()), uniform);
+    // The beam path's one free path: the third coordinate of the ray's point, if quasi-random.
+    const double u = options_.quasi_random && path.beam_path
+                         ? quasi_random(SobolPoints::beam_free_path, random)
+                         : random.uniform();
+    leaf = free_path(spans_, projection_, -std::log1p(-u), uniform);
   }
   if (!leaf && hit.kind == SurfaceKind::none) return std::nullopt;
   Vertex vertex;
@@ -308,13 +328,14 @@ double PathTracer::laser_transmission(const Path& path, const Vertex& vertex, in
   if (!foliage_ || !(transmission > 0.0) || (order == 1 && !any_point_leaves_)) return transmission;
   scene_.volume_spans(vertex.point, up_to_laser, exit_m, spans_);
   ++tally.ray_queries;
-  // The connection runs beside the segment just sampled (traced back from the point).
+  // The connection runs beside the segment just sampled (traced back from the point); at the
+  // first order all the way, at no angle.
   const double separation_rad =
-      std::acos(std::clamp(dot(up_to_laser, -1.0 * path.direction), -1.0, 1.0));
+      order == 1 ? 0.0 : std::acos(std::clamp(dot(up_to_laser, -1.0 * path.direction), -1.0, 1.0));
   const double shared_m = order == 1 ? std::numeric_limits<double>::infinity() : vertex.segment_m;
   project(up_to_laser);
   return transmission * std::exp(-connection_depth(spans_, projection_, optics_.foliage, shared_m,
-                                                   order == 1 ? 0.0 : separation_rad));
+                                                   separation_rad));
 }
 
 // The scored return into its time bin: the total, the canopy or ground part (by the first

@@ -179,6 +179,12 @@ TEST(ShotTransport, SameBitsForAnyThreadCountInAForest) {
   EXPECT_GT(one.canopy_energy_J[0], 0.0);
   EXPECT_EQ(one.total_W, two.total_W);
   EXPECT_EQ(one.canopy_W, two.canopy_W);
+  // Quasi-random rays too: a ray's point depends on (seed, shot, ray) alone.
+  options.quasi_random = true;
+  const ShotWaveforms quasi_one = run(1), quasi_two = run(2);
+  EXPECT_EQ(quasi_one.total_W, quasi_two.total_W);
+  EXPECT_EQ(quasi_one.canopy_W, quasi_two.canopy_W);
+  EXPECT_NE(quasi_one.total_W, one.total_W);
 }
 
 }  // namespace
