@@ -177,8 +177,11 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   ShotWaveforms waveforms =
       simulate_shot(*shot.scene, lidar_, shot.geometry, optics_, options, footprint.shot_number);
   if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;
+  // The Monte Carlo variance weighs the decomposition's tests; it is not a product.
+  const std::vector<std::vector<double>> mc_variance_W2 = std::move(waveforms.total_variance_W2);
   record_waveforms(record, std::move(waveforms), footprint.shot_number);
-  process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
+  process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_),
+                         mc_variance_W2);
   // The truth over the footprint, beside the estimates: what the beam really fell on.
   const VegetationTruth truth =
       measure_vegetation(*shot.scene, footprint.range_m * lidar_.beam_sigma_rad());
