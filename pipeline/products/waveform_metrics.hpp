@@ -17,7 +17,7 @@
 //   detector's, and the Monte Carlo variance of the rays' scores), a component is kept only
 //   when it lowers chi^2 significantly: the noise of a simulation of few rays on a broad return
 //   is not split into returns. The ground is the centre of the lowest one whose amplitude is at
-//   least 5 % of the strongest's and that is a peak of its own (below it, a fit finds only the
+//   least 2 % of the strongest's and that is a peak of its own (below it, a fit finds only the
 //   faint, broad tail of light scattered many times in the crowns, which arrives late); the
 //   lowest strong one where none is.
 // - Energy above the noise between signal begin and end is split at a height above the ground:
