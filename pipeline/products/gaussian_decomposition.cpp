@@ -219,9 +219,9 @@ double chi_square(std::span<const double> values, int first, int last,
 // What a guess alone could take off chi^2 with only its amplitude free, the others held: the
 // weighted projection of the residual on its shape, (sum w r g)^2 / sum w g^2. A fit of all
 // gains more where the others make room, but a bump of noise stays far below the test.
-double linear_gain(std::span<const double> values, int first, int last,
-                   const std::vector<GaussianComponent>& components, const GaussianComponent& guess,
-                   std::span<const double> variance) {
+// `residual` holds values - model from bin `offset` on, over first..last at least.
+double linear_gain(std::span<const double> residual, int offset, int first, int last,
+                   const GaussianComponent& guess, std::span<const double> variance) {
   const double floor =
       kVarianceFloor * *std::max_element(variance.begin() + first, variance.begin() + last + 1);
   const GaussianComponent unit{1.0, guess.center_bin, guess.sigma_bins};
@@ -230,7 +230,7 @@ double linear_gain(std::span<const double> values, int first, int last,
   double cross = 0.0, norm = 0.0;
   for (int i = lo; i <= hi; ++i) {
     const double g = unit.value_at(i), w = 1.0 / std::max(variance[i], floor);
-    cross += w * (values[i] - model_at(components, i)) * g;
+    cross += w * residual[i - offset] * g;
     norm += w * g * g;
   }
   return cross > 0.0 && norm > 0.0 ? cross * cross / norm : 0.0;
@@ -423,8 +423,8 @@ std::vector<GaussianComponent> add_residual_components(std::span<const double> v
     GaussianComponent added =
         peak_guess(smooth_residual, best - lo, first - lo, last - lo, settings);
     added.center_bin += lo;
-    if (!variance.empty() && linear_gain(values, first, last, components, added, variance) <
-                                 0.5 * settings.min_chi2_gain)
+    if (!variance.empty() &&
+        linear_gain(residual, lo, first, last, added, variance) < 0.5 * settings.min_chi2_gain)
       break;  // noise: not worth a fit
     trial.push_back(added);
     trial = fit_gaussians(values, first, last, trial);
@@ -495,8 +495,11 @@ std::vector<GaussianComponent> select_guesses(std::span<const double> values, in
   const std::span<const double> variance = settings.error_variance;
   std::vector<GaussianComponent> components = fit_gaussians(values, first, last, {guesses[0]});
   double misfit = chi_square(values, first, last, components, variance);
+  std::vector<double> residual;  // over first..last, of the components; empty: to compute
   for (std::size_t k = 1; k < guesses.size(); ++k) {
-    if (linear_gain(values, first, last, components, guesses[k], variance) <
+    if (residual.empty())
+      for (int i = first; i <= last; ++i) residual.push_back(values[i] - model_at(components, i));
+    if (linear_gain(residual, first, first, last, guesses[k], variance) <
         0.5 * settings.min_chi2_gain)
       continue;  // not worth a fit
     std::vector<GaussianComponent> trial = components;
@@ -506,6 +509,7 @@ std::vector<GaussianComponent> select_guesses(std::span<const double> values, in
     if (misfit - trial_misfit > settings.min_chi2_gain) {
       components = std::move(trial);
       misfit = trial_misfit;
+      residual.clear();  // of the model before
     }
   }
   return components;
