@@ -180,9 +180,12 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   ShotWaveforms waveforms =
       simulate_shot(*shot.scene, lidar_, shot.geometry, optics_, options, footprint.shot_number);
   if (ray_queries) *ray_queries += waveforms.ray_queries + outline_vertices;
+  // The Monte Carlo variance weighs the decomposition's tests; it is not a product.
+  const std::vector<std::vector<double>> mc_variance_W2 = std::move(waveforms.total_variance_W2);
   record_waveforms(record, std::move(waveforms), footprint.shot_number);
   if (config_.output.metrics)
-    process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_));
+    process_shot_waveforms(record, config_.sensor.bin_ns, waveform_processing(config_),
+                           mc_variance_W2);
   else  // as a flagged shot's: fill
     fill_fields(record, FieldSource::metrics, ProductShape{.bands = lidar_.band_count()});
   // The truth over the footprint, beside the estimates: what the beam really fell on.

@@ -3,7 +3,8 @@
 // Levenberg-Marquardt fit of our own over the signal's window (analytic Jacobian, at most
 // kMaxFitComponents Gaussians in fixed arrays, no allocation per iteration, an iteration cap),
 // components added where the residual still holds signal and dropped when they are not
-// significant. Works in bin units; the caller turns them into times and elevations.
+// significant (above a level and, where each bin's noise is known, by a chi^2 test). Works in
+// bin units; the caller turns them into times and elevations.
 #pragma once
 
 #include <span>
@@ -37,6 +38,16 @@ struct DecompositionSettings {
   // min_area_fraction of the fitted energy.
   double significance_level = 0.0;
   double min_area_fraction = 0.005;
+  // The noise of each bin of the values (W^2, indexed as they are), as the variance that an
+  // independent error would need to weigh as much in a sum of squares (a noise correlated
+  // over L bins counts L times its variance). Empty: unknown, and every component that clears
+  // the level is kept. Given: a component is kept only when it lowers chi^2 (the squared
+  // residuals over each bin's error variance, floored at a tenth of the window's largest) by
+  // more than min_chi2_gain (a likelihood-ratio test of 3 more parameters).
+  std::span<const double> error_variance;
+  // chi^2 with 3 degrees of freedom exceeds 25 by chance with p = 1.6e-5: p = 0.001 for the
+  // best of the ~60 places a pulse-wide component can take in a window of a few hundred bins.
+  double min_chi2_gain = 25.0;
 };
 
 // A Gaussian filter of `sigma_bins` (truncated at 4 sigma, renormalised at the ends, so that a

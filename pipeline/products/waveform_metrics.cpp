@@ -16,7 +16,7 @@ constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 // holds all but 3e-5 of the ground's energy.
 constexpr double kSplitSigmas = 4.0;
 // A ground Gaussian's amplitude is at least this part of the strongest Gaussian's.
-constexpr double kGroundMinAmplitude = 0.05;
+constexpr double kGroundMinAmplitude = 0.02;
 
 struct Statistics {
   double mean = 0.0, sd = 0.0;
@@ -46,6 +46,25 @@ double filter_noise_gain(double sigma_bins) {
     squares += w * w;
   }
   return std::sqrt(squares) / sum;
+}
+
+// What the decomposition's test weighs each bin's misfit by: the detector's noise, white, and
+// the Monte Carlo noise, which the pulse spreads over its neighbours: correlated over the
+// pulse (autocorrelation exp(-m^2 / 4 sigma^2) for a Gaussian pulse of sigma bins), it counts
+// sum_m exp(-m^2 / 2 sigma^2) ~ sqrt(2 pi) sigma times its variance. Empty when there is no
+// noise at all (a noise-free waveform without its Monte Carlo variance).
+std::vector<double> error_variance(std::span<const double> mc_variance_W2, double detector_sd_W,
+                                   double pulse_bins, std::size_t bins) {
+  double correlation_bins = 0.0;
+  const int reach = static_cast<int>(std::ceil(6.0 * pulse_bins));
+  for (int m = -reach; m <= reach; ++m)
+    correlation_bins += std::exp(-0.5 * m * m / (pulse_bins * pulse_bins));
+  std::vector<double> variance(bins, detector_sd_W * detector_sd_W);
+  if (mc_variance_W2.size() == bins)
+    for (std::size_t i = 0; i < bins; ++i) variance[i] += correlation_bins * mc_variance_W2[i];
+  const double largest = *std::max_element(variance.begin(), variance.end());
+  if (!(largest > 0.0) || !std::isfinite(largest)) return {};
+  return variance;
 }
 
 // The part of bin i ([i - 0.5, i + 0.5]) that lies in [a, b].
@@ -92,8 +111,8 @@ Extent signal_extent(const std::vector<double>& smoothed, double threshold) {
 
 // The Gaussians fitted over the signal's extent and the pulse's tails beyond it, and their
 // slots in the metrics as elevations, times and energies.
-void decompose(const std::vector<double>& signal, Extent extent, double pulse_bins,
-               double significance_level, const WaveformProcessing& settings,
+void decompose(const std::vector<double>& signal, std::span<const double> variance, Extent extent,
+               double pulse_bins, double significance_level, const WaveformProcessing& settings,
                const WaveformAxis& axis, WaveformMetrics& m) {
   const std::size_t bins = signal.size();
   DecompositionSettings decomposition;
@@ -102,6 +121,7 @@ void decompose(const std::vector<double>& signal, Extent extent, double pulse_bi
   decomposition.smooth_sigma_bins = pulse_bins;
   decomposition.significance_level = significance_level;
   decomposition.min_area_fraction = settings.min_gaussian_area_fraction;
+  decomposition.error_variance = variance;
   const int margin = static_cast<int>(std::ceil(3.0 * pulse_bins));
   m.gaussians = decompose_waveform(signal, static_cast<int>(std::floor(extent.begin)) - margin,
                                    static_cast<int>(std::ceil(extent.end)) + margin, decomposition);
@@ -124,9 +144,29 @@ void decompose(const std::vector<double>& signal, Extent extent, double pulse_bi
 double split_at_ground(const WaveformAxis& axis, std::size_t bins, WaveformMetrics& m) {
   double strongest = 0.0;
   for (const GaussianComponent& g : m.gaussians) strongest = std::max(strongest, g.amplitude);
+  auto strong = [&](std::size_t k) {
+    return m.gaussians[k].amplitude >= kGroundMinAmplitude * strongest;
+  };
+  // A peak of its own: the fitted waveform is no higher half its width above or below its
+  // centre. A broad tail under a return above it, however strong, is none.
+  auto own_peak = [&](std::size_t k) {
+    const GaussianComponent& g = m.gaussians[k];
+    auto model = [&](double x) {
+      double sum = 0.0;
+      for (const GaussianComponent& other : m.gaussians) sum += other.value_at(x);
+      return sum;
+    };
+    const double top = model(g.center_bin);
+    return top >= model(g.center_bin - 0.5 * g.sigma_bins) &&
+           top >= model(g.center_bin + 0.5 * g.sigma_bins);
+  };
   std::size_t ground_index = m.gaussians.size() - 1;
-  while (ground_index > 0 && m.gaussians[ground_index].amplitude < kGroundMinAmplitude * strongest)
-    --ground_index;
+  while (ground_index > 0 && !(strong(ground_index) && own_peak(ground_index))) --ground_index;
+  if (!(strong(ground_index) && own_peak(ground_index))) {
+    // None is a peak of its own (a ground in the canopy's flank): the lowest strong one.
+    ground_index = m.gaussians.size() - 1;
+    while (ground_index > 0 && !strong(ground_index)) --ground_index;
+  }
   const GaussianComponent& ground = m.gaussians[ground_index];
   m.ground_elev_m = axis.elevation_m(ground.center_bin, bins);
   double split = ground.center_bin - kSplitSigmas * ground.sigma_bins;
@@ -244,7 +284,8 @@ WaveformMetrics WaveformMetrics::none() {
 }
 
 WaveformMetrics process_waveform(std::span<const double> power_W, const WaveformAxis& axis,
-                                 const WaveformProcessing& settings) {
+                                 const WaveformProcessing& settings,
+                                 std::span<const double> mc_variance_W2) {
   WaveformMetrics m = WaveformMetrics::none();
   const int n = static_cast<int>(power_W.size());
   if (n < 3 || !(axis.bin_ns > 0.0)) return m;
@@ -275,14 +316,17 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
   // Everything below works on the waveform above the noise level.
   std::vector<double> signal(power_W.begin(), power_W.end());
   for (double& v : signal) v -= noise.mean;
-  decompose(signal, extent, pulse_bins, above, settings, axis, m);
+  const std::vector<double> variance =
+      error_variance(mc_variance_W2, noise.sd / filter_noise_gain(pulse_bins), pulse_bins, bins);
+  decompose(signal, variance, extent, pulse_bins, above, settings, axis, m);
   const double split = m.gaussians.empty() ? extent.begin : split_at_ground(axis, bins, m);
   store_partition(partition_energy(signal, extent, split), extent, axis, m);
   return m;
 }
 
 std::vector<double> process_shot_waveforms(ShotRecord& record, double bin_ns,
-                                           const WaveformProcessing& settings) {
+                                           const WaveformProcessing& settings,
+                                           std::span<const std::vector<double>> mc_variance_W2) {
   const WaveformAxis axis{bin_ns, record.elev_bin0_m, record.elev_lastbin_m};
   const std::size_t bands = record.rx_waveform_W.size();
   fill_fields(record, FieldSource::metrics, ProductShape{.bands = bands});
@@ -290,7 +334,11 @@ std::vector<double> process_shot_waveforms(ShotRecord& record, double bin_ns,
   if (record.quality_flag != quality_good) return noise_mean_W;
   SignalQuality best = SignalQuality::none;
   for (std::size_t band = 0; band < bands; ++band) {
-    const WaveformMetrics m = process_waveform(record.rx_waveform_W[band], axis, settings);
+    const std::span<const double> variance = band < mc_variance_W2.size()
+                                                 ? std::span<const double>(mc_variance_W2[band])
+                                                 : std::span<const double>();
+    const WaveformMetrics m =
+        process_waveform(record.rx_waveform_W[band], axis, settings, variance);
     store_metrics(record, band, m);
     noise_mean_W[band] = m.noise_mean_W;
     best = std::min(best, m.signal);  // good < low < none

@@ -13,10 +13,13 @@
 //   floor that a noise-free waveform needs. Signal begin and end are the first and last
 //   crossings, interpolated between bins.
 // - Gaussians: up to 6 fitted to the waveform (noise mean removed) over the signal's extent and
-//   3 pulse widths beyond (gaussian_decomposition.hpp). The ground is the centre of the lowest one
-//   whose amplitude
-//   is at least 5 % of the strongest's (below it, a fit finds only the faint, broad tail of light
-//   scattered many times in the crowns, which arrives late).
+//   3 pulse widths beyond (gaussian_decomposition.hpp). Where the waveform's noise is known (the
+//   detector's, and the Monte Carlo variance of the rays' scores), a component is kept only
+//   when it lowers chi^2 significantly: the noise of a simulation of few rays on a broad return
+//   is not split into returns. The ground is the centre of the lowest one whose amplitude is at
+//   least 2 % of the strongest's and that is a peak of its own (below it, a fit finds only the
+//   faint, broad tail of light scattered many times in the crowns, which arrives late); the
+//   lowest strong one where none is.
 // - Energy above the noise between signal begin and end is split at a height above the ground:
 //   4 sigma of the ground Gaussian above its centre, or lower where the other Gaussians already
 //   outweigh the ground's. Below is GR, above is CR, TR = CR + GR.
@@ -93,15 +96,22 @@ struct WaveformMetrics {
 // The metrics of `power_W` (bins in time order). A waveform with a non-finite value, or with
 // nothing above the threshold, gives none() with its noise statistics (and TR = CR = GR = 0
 // when it is finite but empty).
+// `mc_variance_W2`, when given (one value a bin), is the Monte Carlo variance of power_W: with
+// the detector's noise it weighs the decomposition's test of each component (a component must
+// explain more than noise), so that the noise of a simulation of few rays is not taken for
+// returns.
 WaveformMetrics process_waveform(std::span<const double> power_W, const WaveformAxis& axis,
-                                 const WaveformProcessing& settings);
+                                 const WaveformProcessing& settings,
+                                 std::span<const double> mc_variance_W2 = {});
 
 // Processes every band of record.rx_waveform_W (bins of `bin_ns`, between elev_bin0_m and
 // elev_lastbin_m) and stores the metrics in the record's per-band fields. A band whose waveform
 // is fill (a flagged shot) gets fill, with n_peaks 0. A shot none of whose bands has signal is
 // flagged (quality_flag 0) "no signal"; one none of whose bands has more than a low signal, "low
 // signal"; the metrics stay. Returns each band's noise mean (W), 0 for a noise-free waveform.
-std::vector<double> process_shot_waveforms(ShotRecord& record, double bin_ns,
-                                           const WaveformProcessing& settings);
+// `mc_variance_W2` [band][bin], when given, is each band's Monte Carlo variance (W^2).
+std::vector<double> process_shot_waveforms(
+    ShotRecord& record, double bin_ns, const WaveformProcessing& settings,
+    std::span<const std::vector<double>> mc_variance_W2 = {});
 
 }  // namespace glaswave

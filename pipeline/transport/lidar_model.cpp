@@ -61,6 +61,19 @@ std::vector<double> LidarModel::power_W(const std::vector<double>& tally_J) cons
   return power;
 }
 
+std::vector<double> LidarModel::power_variance_W2(const std::vector<double>& variance_J2) const {
+  std::vector<double> variance(sensor_.bins, 0.0);
+  const double bin_s = sensor_.bin_ns * 1e-9;
+  const int width = static_cast<int>(kernel_.size());
+  for (int i = 0; i < sensor_.bins; ++i) {
+    double sum_J2 = 0.0;
+    for (int k = 0; k < width; ++k)
+      sum_J2 += kernel_[k] * kernel_[k] * variance_J2[i + width - 1 - k];
+    variance[i] = sum_J2 / (bin_s * bin_s);
+  }
+  return variance;
+}
+
 std::vector<double> LidarModel::tx_time_ns() const {
   std::vector<double> times;
   for (int k = -margin_bins_; k <= margin_bins_; ++k) times.push_back(k * sensor_.bin_ns);

@@ -57,6 +57,8 @@ class LidarModel {
   int tally_index(double time_ns) const;
   // An energy tally (J per bin) convolved with the pulse: power (W) in each window bin.
   std::vector<double> power_W(const std::vector<double>& tally_J) const;
+  // The variance of power_W for independent tally bins of the given variances (J^2): W^2.
+  std::vector<double> power_variance_W2(const std::vector<double>& variance_J2) const;
 
   // The transmitted pulse of a band: power (W) at tx_time_ns about its peak.
   std::vector<double> tx_time_ns() const;

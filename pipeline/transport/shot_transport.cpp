@@ -24,7 +24,8 @@ constexpr std::int64_t parallel_rays = 2048;
 
 // Normalised returns of a group of rays, per band and tally bin. A return's weight is its
 // part of E_t T A_T f_fov / (pi R^2) per ray: a Lambertian surface of reflectance rho seen
-// square-on at the reference range weighs rho.
+// square-on at the reference range weighs rho. `squares` sums each ray's score in a bin
+// squared (the ray's scores in that bin added first), for the Monte Carlo variance.
 struct Tally {
   Tally(std::size_t bands, int size, int orders)
       : size(size),
@@ -32,6 +33,7 @@ struct Tally {
         total(bands * size, 0.0),
         canopy(bands * size, 0.0),
         ground(bands * size, 0.0),
+        squares(bands * size, 0.0),
         order(bands * orders * size, 0.0) {}
 
   // Only the bins `other` scored into are added: elsewhere it holds zeros, and adding a zero
@@ -47,6 +49,7 @@ struct Tally {
     add_rows(total, other.total);
     add_rows(canopy, other.canopy);
     add_rows(ground, other.ground);
+    add_rows(squares, other.squares);
     add_rows(order, other.order);
     first_bin = std::min(first_bin, other.first_bin);
     last_bin = std::max(last_bin, other.last_bin);
@@ -55,7 +58,7 @@ struct Tally {
 
   // Back to zeros, as constructed.
   void clear() {
-    for (std::vector<double>* part : {&total, &canopy, &ground, &order})
+    for (std::vector<double>* part : {&total, &canopy, &ground, &squares, &order})
       for (std::size_t row = 0; row * size < part->size() && first_bin <= last_bin; ++row)
         std::fill(part->begin() + row * size + first_bin, part->begin() + row * size + last_bin + 1,
                   0.0);
@@ -71,7 +74,7 @@ struct Tally {
 
   std::size_t size;
   int orders;
-  std::vector<double> total, canopy, ground, order;
+  std::vector<double> total, canopy, ground, squares, order;
   std::int64_t ray_queries = 0;
   std::size_t first_bin = std::numeric_limits<std::size_t>::max(), last_bin = 0;  // scored into
 };
@@ -114,7 +117,8 @@ class PathTracer {
   void score_direct(const Path& path, const Vertex& vertex, int order, Tally& tally);
   double laser_transmission(const Path& path, const Vertex& vertex, int order,
                             const Vec3& up_to_laser, Tally& tally);
-  void bin(const Path& path, int order, int bin, Tally& tally) const;
+  void bin(const Path& path, int order, int bin, Tally& tally);
+  void tally_squares(Tally& tally);
   bool scatter(Path& path, const Vertex& vertex, RayRandom& random);
   bool survives_roulette(const Path& path, RayRandom& random);
   void project(const Vec3& direction);
@@ -146,6 +150,9 @@ class PathTracer {
   std::vector<double> projection_;  // G of each foliage for one direction
   const SobolPoints points_;        // the shot's quasi-random points
   std::int64_t ray_ = 0;            // the ray being traced
+  // The current ray's scores by tally bin ([entry][band] weights), for the squares.
+  std::vector<int> ray_bins_;
+  std::vector<double> ray_scores_;
 };
 
 PathTracer::PathTracer(const Scene& scene, const LidarModel& lidar, const ShotGeometry& geometry,
@@ -184,6 +191,18 @@ void PathTracer::trace_ray(std::int64_t ray, Tally& tally) {
   ray_ = ray;
   trace_path(true, random, tally);
   if (options_.max_order >= 2) trace_path(false, random, tally);
+  tally_squares(tally);
+}
+
+// The ray's score in each bin it reached, squared, into the tally; the ray's list emptied.
+void PathTracer::tally_squares(Tally& tally) {
+  for (std::size_t entry = 0; entry < ray_bins_.size(); ++entry)
+    for (std::size_t band = 0; band < bands_; ++band) {
+      const double score = ray_scores_[entry * bands_ + band];
+      tally.squares[band * tally.size + ray_bins_[entry]] += score * score;
+    }
+  ray_bins_.clear();
+  ray_scores_.clear();
 }
 
 void PathTracer::trace_path(bool beam_path, RayRandom& random, Tally& tally) {
@@ -340,8 +359,18 @@ double PathTracer::laser_transmission(const Path& path, const Vertex& vertex, in
 
 // The scored return into its time bin: the total, the canopy or ground part (by the first
 // element the path met), and its scattering order when orders are kept apart.
-void PathTracer::bin(const Path& path, int order, int bin, Tally& tally) const {
+void PathTracer::bin(const Path& path, int order, int bin, Tally& tally) {
   tally.mark(bin);
+  // A ray scores a few times at most, mostly into later bins: the list is short.
+  std::size_t entry = ray_bins_.size();
+  while (entry > 0 && ray_bins_[entry - 1] != bin) --entry;
+  if (entry == 0) {
+    ray_bins_.push_back(bin);
+    ray_scores_.resize(ray_scores_.size() + bands_, 0.0);
+    entry = ray_bins_.size();
+  }
+  for (std::size_t band = 0; band < bands_; ++band)
+    ray_scores_[(entry - 1) * bands_ + band] += response_[band];
   for (std::size_t band = 0; band < bands_; ++band) {
     const std::size_t at = band * tally.size + bin;
     tally.total[at] += response_[band];
@@ -439,6 +468,17 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
                          lidar.sensor().telescope_area_m2 * lidar.fov_fraction() /
                          (std::numbers::pi * range_m * range_m) / static_cast<double>(rays);
     waveforms.total_W.push_back(slice(tally.total, band, scale));
+    // Variance of the mean of `rays` scores, (sum w^2 - (sum w)^2 / N) / N^2 per bin (scale
+    // holds the 1 / N), carried through the pulse like the power.
+    std::vector<double> variance_J2(tally.size);
+    for (std::size_t i = 0; i < tally.size; ++i) {
+      const double sum = tally.total[band * tally.size + i];
+      variance_J2[i] =
+          scale * scale *
+          std::max(tally.squares[band * tally.size + i] - sum * sum / static_cast<double>(rays),
+                   0.0);
+    }
+    waveforms.total_variance_W2.push_back(lidar.power_variance_W2(variance_J2));
     waveforms.canopy_W.push_back(slice(tally.canopy, band, scale));
     waveforms.ground_W.push_back(slice(tally.ground, band, scale));
     waveforms.energy_J.push_back(integral_J(waveforms.total_W.back()));

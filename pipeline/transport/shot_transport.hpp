@@ -26,6 +26,9 @@ struct ShotGeometry {
 // The received signal of one shot: [band][bin] power (W) and [band] energy (J).
 struct ShotWaveforms {
   std::vector<std::vector<double>> total_W, canopy_W, ground_W;
+  // [band][bin] W^2: the Monte Carlo variance of total_W, from the spread of the rays' scores
+  // (bins taken as independent: a ray's scores in different bins are not correlated with it).
+  std::vector<std::vector<double>> total_variance_W2;
   std::vector<std::vector<std::vector<double>>> order_W;  // [band][order - 1][bin] when asked for
   std::vector<double> energy_J, canopy_energy_J, ground_energy_J;
   std::int64_t ray_queries = 0;

@@ -208,5 +208,61 @@ TEST(GaussianDecomposition, SpikesAreNoComponents) {
   EXPECT_NEAR(fitted[0].center_bin, 200.0, 1e-3);
 }
 
+// Noise that grows with the signal, as a Monte Carlo tally's does: RMS sd0 + sd1 sqrt(v / peak)
+// at a value v, drawn white from a fixed seed; `variance` gets each bin's known variance.
+std::vector<double> add_known_noise(std::vector<double>& values, double peak, double sd0,
+                                    double sd1, unsigned seed) {
+  std::mt19937_64 engine(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<double> variance(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const double sd = sd0 + sd1 * std::sqrt(std::max(values[i], 0.0) / peak);
+    variance[i] = sd * sd;
+    values[i] += sd * normal(engine);
+  }
+  return variance;
+}
+
+// With each bin's noise known, a component must lower chi^2 by more than chance would (25 for
+// 3 parameters, the search over the window included): a broad return under noise of 8 % of its peak
+// is one Gaussian in each of 20 draws (centre within 3 bins: the noise's sd over ~100 independent
+// bins moves it by ~1), where without the variance the noise's bumps become components of their
+// own.
+TEST(GaussianDecomposition, NoiseOfKnownVarianceBecomesNoComponent) {
+  const std::vector<GaussianComponent> truth = {{1.0e-6, 250.0, 40.0}};
+  int split_without_variance = 0;
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    auto values = synthesize(truth);
+    const std::vector<double> variance = add_known_noise(values, 1.0e-6, 0.005e-6, 0.08e-6, seed);
+    DecompositionSettings s = settings(0.01e-6);
+    split_without_variance += decompose_waveform(values, 100, 400, s).size() > 1;
+    s.error_variance = variance;
+    const auto fitted = decompose_waveform(values, 100, 400, s);
+    SCOPED_TRACE(seed);
+    ASSERT_EQ(fitted.size(), 1u);
+    EXPECT_NEAR(fitted[0].center_bin, 250.0, 3.0);
+    EXPECT_NEAR(fitted[0].sigma_bins / 40.0, 1.0, 0.1);
+  }
+  EXPECT_GT(split_without_variance, 0);  // the test would be empty otherwise
+}
+
+// Real components stand far above such noise and all stay: canopy, understorey and ground under
+// noise of 3 % of the peak, the right number in each of 20 draws.
+TEST(GaussianDecomposition, KnownComponentsStayUnderNoiseOfKnownVariance) {
+  const std::vector<GaussianComponent> truth = {
+      {0.6e-6, 150.0, 14.0}, {0.5e-6, 215.0, 9.0}, {1.0e-6, 300.0, 5.0}};
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    auto values = synthesize(truth);
+    DecompositionSettings s = settings(0.01e-6);
+    const std::vector<double> variance = add_known_noise(values, 1.0e-6, 0.005e-6, 0.03e-6, seed);
+    s.error_variance = variance;
+    const auto fitted = decompose_waveform(values, 100, 330, s);
+    SCOPED_TRACE(seed);
+    ASSERT_EQ(fitted.size(), truth.size());
+    for (std::size_t k = 0; k < truth.size(); ++k)
+      EXPECT_NEAR(fitted[k].center_bin, truth[k].center_bin, 2.0) << k;
+  }
+}
+
 }  // namespace
 }  // namespace glaswave
