@@ -302,6 +302,7 @@ SimulationSettings read_simulation(JsonReader& root) {
   JsonReader r = root.object("simulation");
   s.rays_per_shot = r.integer("rays_per_shot");
   s.max_order = static_cast<int>(r.integer("max_order"));
+  s.quasi_random = r.choice<bool>("sampling", {{"random", false}, {"sobol", true}});
   r.finish();
   return s;
 }

@@ -38,6 +38,7 @@ struct SensorSettings {
 struct SimulationSettings {
   std::int64_t rays_per_shot = 10000;
   int max_order = 8;
+  bool quasi_random = false;  // "sampling": "sobol" (true) or "random"
 };
 
 struct OutputSettings {

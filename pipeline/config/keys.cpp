@@ -237,11 +237,17 @@ Key sensor_keys() {
 
 Key simulation_keys() {
   const SimulationSettings s;
-  return object("simulation", "the Monte Carlo transport",
-                {integer("rays_per_shot", s.rays_per_shot, 1, run_limits::rays_per_shot, "",
-                         "Monte Carlo rays a shot (error falls as n^−1/2)"),
-                 integer("max_order", s.max_order, 1, run_limits::max_order, "",
-                         "highest scattering order")});
+  return object(
+      "simulation", "the Monte Carlo transport",
+      {integer("rays_per_shot", s.rays_per_shot, 1, run_limits::rays_per_shot, "",
+               "Monte Carlo rays a shot (error falls as n^−1/2)"),
+       integer("max_order", s.max_order, 1, run_limits::max_order, "", "highest scattering order"),
+       choice("sampling", s.quasi_random ? "sobol" : "random", {"random", "sobol"},
+              "how rays draw their beam direction and first free path: `random` "
+              "(plain Monte Carlo) or `sobol` (the shot's scrambled Sobol' points: "
+              "unbiased; on the seed's base case the mean waveform's error at 10^4 "
+              "rays is that of 1.9× the rays at the same cost; the processing's noise "
+              "test, which assumes independent rays, then errs on the safe side)")});
 }
 
 Key terrain_keys() {

@@ -220,6 +220,7 @@ TransportOptions ShotSimulator::transport_options() const {
   TransportOptions options;
   options.rays = config_.simulation.rays_per_shot;
   options.max_order = config_.simulation.max_order;
+  options.quasi_random = config_.simulation.quasi_random;
   options.per_order = config_.output.per_order;
   options.seed = config_.seed;
   return options;

@@ -40,10 +40,10 @@ struct TransportOptions {
   bool per_order = false;
   std::uint64_t seed = 1;
   // Rays take their beam direction and first free path from the shot's scrambled Sobol' points
-  // (sobol_points.hpp) instead of their own streams. Unbiased, and on the seed's base case the
-  // mean waveform's RMS error at equal CPU time is that of 1.9 times the rays; off by default
-  // while two tests that assume plain Monte Carlo (the n^-1/2 slope of PHYSICS.md section 6 and
-  // the sweep's canopy/ground split on a slope) do not pass with it.
+  // (sobol_points.hpp) instead of their own streams (simulation.sampling "sobol"). Unbiased, and
+  // on the seed's base case the mean waveform's RMS error at equal CPU time is that of 1.9 times
+  // the rays; off by default, as plain Monte Carlo's n^-1/2 law (PHYSICS.md section 6) and the
+  // per-ray variance the processing weighs its fits with hold only for independent rays.
   bool quasi_random = false;
 };
 
