@@ -246,8 +246,8 @@ Key simulation_keys() {
               "how rays draw their beam direction and first free path: `random` "
               "(plain Monte Carlo) or `sobol` (the shot's scrambled Sobol' points: "
               "unbiased; on the seed's base case the mean waveform's error at 10^4 "
-              "rays is that of 1.9× the rays at the same cost; the processing's noise "
-              "test, which assumes independent rays, then errs on the safe side)")});
+              "rays is that of 1.9× the rays at the same cost; the noise the processing "
+              "weighs its fits with, computed for independent rays, is then overstated)")});
 }
 
 Key terrain_keys() {
