@@ -685,15 +685,15 @@ json read_json_file(const std::filesystem::path& file) {
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec))
     throw config_error(file.string(), "cannot read: it is a directory");
+  // A device or a pipe (/dev/zero) would be read for ever, and opening a pipe nobody writes
+  // waits for ever: a configuration is a file, and a small one, which is seen before opening.
+  if (std::filesystem::exists(file, ec) && !std::filesystem::is_regular_file(file, ec))
+    throw config_error(file.string(), "cannot read: not a regular file");
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     throw config_error(file.string(),
                        "cannot read: " + std::generic_category().message(errno ? errno : ENOENT));
   }
-  // A device or a pipe (/dev/zero) would be read for ever; a configuration is a file, and a
-  // small one.
-  if (!std::filesystem::is_regular_file(file, ec))
-    throw config_error(file.string(), "cannot read: not a regular file");
   if (std::filesystem::file_size(file, ec) > max_config_bytes)
     throw config_error(file.string(), "is larger than the limit of " +
                                           std::to_string(max_config_bytes >> 20) +
@@ -959,6 +959,54 @@ void check_run(const Config& config) {
                        "plots are drawn from footprints.geojson: output.plots needs "
                        "footprints_format \"GeoJSON\", got \"" +
                            o.footprints_format + "\"");
+}
+
+BrfMemory estimate_brf_memory(const Config& c) {
+  BrfMemory m;
+  m.pixels = std::ceil(c.brf.scene_size_m / c.brf.image_resolution_m);
+  const double tile_m = m.pixels * c.brf.image_resolution_m;
+  m.scene_side_m = tile_m + 2.0 * (c.terrain.plane ? 5.0 : 100.0);  // as run_brf builds it
+  double density = 0.0;
+  if (c.canopy) {
+    density = tree_density_m2(*c.canopy);
+    for (const StandArea& stand : c.canopy->stand_areas)
+      density = std::max(density, tree_density_m2(stand.canopy));
+  }
+  m.trees = density * m.scene_side_m * m.scene_side_m;
+  m.scene_bytes = m.trees * run_limits::tree_bytes;
+  m.image_bytes = static_cast<double>(c.sensor.bands.size()) * m.pixels * m.pixels * 8.0 *
+                  run_limits::brf_image_copies;
+  m.bytes = m.scene_bytes + m.image_bytes;
+  m.available_bytes = available_memory_bytes();
+  // The key to change: the pixels when the image weighs most, else the tile when it is wide,
+  // else the crowns that crowd it.
+  m.place = m.image_bytes > m.scene_bytes ? "/brf/image_resolution_m"
+            : tile_m > 1000.0             ? "/brf/scene_size_m"
+                                          : "/canopy/crown_radius_m";
+  return m;
+}
+
+void check_brf(const Config& config) {
+  const BrfSettings& b = config.brf;
+  const double pixels = std::ceil(b.scene_size_m / b.image_resolution_m);
+  if (pixels > run_limits::brf_image_pixels)
+    throw config_error("/brf/image_resolution_m",
+                       "scene.tif would be " + format_number(pixels) + " pixels across (" +
+                           format_number(b.scene_size_m) + " m at " +
+                           format_number(b.image_resolution_m) + " m a pixel); at most " +
+                           format_number(run_limits::brf_image_pixels));
+  const BrfMemory memory = estimate_brf_memory(config);
+  if (memory.bytes <= memory.available_bytes) return;
+  std::ostringstream why;
+  why << "brf's scene would hold about " << gibibytes(memory.bytes) << " ("
+      << format_number(std::round(memory.trees)) << " trees over "
+      << format_number(std::round(memory.scene_side_m)) << " m across, at "
+      << format_number(run_limits::tree_bytes / 1024.0) << " KiB a tree, and scene.tif's "
+      << config.sensor.bands.size() << " bands of " << format_number(memory.pixels) << " x "
+      << format_number(memory.pixels) << " pixels, " << mebibytes(memory.image_bytes)
+      << "), more than the " << gibibytes(memory.available_bytes)
+      << " of memory this process may have";
+  throw config_error(memory.place, why.str());
 }
 
 namespace {

@@ -109,6 +109,12 @@ inline constexpr std::uint64_t track_shots = 1'000'000'000;  // 290 days of GLAS
 // What one shot's waveforms may take: the transport tallies each shot's rays in 65 copies of
 // them (pipeline/transport/shot_transport.cpp) and every thread simulates a shot.
 inline constexpr double shot_waveform_bytes = 4.0 * 1024 * 1024;
+// `glaswave brf`'s tile is flat and periodic in the first footprint's local frame: 10 km across,
+// its corners (7.1 km out) already lie 3.9 m below that plane on the curved Earth.
+inline constexpr double brf_scene_m = 10000.0;
+inline constexpr double brf_image_pixels = 8192;  // scene.tif's side (2^26 pixels a band)
+// The copies of scene.tif's bands `brf` holds: the tallied image and the one written.
+inline constexpr double brf_image_copies = 2.0;
 }  // namespace run_limits
 
 struct Config {
@@ -169,6 +175,26 @@ RunMemory estimate_run_memory(const Config& config);
 // (estimate_run_memory). `check` asks the same, so that the two accept exactly the same
 // configurations.
 void check_run(const Config& config);
+
+// What `glaswave brf` will hold in memory, estimated as for a run: one scene (shared by the
+// threads), the trees on its tile and beyond its sides (5 m over a periodic plane, 100 m over a
+// DEM), and scene.tif's bands of doubles.
+struct BrfMemory {
+  double pixels = 0.0;        // scene.tif's side: brf.scene_size_m in whole pixels
+  double scene_side_m = 0.0;  // the ground the scene is built over
+  double trees = 0.0;         // on it, at the densest stand's density
+  double scene_bytes = 0.0;   // the trees'
+  double image_bytes = 0.0;   // scene.tif's bands, brf_image_copies times
+  double bytes = 0.0;         // scene + image
+  double available_bytes = 0.0;
+  std::string place;  // the key that makes it large, when it is too large
+};
+BrfMemory estimate_brf_memory(const Config& config);
+
+// What `brf` refuses before tracing anything: scene.tif wider than brf_image_pixels, or more
+// memory than this process may have (estimate_brf_memory), at the key that makes it large.
+// `check` asks the same.
+void check_brf(const Config& config);
 
 // read_json_file + apply_override for each + parse_config.
 Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides);

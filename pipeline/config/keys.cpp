@@ -497,9 +497,10 @@ Key brf_keys() {
                "photons traced from the sun"),
        number("image_resolution_m", b.image_resolution_m, above(0), "m",
               "pixel size of `scene.tif`"),
-       number("scene_size_m", b.scene_size_m, above(0), "m",
+       number("scene_size_m", b.scene_size_m, open_closed(0, run_limits::brf_scene_m), "m",
               "side of the square scene around the track's first footprint that the sun "
-              "lights (periodic over a synthetic plane); rounded up to whole pixels")});
+              "lights (periodic over a synthetic plane); rounded up to whole pixels, at most "
+              "8192 of them (see Limits)")});
 }
 
 }  // namespace

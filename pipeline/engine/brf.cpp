@@ -24,9 +24,6 @@
 namespace glaswave {
 namespace {
 
-// Pixels along each side of scene.tif at most (2^26 pixels a band).
-constexpr double max_image_pixels = 8192;
-
 // Unit vector toward zenith and azimuth (degrees, clockwise from north) in east-north-up.
 Vec3 toward(double zenith_deg, double azimuth_deg) {
   const double deg = std::numbers::pi / 180.0;
@@ -100,14 +97,9 @@ BrfScene build_brf_scene(const Config& config, const Terrain& terrain,
 BrfSummary run_brf(const Config& config, const BrfRequest& request,
                    const ProgressCallback& progress) {
   const auto started = std::chrono::steady_clock::now();
-  const double pixels_per_side = std::ceil(config.brf.scene_size_m / config.brf.image_resolution_m);
-  if (pixels_per_side > max_image_pixels)
-    throw config_error("/brf/image_resolution_m",
-                       "scene.tif would be " +
-                           std::to_string(static_cast<long long>(pixels_per_side)) +
-                           " pixels across brf.scene_size_m; at most " +
-                           std::to_string(static_cast<int>(max_image_pixels)));
-  const int pixels = static_cast<int>(pixels_per_side);
+  check_brf(config);  // first, as check_inputs does: check and brf refuse alike
+  const int pixels =
+      static_cast<int>(std::ceil(config.brf.scene_size_m / config.brf.image_resolution_m));
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
   const ShotSimulator simulator(config, *terrain);
   const std::unique_ptr<Track> track = plan_track(config, *terrain);

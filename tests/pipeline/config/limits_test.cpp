@@ -3,6 +3,7 @@
 // would hold estimated before anything is allocated, refused with the limit in the message.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <filesystem>
@@ -66,6 +67,20 @@ TEST(JsonNesting, ReachesTheFileAndSet) {
     EXPECT_THAT(std::string(e.what()),
                 StartsWith("/track/points/0/0/0/...: nests deeper than 64 levels"));
     EXPECT_THAT(std::string(e.what()), HasSubstr("(from --set track.points)"));
+  }
+}
+
+// A configuration is a regular file: a FIFO nobody writes is refused before it is opened, which
+// would wait for ever.
+TEST(ConfigFile, AFifoIsRefusedNotWaitedFor) {
+  const test_support::ScratchDir dir("glaswave_limits_test");
+  const auto fifo = dir / "config.json";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    read_json_file(fifo);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), fifo.string() + ": cannot read: not a regular file");
   }
 }
 
@@ -136,6 +151,62 @@ TEST(RunMemory, BeyondTheMachineIsRefusedAtTheKeyThatMakesIt) {
   } catch (const Error& e) {
     EXPECT_EQ(e.place(), "/track/altitude_m");
   }
+}
+
+// brf's scene: one for every thread, its tile in whole pixels with 5 m beyond each side over a
+// periodic plane, the trees on it at -ln(1 - cover) / (pi r^2) a square metre, and scene.tif's
+// bands of 8-byte pixels held twice.
+TEST(BrfMemory, CountsTheTreesOfTheTileAndTheImage) {
+  const Config c = parse_config(doc(R"({"sensor": {"preset": "glas"}, "canopy": {},
+      "brf": {"scene_size_m": 99.5, "image_resolution_m": 2}})"));
+  const BrfMemory m = estimate_brf_memory(c);
+  EXPECT_EQ(m.pixels, 50.0);
+  EXPECT_EQ(m.scene_side_m, 110.0);
+  const double density = -std::log(1.0 - 0.7) / (std::numbers::pi * 8.0 * 8.0);
+  EXPECT_NEAR(m.trees, density * 110.0 * 110.0, 1e-9 * m.trees);
+  EXPECT_NEAR(m.image_bytes, 2.0 * 50 * 50 * 8 * 2, 1e-9);  // glas: 2 bands
+  EXPECT_NEAR(m.bytes, m.trees * 2560.0 + m.image_bytes, 1e-6);
+  EXPECT_NO_THROW(check_brf(c));
+  // Over a DEM the scene reaches 100 m beyond the tile.
+  const Config dem = parse_config(doc(R"({"terrain": {"dem": "x.tif"}, "brf": {}})"));
+  EXPECT_EQ(estimate_brf_memory(dem).scene_side_m, 300.0);
+}
+
+TEST(BrfMemory, ATileThatCannotBePhysicalOrFitIsRefusedAtItsKey) {
+  EXPECT_EQ(error_of(doc(R"({"brf": {"scene_size_m": 20000}})")),
+            "/brf/scene_size_m: must be in (0, 10000], got 20000");
+  const auto refusal = [](const std::string& text) {
+    try {
+      check_brf(parse_config(doc(text)));
+    } catch (const Error& e) {
+      return e.place() + ": " + e.message();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal(R"({"brf": {"scene_size_m": 10000, "image_resolution_m": 0.5}})"),
+            "/brf/image_resolution_m: scene.tif would be 20000 pixels across (10000 m at 0.5 m a "
+            "pixel); at most 8192");
+  EXPECT_EQ(refusal(R"({"brf": {"scene_size_m": 8192, "image_resolution_m": 1}})"), "accepted");
+  // 5 cm crowns over the widest tile: 3e10 trees, tens of terabytes.
+  EXPECT_THAT(refusal(R"({"canopy": {"crown_radius_m": 0.05, "cover": 0.9},
+      "brf": {"scene_size_m": 10000, "image_resolution_m": 10}})"),
+              StartsWith("/brf/scene_size_m: brf's scene would hold about "));
+  EXPECT_THAT(refusal(R"({"canopy": {"crown_radius_m": 0.01}})"),
+              StartsWith("/canopy/crown_radius_m: brf's scene would hold about "));
+  // 256 bands of 8192 x 8192 pixels: 256 GiB of image.
+  json bands = json::array();
+  for (int i = 0; i < 256; ++i)
+    bands.push_back({{"name", "b" + std::to_string(i)},
+                     {"wavelength_nm", 500 + i},
+                     {"pulse_energy_mJ", 1},
+                     {"atmos_transmission_roundtrip", 0.9}});
+  const std::string many_bands = json{
+      {"sensor", {{"bands", bands}, {"bins", 100}}},
+      {"canopy", nullptr},
+      {"brf",
+       {{"scene_size_m", 8192}}}}.dump();
+  EXPECT_THAT(refusal(many_bands),
+              StartsWith("/brf/image_resolution_m: brf's scene would hold about 256 GiB"));
 }
 
 }  // namespace
