@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/config/config.hpp"
+#include "pipeline/config/json_reader.hpp"
 #include "pipeline/engine/brf.hpp"
 #include "pipeline/engine/run.hpp"
 
@@ -33,7 +34,8 @@ Config load(const std::optional<std::string>& path, const std::optional<std::str
   if (path) return load_config(*path, overrides);
   nlohmann::json parsed;
   try {
-    parsed = nlohmann::json::parse(document.value_or("null"));
+    // Checked as a file is: nesting and duplicate keys refused before anything recurses.
+    parsed = parse_json_checked(document.value_or("null"));
   } catch (const nlohmann::json::exception& e) {
     throw config_error("", std::string("not a JSON document: ") + e.what());
   }
@@ -125,6 +127,7 @@ PYBIND11_MODULE(_glaswave, m) {
   using namespace glaswave;
   m.doc() = "glaswave's engine (use the glaswave package, which wraps it)";
   m.attr("__version__") = GLASWAVE_VERSION;
+  m.attr("max_json_depth") = max_json_depth;  // the package checks a dict's depth before json
   config_error_type = add_exception(
       m, "ConfigError", PyExc_ValueError,
       "A bad configuration or argument; the message names the key as a JSON path "

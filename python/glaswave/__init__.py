@@ -25,10 +25,46 @@ __version__ = _glaswave.__version__
 __all__ = ["run", "brf", "check", "ConfigError", "InputError", "RunError", "__version__"]
 
 
+def _config_error(place, reason):
+    """A ConfigError as the engine raises it: "place: reason", with both as attributes."""
+    error = ConfigError(f"{place}: {reason}" if place else reason)
+    error.place, error.reason = place, reason
+    return error
+
+
+def _pointer_child(pointer, key):
+    """The JSON pointer of `key` under `pointer`, '~' and '/' escaped (RFC 6901)."""
+    return f"{pointer}/" + str(key).replace("~", "~0").replace("/", "~1")
+
+
+def _check_nesting(value, prefix=""):
+    """Refuses, as the engine refuses JSON text, a value nesting deeper than the engine's limit
+    or holding itself, before json.dumps recurses into it (a RecursionError, or a crash, there).
+    Walked without recursion; the place named is the outermost levels, as the engine names it."""
+    limit = _glaswave.max_json_depth
+    stack = [(value, prefix, 0, ())]  # (value, its pointer, containers above it, their ids)
+    while stack:
+        item, pointer, depth, above = stack.pop()
+        if isinstance(item, Mapping):
+            children = ((_pointer_child(pointer, k), v) for k, v in item.items())
+        elif isinstance(item, (list, tuple)):
+            children = ((f"{pointer}/{i}", v) for i, v in enumerate(item))
+        else:
+            continue
+        if id(item) in above:
+            raise _config_error(pointer, "refers to itself: not a JSON value")
+        if depth >= limit:
+            outer = "/".join(pointer[len(prefix):].split("/")[:4])
+            raise _config_error(f"{prefix}{outer}/...",
+                                f"nests deeper than {limit} levels of objects and arrays")
+        stack.extend((v, p, depth + 1, above + (id(item),)) for p, v in children)
+
+
 def _source(config):
     """(path, document, folder) for the engine: a file, or a dict as JSON text whose relative
     paths are taken from the current directory."""
     if isinstance(config, Mapping):
+        _check_nesting(config)
         try:
             document = json.dumps(config, allow_nan=False)
         except (TypeError, ValueError) as error:
@@ -47,6 +83,7 @@ def _assignments(overrides):
         raise TypeError(f"overrides must be a dict, not {type(overrides).__name__}")
     assignments = []
     for key, value in overrides.items():
+        _check_nesting(value, "/" + str(key).replace(".", "/"))
         try:
             text = json.dumps(value, allow_nan=False)
         except (TypeError, ValueError) as error:

@@ -57,6 +57,56 @@ def test_check_raises_config_error_naming_the_json_path():
     assert summary["shots"] == 3 and summary["shots_off_terrain"] == 0
 
 
+def nested(levels, leaf=1):
+    """A list `levels` deep, built without recursion."""
+    value = leaf
+    for _ in range(levels):
+        value = [value]
+    return value
+
+
+def test_a_deeply_nested_dict_is_a_config_error_naming_its_path_as_a_file_gives():
+    # Deeper than Python's recursion limit (json.dumps would raise RecursionError) and just over
+    # the engine's limit of 64 levels (which json.dumps would pass): the engine's message, at
+    # the path's outermost levels, for run, check and brf alike.
+    limit = glaswave._glaswave.max_json_depth
+    for levels in (100_000, limit):
+        config = small_config()
+        config["canopy"] = {"pai": nested(levels)}
+        for call in (glaswave.check, glaswave.run, glaswave.brf):
+            with pytest.raises(glaswave.ConfigError) as raised:
+                call(config)
+            assert str(raised.value) == (
+                "/canopy/pai/0/...: nests deeper than 64 levels of objects and arrays")
+            assert raised.value.place == "/canopy/pai/0/..."
+        # The engine checks the JSON text it is given too (what json.dumps still writes).
+        if levels == limit:
+            with pytest.raises(glaswave.ConfigError, match=r"^/canopy/pai/0/\.\.\.: nests"):
+                glaswave._glaswave.check(None, json.dumps(config), ".", [])
+    with pytest.raises(glaswave.ConfigError, match=r"^/seed: duplicate key"):
+        glaswave._glaswave.check(None, '{"seed": 1, "seed": 2}', ".", [])
+    # One level less is JSON the engine reads: the error is then the key's own.
+    config = small_config()
+    config["canopy"] = {"pai": nested(limit - 2)}
+    with pytest.raises(glaswave.ConfigError, match=r"^/canopy/pai: must be a number"):
+        glaswave.check(config)
+    # Nested dicts, and an override's value (placed at its key, as --set places it).
+    deep_dict = {}
+    inner = deep_dict
+    for _ in range(5000):
+        inner["a"] = {}
+        inner = inner["a"]
+    with pytest.raises(glaswave.ConfigError, match=r"^/track/a/a/\.\.\.: nests deeper than 64"):
+        glaswave.check({**small_config(), "track": deep_dict})
+    with pytest.raises(glaswave.ConfigError, match=r"^/seed/0/0/0/\.\.\.: nests deeper than 64"):
+        glaswave.check(small_config(), overrides={"seed": nested(100_000)})
+    # A value that holds itself is named, not followed for ever.
+    loop = []
+    loop.append(loop)
+    with pytest.raises(glaswave.ConfigError, match=r"^/canopy/pai/0: refers to itself"):
+        glaswave.check({**small_config(), "canopy": {"pai": loop}})
+
+
 def test_the_contracts_example_names_the_wrong_value_before_the_missing_terrain():
     # PRODUCT.md §6, as written there: no terrain, and a negative PAI.
     with pytest.raises(glaswave.ConfigError) as raised:
