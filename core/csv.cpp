@@ -81,6 +81,10 @@ bool CsvReader::read_line() {
 bool CsvReader::next_row(std::vector<std::string_view>& fields) {
   while (read_line()) {
     ++line_number_;
+    // A UTF-8 byte order mark (a spreadsheet's "CSV UTF-8") is no part of the header.
+    constexpr std::string_view bom = "\xEF\xBB\xBF";
+    if (line_number_ == 1 && std::string_view(line_).substr(0, bom.size()) == bom)
+      line_.erase(0, bom.size());
     const std::string_view text = trimmed(line_);
     if (text.empty() || text.front() == '#') continue;
     fields = split_csv_line(text);

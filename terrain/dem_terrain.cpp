@@ -207,6 +207,9 @@ void DemTerrain::Impl::open_dataset() {
     if (!fs::exists(path, ec)) throw input_error(path, "cannot read the DEM: no such file");
     if (fs::is_directory(path, ec))
       throw input_error(path, "cannot read the DEM: it is a directory");
+    // A pipe nobody writes would be waited for, a device read for ever.
+    if (!fs::is_regular_file(path, ec))
+      throw input_error(path, "cannot read the DEM: not a regular file");
   }
   {
     const GdalErrorTrap trap;

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "core/error.hpp"
@@ -138,6 +139,12 @@ json feature_properties(const OGRFeature& feature, const std::string& path,
 }  // namespace
 
 std::vector<StandFeature> read_stand_features(const std::string& path) {
+  // A pipe or a device would be waited for or read for ever (a Shapefile's folder is fine).
+  std::error_code error;
+  const auto status = std::filesystem::status(path, error);
+  if (!error && status.type() != std::filesystem::file_type::regular &&
+      status.type() != std::filesystem::file_type::directory)
+    throw input_error(path, "cannot be read as a vector file: not a regular file");
   GDALAllRegister();
   const QuietGdal quiet;
   const std::unique_ptr<GDALDataset, DatasetCloser> dataset(GDALDataset::FromHandle(
@@ -199,6 +206,8 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
       features.push_back(std::move(stand));
     }
   }
+  // An empty file would change nothing, without a word.
+  if (features.empty()) throw input_error(path, "holds no feature: no stand to place");
   return features;
 }
 

@@ -246,6 +246,7 @@ std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track
 
 CheckSummary check_inputs(const Config& config) {
   check_run(config);  // what run refuses before simulating
+  check_brf(config);  // ... and brf
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
   // The forest reads its crowns file and checks what the configuration cannot alone.
   grow_forest(config);
@@ -261,6 +262,15 @@ CheckSummary check_inputs(const Config& config) {
       centres.push_back({footprint.ground.lat_deg, footprint.ground.lon_deg});
   }
   if (const auto warning = stands_off_track(config, centres)) summary.warnings.push_back(*warning);
+  // Roughness too fine to mesh under the beam is refused where a shot builds its ground: the
+  // first footprint's scene is built here, so that check refuses it as run does.
+  if (config.terrain.roughness.rms_m > 0.0) {
+    for (std::int64_t record = 0; record < track->size(); ++record)
+      if (const Footprint footprint = track->footprint(record); footprint.on_terrain) {
+        ShotSimulator(config, *terrain).check_scene(footprint);
+        break;
+      }
+  }
   return summary;
 }
 

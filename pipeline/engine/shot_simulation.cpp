@@ -126,6 +126,8 @@ ShotSimulator::ShotSimulator(const Config& config, const Terrain& terrain)
 
 ShotSimulator::~ShotSimulator() = default;
 
+void ShotSimulator::check_scene(const Footprint& footprint) const { build_scene(footprint); }
+
 SceneOptics ShotSimulator::scene_optics() const {
   SceneOptics optics;
   optics.soil_reflectance = config_.terrain.soil_reflectance;

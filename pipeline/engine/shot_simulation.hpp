@@ -36,6 +36,10 @@ class ShotSimulator {
   std::optional<ShotWaveforms> simulate_ray(const Footprint& footprint, std::int64_t ray,
                                             const RayObserver& observer) const;
 
+  // Builds the footprint's scene and drops it: what a shot refuses before tracing (roughness
+  // too fine to mesh under the beam), for `check`.
+  void check_scene(const Footprint& footprint) const;
+
   // What the products need to know besides the shots.
   RunInfo run_info(std::int64_t shots, const std::string& command_line) const;
 

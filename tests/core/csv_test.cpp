@@ -3,6 +3,7 @@
 #include "core/csv.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <clocale>
 #include <filesystem>
@@ -65,6 +66,33 @@ TEST(CsvReader, SkipsBlankAndCommentLinesAndNamesTheLineOfAnError) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), file.string() + ": cannot open the test file");
   }
+}
+
+// A spreadsheet's "CSV UTF-8" starts with a byte order mark, and Windows ends lines with CRLF:
+// neither is part of a field. A FIFO nobody writes is refused before it is opened (opening it
+// would wait for ever).
+TEST(CsvReader, ReadsAByteOrderMarkAndCrlfAsNothingAndRefusesAFifo) {
+  const test_support::ScratchDir dir("glaswave_csv_test");
+  const fs::path file = dir / "excel.csv";
+  std::ofstream(file, std::ios::binary) << "\xEF\xBB\xBFx,y\r\n1,2\r\n";
+  CsvReader csv(file, "the test file");
+  std::vector<std::string_view> fields;
+  ASSERT_TRUE(csv.next_row(fields));
+  ASSERT_EQ(fields.size(), 2u);
+  EXPECT_EQ(fields[0], "x");
+  EXPECT_EQ(fields[1], "y");
+  ASSERT_TRUE(csv.next_row(fields));
+  EXPECT_EQ(fields[1], "2");
+  // Only at the start of the file: elsewhere it is a field's content.
+  const std::string bom = "\xEF\xBB\xBF";
+  std::ofstream(file, std::ios::binary) << "x,y\n" << bom << "1,2\n";
+  CsvReader later(file, "the test file");
+  ASSERT_TRUE(later.next_row(fields));
+  ASSERT_TRUE(later.next_row(fields));
+  EXPECT_EQ(fields[0], bom + "1");
+  const fs::path fifo = dir / "fifo.csv";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_THROW(CsvReader(fifo, "the test file"), Error);
 }
 
 // A device is read for ever and a line of megabytes is no CSV of ours: both refused before they

@@ -3,6 +3,7 @@
 // of a file of another kind echoed; and a run whose stderr is not a terminal reports its
 // progress as plain lines.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -98,6 +99,43 @@ TEST_F(HostileInput, RunSizesBeyondTheLimitsAreRefusedByCheckAndRun) {
                  "/output: nothing to write");
 }
 
+// The same for `glaswave brf`'s scene: a tile that cannot be physical, an image too wide, a scene
+// beyond the machine's memory; refused by check and brf alike, nothing written.
+TEST_F(HostileInput, BrfScenesBeyondTheLimitsAreRefusedByCheckAndBrf) {
+  const auto expect_brf_refused = [&](const json& changes, const std::string& message) {
+    const std::string config = write_config(changes);
+    const CommandOutcome check = run_glaswave("check " + config);
+    const CommandOutcome brf = run_glaswave("brf " + config + " --quiet --out " + out().string());
+    for (const CommandOutcome& outcome : {check, brf}) {
+      EXPECT_EQ(outcome.status, 2) << message << ": " << outcome.output;
+      EXPECT_EQ(outcome.output.rfind("glaswave: error: " + message, 0), 0u) << outcome.output;
+      EXPECT_EQ(std::count(outcome.output.begin(), outcome.output.end(), '\n'), 1)
+          << outcome.output;
+    }
+    EXPECT_FALSE(fs::exists(out())) << message;
+  };
+  expect_brf_refused({{"brf", {{"scene_size_m", 1e9}}}},
+                     "/brf/scene_size_m: must be in (0, 10000], got 1000000000");
+  expect_brf_refused({{"brf", {{"scene_size_m", 10000}, {"image_resolution_m", 0.01}}}},
+                     "/brf/image_resolution_m: scene.tif would be 1000000 pixels across");
+  // 1 m crowns: a run's scene holds about 0.2 million trees (0.4 GiB a thread), a 10 km tile
+  // 74 million (175 GiB).
+  expect_brf_refused({{"canopy", {{"crown_radius_m", 1.0}, {"cover", 0.9}}},
+                      {"brf", {{"scene_size_m", 10000}, {"image_resolution_m", 10}}}},
+                     "/brf/scene_size_m: brf's scene would hold about ");
+  expect_brf_refused({{"brf", {{"photons", 1000000000000LL}}}},
+                     "/brf/photons: must be <= 1000000000, got 1000000000000");
+}
+
+// Item 8: roughness too fine to mesh under the beam even at one node per correlation length is
+// refused by run when its first shot builds the ground, and by check, which builds that shot's
+// scene for it.
+TEST_F(HostileInput, RoughnessTooFineForTheBeamIsRefusedByCheckAndRun) {
+  expect_refused(
+      write_config({{"terrain", {{"roughness", {{"rms_m", 0.45}, {"correlation_m", 0.05}}}}}}), "",
+      2, "/terrain/roughness/correlation_m: 0.05 m is too short to mesh under this beam");
+}
+
 // Item 5: a value nested 100 000 levels deep under a known key, in the file or from --set.
 TEST_F(HostileInput, DeepNestingIsRefusedBeforeAnythingRecurses) {
   const std::string deep = std::string(100000, '[') + std::string(100000, ']');
@@ -145,6 +183,31 @@ TEST_F(HostileInput, EachItemOfTheListGetsAClearError) {
   // An escape code in a key reaches stderr written out, not raw.
   expect_refused(write_config({{"canopy", {{"p\x1b[31mai", 1}}}}), "", 2,
                  "/canopy/p\\x1b[31mai: unknown key");
+}
+
+// Found by tests/reliability/inputs_tried.py: a FIFO nobody writes, given as the configuration or
+// as a file it names, is refused at once, not waited for; a stands file without a feature is
+// refused (it would change nothing, silently); a crowns file from a spreadsheet (a UTF-8 byte
+// order mark, CRLF) is read.
+TEST_F(HostileInput, FifosAndEmptyStandsAreRefusedAndSpreadsheetCsvIsRead) {
+  const fs::path fifo = dir_ / "fifo";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  expect_refused(fifo.string(), "", 2, fifo.string() + ": cannot read: not a regular file");
+  expect_refused(write_config({{"canopy", {{"stands", fifo.string()}}}}), "", 3,
+                 fifo.string() + ": cannot be read as a vector file: not a regular file");
+  expect_refused(write_config({{"canopy", {{"crowns_file", fifo.string()}}}}), "", 3,
+                 fifo.string() + ": cannot read the crowns file: not a regular file");
+  expect_refused(write_config({{"terrain", {{"plane", nullptr}, {"dem", fifo.string()}}}}), "", 3,
+                 fifo.string() + ": cannot read the DEM: not a regular file");
+  const std::string empty =
+      write("empty.geojson", R"({"type": "FeatureCollection", "features": []})");
+  expect_refused(write_config({{"canopy", {{"stands", empty}}}}), "", 3,
+                 empty + ": holds no feature: no stand to place");
+  const std::string crowns =
+      write("excel.csv", "\xEF\xBB\xBFx,y,base_m,radius_m,half_height_m\r\n0,0,5,3,3\r\n");
+  const CommandOutcome check =
+      run_glaswave("check " + write_config({{"canopy", {{"crowns_file", crowns}}}}));
+  EXPECT_EQ(check.status, 0) << check.output;
 }
 
 // Item 4: the ephemeris error names the file, line and what was expected, never the content of

@@ -798,7 +798,10 @@ TEST(LoadConfig, OverridesInOrderAndPathsRelativeToTheFile) {
   // The stands file is read with the configuration; the others are opened later by their readers.
   const std::string stands =
       std::filesystem::absolute(
-          dir.write("elsewhere/stands.geojson", R"({"type": "FeatureCollection", "features": []})"))
+          dir.write("elsewhere/stands.geojson",
+                    R"({"type": "FeatureCollection", "features": [{"type": "Feature",
+                        "properties": {"pai": 1}, "geometry": {"type": "Polygon", "coordinates":
+                        [[[0, 0], [1, 0], [1, 1], [0, 0]]]}}]})"))
           .string();
   const auto file = dir.write("site/config.json", R"({
     "terrain": {"dem": "dems/dem.tif"},
