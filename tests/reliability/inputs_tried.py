@@ -1,0 +1,619 @@
+#!/usr/bin/python3
+"""Bad and hostile inputs tried on the built glaswave (issue 13), as a markdown table.
+
+    /usr/bin/python3 tests/reliability/inputs_tried.py [--glaswave build/pipeline/glaswave]
+        [--out inputs_tried.md] [--only SUBSTRING]
+
+Each case runs under `timeout 20` in a scratch directory and is recorded with its exit status,
+the first line of stderr and a verdict. A case is a bug when it crashes (a signal: exit >= 128),
+hangs (killed by the timeout: 124), echoes a file's content (every hostile file holds the
+marker below), leaves a product under its final name after a failure, or fails with more (or
+less) than one `glaswave: error:` line. Cases marked `ok` are meant to succeed. A full disk is a
+small tmpfs when this runs as root (else `ulimit -f`). Not run by ctest: a tool for the issue's
+closing note and for trying new inputs.
+"""
+
+import argparse
+import json
+import math
+import os
+import pathlib
+import resource
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+MARKER = "SECRET-MARKER-7f3a"
+PRODUCTS = {"shots.nc", "footprints.geojson", "footprints.gpkg", "brf.json", "scene.tif",
+            "sensitivity.csv", "sensitivity.md", "waveforms.png", "track_map.png"}
+TIMEOUT_S = 20
+
+
+def ecef(lat_deg, lon_deg, h_m):
+    """WGS84 geodetic to Earth-fixed (m)."""
+    a, f = 6378137.0, 1 / 298.257223563
+    e2 = f * (2 - f)
+    lat, lon = math.radians(lat_deg), math.radians(lon_deg)
+    n = a / math.sqrt(1 - e2 * math.sin(lat) ** 2)
+    return ((n + h_m) * math.cos(lat) * math.cos(lon), (n + h_m) * math.cos(lat) * math.sin(lon),
+            (n * (1 - e2) + h_m) * math.sin(lat))
+
+
+class Trial:
+    def __init__(self, glaswave, scratch):
+        self.glaswave = glaswave
+        self.dir = pathlib.Path(scratch)
+        self.rows = []
+        self.count = 0
+
+    # ---- files ---------------------------------------------------------------------------
+    def path(self, name):
+        return self.dir / name
+
+    def write(self, name, text, mode="w"):
+        p = self.path(name)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        with open(p, mode) as f:
+            f.write(text)
+        return str(p)
+
+    def base(self, **changes):
+        config = {
+            "seed": 1,
+            "sensor": {"preset": "glas"},
+            "simulation": {"rays_per_shot": 200, "max_order": 3},
+            "terrain": {"plane": {"origin_lat_deg": 46.0, "origin_lon_deg": 8.0}},
+            "canopy": None,
+            "track": {"start_lat_deg": 46.0, "start_lon_deg": 8.0, "shots": 2},
+        }
+        for key, value in changes.items():
+            section, _, leaf = key.partition("__")
+            if leaf:
+                config.setdefault(section, {})
+                if config[section] is None:
+                    config[section] = {}
+                config[section][leaf] = value
+            else:
+                config[section] = value
+        return config
+
+    def config(self, name="config.json", **changes):
+        return self.write(name, json.dumps(self.base(**changes), indent=1))
+
+    # ---- running ---------------------------------------------------------------------------
+    def run(self, description, args, expect="error", out=None, shell_prefix="", env=None,
+            cwd=None):
+        """Runs glaswave ARGS; `out` is the output directory whose products are checked."""
+        self.count += 1
+        if out is not None:
+            shutil.rmtree(out, ignore_errors=True)
+        command = ["timeout", "-s", "KILL", str(TIMEOUT_S), self.glaswave, *args]
+        started = time.monotonic()
+        cpu_before = _children_cpu_s()
+        if shell_prefix:
+            line = shell_prefix + " " + " ".join(_quote(a) for a in command)
+            done = subprocess.run(["bash", "-c", line], capture_output=True, env=env, cwd=cwd)
+        else:
+            done = subprocess.run(command, capture_output=True, env=env, cwd=cwd)
+        wall_s = time.monotonic() - started
+        cpu_s = _children_cpu_s() - cpu_before
+        status = done.returncode if done.returncode >= 0 else 128 - done.returncode
+        stderr = done.stderr.decode("utf-8", "replace")
+        lines = [l for l in stderr.splitlines() if l.strip()]
+        first = lines[0] if lines else ""
+        problems = []
+        if status == 137 and wall_s >= TIMEOUT_S - 0.5:
+            problems.append(f"HANG (killed after {TIMEOUT_S} s)")
+        elif status >= 128:
+            problems.append(f"CRASH (signal {status - 128})")
+        if MARKER in stderr or MARKER in done.stdout.decode("utf-8", "replace"):
+            problems.append("ECHOES A FILE")
+        if "\x1b" in stderr:
+            problems.append("RAW ESCAPE CODE")
+        if out is not None and status != 0 and os.path.isdir(out):
+            left = sorted(p.name for p in pathlib.Path(out).rglob("*") if p.name in PRODUCTS)
+            if left:
+                problems.append("PRODUCT LEFT: " + ", ".join(left))
+        errors = [l for l in lines if l.startswith("glaswave: error:")]
+        if expect == "ok" and status != 0:
+            problems.append("FAILED")
+        if expect != "ok" and status == 0:
+            problems.append("ACCEPTED")
+        if expect != "ok" and status not in (0, 124) and status < 128 and len(errors) != 1:
+            problems.append(f"{len(errors)} error lines, {len(lines)} lines")
+        if expect not in ("ok", "error") and status != expect and not problems:
+            problems.append(f"exit {status}, expected {expect}")
+        verdict = "; ".join(problems) if problems else ("works" if status == 0 else "clear error")
+        self.rows.append((self.count, description, status, first, verdict, wall_s, cpu_s))
+        print(f"{self.count:3d} {status:3d} {verdict[:30]:30s} {description[:60]}", flush=True)
+        return done
+
+    def table(self):
+        bugs = [r for r in self.rows if is_bug(r[4])]
+        text = [
+            "# Inputs tried on glaswave (issue 13)", "",
+            f"{len(self.rows)} inputs, each run as `timeout -s KILL {TIMEOUT_S} glaswave ...` by "
+            "`tests/reliability/inputs_tried.py`; exit status, the first line of stderr, and the "
+            "verdict (a crash, a hang, an echoed file, a product left after a failure or more "
+            "than one error line would be named). "
+            f"{len(bugs)} found wanting.", "",
+            "| # | input | exit | first line of stderr | verdict | wall s | CPU s |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for n, description, status, first, verdict, wall_s, cpu_s in self.rows:
+            first = first.replace(str(self.dir) + "/", "").replace("|", "\\|")
+            if len(first) > 200:
+                first = first[:197] + "..."
+            description = description.replace("|", "\\|").replace("`", "'")
+            first = "`" + first.replace("`", "'") + "`" if first else ""
+            text.append(f"| {n} | {description} | {status} | {first} | {verdict} | {wall_s:.1f} | "
+                        f"{cpu_s:.1f} |")
+        return "\n".join(text) + "\n"
+
+
+def is_bug(verdict):
+    return verdict not in ("works", "clear error") and not verdict.startswith("works;")
+
+
+def _children_cpu_s():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _quote(text):
+    return "'" + text.replace("'", "'\\''") + "'"
+
+
+# ---- the cases -------------------------------------------------------------------------------
+
+def issue_items(t):
+    out = str(t.path("out"))
+    # 1. A full disk: a 300 KiB filesystem of its own (as root), else a file size limit.
+    disk = t.path("small_disk")
+    disk.mkdir(exist_ok=True)
+    mounted = os.geteuid() == 0 and subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=300k", "tmpfs", str(disk)],
+        capture_output=True).returncode == 0
+    full = t.config("full.json", track__shots=40, output={"per_order": True})
+    try:
+        if mounted:
+            t.run("1. full disk: run into a 300 KiB tmpfs", ["run", full, "--quiet", "--out",
+                  str(disk / "run")], out=str(disk / "run"))
+        t.run("1. full disk: run under `ulimit -f 64` (EFBIG)", ["run", full, "--quiet", "--out",
+              out], out=out, shell_prefix="ulimit -f 64;")
+    finally:
+        if mounted:
+            subprocess.run(["umount", str(disk)])
+    # 2. Stands: 3000 polygons over the track.
+    features = []
+    for i in range(3000):
+        w = 7.9 + (i % 60) * 0.003
+        s = 45.95 + (i // 60) * 0.002
+        features.append({"type": "Feature", "properties": {"pai": 1 + i % 3},
+                         "geometry": {"type": "Polygon", "coordinates": [[
+                             [w, s], [w + 0.0025, s], [w + 0.0025, s + 0.0015], [w, s + 0.0015],
+                             [w, s]]]}})
+    stands = t.write("stands3000.geojson", json.dumps(
+        {"type": "FeatureCollection", "features": features}))
+    t.run("2. 3000 stand polygons, 20 shots", ["run", t.config(
+        "stands.json", canopy={"stands": stands}, track__shots=20), "--quiet", "--out", out],
+        expect="ok", out=out)
+    ring = [[8.0 + 0.01 * math.cos(2 * math.pi * k / 1_000_000),
+             46.0 + 0.01 * math.sin(2 * math.pi * k / 1_000_000)] for k in range(1_000_000)]
+    ring.append(ring[0])
+    big = t.write("stand_1e6.geojson", json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"pai": 2},
+         "geometry": {"type": "Polygon", "coordinates": [ring]}}]}))
+    t.run("2. one stand polygon of 1 000 000 vertices, 5 shots", ["run", t.config(
+        "stand_big.json", canopy={"stands": big}, track__shots=5), "--quiet", "--out", out],
+        expect="ok", out=out)
+    # 3. Run sizes.
+    for description, changes in [
+            ("3. sensor.bins 100000000", {"sensor__bins": 100000000}),
+            ("3. sensor.ifov_rad 3", {"sensor__ifov_rad": 3}),
+            ("3. track.altitude_m 1e10", {"track__altitude_m": 1e10}),
+            ("3. simulation.rays_per_shot 1e12", {"simulation__rays_per_shot": 10**12}),
+            ("3. canopy.crown_radius_m 0.01 (1e9 trees a shot)",
+             {"canopy": {"crown_radius_m": 0.01}}),
+            ("3. output with everything off", {"output": {"netcdf": False, "geojson": False}}),
+            ("3. sensor.bins 16777216 x per_order x max_order 1000",
+             {"sensor__bins": 16777216, "output": {"per_order": True},
+              "simulation": {"max_order": 1000}}),
+            ("3. orbit with apogee beyond 40 000 km",
+             {"track": {"type": "orbit", "semi_major_axis_m": 4e7, "eccentricity": 0.5}})]:
+        config = t.config("size.json", **changes)
+        t.run(description + " (check)", ["check", config])
+        t.run(description + " (run)", ["run", config, "--quiet", "--out", out], out=out)
+    # 4. A file of another kind as the ephemeris: no line of it echoed.
+    shadow = t.write("shadow", f"root:$6${MARKER}$Zk3Hq0:19000:0:99999:7:::\n")
+    for name, path in [("a password-hash file", shadow), ("/etc/passwd", "/etc/passwd")]:
+        t.run(f"4. ephemeris pointed at {name}", ["run", t.config(
+            "eph.json", track={"type": "ephemeris", "ephemeris": path}), "--quiet", "--out", out],
+            out=out)
+    # 5. 100 000 levels under a known key.
+    deep = "[" * 100000 + "]" * 100000
+    for key, text in [("seed", '{"seed": %s}' % deep), ("canopy", '{"canopy": %s}' % deep),
+                      ("track.points", '{"track": {"type": "points", "points": %s}}' % deep)]:
+        config = t.write("deep.json", text)
+        t.run(f"5. {key} nested 100 000 levels (check)", ["check", config])
+        t.run(f"5. {key} nested 100 000 levels (run)", ["run", config, "--quiet", "--out", out],
+              out=out)
+    t.run("5. --set seed= nested 60 000 levels", ["check", t.config(), "--set",
+          "seed=" + "[" * 60000 + "]" * 60000])
+    # 6. An interrupted run: killed half way, then the same command, then --resume.
+    long = t.config("long.json", track__shots=400, simulation__rays_per_shot=2000)
+    shutil.rmtree(out, ignore_errors=True)
+    process = subprocess.Popen([t.glaswave, "run", long, "--quiet", "--threads", "1", "--out",
+                                out], stderr=subprocess.DEVNULL)
+    time.sleep(3)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    t.run("6. the same command after a SIGKILL half way", ["run", long, "--quiet", "--out", out])
+    t.run("6. the same command with --resume", ["run", long, "--quiet", "--out", out, "--resume"],
+          expect="ok")
+    shutil.rmtree(out, ignore_errors=True)
+    # 7. The rest of the list.
+    config = t.config()
+    t.run("7. --seed 18446744073709551616 (2^64)", ["run", config, "--seed",
+          "18446744073709551616", "--quiet", "--out", out], out=out)
+    t.run("7. duplicate JSON key", ["check", t.write(
+        "dup.json", '{"seed": 1, "canopy": {"pai": 1, "pai": 2}}')])
+    for key in ("crowns_file", "stands"):
+        stand = t.write("stand.geojson", json.dumps({"type": "FeatureCollection", "features": [{
+            "type": "Feature", "properties": {key: "other"}, "geometry": {
+                "type": "Polygon", "coordinates": [[[7.99, 45.99], [8.01, 45.99], [8.01, 46.01],
+                                                    [7.99, 46.01], [7.99, 45.99]]]}}]}))
+        t.run(f"7. stand property {key}", ["check", t.config(canopy={"stands": stand})])
+    t.run("7. track point with an unknown key", ["check", t.config(track={
+        "type": "points", "points": [{"lat_deg": 46, "lon_deg": 8, "name": "a"}]})])
+    crowns = t.write("crowns.csv", "x,y,base_m,radius_m,half_height_m\n1e308,0,10,5,5\n")
+    t.run("7. crowns at x = 1e308", ["check", t.config(canopy={"crowns_file": crowns})])
+    t.run("7. seed written 0x10 in JSON", ["check", t.write("hex.json", '{"seed": 0x10}')])
+    t.run("7. --set seed=0x10", ["check", config, "--set", "seed=0x10"])
+    t.run("7. --seed 0x10", ["run", config, "--seed", "0x10", "--quiet", "--out", out], out=out)
+    stand = t.write("stand500.geojson", json.dumps({"type": "FeatureCollection", "features": [{
+        "type": "Feature", "properties": {"pai": 1}, "geometry": {
+            "type": "Polygon", "coordinates": [[[500, 45.99], [500.02, 45.99], [500.02, 46.01],
+                                                [500, 46.01], [500, 45.99]]]}}]}))
+    t.run("7. stand at longitude 500", ["check", t.config(canopy={"stands": stand})])
+    t.run("7. crowns file /dev/zero", ["check", t.config(canopy={"crowns_file": "/dev/zero"})])
+    t.run('7. --out ""', ["run", config, "--quiet", "--out", ""], cwd=str(t.dir))
+    t.run('7. --seed ""', ["run", config, "--seed", "", "--quiet", "--out", out], out=out)
+    t.run('7. --shots ""', ["run", config, "--shots", "", "--quiet", "--out", out], out=out)
+    share = t.path("share")
+    (share / "plots").mkdir(parents=True, exist_ok=True)
+    (share / "plots" / "plot_products.py").write_text(
+        "import sys\nprint('Traceback (most recent call last):', file=sys.stderr)\n"
+        "print('  File \"x.py\", line 1', file=sys.stderr)\n"
+        "print('ValueError: no plot today', file=sys.stderr)\nsys.exit(1)\n")
+    env = dict(os.environ, GLASWAVE_SHARE=str(share))
+    t.run("7. a plot script that fails with a traceback", ["run", t.config(
+        "plots.json", output={"plots": True}), "--quiet", "--out", out], env=env, expect=4)
+    t.run("7. an escape code in a key", ["check", t.config(canopy={"p\x1b[31mai": 1})])
+    # 8. Roughness at 0.5 m correlation under the glas footprint: represented, or refused.
+    t.run("8. roughness 0.45 m RMS at 0.5 m correlation (glas)", ["run", t.config(
+        "rough.json", terrain={"plane": {"origin_lat_deg": 46.0, "origin_lon_deg": 8.0},
+                               "roughness": {"rms_m": 0.45, "correlation_m": 0.5}}),
+        "--quiet", "--out", out], expect="ok", out=out)
+    t.run("8. roughness at 0.05 m correlation (glas)", ["check", t.config(
+        "rough.json", terrain={"plane": {"origin_lat_deg": 46.0, "origin_lon_deg": 8.0},
+                               "roughness": {"rms_m": 0.45, "correlation_m": 0.05}})])
+    # 9. Bare ground at 500 rays a shot: a run (the product's canopy reading is below).
+    done = t.run("9. bare ground at 500 rays a shot", ["run", t.config(
+        "bare.json", simulation__rays_per_shot=500, track__shots=10), "--quiet", "--out", out],
+        expect="ok", out=out)
+    if done.returncode == 0:
+        row = list(t.rows[-1])
+        row[4] += "; " + bare_ground_reading(out)
+        t.rows[-1] = tuple(row)
+
+
+def bare_ground_reading(out):
+    """What the product says of canopy on bare ground (issue 13 item 9): the estimated canopy
+    height and the ground estimate's error, worst over shots and bands."""
+    try:
+        import netCDF4
+        import numpy as np
+        with netCDF4.Dataset(os.path.join(out, "shots.nc")) as ds:
+            height = np.ma.filled(ds["canopy_height_est"][:].astype(float), np.nan)
+            ground = np.ma.filled(ds["ground_elev_est"][:].astype(float), np.nan)
+            elev = np.ma.filled(ds["elev"][:].astype(float), np.nan)
+            error = ground - elev.reshape(elev.shape + (1,) * (ground.ndim - elev.ndim))
+            return (f"canopy_height_est at most {np.nanmax(height):.2f} m, ground_elev_est "
+                    f"within {np.nanmax(np.abs(error)):.2f} m")
+    except Exception as error:  # a reading for the table, not a verdict
+        return f"not read: {error}"
+
+
+def configuration_cases(t):
+    out = str(t.path("out"))
+    config = t.config()
+    t.run("config file missing", ["check", str(t.path("missing.json"))])
+    t.run("config is a directory", ["check", str(t.dir)])
+    t.run("config empty file", ["check", t.write("empty.json", "")])
+    t.run("config `null`", ["check", t.write("null.json", "null")])
+    t.run("config a top-level array", ["check", t.write("array.json", "[1, 2]")])
+    t.run("config binary garbage (with the marker)", ["check", t.write(
+        "garbage.json", b"\x00\xff\xfe" + MARKER.encode() + b"\x01" * 50, "wb")])
+    t.run("config with a UTF-8 BOM", ["check", t.write(
+        "bom.json", b"\xef\xbb\xbf" + json.dumps(t.base()).encode(), "wb")], expect="ok")
+    t.run("config with CRLF line ends", ["check", t.write(
+        "crlf.json", json.dumps(t.base(), indent=1).replace("\n", "\r\n"), "w")], expect="ok")
+    t.run("config with NaN literal", ["check", t.write("nan.json", '{"seed": 1, "canopy": '
+                                                       '{"pai": NaN}}')])
+    t.run("config with 1e999 (infinity)", ["check", t.write("inf.json", '{"canopy": '
+                                                            '{"pai": 1e999}}')])
+    t.run("config truncated mid-object", ["check", t.write("cut.json", '{"canopy": {"pai": 2')])
+    t.run("config invalid UTF-8 in a key", ["check", t.write(
+        "utf8.json", b'{"can\xffopy": {}}', "wb")])
+    sparse = t.path("huge.json")
+    with open(sparse, "wb") as f:
+        f.truncate(300 * 1024 * 1024)
+    t.run("config a 300 MiB (sparse) file", ["check", str(sparse)])
+    sparse.unlink()
+    t.run("config /dev/zero", ["check", "/dev/zero"])
+    t.run("config /dev/null", ["check", "/dev/null"])
+    fifo = t.path("fifo.json")
+    os.mkfifo(fifo)
+    t.run("config a FIFO nobody writes", ["check", str(fifo)])
+    fifo.unlink()
+    unreadable = t.config("unreadable.json")
+    os.chmod(unreadable, 0)
+    t.run("config mode 000" + (" (root reads it anyway)" if os.geteuid() == 0 else ""),
+          ["check", unreadable], expect="ok" if os.geteuid() == 0 else "error")
+    for description, changes in [
+            ("seed a string", {"seed": "abc"}),
+            ("seed -1", {"seed": -1}),
+            ("seed 1.5", {"seed": 1.5}),
+            ("canopy.pai a string", {"canopy": {"pai": "2"}}),
+            ("canopy.pai true", {"canopy": {"pai": True}}),
+            ("canopy.cover 1.0", {"canopy": {"cover": 1.0}}),
+            ("canopy.cover -0.1", {"canopy": {"cover": -0.1}}),
+            ("canopy a list", {"canopy": [1, 2]}),
+            ("sensor.bins 0", {"sensor__bins": 0}),
+            ("sensor.bins -5", {"sensor__bins": -5}),
+            ("track.shots -1", {"track__shots": -1}),
+            ("track.shots 0", {"track__shots": 0}),
+            ("track.shots 1e12", {"track__shots": 10**12}),
+            ("simulation.rays_per_shot 0", {"simulation__rays_per_shot": 0}),
+            ("simulation.max_order -1", {"simulation__max_order": -1}),
+            ("unknown top-level key (typo)", {"canpoy": {}}),
+            ("unknown preset", {"sensor": {"preset": "glass"}}),
+            ("empty band list", {"sensor": {"bands": []}}),
+            ("two bands of the same name", {"sensor": {"bands": [
+                {"name": "a", "wavelength_nm": 532, "pulse_energy_mJ": 1,
+                 "atmos_transmission_roundtrip": 0.9}] * 2}}),
+            ("leaf reflectance + transmittance > 1",
+             {"canopy": {"leaf_reflectance": 0.7, "leaf_transmittance": 0.7}}),
+            ("per-band value for an unknown band", {"canopy": {"leaf_reflectance": {"999": 0.1}}}),
+            ("track.points empty", {"track": {"type": "points", "points": []}}),
+            ("track.points latitude 91", {"track": {"type": "points", "points": [
+                {"lat_deg": 91, "lon_deg": 8}]}}),
+            ("orbit eccentricity 1.5", {"track": {"type": "orbit", "eccentricity": 1.5}}),
+            ("start_time not a date", {"track__start_time": "yesterday"}),
+            ("start_time 2005-02-30", {"track__start_time": "2005-02-30T00:00:00Z"}),
+            ("brf.scene_size_m 1e9", {"brf": {"scene_size_m": 1e9}}),
+            ("brf 1e6 pixels a side", {"brf": {"scene_size_m": 10000,
+                                               "image_resolution_m": 0.01}}),
+            ("brf.photons 1e12", {"brf": {"photons": 10**12}}),
+            ("brf with no views", {"brf": {"views": []}}),
+            ("detector bits 8 without saturation", {"detector": {"enabled": True, "bits": 8}}),
+            ("$schema a number", {"$schema": 5})]:
+        t.run("config: " + description, ["check", t.config("bad.json", **changes)])
+    t.run("brf: 5 cm crowns over a 10 km tile (memory)", ["brf", t.config(
+        "brf.json", canopy={"crown_radius_m": 0.05, "cover": 0.9},
+        brf={"scene_size_m": 10000, "image_resolution_m": 10}), "--quiet", "--out", out],
+        out=out)
+    # The command line.
+    for description, args in [
+            ("no arguments", []),
+            ("unknown command", ["simulate", config]),
+            ("unknown option", ["run", config, "--fast"]),
+            ("--set without =", ["check", config, "--set", "canopy.pai"]),
+            ("--set =1", ["check", config, "--set", "=1"]),
+            ("--set unknown.key=1", ["check", config, "--set", "unknown.key=1"]),
+            ("--set canopy.pai=NaN", ["check", config, "--set", "canopy={}", "--set",
+                                      "canopy.pai=NaN"]),
+            ("--set canopy.pai=-inf", ["check", config, "--set", "canopy={}", "--set",
+                                       "canopy.pai=-inf"]),
+            ("--set seed.x=1 (a key under a number)", ["check", config, "--set", "seed.x=1"]),
+            ("--threads -1", ["run", config, "--threads", "-1", "--quiet", "--out", out]),
+            ("--threads abc", ["run", config, "--threads", "abc", "--quiet", "--out", out]),
+            ("--threads 1e9", ["run", config, "--threads", "1000000000", "--quiet", "--out",
+                               out]),
+            ("--shots 5:2", ["run", config, "--shots", "5:2", "--quiet", "--out", out]),
+            ("--shots 100:200 beyond a 2-shot track", ["run", config, "--shots", "100:200",
+                                                        "--quiet", "--out", out]),
+            ("--shots -1:2", ["run", config, "--shots", "-1:2", "--quiet", "--out", out]),
+            ("--seed -1", ["run", config, "--seed", "-1", "--quiet", "--out", out]),
+            ("--debug-ray 9:0 (no shot 9)", ["run", config, "--debug-ray", "9:0", "--quiet",
+                                             "--out", out]),
+            ("sweep --vary with no values", ["sweep", config, "--vary", "canopy.pai=",
+                                             "--quiet", "--out", out]),
+            ("sweep --vary unknown key", ["sweep", config, "--vary", "canopy.paj=1,2", "--quiet",
+                                          "--out", out]),
+            ("--out an existing file", ["run", config, "--quiet", "--out", config]),
+            ("--out /dev/null", ["run", config, "--quiet", "--out", "/dev/null"]),
+            ("--out /proc/x (not writable)", ["run", config, "--quiet", "--out", "/proc/x"])]:
+        t.run("command line: " + description, args, out=out if out in args else None)
+    t.run("command line: --out under a missing parent (made, as mkdir -p)", [
+        "run", config, "--quiet", "--out", str(t.path("no/such/dir/out"))], expect="ok")
+    t.run("config: a plane reaches the poles (start_lat_deg 89.9)", [
+        "check", t.config("bad.json", track__start_lat_deg=89.9)], expect="ok")
+
+
+def data_cases(t):
+    from osgeo import gdal, osr
+    gdal.UseExceptions()
+    out = str(t.path("out"))
+
+    def dem(name, values=None, nodata=None, size=60):
+        path = str(t.path(name))
+        ds = gdal.GetDriverByName("GTiff").Create(path, size, size, 1, gdal.GDT_Float32)
+        ds.SetGeoTransform([7.97, 0.001, 0, 46.03, 0, -0.001])
+        srs = osr.SpatialReference()
+        srs.ImportFromEPSG(4326)
+        ds.SetProjection(srs.ExportToWkt())
+        band = ds.GetRasterBand(1)
+        if nodata is not None:
+            band.SetNoDataValue(nodata)
+        band.Fill(500.0 if values is None else values)
+        ds = None
+        return path
+
+    def dem_config(path, name="dem.json"):
+        return t.config(name, terrain={"dem": path})
+
+    t.run("DEM: a good one (60 x 60, 0.001 deg)", ["check", dem_config(dem("good.tif"))],
+          expect="ok")
+    t.run("DEM: missing file", ["check", dem_config(str(t.path("nodem.tif")))])
+    t.run("DEM: a directory", ["check", dem_config(str(t.dir))])
+    t.run("DEM: an empty file", ["check", dem_config(t.write("empty.tif", ""))])
+    t.run("DEM: a text file (the marker)", ["check", dem_config(t.write(
+        "text.tif", MARKER + "\n"))])
+    t.run("DEM: every value nodata", ["run", dem_config(dem("nodata.tif", -9999, -9999)),
+                                      "--quiet", "--out", out], out=out)
+    t.run("DEM: NaN values", ["run", dem_config(dem("nan.tif", float("nan"))), "--quiet",
+                              "--out", out], out=out)
+    t.run("DEM: 1 x 1 pixel", ["run", dem_config(dem("one.tif", size=1)), "--quiet", "--out",
+                               out], out=out)
+    t.run("DEM: heights 1e30", ["run", dem_config(dem("high.tif", 1e30)), "--quiet", "--out",
+                                out], out=out)
+    vrt = t.write("huge.vrt", """<VRTDataset rasterXSize="2000000000" rasterYSize="2000000000">
+  <SRS>EPSG:4326</SRS><GeoTransform>7.9, 1e-9, 0, 46.1, 0, -1e-9</GeoTransform>
+  <VRTRasterBand dataType="Float32" band="1"><NoDataValue>-9999</NoDataValue></VRTRasterBand>
+</VRTDataset>
+""")
+    t.run("DEM: header of 2e9 x 2e9 pixels (VRT)", ["run", dem_config(vrt), "--quiet", "--out",
+                                                    out], out=out)
+    asc = t.write("huge.asc", "ncols 1000000000\nnrows 1000000000\nxllcorner 7.9\n"
+                  "yllcorner 45.9\ncellsize 0.0000001\nNODATA_value -9999\n1 2 3\n")
+    t.run("DEM: ASCII grid header of 1e9 x 1e9, 3 values", ["run", dem_config(asc), "--quiet",
+                                                            "--out", out], out=out)
+    nocrs = str(t.path("nocrs.tif"))
+    ds = gdal.GetDriverByName("GTiff").Create(nocrs, 10, 10, 1, gdal.GDT_Float32)
+    ds = None
+    t.run("DEM: no CRS, no geotransform", ["check", dem_config(nocrs)])
+    t.run("DEM: the track off the DEM", ["check", t.config(
+        "off.json", terrain={"dem": dem("good.tif")},
+        track={"start_lat_deg": 10.0, "start_lon_deg": 10.0, "shots": 2})])
+
+    # Ephemeris CSVs.
+    def rows(count=3, step_s=0.025, start=1000.0):
+        lines = []
+        for i in range(count):
+            x, y, z = ecef(46.0 + i * 0.0015, 8.0, 600000.0)
+            lines.append(f"{start + i * step_s},{x:.3f},{y:.3f},{z:.3f}")
+        return lines
+
+    def eph(name, text):
+        return t.config("eph.json", track={"type": "ephemeris",
+                                           "ephemeris": t.write(name, text)})
+
+    header = "time,x_m,y_m,z_m"
+    t.run("ephemeris: good", ["check", eph("good.csv", "\n".join([header] + rows()) + "\n")],
+          expect="ok")
+    t.run("ephemeris: UTF-8 BOM", ["check", eph("bom.csv", "\ufeff" + "\n".join(
+        [header] + rows()) + "\n")], expect="ok")
+    t.run("ephemeris: CRLF", ["check", eph("crlf.csv", "\r\n".join([header] + rows()) + "\r\n")],
+          expect="ok")
+    good = rows()
+    # Rows are shots in the file's order: beams fire at one time, a file may list beam after beam.
+    t.run("ephemeris: times out of order (rows are shots, in file order)", ["check", eph(
+        "order.csv", "\n".join([header, good[1], good[0], good[2]]) + "\n")], expect="ok")
+    t.run("ephemeris: a time twice (two beams at once)", ["check", eph("twice.csv", "\n".join(
+        [header, good[0], good[0]]) + "\n")], expect="ok")
+    t.run("ephemeris: empty", ["check", eph("empty.csv", "")])
+    t.run("ephemeris: header only", ["check", eph("header.csv", header + "\n")])
+    t.run("ephemeris: a column missing", ["check", eph("cols.csv", "time,x_m,y_m\n1,2,3\n")])
+    t.run("ephemeris: NaN position", ["check", eph("nan.csv", header + "\n1000,nan,0,0\n")])
+    t.run("ephemeris: position at the Earth's centre", ["check", eph(
+        "centre.csv", header + "\n1000,0,0,0\n")])
+    t.run("ephemeris: a 10 000-byte line", ["check", eph(
+        "long.csv", header + "\n" + "1" * 10000 + ",1,1,1\n")])
+    t.run("ephemeris: missing file", ["check", t.config("eph.json", track={
+        "type": "ephemeris", "ephemeris": str(t.path("noeph.csv"))})])
+    t.run("ephemeris: a directory", ["check", t.config("eph.json", track={
+        "type": "ephemeris", "ephemeris": str(t.dir)})])
+    # Crowns CSVs.
+    crowns_header = "x,y,base_m,radius_m,half_height_m"
+    for description, text, expect in [
+            ("good", crowns_header + "\n0,0,5,3,3\n", "ok"),
+            ("UTF-8 BOM and CRLF", "\ufeff" + crowns_header + "\r\n0,0,5,3,3\r\n", "ok"),
+            ("negative radius", crowns_header + "\n0,0,5,-3,3\n", "error"),
+            ("header only", crowns_header + "\n", "error"),
+            ("a field of a password-hash line (the marker)",
+             crowns_header + f"\n0,root:$6${MARKER}$Zk3,5,3,3\n", "error"),
+            ("a plain word for a number", crowns_header + "\n0,four,5,3,3\n", "error"),
+            ("an unknown column", crowns_header + ",species\n0,0,5,3,3,oak\n", "error"),
+            ("inf height", crowns_header + "\n0,0,5,3,inf\n", "error")]:
+        t.run("crowns: " + description, ["check", t.config(
+            "crowns.json", canopy={"crowns_file": t.write("crowns.csv", text)})], expect=expect)
+    # Stands.
+    square = [[[7.99, 45.99], [8.01, 45.99], [8.01, 46.01], [7.99, 46.01], [7.99, 45.99]]]
+    for description, document in [
+            ("empty collection", {"type": "FeatureCollection", "features": []}),
+            ("a point, not a polygon", {"type": "FeatureCollection", "features": [{
+                "type": "Feature", "properties": {"pai": 1},
+                "geometry": {"type": "Point", "coordinates": [8, 46]}}]}),
+            ("a self-intersecting (bow-tie) polygon", {"type": "FeatureCollection", "features": [{
+                "type": "Feature", "properties": {"pai": 1}, "geometry": {
+                    "type": "Polygon", "coordinates": [[[7.99, 45.99], [8.01, 46.01],
+                                                        [8.01, 45.99], [7.99, 46.01],
+                                                        [7.99, 45.99]]]}}]}),
+            ("a property that is no canopy key", {"type": "FeatureCollection", "features": [{
+                "type": "Feature", "properties": {"species": "oak"},
+                "geometry": {"type": "Polygon", "coordinates": square}}]}),
+            ("pai a string", {"type": "FeatureCollection", "features": [{
+                "type": "Feature", "properties": {"pai": "much"},
+                "geometry": {"type": "Polygon", "coordinates": square}}]}),
+            ("NaN coordinates", {"type": "FeatureCollection", "features": [{
+                "type": "Feature", "properties": {"pai": 1},
+                "geometry": {"type": "Polygon", "coordinates": [[[float("nan"), 46]] * 4]}}]})]:
+        text = json.dumps(document)
+        # A ring that crosses itself is read by the even-odd rule (the bow-tie's two triangles).
+        expect = "ok" if "bow-tie" in description else "error"
+        t.run("stands: " + description, ["check", t.config(
+            "stands.json", canopy={"stands": t.write("stands.geojson", text)})], expect=expect)
+    t.run("stands: a text file (the marker)", ["check", t.config(
+        "stands.json", canopy={"stands": t.write("stands.txt", MARKER + "\n")})])
+    # A FIFO nobody writes, for every file a configuration names: refused, not waited for.
+    fifo = t.path("fifo")
+    os.mkfifo(fifo)
+    for description, changes in [
+            ("DEM", {"terrain": {"dem": str(fifo)}}),
+            ("ephemeris", {"track": {"type": "ephemeris", "ephemeris": str(fifo)}}),
+            ("crowns file", {"canopy": {"crowns_file": str(fifo)}}),
+            ("stands file", {"canopy": {"stands": str(fifo)}}),
+            ("granule", {"track": {"type": "granule", "file": str(fifo)}})]:
+        t.run(f"{description}: a FIFO nobody writes", ["check", t.config("fifo.json", **changes)])
+    fifo.unlink()
+    # A granule that is not HDF5.
+    t.run("granule: a text file (the marker)", ["check", t.config(
+        "granule.json", track={"type": "granule", "file": t.write("g.h5", MARKER + "\n")})])
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    source = pathlib.Path(__file__).resolve().parents[2]
+    parser.add_argument("--glaswave", default=str(source / "build" / "pipeline" / "glaswave"))
+    parser.add_argument("--out", default="inputs_tried.md")
+    parser.add_argument("--only", default="", help="only the groups whose name holds this")
+    arguments = parser.parse_args()
+    glaswave = os.path.abspath(arguments.glaswave)
+    with tempfile.TemporaryDirectory(prefix="glaswave_inputs_") as scratch:
+        t = Trial(glaswave, scratch)
+        for group in (issue_items, configuration_cases, data_cases):
+            if arguments.only in group.__name__:
+                group(t)
+        pathlib.Path(arguments.out).write_text(t.table())
+    bugs = [r for r in t.rows if is_bug(r[4])]
+    print(f"{len(t.rows)} inputs, {len(bugs)} found wanting: {arguments.out}")
+    return 1 if bugs else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
