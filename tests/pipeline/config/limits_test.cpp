@@ -169,7 +169,7 @@ TEST(BrfMemory, CountsTheTreesOfTheTileAndTheImage) {
   EXPECT_NO_THROW(check_brf(c));
   // Over a DEM the scene reaches 100 m beyond the tile.
   const Config dem = parse_config(doc(R"({"terrain": {"dem": "x.tif"}, "brf": {}})"));
-  EXPECT_EQ(estimate_brf_memory(dem).scene_side_m, 300.0);
+  EXPECT_EQ(estimate_brf_memory(dem).scene_side_m, 500.0);  // the default 300 m tile
 }
 
 TEST(BrfMemory, ATileThatCannotBePhysicalOrFitIsRefusedAtItsKey) {
