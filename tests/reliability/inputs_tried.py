@@ -244,11 +244,16 @@ def issue_items(t):
     t.run("5. --set seed= nested 60 000 levels", ["check", t.config(), "--set",
           "seed=" + "[" * 60000 + "]" * 60000])
     # 6. An interrupted run: killed half way, then the same command, then --resume.
-    long = t.config("long.json", track__shots=400, simulation__rays_per_shot=2000)
+    long = t.config("long.json", track__shots=1500, simulation__rays_per_shot=500)
     shutil.rmtree(out, ignore_errors=True)
     process = subprocess.Popen([t.glaswave, "run", long, "--quiet", "--threads", "1", "--out",
-                                out], stderr=subprocess.DEVNULL)
-    time.sleep(3)
+                                out], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    journal = pathlib.Path(out) / "glaswave.journal"
+    deadline = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < deadline and process.poll() is None and not (
+            journal.exists() and journal.stat().st_size > 0):
+        time.sleep(0.05)
+    time.sleep(0.3)  # a few batches into the journal
     process.send_signal(signal.SIGKILL)
     process.wait()
     t.run("6. the same command after a SIGKILL half way", ["run", long, "--quiet", "--out", out])
