@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/netcdf_lock.hpp"
 #include "terrain/crs_transform.hpp"
 #include "terrain/ground_mesh.hpp"
 
@@ -317,7 +318,7 @@ TilePtr DemTerrain::Impl::load(int tx, int ty) {
   std::vector<double> values(n);
   std::vector<GByte> mask;
   {
-    const std::lock_guard lock(io_mutex);
+    const std::scoped_lock lock(io_mutex, netcdf_library_mutex());
     const GdalErrorTrap trap;
     const auto read = [&](GDALRasterBand* from, void* into, GDALDataType type) {
       if (from->RasterIO(GF_Read, t->col0, t->row0, t->cols, t->rows, into, t->cols, t->rows, type,

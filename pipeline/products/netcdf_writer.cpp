@@ -26,6 +26,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/netcdf_lock.hpp"
 #include "core/write_error.hpp"
 #include "pipeline/products/product_fields.hpp"
 
@@ -732,6 +733,7 @@ NetcdfWriter::Impl& NetcdfWriter::impl() {
 }
 
 void NetcdfWriter::write(std::int64_t index, const ShotRecord& shot) {
+  const std::lock_guard lock(netcdf_library_mutex());  // a DEM may be read meanwhile
   Impl& impl = this->impl();
   if (impl.finished) impl.fail("write after finish");
   if (index < 0 || index >= static_cast<std::int64_t>(impl.shots)) {
@@ -746,6 +748,7 @@ void NetcdfWriter::write(std::int64_t index, const ShotRecord& shot) {
 }
 
 void NetcdfWriter::finish(const RunStats& stats) {
+  const std::lock_guard lock(netcdf_library_mutex());
   Impl& impl = this->impl();
   if (impl.finished) impl.fail("finished twice");
   if (impl.broken) impl.fail("a write failed before: the product lacks records");
@@ -774,6 +777,7 @@ void NetcdfWriter::finish(const RunStats& stats) {
 
 void NetcdfWriter::abort() noexcept {
   // A finished product stays: only an unfinished one has a .part to give up.
+  const std::lock_guard lock(netcdf_library_mutex());
   if (impl_ && !impl_->finished) impl_.reset();
 }
 
