@@ -76,8 +76,6 @@ namespace {
 struct BeamWeightedPlaneFit {
   Eigen::Vector3d axis;  // the beam's, unit, through the origin
   double sigma_m;
-  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
 
   // A triangle, cut into m^2 equal parts no wider than sigma / 4, each weighted at its centroid.
   void add_triangle(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
@@ -96,22 +94,68 @@ struct BeamWeightedPlaneFit {
         std::max({e1.head<2>().norm(), e2.head<2>().norm(), (p2 - p1).head<2>().norm()});
     const int m = std::clamp(static_cast<int>(std::ceil(longest_m / (sigma_m / 4.0))), 1, 64);
     const double part_area_m2 = area_m2 / (m * m);
-    auto add = [&](double u, double v) {
-      const Eigen::Vector3d p = p0 + (u / m) * e1 + (v / m) * e2;
-      const double along_m = p.dot(axis);
-      const double off_sq_m2 = std::max(0.0, p.squaredNorm() - along_m * along_m);
-      const double weight = part_area_m2 * std::exp(-off_sq_m2 / (2.0 * sigma_m * sigma_m));
-      const Eigen::Vector3d row(1.0, p.x(), p.y());
-      normal_matrix += weight * row * row.transpose();
-      rhs += weight * p.z() * row;
-    };
-    for (int i = 0; i < m; ++i) {
-      for (int j = 0; i + j < m; ++j) {
-        add(i + 1.0 / 3.0, j + 1.0 / 3.0);  // the part pointing like the triangle
-        if (i + j + 2 <= m) add(i + 2.0 / 3.0, j + 2.0 / 3.0);  // the part between, upside down
+    // The parts' centroids lie on two lattices, p0 + (i + c) d1 + (j + c) d2 with c = 1/3 (the
+    // parts pointing like the triangle, i + j < m) and 2/3 (those between, upside down,
+    // i + j + 2 <= m). The weight's exponent, -|q|^2_perp / 2 sigma^2, is quadratic in i and j:
+    // along a row each weight is the last times a ratio that itself changes by a constant
+    // factor, and so are the rows' first weights and ratios. A few exponentials a triangle
+    // instead of one a part (they were a fifth of a short shot's time).
+    const Eigen::Matrix3d perp = Eigen::Matrix3d::Identity() - axis * axis.transpose();
+    const Eigen::Vector3d d1 = e1 / m, d2 = e2 / m;
+    const double scale = -0.5 / (sigma_m * sigma_m);
+    const Eigen::Vector3d perp_d1 = perp * d1, perp_d2 = perp * d2;
+    const double ratio_step_j = std::exp(2.0 * scale * d2.dot(perp_d2));  // along a row
+    const double ratio_step_i = std::exp(2.0 * scale * d1.dot(perp_d2));  // of rows' j-ratios
+    const double first_step_i = std::exp(2.0 * scale * d1.dot(perp_d1));  // of rows' i-ratios
+    auto lattice = [&](double c, int rows) {  // row i holds rows - i parts
+      const Eigen::Vector3d q = p0 + c * d1 + c * d2;
+      const Eigen::Vector3d perp_q = perp * q;
+      double first = std::exp(scale * q.dot(perp_q));  // the weight of (0, 0)
+      // Ratios from (i, 0) to (i + 1, 0) and from (i, 0) to (i, 1), at i = 0.
+      double ratio_i = std::exp(scale * (2.0 * d1.dot(perp_q) + d1.dot(perp_d1)));
+      double ratio_j = std::exp(scale * (2.0 * d2.dot(perp_q) + d2.dot(perp_d2)));
+      for (int i = 0; i < rows; ++i) {
+        double weight = first, ratio = ratio_j;
+        Eigen::Vector3d p = q + i * d1;
+        for (int j = 0; j < rows - i; ++j) {
+          add(p, part_area_m2 * weight);
+          weight *= ratio;
+          ratio *= ratio_step_j;
+          p += d2;
+        }
+        first *= ratio_i;
+        ratio_i *= first_step_i;
+        ratio_j *= ratio_step_i;
       }
-    }
+    };
+    lattice(1.0 / 3.0, m);
+    lattice(2.0 / 3.0, m - 1);
   }
+
+  void add(const Eigen::Vector3d& p, double weight) {
+    const double wx = weight * p.x(), wy = weight * p.y();
+    sum_w += weight;
+    sum_wx += wx;
+    sum_wy += wy;
+    sum_wxx += wx * p.x();
+    sum_wxy += wx * p.y();
+    sum_wyy += wy * p.y();
+    sum_wz += weight * p.z();
+    sum_wxz += wx * p.z();
+    sum_wyz += wy * p.z();
+  }
+
+  // The sums as the normal equations of z = c0 + c1 x + c2 y.
+  Eigen::Matrix3d normal_matrix() const {
+    Eigen::Matrix3d matrix;
+    matrix << sum_w, sum_wx, sum_wy, sum_wx, sum_wxx, sum_wxy, sum_wy, sum_wxy, sum_wyy;
+    return matrix;
+  }
+  Eigen::Vector3d rhs() const { return {sum_wz, sum_wxz, sum_wyz}; }
+
+  // The weighted sums of 1, x, y and their products, and of z times each.
+  double sum_w = 0.0, sum_wx = 0.0, sum_wy = 0.0, sum_wxx = 0.0, sum_wxy = 0.0, sum_wyy = 0.0;
+  double sum_wz = 0.0, sum_wxz = 0.0, sum_wyz = 0.0;
 };
 
 }  // namespace
@@ -135,11 +179,11 @@ SurfaceOrientation fit_surface_orientation(const Terrain& terrain, const LocalFr
                      vertex(mesh.triangles[t + 2]));
 
   SurfaceOrientation orientation;
-  if (fit.normal_matrix(0, 0) <= 0.0) {  // no ground under the beam
+  if (fit.sum_w <= 0.0) {  // no ground under the beam
     orientation.slope_deg = orientation.aspect_deg = std::numeric_limits<double>::quiet_NaN();
     return orientation;
   }
-  const Eigen::Vector3d c = fit.normal_matrix.ldlt().solve(fit.rhs);
+  const Eigen::Vector3d c = fit.normal_matrix().ldlt().solve(fit.rhs());
   const double rad = 180.0 / std::numbers::pi;
   orientation.slope_deg = std::atan(std::hypot(c[1], c[2])) * rad;
   // The surface faces down the gradient.

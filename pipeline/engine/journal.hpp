@@ -50,6 +50,7 @@ class RunJournal {
  private:
   RunJournal(std::filesystem::path path, int fd);
   void write_all(const std::string& bytes);
+  void write_frame(const std::string& raw, std::size_t records, std::int64_t ray_queries);
 
   std::filesystem::path path_;
   int fd_ = -1;

@@ -270,8 +270,17 @@ std::vector<double> gaussian_smooth(std::span<const double> values, double sigma
   std::vector<double> kernel(2 * half + 1);
   for (int k = -half; k <= half; ++k)
     kernel[k + half] = std::exp(-0.5 * (k / sigma_bins) * (k / sigma_bins));
-  std::vector<double> out(n);
+  // Bins farther than `half` from every nonzero value stay 0, as the sum over zeros would give
+  // (a short shot's waveform is mostly zeros).
+  int first_nonzero = n, last_nonzero = -1;
   for (int i = 0; i < n; ++i) {
+    if (values[i] != 0.0) {
+      first_nonzero = std::min(first_nonzero, i);
+      last_nonzero = i;
+    }
+  }
+  std::vector<double> out(n, 0.0);
+  for (int i = std::max(0, first_nonzero - half); i < std::min(n, last_nonzero + half + 1); ++i) {
     double sum = 0.0, weight = 0.0;
     for (int k = std::max(-half, -i); k <= std::min(half, n - 1 - i); ++k) {
       sum += kernel[k + half] * values[i + k];

@@ -170,8 +170,9 @@ double split_at_ground(const WaveformAxis& axis, std::size_t bins, WaveformMetri
   const GaussianComponent& ground = m.gaussians[ground_index];
   m.ground_elev_m = axis.elevation_m(ground.center_bin, bins);
   double split = ground.center_bin - kSplitSigmas * ground.sigma_bins;
-  // Where the canopy's Gaussians outweigh the ground's before that, the split comes down.
-  for (double x = ground.center_bin; x > split; x -= 0.05) {
+  // Where the canopy's Gaussians outweigh the ground's before that, the split comes down (with
+  // none above the ground, nothing can: a broad ground spans thousands of steps).
+  for (double x = ground.center_bin; ground_index > 0 && x > split; x -= 0.05) {
     double others = 0.0;
     for (std::size_t k = 0; k < ground_index; ++k) others += m.gaussians[k].value_at(x);
     if (others > ground.value_at(x)) {

@@ -23,7 +23,10 @@ LidarModel::LidarModel(const LidarSettings& sensor) : sensor_(sensor) {
     kernel_.push_back(std::exp(-0.5 * t * t));
     sum += kernel_.back();
   }
-  for (double& weight : kernel_) weight /= sum;
+  for (double& weight : kernel_) {
+    weight /= sum;
+    kernel_squared_.push_back(weight * weight);
+  }
 }
 
 double LidarModel::fov_solid_angle_sr() const {
@@ -43,35 +46,39 @@ int LidarModel::tally_index(double time_ns) const {
   return static_cast<int>(position);
 }
 
-std::vector<double> LidarModel::power_W(const std::vector<double>& tally_J) const {
-  std::vector<double> power(sensor_.bins, 0.0);
-  const double bin_s = sensor_.bin_ns * 1e-9;
-  const int width = static_cast<int>(kernel_.size());
-  // Scored tally bins so far: a window bin that reaches none stays 0 (a few-ray shot's tally is
-  // mostly zeros), the sum over zeros being 0 to the bit.
-  std::vector<int> scored(tally_J.size() + 1, 0);
-  for (std::size_t j = 0; j < tally_J.size(); ++j) scored[j + 1] = scored[j] + (tally_J[j] != 0.0);
-  for (int i = 0; i < sensor_.bins; ++i) {
+namespace {
+
+// A tally (bins of the window with `margin` more either side) convolved with a kernel of
+// 2 margin + 1 weights, over the window's `bins`, divided by `divisor`. A window bin that reaches
+// no scored tally bin stays 0 (a few-ray shot's tally is mostly zeros), the sum over zeros being
+// 0 to the bit.
+std::vector<double> convolve_scored(const std::vector<double>& tally,
+                                    const std::vector<double>& kernel, int bins, double divisor) {
+  std::vector<double> out(bins, 0.0);
+  const int width = static_cast<int>(kernel.size());
+  // Scored tally bins so far.
+  std::vector<int> scored(tally.size() + 1, 0);
+  for (std::size_t j = 0; j < tally.size(); ++j) scored[j + 1] = scored[j] + (tally[j] != 0.0);
+  for (int i = 0; i < bins; ++i) {
     if (scored[i + width] == scored[i]) continue;
     // Window bin i is tally bin i + margin; the kernel reaches margin bins either side.
-    double energy_J = 0.0;
-    for (int k = 0; k < width; ++k) energy_J += kernel_[k] * tally_J[i + width - 1 - k];
-    power[i] = energy_J / bin_s;
+    double sum = 0.0;
+    for (int k = 0; k < width; ++k) sum += kernel[k] * tally[i + width - 1 - k];
+    out[i] = sum / divisor;
   }
-  return power;
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> LidarModel::power_W(const std::vector<double>& tally_J) const {
+  const double bin_s = sensor_.bin_ns * 1e-9;
+  return convolve_scored(tally_J, kernel_, sensor_.bins, bin_s);
 }
 
 std::vector<double> LidarModel::power_variance_W2(const std::vector<double>& variance_J2) const {
-  std::vector<double> variance(sensor_.bins, 0.0);
   const double bin_s = sensor_.bin_ns * 1e-9;
-  const int width = static_cast<int>(kernel_.size());
-  for (int i = 0; i < sensor_.bins; ++i) {
-    double sum_J2 = 0.0;
-    for (int k = 0; k < width; ++k)
-      sum_J2 += kernel_[k] * kernel_[k] * variance_J2[i + width - 1 - k];
-    variance[i] = sum_J2 / (bin_s * bin_s);
-  }
-  return variance;
+  return convolve_scored(variance_J2, kernel_squared_, sensor_.bins, bin_s * bin_s);
 }
 
 std::vector<double> LidarModel::tx_time_ns() const {

@@ -68,9 +68,10 @@ class LidarModel {
   LidarSettings sensor_;
   double fov_fraction_;
   double max_angle_rad_;
-  double lead_ns_;              // time from the centre of bin 0 to the reference return
-  int margin_bins_;             // half-width of the pulse kernel
-  std::vector<double> kernel_;  // pulse sampled at the bin spacing, sums to 1
+  double lead_ns_;                      // time from the centre of bin 0 to the reference return
+  int margin_bins_;                     // half-width of the pulse kernel
+  std::vector<double> kernel_;          // pulse sampled at the bin spacing, sums to 1
+  std::vector<double> kernel_squared_;  // its squares, for variances
 };
 
 // Samples ray directions about a beam axis in proportion to the beam's irradiance, within

@@ -140,6 +140,28 @@ TEST_F(Resume, ATornJournalLosesOnlyItsLastBatch) {
   expect_same_products(dir_ / "whole", out);
 }
 
+// A journal in another glaswave version's format (its magic "GWJRNL" and other digits), or a
+// file that is not a journal at all, is named and refused, and kept.
+TEST_F(Resume, AnotherVersionsJournalOrAnotherFileIsRefused) {
+  const fs::path out = dir_ / "version";
+  ASSERT_TRUE(kill_when(start_glaswave(run_arguments(out)), out / "glaswave.journal", 17));
+  const fs::path journal = out / "glaswave.journal";
+  for (const std::string magic : {"GWJRNL02", "PK\x03\x04zip!"}) {
+    {
+      std::fstream file(journal, std::ios::in | std::ios::out | std::ios::binary);
+      file.write(magic.data(), 8);  // little-endian: the name's bytes as they are on disk
+    }
+    const CommandOutcome refused = run_glaswave(run_arguments(out) + " --resume");
+    EXPECT_EQ(refused.status, 2) << refused.output;
+    EXPECT_NE(refused.output.find(journal.string()), std::string::npos) << refused.output;
+    EXPECT_NE(refused.output.find(magic == "GWJRNL02" ? "another glaswave version"
+                                                      : "not a glaswave run journal"),
+              std::string::npos)
+        << refused.output;
+    EXPECT_TRUE(fs::exists(journal));
+  }
+}
+
 TEST_F(Resume, AnotherConfigurationOrAFinishedRunIsNotResumed) {
   const fs::path out = dir_ / "other";
   ASSERT_TRUE(kill_when(start_glaswave(run_arguments(out)), out / "glaswave.journal", 17));
