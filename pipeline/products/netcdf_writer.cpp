@@ -330,6 +330,9 @@ struct NetcdfWriter::Impl {
     chunks.insert(chunks.end(), lengths.begin(), lengths.end());
     check(nc_def_var_chunking(nc.id(), varid, NC_CHUNKED, chunks.data()), what + " chunking");
     check(nc_def_var_deflate(nc.id(), varid, 1, 1, kDeflateLevel), what + " compression");
+    // Each chunk is written once, whole: with no chunk cache HDF5 compresses and writes it then,
+    // beside the next batch's simulation, not all at once when the file closes.
+    check(nc_set_var_chunk_cache(nc.id(), varid, 0, 0, 1.0f), what + " chunk cache");
     return chunk_shots;
   }
 

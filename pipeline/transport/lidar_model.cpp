@@ -51,7 +51,7 @@ namespace {
 // A tally (bins of the window with `margin` more either side) convolved with a kernel of
 // 2 margin + 1 weights, over the window's `bins`, divided by `divisor`. A window bin that reaches
 // no scored tally bin stays 0 (a few-ray shot's tally is mostly zeros), the sum over zeros being
-// 0 to the bit.
+// 0 to the bit, whether it is summed or not.
 std::vector<double> convolve_scored(const std::vector<double>& tally,
                                     const std::vector<double>& kernel, int bins, double divisor) {
   std::vector<double> out(bins, 0.0);
@@ -59,9 +59,26 @@ std::vector<double> convolve_scored(const std::vector<double>& tally,
   // Scored tally bins so far.
   std::vector<int> scored(tally.size() + 1, 0);
   for (std::size_t j = 0; j < tally.size(); ++j) scored[j + 1] = scored[j] + (tally[j] != 0.0);
-  for (int i = 0; i < bins; ++i) {
+  // Window bin i is tally bin i + margin; the kernel reaches margin bins either side. Four bins
+  // at a time, each summed in the same order as alone: four chains of additions at once.
+  int i = 0;
+  for (; i + 4 <= bins; i += 4) {
+    if (scored[i + 3 + width] == scored[i]) continue;
+    const double* last = tally.data() + i + width - 1;
+    double sum0 = 0.0, sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
+    for (int k = 0; k < width; ++k) {
+      sum0 += kernel[k] * last[-k];
+      sum1 += kernel[k] * last[1 - k];
+      sum2 += kernel[k] * last[2 - k];
+      sum3 += kernel[k] * last[3 - k];
+    }
+    out[i] = sum0 / divisor;
+    out[i + 1] = sum1 / divisor;
+    out[i + 2] = sum2 / divisor;
+    out[i + 3] = sum3 / divisor;
+  }
+  for (; i < bins; ++i) {
     if (scored[i + width] == scored[i]) continue;
-    // Window bin i is tally bin i + margin; the kernel reaches margin bins either side.
     double sum = 0.0;
     for (int k = 0; k < width; ++k) sum += kernel[k] * tally[i + width - 1 - k];
     out[i] = sum / divisor;

@@ -34,49 +34,49 @@ struct Tally {
         canopy(bands * size, 0.0),
         ground(bands * size, 0.0),
         squares(bands * size, 0.0),
-        order(bands * orders * size, 0.0) {}
+        order(bands * orders * size, 0.0),
+        marked(size, 0) {}
 
   // Only the bins `other` scored into are added: elsewhere it holds zeros, and adding a zero
-  // changes no bit, so a shot of few rays sums little.
+  // changes no bit. A group of a few rays scores into a few bins, however far apart (a slope's
+  // returns spread over hundreds).
   Tally& operator+=(const Tally& other) {
     ray_queries += other.ray_queries;
-    if (other.last_bin < other.first_bin) return *this;
-    auto add_rows = [&](std::vector<double>& sum, const std::vector<double>& part) {
+    auto add = [&](std::vector<double>& sum, const std::vector<double>& part) {
       for (std::size_t row = 0; row * size < sum.size(); ++row)
-        for (std::size_t i = row * size + other.first_bin; i <= row * size + other.last_bin; ++i)
-          sum[i] += part[i];
+        for (int bin : other.bins) sum[row * size + bin] += part[row * size + bin];
     };
-    add_rows(total, other.total);
-    add_rows(canopy, other.canopy);
-    add_rows(ground, other.ground);
-    add_rows(squares, other.squares);
-    add_rows(order, other.order);
-    first_bin = std::min(first_bin, other.first_bin);
-    last_bin = std::max(last_bin, other.last_bin);
+    add(total, other.total);
+    add(canopy, other.canopy);
+    add(ground, other.ground);
+    add(squares, other.squares);
+    add(order, other.order);
+    for (int bin : other.bins) mark(bin);
     return *this;
   }
 
   // Back to zeros, as constructed.
   void clear() {
     for (std::vector<double>* part : {&total, &canopy, &ground, &squares, &order})
-      for (std::size_t row = 0; row * size < part->size() && first_bin <= last_bin; ++row)
-        std::fill(part->begin() + row * size + first_bin, part->begin() + row * size + last_bin + 1,
-                  0.0);
-    first_bin = std::numeric_limits<std::size_t>::max();
-    last_bin = 0;
+      for (std::size_t row = 0; row * size < part->size(); ++row)
+        for (int bin : bins) (*part)[row * size + bin] = 0.0;
+    for (int bin : bins) marked[bin] = 0;
+    bins.clear();
     ray_queries = 0;
   }
 
   void mark(int bin) {
-    first_bin = std::min(first_bin, static_cast<std::size_t>(bin));
-    last_bin = std::max(last_bin, static_cast<std::size_t>(bin));
+    if (marked[bin]) return;
+    marked[bin] = 1;
+    bins.push_back(bin);
   }
 
   std::size_t size;
   int orders;
   std::vector<double> total, canopy, ground, squares, order;
   std::int64_t ray_queries = 0;
-  std::size_t first_bin = std::numeric_limits<std::size_t>::max(), last_bin = 0;  // scored into
+  std::vector<char> marked;  // per bin: scored into
+  std::vector<int> bins;     // those bins, in the order first scored
 };
 
 // One path of a ray, between two interactions.
@@ -479,8 +479,16 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
                    0.0);
     }
     waveforms.total_variance_W2.push_back(lidar.power_variance_W2(variance_J2));
-    waveforms.canopy_W.push_back(slice(tally.canopy, band, scale));
-    waveforms.ground_W.push_back(slice(tally.ground, band, scale));
+    // Where no return came from one part, the other's is the total, bit for bit (the same
+    // scores added in the same order): bare ground needs no third convolution.
+    auto none = [&](const std::vector<double>& flat) {
+      return std::all_of(flat.begin() + band * tally.size, flat.begin() + (band + 1) * tally.size,
+                         [](double value) { return value == 0.0; });
+    };
+    waveforms.canopy_W.push_back(none(tally.ground) ? waveforms.total_W.back()
+                                                    : slice(tally.canopy, band, scale));
+    waveforms.ground_W.push_back(none(tally.canopy) ? waveforms.total_W.back()
+                                                    : slice(tally.ground, band, scale));
     waveforms.energy_J.push_back(integral_J(waveforms.total_W.back()));
     waveforms.canopy_energy_J.push_back(integral_J(waveforms.canopy_W.back()));
     waveforms.ground_energy_J.push_back(integral_J(waveforms.ground_W.back()));
