@@ -42,7 +42,13 @@ struct Tally {
   // returns spread over hundreds).
   Tally& operator+=(const Tally& other) {
     ray_queries += other.ray_queries;
+    // Where it scored into most bins (many rays), every bin: one pass over contiguous memory.
+    const bool most = 2 * other.bins.size() > size;
     auto add = [&](std::vector<double>& sum, const std::vector<double>& part) {
+      if (most) {
+        for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
+        return;
+      }
       for (std::size_t row = 0; row * size < sum.size(); ++row)
         for (int bin : other.bins) sum[row * size + bin] += part[row * size + bin];
     };
@@ -57,9 +63,15 @@ struct Tally {
 
   // Back to zeros, as constructed.
   void clear() {
-    for (std::vector<double>* part : {&total, &canopy, &ground, &squares, &order})
+    const bool most = 2 * bins.size() > size;
+    for (std::vector<double>* part : {&total, &canopy, &ground, &squares, &order}) {
+      if (most) {
+        std::fill(part->begin(), part->end(), 0.0);
+        continue;
+      }
       for (std::size_t row = 0; row * size < part->size(); ++row)
         for (int bin : bins) (*part)[row * size + bin] = 0.0;
+    }
     for (int bin : bins) marked[bin] = 0;
     bins.clear();
     ray_queries = 0;
