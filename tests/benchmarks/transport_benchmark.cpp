@@ -5,6 +5,7 @@
 // run, so that the ratios hold on a shared machine whose absolute speed drifts. Not a test:
 // `--quick` is the short mode that ctest runs.
 #include <embree3/rtcore.h>
+#include <sys/resource.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
@@ -76,9 +77,18 @@ fs::path scratch_path(const char* what) {
                                       what + "-" + std::to_string(count++));
 }
 
+// CPU time of the whole process so far (every thread, user and system), s.
+double process_cpu_s() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  auto s = [](const timeval& t) { return t.tv_sec + 1e-6 * t.tv_usec; };
+  return s(usage.ru_utime) + s(usage.ru_stime);
+}
+
 struct RunFigures {
   std::int64_t shots = 0, queries = 0;
   double seconds = 0.0;
+  double cpu_seconds = 0.0;  // every thread's
   double shots_per_s() const { return shots / seconds; }
   double queries_per_s() const { return queries / seconds; }
 };
@@ -89,8 +99,10 @@ RunFigures whole_run(const glaswave::Config& config, int threads) {
   request.out_dir = scratch_path("run");
   request.threads = threads;
   const auto start = Clock::now();
+  const double cpu_start_s = process_cpu_s();
   const glaswave::RunSummary summary = glaswave::run_simulation(config, request, {});
-  RunFigures figures{summary.shots, summary.ray_queries, seconds_since(start)};
+  RunFigures figures{summary.shots, summary.ray_queries, seconds_since(start),
+                     process_cpu_s() - cpu_start_s};
   fs::remove_all(request.out_dir);
   return figures;
 }
@@ -253,6 +265,9 @@ int main(int argc, char** argv) {
   const double scaling = base_all.shots_per_s() / base_one.shots_per_s();
   std::printf("  base case queries/s / raw Embree probe: %.3f\n", probe_ratio);
   std::printf("  20 degree slope / flat ground, time:     %.2f\n", slope_ratio);
+  // CPU time is steadier on a shared machine: it leaves out time spent waiting for a core.
+  std::printf("  20 degree slope / flat ground, CPU:      %.2f\n",
+              slope_run.cpu_seconds / flat_run.cpu_seconds);
   std::printf("  thread scaling, base case (%d / 1):      %.2f\n", cores, scaling);
 
   std::printf("stage shares, one thread (%% of each case's time; %d and %d shots):\n",
