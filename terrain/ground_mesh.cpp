@@ -71,6 +71,10 @@ GroundMesh sample_ground_mesh(const Terrain& terrain, const LocalFrame& frame, d
 
 namespace {
 
+// exp(-600) = 2.6e-261: the weights of a triangle whose exponents all lie above it, and the
+// ratios between them (at most e^600), stay within a double's range.
+constexpr double kLowestExponent = -600.0;
+
 // The normal equations of a weighted least-squares fit of z = c0 + c1 x + c2 y over a surface,
 // each part of it weighted by its horizontal area and a beam's Gaussian irradiance there.
 struct BeamWeightedPlaneFit {
@@ -104,6 +108,11 @@ struct BeamWeightedPlaneFit {
     const Eigen::Vector3d d1 = e1 / m, d2 = e2 / m;
     const double scale = -0.5 / (sigma_m * sigma_m);
     const Eigen::Vector3d perp_d1 = perp * d1, perp_d2 = perp * d2;
+    // The exponent is lowest at a corner. Where a corner's weight is below what a double holds
+    // (a beam much narrower than the cells), the recurrence would carry zeros from there: each
+    // part's weight is then computed alone.
+    auto exponent = [&](const Eigen::Vector3d& p) { return scale * p.dot(perp * p); };
+    const bool alone = std::min({exponent(p0), exponent(p1), exponent(p2)}) < kLowestExponent;
     const double ratio_step_j = std::exp(2.0 * scale * d2.dot(perp_d2));  // along a row
     const double ratio_step_i = std::exp(2.0 * scale * d1.dot(perp_d2));  // of rows' j-ratios
     const double first_step_i = std::exp(2.0 * scale * d1.dot(perp_d1));  // of rows' i-ratios
@@ -118,7 +127,7 @@ struct BeamWeightedPlaneFit {
         double weight = first, ratio = ratio_j;
         Eigen::Vector3d p = q + i * d1;
         for (int j = 0; j < rows - i; ++j) {
-          add(p, part_area_m2 * weight);
+          add(p, part_area_m2 * (alone ? std::exp(exponent(p)) : weight));
           weight *= ratio;
           ratio *= ratio_step_j;
           p += d2;

@@ -80,6 +80,11 @@ TEST(DemTerrain, PlaneInUtmAndInGeographicCoordinatesIsThePlane) {
     EXPECT_NEAR(a.aspect_deg, b.aspect_deg, 0.05);
     EXPECT_NEAR(a.slope_deg, 20.0, 0.03);
     EXPECT_NEAR(a.aspect_deg, 135.0, 0.05);
+    // A beam far narrower than the cells (0.5 m against 30 m): the weights of a cell's far
+    // corners are below what a double holds, its centre's are not.
+    const SurfaceOrientation narrow = fit_surface_orientation(utm, frame, 0.5);
+    EXPECT_NEAR(narrow.slope_deg, 20.0, 0.03);
+    EXPECT_NEAR(narrow.aspect_deg, 135.0, 0.05);
   }
 }
 
