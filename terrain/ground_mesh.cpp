@@ -106,23 +106,25 @@ struct BeamWeightedPlaneFit {
     // instead of one a part (they were a fifth of a short shot's time).
     const Eigen::Matrix3d perp = Eigen::Matrix3d::Identity() - axis * axis.transpose();
     const Eigen::Vector3d d1 = e1 / m, d2 = e2 / m;
-    const double scale = -0.5 / (sigma_m * sigma_m);
+    const double exponent_per_m2 = -0.5 / (sigma_m * sigma_m);
     const Eigen::Vector3d perp_d1 = perp * d1, perp_d2 = perp * d2;
     // The exponent is lowest at a corner. Where a corner's weight is below what a double holds
     // (a beam much narrower than the cells), the recurrence would carry zeros from there: each
     // part's weight is then computed alone.
-    auto exponent = [&](const Eigen::Vector3d& p) { return scale * p.dot(perp * p); };
+    auto exponent = [&](const Eigen::Vector3d& p) { return exponent_per_m2 * p.dot(perp * p); };
     const bool alone = std::min({exponent(p0), exponent(p1), exponent(p2)}) < kLowestExponent;
-    const double ratio_step_j = std::exp(2.0 * scale * d2.dot(perp_d2));  // along a row
-    const double ratio_step_i = std::exp(2.0 * scale * d1.dot(perp_d2));  // of rows' j-ratios
-    const double first_step_i = std::exp(2.0 * scale * d1.dot(perp_d1));  // of rows' i-ratios
-    auto lattice = [&](double c, int rows) {  // row i holds rows - i parts
+    const double ratio_step_j = std::exp(2.0 * exponent_per_m2 * d2.dot(perp_d2));  // along a row
+    const double ratio_step_i =
+        std::exp(2.0 * exponent_per_m2 * d1.dot(perp_d2));  // of rows' j-ratios
+    const double first_step_i =
+        std::exp(2.0 * exponent_per_m2 * d1.dot(perp_d1));  // of rows' i-ratios
+    auto lattice = [&](double c, int rows) {                // row i holds rows - i parts
       const Eigen::Vector3d q = p0 + c * d1 + c * d2;
       const Eigen::Vector3d perp_q = perp * q;
-      double first = std::exp(scale * q.dot(perp_q));  // the weight of (0, 0)
+      double first = std::exp(exponent_per_m2 * q.dot(perp_q));  // the weight of (0, 0)
       // Ratios from (i, 0) to (i + 1, 0) and from (i, 0) to (i, 1), at i = 0.
-      double ratio_i = std::exp(scale * (2.0 * d1.dot(perp_q) + d1.dot(perp_d1)));
-      double ratio_j = std::exp(scale * (2.0 * d2.dot(perp_q) + d2.dot(perp_d2)));
+      double ratio_i = std::exp(exponent_per_m2 * (2.0 * d1.dot(perp_q) + d1.dot(perp_d1)));
+      double ratio_j = std::exp(exponent_per_m2 * (2.0 * d2.dot(perp_q) + d2.dot(perp_d2)));
       for (int i = 0; i < rows; ++i) {
         double weight = first, ratio = ratio_j;
         Eigen::Vector3d p = q + i * d1;

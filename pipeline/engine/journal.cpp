@@ -27,9 +27,7 @@ constexpr std::uint64_t kMagic = 0x33304c4e524a5747;  // "GWJRNL03"
 constexpr std::uint64_t kFrameMarker = 0x454d415246574721;
 // A run's longest wait between flushes of the journal to the disk.
 constexpr double kSyncInterval_s = 1.0;
-// A frame's records, uncompressed: a frame is closed once they pass kFrameBytes, and none may
-// pass what LZ4 compresses at once.
-constexpr std::size_t kFrameBytes = std::size_t{64} << 20;
+// What LZ4 compresses at once: no frame's records may pass it.
 constexpr std::size_t kLargestFrame = LZ4_MAX_INPUT_SIZE;
 
 std::uint64_t fnv1a(const char* data, std::size_t size, std::uint64_t hash = 0xcbf29ce484222325) {
@@ -172,7 +170,8 @@ std::unique_ptr<RunJournal> RunJournal::resume(
     std::array<std::uint64_t, 5> words{};  // marker, records, ray queries, sizes
     if (!in.read(reinterpret_cast<char*>(words.data()), sizeof words)) break;
     // Sizes beyond what LZ4 takes: not a frame.
-    if (words[0] != kFrameMarker || words[3] > kLargestFrame + kLargestFrame / 128 ||
+    if (words[0] != kFrameMarker ||
+        words[3] > static_cast<std::uint64_t>(LZ4_COMPRESSBOUND(kLargestFrame)) ||
         words[4] > kLargestFrame)
       break;
     frame.assign(reinterpret_cast<const char*>(words.data()), sizeof words);

@@ -6,6 +6,7 @@
 // flushed to the disk at most about once a second.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -21,6 +22,9 @@ class RunJournal {
  public:
   // The journal's name in the output directory.
   static constexpr const char* kFileName = "glaswave.journal";
+  // A frame's records, uncompressed: a frame is closed once they pass this many bytes, so that
+  // LZ4 (2 GB at most at once) takes any batch.
+  static constexpr std::size_t kFrameBytes = std::size_t{8} << 20;
 
   // Creates `path` for a run of identity `identity` (any text; only its hash is kept).
   RunJournal(std::filesystem::path path, const std::string& identity);

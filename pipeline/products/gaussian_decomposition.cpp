@@ -292,7 +292,7 @@ std::vector<double> gaussian_smooth(std::span<const double> values, double sigma
   // Away from the ends every bin has the whole kernel, and the same weight: four bins at a time,
   // each summed in the same order as alone.
   double whole_weight = 0.0;
-  for (double k : kernel) whole_weight += k;
+  for (double weight : kernel) whole_weight += weight;
   const int begin = std::max(0, first_nonzero - half), end = std::min(n, last_nonzero + half + 1);
   int i = begin;
   for (; i < std::min(end, half); ++i) smooth_one(i);

@@ -87,5 +87,42 @@ TEST(SurfaceOrientation, RecoversSlopeAndAspectOfPlanes) {
   }
 }
 
+// Heights k x^3, x east of an origin: a surface whose beam-weighted plane depends on the
+// weights. Over the fit's square of +-3.5 sigma, with Gaussian weights of RMS width sigma, the
+// symmetric weights leave the plane's east gradient k sigma^2 I4 / I2, the truncated moments
+// I_n = integral of t^n exp(-t^2 / 2) over [-3.5, 3.5], by parts I4 = 3 I2 - 2 a^3 exp(-a^2/2)
+// and I2 = sqrt(2 pi) erf(a / sqrt 2) - 2 a exp(-a^2 / 2): 2.925 sigma^2 k, where untruncated
+// weights would give 3 and uniform ones 7.35.
+class CubicTerrain final : public Terrain {
+ public:
+  CubicTerrain(const Geodetic& origin, double k_per_m2) : origin_(origin), k_per_m2_(k_per_m2) {}
+  double height_m(double lat_deg, double lon_deg) const override {
+    const double x_m = origin_.to_local({lat_deg, lon_deg, 0.0})[0];
+    return k_per_m2_ * x_m * x_m * x_m;
+  }
+  // The mesh interpolates the cubic linearly between nodes: on 1 m cells that moves the fit by
+  // 0.67 h^2 / (2.925 sigma^2) = 0.23 %, on 0.25 m cells by 0.015 %.
+  double detail_m() const override { return 0.25; }
+
+ private:
+  LocalFrame origin_;
+  double k_per_m2_;
+};
+
+TEST(SurfaceOrientation, WeighsTheSurfaceByTheBeamsGaussian) {
+  const double sigma_m = 10.0, a = 3.5;
+  const double tail = std::exp(-0.5 * a * a);
+  const double i2 =
+      std::sqrt(2.0 * std::numbers::pi) * std::erf(a / std::sqrt(2.0)) - 2.0 * a * tail;
+  const double i4 = 3.0 * i2 - 2.0 * a * a * a * tail;
+  const double k_per_m2 = 0.2 / (sigma_m * sigma_m * 3.0);
+  const Geodetic origin{46.0, 8.0, 0.0};
+  const CubicTerrain terrain(origin, k_per_m2);
+  const SurfaceOrientation fit = fit_surface_orientation(terrain, LocalFrame(origin), sigma_m);
+  const double gradient = k_per_m2 * sigma_m * sigma_m * i4 / i2;  // 0.195
+  EXPECT_NEAR(std::tan(fit.slope_deg * deg), gradient, 1e-3 * gradient);
+  EXPECT_NEAR(fit.aspect_deg, 270.0, 0.05);  // rising eastward, it faces west
+}
+
 }  // namespace
 }  // namespace glaswave
