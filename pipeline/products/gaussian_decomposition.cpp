@@ -8,6 +8,8 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <tuple>
+#include <utility>
 
 namespace glaswave {
 namespace {
@@ -42,27 +44,42 @@ struct Problem {
   int bins() const { return last - first + 1; }
 };
 
-// Fills component k's unit profile exp(-(i - c)^2 / (2 s^2)) over its reach by the recurrence
-// g(i + 1) = g(i) r(i), r(i + 1) = r(i) exp(-1 / s^2): two exponentials per component instead
-// of one per bin (the round-off over a few hundred bins stays near 1e-14).
-void fill_profile(Problem& problem, int k, double center, double sigma) {
-  double* e = problem.profile.data() + static_cast<std::size_t>(k) * problem.bins();
-  std::fill(e, e + problem.bins(), 0.0);
+// Adds amplitude exp(-(i - center)^2 / (2 sigma^2)) to out[i - offset] over the bins of lo..hi
+// within the cutoff, by the recurrence g(i + 1) = g(i) r(i), r(i + 1) = r(i) exp(-1 / sigma^2):
+// three exponentials instead of one per bin (the round-off over a few hundred bins stays near
+// 1e-14). Returns the bins it covered (lo > hi: none). A width that is not positive, or a value
+// that is not finite, is evaluated bin by bin as the Gaussian's formula gives it.
+std::pair<int, int> add_profile(double* out, int offset, int lo, int hi, double amplitude,
+                                double center, double sigma) {
+  if (!(sigma > 0.0) || !std::isfinite(sigma) || !std::isfinite(center) ||
+      !std::isfinite(amplitude)) {
+    const GaussianComponent g{amplitude, center, sigma};
+    for (int i = lo; i <= hi; ++i) out[i - offset] += g.value_at(i);
+    return {lo, hi};
+  }
   const double reach = kCutoffSigmas * sigma;
-  const int lo = std::max(problem.first, static_cast<int>(std::ceil(center - reach)));
-  const int hi = std::min(problem.last, static_cast<int>(std::floor(center + reach)));
-  problem.lo[k] = lo, problem.hi[k] = hi;
-  if (lo > hi) return;
+  lo = static_cast<int>(std::max<double>(lo, std::ceil(center - reach)));
+  hi = static_cast<int>(std::min<double>(hi, std::floor(center + reach)));
+  if (lo > hi) return {lo, hi};
   const double inverse_variance = 1.0 / (sigma * sigma);
   const double d = lo - center;
   double g = std::exp(-0.5 * d * d * inverse_variance);
   double ratio = std::exp(-(d + 0.5) * inverse_variance);
   const double step = std::exp(-inverse_variance);
   for (int i = lo; i <= hi; ++i) {
-    e[i - problem.first] = g;
+    out[i - offset] += amplitude * g;
     g *= ratio;
     ratio *= step;
   }
+  return {lo, hi};
+}
+
+// Fills component k's unit profile over its reach (zero beyond the cutoff).
+void fill_profile(Problem& problem, int k, double center, double sigma) {
+  double* e = problem.profile.data() + static_cast<std::size_t>(k) * problem.bins();
+  std::fill(e, e + problem.bins(), 0.0);
+  std::tie(problem.lo[k], problem.hi[k]) =
+      add_profile(e, problem.first, problem.first, problem.last, 1.0, center, sigma);
 }
 
 // Sum of squared residuals at x, the profiles left at x; +inf when a width is not positive or a
@@ -84,28 +101,58 @@ double cost(Problem& problem, const Vector& x) {
 }
 
 // J^T J (upper triangle) and J^T r at x (whose profiles the problem holds), one bin's row at a
-// time: only the parameters of the components within reach of the bin take part.
+// time: only the parameters of the components within reach of the bin take part, and bins beyond
+// every component's reach add nothing. One component (a bare slope's broad return, the most bins
+// to cover) is summed in registers.
 void normal_equations(const Problem& problem, const Vector& x, Matrix& jtj, Vector& jtr) {
   for (int a = 0; a < problem.p; ++a) {
     jtr[a] = 0.0;
     for (int b = a; b < problem.p; ++b) jtj[a][b] = 0.0;
   }
   const int n = problem.bins();
+  const int components = problem.p / 3;
+  std::array<double, kMaxFitComponents> inverse_sigma{};
+  int lo = problem.last + 1, hi = problem.first - 1;
+  for (int k = 0; k < components; ++k) {
+    inverse_sigma[k] = 1.0 / x[3 * k + 2];
+    lo = std::min(lo, problem.lo[k]);
+    hi = std::max(hi, problem.hi[k]);
+  }
+  const double* values = problem.values.data();
+  if (components == 1) {
+    const double a = x[0], c = x[1], w = inverse_sigma[0];
+    const double* e = problem.profile.data() - problem.first;
+    double aa = 0.0, ac = 0.0, as = 0.0, cc = 0.0, cs = 0.0, ss = 0.0;
+    double ra = 0.0, rc = 0.0, rs = 0.0;
+    for (int i = lo; i <= hi; ++i) {
+      const double u = (i - c) * w;
+      const double jc = a * e[i] * u * w, js = jc * u;
+      const double r = a * e[i] - values[i] * problem.inverse_scale;
+      aa += e[i] * e[i], ac += e[i] * jc, as += e[i] * js;
+      cc += jc * jc, cs += jc * js, ss += js * js;
+      ra += e[i] * r, rc += jc * r, rs += js * r;
+    }
+    jtj[0][0] = aa, jtj[0][1] = ac, jtj[0][2] = as;
+    jtj[1][1] = cc, jtj[1][2] = cs, jtj[2][2] = ss;
+    jtr[0] = ra, jtr[1] = rc, jtr[2] = rs;
+    return;
+  }
   std::array<double, kMaxParameters> row{};
   std::array<int, kMaxParameters> index{};
-  for (int i = problem.first; i <= problem.last; ++i) {
+  for (int i = lo; i <= hi; ++i) {
     int active = 0;
     double model = 0.0;
-    for (int k = 0; k < problem.p / 3; ++k) {
+    for (int k = 0; k < components; ++k) {
       if (i < problem.lo[k] || i > problem.hi[k]) continue;
-      const double a = x[3 * k], s = x[3 * k + 2], u = (i - x[3 * k + 1]) / s;
+      const double a = x[3 * k], w = inverse_sigma[k], u = (i - x[3 * k + 1]) * w;
       const double e = problem.profile[k * n + i - problem.first];
       model += a * e;
+      const double jc = a * e * u * w;
       row[active] = e, index[active++] = 3 * k;
-      row[active] = a * e * u / s, index[active++] = 3 * k + 1;
-      row[active] = a * e * u * u / s, index[active++] = 3 * k + 2;
+      row[active] = jc, index[active++] = 3 * k + 1;
+      row[active] = jc * u, index[active++] = 3 * k + 2;
     }
-    const double r = model - problem.values[i] * problem.inverse_scale;
+    const double r = model - values[i] * problem.inverse_scale;
     for (int m = 0; m < active; ++m) {
       jtr[index[m]] += row[m] * r;
       for (int q = m; q < active; ++q) jtj[index[m]][index[q]] += row[m] * row[q];
@@ -183,19 +230,20 @@ void levenberg_marquardt(Problem& problem, Vector& x) {
   }
 }
 
-double model_at(const std::vector<GaussianComponent>& components, double x) {
-  double sum = 0.0;
-  for (const GaussianComponent& g : components) sum += g.value_at(x);
-  return sum;
+// values - the components' sum, over bins lo..hi (residual[i - lo]).
+std::vector<double> residual_over(std::span<const double> values, int lo, int hi,
+                                  const std::vector<GaussianComponent>& components) {
+  std::vector<double> model(hi - lo + 1, 0.0);
+  for (const GaussianComponent& g : components)
+    add_profile(model.data(), lo, lo, hi, g.amplitude, g.center_bin, g.sigma_bins);
+  for (int i = lo; i <= hi; ++i) model[i - lo] = values[i] - model[i - lo];
+  return model;
 }
 
 double sum_of_squares(std::span<const double> values, int first, int last,
                       const std::vector<GaussianComponent>& components) {
   double sum = 0.0;
-  for (int i = first; i <= last; ++i) {
-    const double r = values[i] - model_at(components, i);
-    sum += r * r;
-  }
+  for (double r : residual_over(values, first, last, components)) sum += r * r;
   return sum;
 }
 
@@ -208,9 +256,10 @@ double chi_square(std::span<const double> values, int first, int last,
                   std::span<const double> variance) {
   const double floor =
       kVarianceFloor * *std::max_element(variance.begin() + first, variance.begin() + last + 1);
+  const std::vector<double> residual = residual_over(values, first, last, components);
   double sum = 0.0;
   for (int i = first; i <= last; ++i) {
-    const double r = values[i] - model_at(components, i);
+    const double r = residual[i - first];
     sum += r * r / std::max(variance[i], floor);
   }
   return sum;
@@ -224,12 +273,14 @@ double linear_gain(std::span<const double> residual, int offset, int first, int 
                    const GaussianComponent& guess, std::span<const double> variance) {
   const double floor =
       kVarianceFloor * *std::max_element(variance.begin() + first, variance.begin() + last + 1);
-  const GaussianComponent unit{1.0, guess.center_bin, guess.sigma_bins};
   const int lo = std::max(first, static_cast<int>(guess.center_bin - 5.0 * guess.sigma_bins));
   const int hi = std::min(last, static_cast<int>(guess.center_bin + 5.0 * guess.sigma_bins));
+  if (lo > hi) return 0.0;
+  std::vector<double> unit(hi - lo + 1, 0.0);
+  add_profile(unit.data(), lo, lo, hi, 1.0, guess.center_bin, guess.sigma_bins);
   double cross = 0.0, norm = 0.0;
   for (int i = lo; i <= hi; ++i) {
-    const double g = unit.value_at(i), w = 1.0 / std::max(variance[i], floor);
+    const double g = unit[i - lo], w = 1.0 / std::max(variance[i], floor);
     cross += w * residual[i - offset] * g;
     norm += w * g * g;
   }
@@ -431,9 +482,8 @@ std::vector<GaussianComponent> add_residual_components(std::span<const double> v
   const int reach = static_cast<int>(std::ceil(4.0 * settings.smooth_sigma_bins));
   const int lo = std::max(first - reach, 0);
   const int hi = std::min(last + reach, static_cast<int>(values.size()) - 1);
-  std::vector<double> residual(hi - lo + 1);
   while (static_cast<int>(components.size()) < settings.max_components) {
-    for (int i = lo; i <= hi; ++i) residual[i - lo] = values[i] - model_at(components, i);
+    const std::vector<double> residual = residual_over(values, lo, hi, components);
     const std::vector<double> smooth_residual =
         gaussian_smooth(residual, settings.smooth_sigma_bins);
     // The highest residual; with the noise known, the one that stands most noise sds high (a
@@ -448,8 +498,11 @@ std::vector<GaussianComponent> add_residual_components(std::span<const double> v
                               : smooth_residual[i - lo] / std::sqrt(std::max(variance[i], floor));
     };
     int best = first;
-    for (int i = first; i <= last; ++i)
-      if (standing(i) > standing(best)) best = i;
+    double best_standing = standing(first);
+    for (int i = first + 1; i <= last; ++i) {
+      const double here = standing(i);
+      if (here > best_standing) best = i, best_standing = here;
+    }
     if (!(smooth_residual[best - lo] > settings.significance_level)) break;
     std::vector<GaussianComponent> trial = components;
     GaussianComponent added =
@@ -529,8 +582,7 @@ std::vector<GaussianComponent> select_guesses(std::span<const double> values, in
   double misfit = chi_square(values, first, last, components, variance);
   std::vector<double> residual;  // over first..last, of the components; empty: to compute
   for (std::size_t k = 1; k < guesses.size(); ++k) {
-    if (residual.empty())
-      for (int i = first; i <= last; ++i) residual.push_back(values[i] - model_at(components, i));
+    if (residual.empty()) residual = residual_over(values, first, last, components);
     if (linear_gain(residual, first, first, last, guesses[k], variance) <
         0.5 * settings.min_chi2_gain)
       continue;  // not worth a fit
