@@ -53,12 +53,14 @@ class RunJournal {
 
  private:
   RunJournal(std::filesystem::path path, int fd);
-  void write_all(const std::string& bytes);
+  void write_all(const char* bytes, std::size_t size);
   void write_frame(const std::string& raw, std::size_t records, std::int64_t ray_queries);
 
   std::filesystem::path path_;
   int fd_ = -1;
   double last_sync_s_ = 0.0;
+  std::string raw_;    // a frame's records, uncompressed; kept, as frame_, for the next frame
+  std::string frame_;  // a frame as written: header, LZ4 payload, checksum
 };
 
 }  // namespace glaswave
