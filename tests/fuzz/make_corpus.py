@@ -5,7 +5,6 @@ bindings, python3-gdal). Regression inputs found by fuzzing live beside them, na
 regression-*, and are not touched. Run from anywhere: /usr/bin/python3 tests/fuzz/make_corpus.py
 """
 import json
-import math
 import pathlib
 import random
 
@@ -21,13 +20,11 @@ def write(target, name, content):
     (folder / name).write_bytes(data)
 
 
-def ecef(lat_deg, lon_deg, h_m):
-    a, f = 6378137.0, 1 / 298.257223563
-    e2 = f * (2 - f)
-    lat, lon = math.radians(lat_deg), math.radians(lon_deg)
-    n = a / math.sqrt(1 - e2 * math.sin(lat) ** 2)
-    return ((n + h_m) * math.cos(lat) * math.cos(lon), (n + h_m) * math.cos(lat) * math.sin(lon),
-            (n * (1 - e2) + h_m) * math.sin(lat))
+# WGS 84 latitude, longitude and height to Earth-fixed x, y, z (m), through PROJ.
+GEODETIC, GEOCENTRIC = osr.SpatialReference(), osr.SpatialReference()
+GEODETIC.ImportFromEPSG(4979)
+GEOCENTRIC.ImportFromEPSG(4978)
+ecef = osr.CoordinateTransformation(GEODETIC, GEOCENTRIC).TransformPoint
 
 
 def config_corpus():

@@ -26,20 +26,19 @@ import sys
 import tempfile
 import time
 
+from osgeo import osr
+
 MARKER = "SECRET-MARKER-7f3a"
 PRODUCTS = {"shots.nc", "footprints.geojson", "footprints.gpkg", "brf.json", "scene.tif",
             "sensitivity.csv", "sensitivity.md", "waveforms.png", "track_map.png"}
 TIMEOUT_S = 20
 
 
-def ecef(lat_deg, lon_deg, h_m):
-    """WGS84 geodetic to Earth-fixed (m)."""
-    a, f = 6378137.0, 1 / 298.257223563
-    e2 = f * (2 - f)
-    lat, lon = math.radians(lat_deg), math.radians(lon_deg)
-    n = a / math.sqrt(1 - e2 * math.sin(lat) ** 2)
-    return ((n + h_m) * math.cos(lat) * math.cos(lon), (n + h_m) * math.cos(lat) * math.sin(lon),
-            (n * (1 - e2) + h_m) * math.sin(lat))
+# WGS 84 latitude, longitude and height to Earth-fixed x, y, z (m), through PROJ.
+GEODETIC, GEOCENTRIC = osr.SpatialReference(), osr.SpatialReference()
+GEODETIC.ImportFromEPSG(4979)
+GEOCENTRIC.ImportFromEPSG(4978)
+ecef = osr.CoordinateTransformation(GEODETIC, GEOCENTRIC).TransformPoint
 
 
 class Trial:
