@@ -57,10 +57,13 @@ std::pair<int, int> add_profile(double* out, int offset, int lo, int hi, double 
     for (int i = lo; i <= hi; ++i) out[i - offset] += g.value_at(i);
     return {lo, hi};
   }
+  // Clipped as doubles: a centre far outside the bins would not fit an int.
   const double reach = kCutoffSigmas * sigma;
-  lo = static_cast<int>(std::max<double>(lo, std::ceil(center - reach)));
-  hi = static_cast<int>(std::min<double>(hi, std::floor(center + reach)));
-  if (lo > hi) return {lo, hi};
+  const double from = std::max<double>(lo, std::ceil(center - reach));
+  const double to = std::min<double>(hi, std::floor(center + reach));
+  if (!(from <= to)) return {hi + 1, hi};
+  lo = static_cast<int>(from);
+  hi = static_cast<int>(to);
   const double inverse_variance = 1.0 / (sigma * sigma);
   const double d = lo - center;
   double g = std::exp(-0.5 * d * d * inverse_variance);
@@ -121,16 +124,16 @@ void normal_equations(const Problem& problem, const Vector& x, Matrix& jtj, Vect
   const double* values = problem.values.data();
   if (components == 1) {
     const double a = x[0], c = x[1], w = inverse_sigma[0];
-    const double* e = problem.profile.data() - problem.first;
+    const double* e = problem.profile.data();
     double aa = 0.0, ac = 0.0, as = 0.0, cc = 0.0, cs = 0.0, ss = 0.0;
     double ra = 0.0, rc = 0.0, rs = 0.0;
     for (int i = lo; i <= hi; ++i) {
-      const double u = (i - c) * w;
-      const double jc = a * e[i] * u * w, js = jc * u;
-      const double r = a * e[i] - values[i] * problem.inverse_scale;
-      aa += e[i] * e[i], ac += e[i] * jc, as += e[i] * js;
+      const double g = e[i - problem.first], u = (i - c) * w;
+      const double jc = a * g * u * w, js = jc * u;
+      const double r = a * g - values[i] * problem.inverse_scale;
+      aa += g * g, ac += g * jc, as += g * js;
       cc += jc * jc, cs += jc * js, ss += js * js;
-      ra += e[i] * r, rc += jc * r, rs += js * r;
+      ra += g * r, rc += jc * r, rs += js * r;
     }
     jtj[0][0] = aa, jtj[0][1] = ac, jtj[0][2] = as;
     jtj[1][1] = cc, jtj[1][2] = cs, jtj[2][2] = ss;
