@@ -141,6 +141,16 @@ void pulse_convolution(benchmark::State& state) {
 }
 BENCHMARK(pulse_convolution);
 
+// The decomposition's settings in both of its cases: a 1.5-bin narrowest Gaussian, smoothing over
+// 3 bins, components below 0.05 of the unit peak dropped.
+glaswave::DecompositionSettings decomposition_settings() {
+  glaswave::DecompositionSettings settings;
+  settings.min_sigma_bins = 1.5;
+  settings.smooth_sigma_bins = 3.0;
+  settings.significance_level = 0.05;
+  return settings;
+}
+
 // Three Gaussians with noise over 544 bins (a canopy's two layers and its ground), decomposed.
 void decomposition(benchmark::State& state) {
   std::vector<double> waveform(544, 0.0);
@@ -152,10 +162,7 @@ void decomposition(benchmark::State& state) {
                   0.6 * std::exp(-0.5 * std::pow((x - 230.0) / 6.0, 2)) +
                   2.0 * std::exp(-0.5 * std::pow((x - 300.0) / 3.0, 2)) + noise(engine);
   }
-  glaswave::DecompositionSettings settings;
-  settings.min_sigma_bins = 1.5;
-  settings.smooth_sigma_bins = 3.0;
-  settings.significance_level = 0.05;
+  const glaswave::DecompositionSettings settings = decomposition_settings();
   for (auto _ : state)
     benchmark::DoNotOptimize(glaswave::decompose_waveform(waveform, 180, 320, settings));
 }
@@ -173,11 +180,8 @@ void decomposition_broad(benchmark::State& state) {
     waveform[i] = truth * (1.0 + noise(engine));
     variance[i] = std::pow(0.01 * truth, 2);
   }
-  glaswave::DecompositionSettings settings;
+  glaswave::DecompositionSettings settings = decomposition_settings();
   settings.error_variance = variance;
-  settings.min_sigma_bins = 1.5;
-  settings.smooth_sigma_bins = 3.0;
-  settings.significance_level = 0.05;
   for (auto _ : state)
     benchmark::DoNotOptimize(glaswave::decompose_waveform(waveform, 25, 515, settings));
 }
