@@ -45,7 +45,11 @@ std::string field_excerpt(std::string_view field, std::string_view also) {
   for (char c : field)
     plain = plain && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' ||
                       c == '+' || c == '-' || also.find(c) != std::string_view::npos);
-  if (plain) return "\"" + std::string(field) + "\"";
+  if (plain) {
+    std::string quoted(1, '"');  // not "\"" + std::string: GCC 12 warns of a false overlap there
+    quoted.append(field).push_back('"');
+    return quoted;
+  }
   return "a field of " + std::to_string(field.size()) + " characters";
 }
 

@@ -141,7 +141,8 @@ TEST_F(HostileInput, DeepNestingIsRefusedBeforeAnythingRecurses) {
   const std::string deep = std::string(100000, '[') + std::string(100000, ']');
   for (const char* key : {"seed", "canopy"}) {
     const std::string config = write("deep.json", "{\"" + std::string(key) + "\": " + deep + "}");
-    expect_refused(config, "", 2, "/" + std::string(key) + "/0/0/...: nests deeper than 64 levels");
+    expect_refused(config, "", 2,
+                   std::string("/").append(key).append("/0/0/...: nests deeper than 64 levels"));
   }
   const std::string points =
       write("points.json", "{\"track\": {\"type\": \"points\", \"points\": " + deep + "}}");

@@ -196,7 +196,7 @@ TEST(BrfMemory, ATileThatCannotBePhysicalOrFitIsRefusedAtItsKey) {
   // 256 bands of 8192 x 8192 pixels: 256 GiB of image.
   json bands = json::array();
   for (int i = 0; i < 256; ++i)
-    bands.push_back({{"name", "b" + std::to_string(i)},
+    bands.push_back({{"name", std::string("b").append(std::to_string(i))},
                      {"wavelength_nm", 500 + i},
                      {"pulse_energy_mJ", 1},
                      {"atmos_transmission_roundtrip", 0.9}});
