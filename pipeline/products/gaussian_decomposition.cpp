@@ -103,6 +103,15 @@ double cost(Problem& problem, const Vector& x) {
   return sum;
 }
 
+// A component's row of the Jacobian at bin i, the model's derivatives by its amplitude, centre
+// and sigma, from its unit profile e there and its 1 / sigma.
+std::array<double, 3> jacobian_row(double amplitude, double center, double inverse_sigma, double e,
+                                   int i) {
+  const double u = (i - center) * inverse_sigma;
+  const double d_center = amplitude * e * u * inverse_sigma;
+  return {e, d_center, d_center * u};
+}
+
 // J^T J (upper triangle) and J^T r at x (whose profiles the problem holds), one bin's row at a
 // time: only the parameters of the components within reach of the bin take part, and bins beyond
 // every component's reach add nothing. One component (a bare slope's broad return, the most bins
@@ -128,12 +137,12 @@ void normal_equations(const Problem& problem, const Vector& x, Matrix& jtj, Vect
     double aa = 0.0, ac = 0.0, as = 0.0, cc = 0.0, cs = 0.0, ss = 0.0;
     double ra = 0.0, rc = 0.0, rs = 0.0;
     for (int i = lo; i <= hi; ++i) {
-      const double g = e[i - problem.first], u = (i - c) * w;
-      const double jc = a * g * u * w, js = jc * u;
+      const double g = e[i - problem.first];
+      const auto [ja, jc, js] = jacobian_row(a, c, w, g, i);
       const double r = a * g - values[i] * problem.inverse_scale;
-      aa += g * g, ac += g * jc, as += g * js;
+      aa += ja * ja, ac += ja * jc, as += ja * js;
       cc += jc * jc, cs += jc * js, ss += js * js;
-      ra += g * r, rc += jc * r, rs += js * r;
+      ra += ja * r, rc += jc * r, rs += js * r;
     }
     jtj[0][0] = aa, jtj[0][1] = ac, jtj[0][2] = as;
     jtj[1][1] = cc, jtj[1][2] = cs, jtj[2][2] = ss;
@@ -147,13 +156,10 @@ void normal_equations(const Problem& problem, const Vector& x, Matrix& jtj, Vect
     double model = 0.0;
     for (int k = 0; k < components; ++k) {
       if (i < problem.lo[k] || i > problem.hi[k]) continue;
-      const double a = x[3 * k], w = inverse_sigma[k], u = (i - x[3 * k + 1]) * w;
       const double e = problem.profile[k * n + i - problem.first];
-      model += a * e;
-      const double jc = a * e * u * w;
-      row[active] = e, index[active++] = 3 * k;
-      row[active] = jc, index[active++] = 3 * k + 1;
-      row[active] = jc * u, index[active++] = 3 * k + 2;
+      model += x[3 * k] * e;
+      const std::array<double, 3> j = jacobian_row(x[3 * k], x[3 * k + 1], inverse_sigma[k], e, i);
+      for (int d = 0; d < 3; ++d) row[active] = j[d], index[active++] = 3 * k + d;
     }
     const double r = model - values[i] * problem.inverse_scale;
     for (int m = 0; m < active; ++m) {

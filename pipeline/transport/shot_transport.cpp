@@ -43,7 +43,7 @@ struct Tally {
   Tally& operator+=(const Tally& other) {
     ray_queries += other.ray_queries;
     // Where it scored into most bins (many rays), every bin: one pass over contiguous memory.
-    const bool most = 2 * other.bins.size() > size;
+    const bool most = other.scored_most();
     auto add = [&](std::vector<double>& sum, const std::vector<double>& part) {
       if (most) {
         for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
@@ -63,7 +63,7 @@ struct Tally {
 
   // Back to zeros, as constructed.
   void clear() {
-    const bool most = 2 * bins.size() > size;
+    const bool most = scored_most();
     for (std::vector<double>* part : {&total, &canopy, &ground, &squares, &order}) {
       if (most) {
         std::fill(part->begin(), part->end(), 0.0);
@@ -76,6 +76,9 @@ struct Tally {
     bins.clear();
     ray_queries = 0;
   }
+
+  // Scored into more than half of the bins: faster over all of them than by the list.
+  bool scored_most() const { return 2 * bins.size() > size; }
 
   void mark(int bin) {
     if (marked[bin]) return;
