@@ -46,6 +46,10 @@ struct SpanCollector {
   const std::vector<CrownCrossing>* crossings;
   std::vector<VolumeSpan>* spans;
   Vec3 origin, direction;  // in double: the float ray is only for traversal
+  double max_distance_m;   // spans end here at the latest
+  // For a free path: its optical depth, and each material's extinction per unit density.
+  double depth = 0.0;
+  const std::vector<double>* extinction_per_density = nullptr;
 };
 
 void crown_bounds(const RTCBoundsFunctionArguments* args) {
@@ -68,10 +72,20 @@ void crown_intersect(const RTCIntersectFunctionNArguments* args) {
       (*collector->crossings)[args->primID].interval(collector->origin, collector->direction);
   if (!interval) return;
   const double t0 = std::max(interval->first, static_cast<double>(ray->tnear));
-  const double t1 = std::min(interval->second, static_cast<double>(ray->tfar));
-  if (t0 < t1)
-    collector->spans->push_back(
-        {t0, t1, crown.area_density_m2_m3, crown.material, static_cast<int>(args->primID)});
+  const double t1 = std::min(interval->second, collector->max_distance_m);
+  if (!(t0 < t1)) return;
+  collector->spans->push_back(
+      {t0, t1, crown.area_density_m2_m3, crown.material, static_cast<int>(args->primID)});
+  if (!collector->extinction_per_density) return;
+  // Where this crown's foliage alone reaches the free path's depth, the free path has ended:
+  // crowns wholly beyond need not be visited. Embree culls by tfar in float: a little beyond.
+  const double extinction =
+      crown.area_density_m2_m3 * (*collector->extinction_per_density)[crown.material];
+  if (!(extinction > 0.0)) return;
+  const double end_m = t0 + collector->depth / extinction;
+  if (end_m > t1) return;
+  float& tfar = reinterpret_cast<RTCRayHit*>(args->rayhit)->ray.tfar;
+  tfar = std::min(tfar, static_cast<float>(end_m * (1.0 + 1e-5) + 1e-3));
 }
 
 // A slab between two heights above a plane: where the ray is inside it.
@@ -201,6 +215,18 @@ bool Scene::occluded(const Vec3& origin, const Vec3& direction, double max_dista
 
 void Scene::volume_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
                          std::vector<VolumeSpan>& spans) const {
+  collect_spans(origin, direction, max_distance_m, spans, 0.0, nullptr);
+}
+
+void Scene::volume_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                         std::vector<VolumeSpan>& spans, double depth,
+                         const std::vector<double>& extinction_per_density) const {
+  collect_spans(origin, direction, max_distance_m, spans, depth, &extinction_per_density);
+}
+
+void Scene::collect_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                          std::vector<VolumeSpan>& spans, double depth,
+                          const std::vector<double>* extinction_per_density) const {
   spans.clear();
   if (crown_scene_) {
     SpanCollector collector{};
@@ -210,6 +236,9 @@ void Scene::volume_spans(const Vec3& origin, const Vec3& direction, double max_d
     collector.spans = &spans;
     collector.origin = origin;
     collector.direction = direction;
+    collector.max_distance_m = static_cast<float>(max_distance_m);
+    collector.depth = depth;
+    collector.extinction_per_density = extinction_per_density;
     RTCRayHit query{};
     query.ray = make_ray(origin, direction, 0.0, max_distance_m);
     query.hit.geomID = RTC_INVALID_GEOMETRY_ID;

@@ -82,10 +82,22 @@ class Scene {
   void volume_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
                     std::vector<VolumeSpan>& spans) const;
 
+  // The same, for a free path of optical depth `depth`, a span's extinction being its density
+  // times `extinction_per_density[material]`: the search stops short of crowns that lie wholly
+  // beyond where one crown's foliage alone reaches that depth, as the free path ends before them.
+  // Every span that starts before the free path's end is there, whole.
+  void volume_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                    std::vector<VolumeSpan>& spans, double depth,
+                    const std::vector<double>& extinction_per_density) const;
+
   double top_m() const { return top_m_; }  // highest point of anything, local frame
   bool has_volumes() const { return !crowns_.empty() || layer_.has_value(); }
 
  private:
+  void collect_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                     std::vector<VolumeSpan>& spans, double depth,
+                     const std::vector<double>* extinction_per_density) const;
+
   RTCSceneTy* surfaces_;
   RTCSceneTy* crown_scene_ = nullptr;
   std::vector<Crown> crowns_;

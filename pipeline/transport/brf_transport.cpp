@@ -130,16 +130,16 @@ Event SunTracer::next_event(Photon& photon, RandomStream& random, BatchTally& ta
     const Vec3& d = photon.direction;
     const double side_m = to_side_m(origin, d);
     const double limit_m = std::min(side_m, far_m);
-    const SurfaceHit hit = scene_.intersect(origin, d, limit_m, min_distance_m);
-    ++tally.ray_queries;
-    std::optional<Interaction> leaf;
+    std::optional<double> target;
     if (scene_.has_volumes()) {
-      scene_.volume_spans(origin, d, hit.kind == SurfaceKind::none ? limit_m : hit.distance_m,
-                          spans_);
-      ++tally.ray_queries;
       project(d);
-      leaf = free_path(spans_, projection_, -std::log1p(-random.uniform()), uniform);
+      target = -std::log1p(-random.uniform());
     }
+    const ElementMet met = element_met(scene_, origin, d, limit_m, min_distance_m, target, spans_,
+                                       projection_, uniform);
+    tally.ray_queries += target ? 2 : 1;
+    const SurfaceHit& hit = met.surface;
+    const std::optional<Interaction>& leaf = met.leaf;
     if (leaf) {
       event.element = RayElement::leaf;
       event.material = &optics_.foliage[leaf->material];

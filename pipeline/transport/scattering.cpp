@@ -1,11 +1,38 @@
 // The scattering kernels shared by the transports.
 #include "pipeline/transport/scattering.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 
 namespace glaswave {
+
+std::optional<FreePath> free_path_depth(const std::vector<VolumeSpan>& spans,
+                                        const std::vector<double>& projection, double target) {
+  if (spans.empty()) return std::nullopt;
+  // One sweep over span ends: extinction added where a span starts, removed where it ends.
+  thread_local std::vector<std::pair<double, double>> events;
+  events.clear();
+  for (const VolumeSpan& span : spans) {
+    const double extinction = span.area_density_m2_m3 * projection[span.material];
+    events.emplace_back(span.start_m, extinction);
+    events.emplace_back(span.end_m, -extinction);
+  }
+  std::sort(events.begin(), events.end());
+  double extinction = 0.0, depth = 0.0, t_previous = events.front().first;
+  for (const auto& [t, change] : events) {
+    if (extinction > 0.0 && t > t_previous) {
+      const double step = extinction * (t - t_previous);
+      if (depth + step >= target)
+        return FreePath{t_previous + (target - depth) / extinction, extinction};
+      depth += step;
+    }
+    t_previous = t;
+    extinction += change;
+  }
+  return std::nullopt;
+}
 
 double connection_depth(const std::vector<VolumeSpan>& spans, const std::vector<double>& projection,
                         const std::vector<Foliage>& foliage, double shared_m,

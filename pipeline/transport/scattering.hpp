@@ -53,46 +53,63 @@ struct Interaction {
   int crown;  // -1 for the layer
 };
 
-// Where the accumulated optical depth along the ray reaches `target`, within the spans
-// (overlapping spans add their extinctions), and which foliage the ray met there, chosen in
-// proportion to each one's extinction at that point; empty if the depth is never reached.
+// Where the accumulated optical depth along the ray reaches `target` within the spans
+// (overlapping spans add their extinctions), and the extinction there; empty if the depth is
+// never reached. Spans that begin beyond that point change neither.
+struct FreePath {
+  double distance_m;
+  double extinction_per_m;
+};
+std::optional<FreePath> free_path_depth(const std::vector<VolumeSpan>& spans,
+                                        const std::vector<double>& projection, double target);
+
+// Which foliage the ray met at a free path's end: one of the spans covering the point, chosen
+// in proportion to its extinction there (one uniform number).
 template <class Uniform>
-std::optional<Interaction> free_path(const std::vector<VolumeSpan>& spans,
-                                     const std::vector<double>& projection, double target,
-                                     Uniform&& uniform) {
-  if (spans.empty()) return std::nullopt;
-  // One sweep over span ends: extinction added where a span starts, removed where it ends.
-  thread_local std::vector<std::pair<double, double>> events;
-  events.clear();
+Interaction foliage_met(const std::vector<VolumeSpan>& spans, const std::vector<double>& projection,
+                        const FreePath& path, Uniform&& uniform) {
+  double pick = uniform() * path.extinction_per_m;
+  const VolumeSpan* met = &spans.front();
   for (const VolumeSpan& span : spans) {
-    const double extinction = span.area_density_m2_m3 * projection[span.material];
-    events.emplace_back(span.start_m, extinction);
-    events.emplace_back(span.end_m, -extinction);
+    if (span.start_m > path.distance_m || span.end_m <= path.distance_m) continue;
+    met = &span;
+    pick -= span.area_density_m2_m3 * projection[span.material];
+    if (pick < 0.0) break;
   }
-  std::sort(events.begin(), events.end());
-  double extinction = 0.0, depth = 0.0, t_previous = events.front().first;
-  for (const auto& [t, change] : events) {
-    if (extinction > 0.0 && t > t_previous) {
-      const double step = extinction * (t - t_previous);
-      if (depth + step >= target) {
-        const double at = t_previous + (target - depth) / extinction;
-        // The spans covering the point share the interaction by their extinction.
-        double pick = uniform() * extinction;
-        const VolumeSpan* met = &spans.front();
-        for (const VolumeSpan& span : spans) {
-          if (span.start_m > at || span.end_m <= at) continue;
-          met = &span;
-          pick -= span.area_density_m2_m3 * projection[span.material];
-          if (pick < 0.0) break;
-        }
-        return Interaction{at, met->material, met->crown};
-      }
-      depth += step;
-    }
-    t_previous = t;
-    extinction += change;
+  return Interaction{path.distance_m, met->material, met->crown};
+}
+
+// What a ray meets first within (min_distance_m, limit_m]: a leaf, by free-path sampling to
+// the optical depth `target` through the foliage (none: the scene has none), or a surface,
+// whichever is nearer (PHYSICS.md section 8). The free path is found first, through the foliage
+// up to the limit (crowns beyond its end are not searched): up to that end these are the spans
+// before any surface, so the surfaces are searched only that far, and a ray that meets a leaf
+// rarely traverses the ground's mesh. Products are the same bits as when the surface came
+// first. `spans` is the caller's scratch, `projection` its G for the ray's direction; two ray
+// queries.
+struct ElementMet {
+  SurfaceHit surface;               // the nearest before the leaf, if any
+  std::optional<Interaction> leaf;  // set when no surface comes before it
+};
+template <class Uniform>
+ElementMet element_met(const Scene& scene, const Vec3& origin, const Vec3& direction,
+                       double limit_m, double min_distance_m, std::optional<double> target,
+                       std::vector<VolumeSpan>& spans, const std::vector<double>& projection,
+                       Uniform&& uniform) {
+  std::optional<FreePath> free;
+  if (target) {
+    scene.volume_spans(origin, direction, limit_m, spans, *target, projection);
+    free = free_path_depth(spans, projection, *target);
   }
-  return std::nullopt;
+  // Embree's range is in float: a little beyond the free path's end, so that rounding loses no
+  // surface before it.
+  ElementMet met;
+  met.surface = scene.intersect(origin, direction,
+                                free ? std::min(free->distance_m * (1.0 + 1e-6), limit_m) : limit_m,
+                                min_distance_m);
+  if (free && (met.surface.kind == SurfaceKind::none || met.surface.distance_m >= free->distance_m))
+    met.leaf = foliage_met(spans, projection, *free, uniform);
+  return met;
 }
 
 // Optical depth along a connection ray whose first `shared_m` metres run close to a path

@@ -272,24 +272,23 @@ Path PathTracer::sample_beam(bool beam_path, RayRandom& random) {
 }
 
 // The next element along the path: a leaf by free-path sampling through the foliage, but never
-// beyond the nearest surface (PHYSICS.md section 8); empty when the path leaves the scene.
+// beyond the nearest surface; empty when the path leaves the scene.
 std::optional<Vertex> PathTracer::find_vertex(const Path& path, RayRandom& random, Tally& tally) {
   auto uniform = [&random] { return random.uniform(); };
-  const SurfaceHit hit =
-      scene_.intersect(path.position, path.direction, far_m, path.min_distance_m);
-  ++tally.ray_queries;
-  std::optional<Interaction> leaf;
+  std::optional<double> target;
   if (foliage_) {
-    scene_.volume_spans(path.position, path.direction,
-                        hit.kind == SurfaceKind::none ? far_m : hit.distance_m, spans_);
-    ++tally.ray_queries;
     project(path.direction);
     // The beam path's one free path: the third coordinate of the ray's point, if quasi-random.
     const double u = options_.quasi_random && path.beam_path
                          ? quasi_random(SobolPoints::beam_free_path, random)
                          : random.uniform();
-    leaf = free_path(spans_, projection_, -std::log1p(-u), uniform);
+    target = -std::log1p(-u);
   }
+  const ElementMet met = element_met(scene_, path.position, path.direction, far_m,
+                                     path.min_distance_m, target, spans_, projection_, uniform);
+  tally.ray_queries += foliage_ ? 2 : 1;
+  const SurfaceHit& hit = met.surface;
+  const std::optional<Interaction>& leaf = met.leaf;
   if (!leaf && hit.kind == SurfaceKind::none) return std::nullopt;
   Vertex vertex;
   if (leaf) {

@@ -52,8 +52,9 @@ void crown_interval(benchmark::State& state) {
 }
 BENCHMARK(crown_interval);
 
-// A 200 m square of ground under 400 ellipsoidal crowns (about the base case's density): a
-// downward ray's spans through the crowns, and a free path sampled along them.
+// A 200 m square of ground under 400 ellipsoidal crowns (about the base case's density): what a
+// downward ray meets (its spans through the crowns, a free path sampled along them, the ground
+// searched up to the free path's end), as a path's every segment does.
 void free_path_sampling(benchmark::State& state) {
   const glaswave::RayDevice device;
   glaswave::GroundMesh ground;
@@ -79,10 +80,10 @@ void free_path_sampling(benchmark::State& state) {
   for (auto _ : state) {
     const glaswave::Vec3 origin{60.0 * random.uniform() - 30.0, 60.0 * random.uniform() - 30.0,
                                 30.0};
-    scene.volume_spans(origin, {0.0, 0.0, -1.0}, 40.0, spans);
-    if (const auto leaf =
-            glaswave::free_path(spans, projection, -std::log1p(-random.uniform()), uniform))
-      depth_m += leaf->distance_m;
+    const glaswave::ElementMet met =
+        glaswave::element_met(scene, origin, {0.0, 0.0, -1.0}, 40.0, 0.0,
+                              -std::log1p(-random.uniform()), spans, projection, uniform);
+    depth_m += met.leaf ? met.leaf->distance_m : met.surface.distance_m;
   }
   benchmark::DoNotOptimize(depth_m);
 }

@@ -3,10 +3,14 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <memory>
 #include <numbers>
+#include <optional>
+#include <vector>
 
 #include "canopy/leaf_angles.hpp"
 #include "core/random.hpp"
+#include "pipeline/transport/scattering.hpp"
 #include "pipeline/transport/shot_transport.hpp"
 #include "terrain/ground_mesh.hpp"
 #include "tests/pipeline/transport/transport_test_support.hpp"
@@ -185,6 +189,137 @@ TEST(ShotTransport, SameBitsForAnyThreadCountInAForest) {
   EXPECT_EQ(quasi_one.total_W, quasi_two.total_W);
   EXPECT_EQ(quasi_one.canopy_W, quasi_two.canopy_W);
   EXPECT_NE(quasi_one.total_W, one.total_W);
+}
+
+// What a ray meets first (element_met), against free paths worked by hand: a vertical ray down
+// from 30 m over flat ground, through foliage of extinction G u = 0.5 * 0.4 = 0.2 per metre.
+// Optical depth tau is reached 20 + tau / 0.2 m along the ray from the foliage's top at 10 m
+// (height); the ground lies 30 m along it.
+struct VerticalRay {
+  explicit VerticalRay(Vegetation vegetation) {
+    ground.vertices_m = {-100, -100, 0, 100, -100, 0, 100, 100, 0, -100, 100, 0};
+    ground.triangles = {0, 1, 2, 0, 2, 3};
+    scene = std::make_unique<Scene>(device, ground, vegetation);
+  }
+  ElementMet meet(std::optional<double> depth, double limit_m = far_m) {
+    auto uniform = [this] {
+      ++draws;
+      return 0.5;
+    };
+    return element_met(*scene, {0.0, 0.0, 30.0}, {0.0, 0.0, -1.0}, limit_m, 0.0, depth, spans,
+                       projection, uniform);
+  }
+  RayDevice device;
+  GroundMesh ground;
+  std::unique_ptr<Scene> scene;
+  std::vector<VolumeSpan> spans;
+  const std::vector<double> projection{0.5};
+  int draws = 0;  // uniform numbers taken: one to choose the foliage of each leaf met
+};
+
+TEST(ElementMet, ALeafWhereTheFreePathEndsBeforeTheGround) {
+  Vegetation layer;
+  layer.layer = TurbidLayer{0.0, 0.0, 0.0, 10.0, 0.4, 0};
+  VerticalRay ray(layer);
+  const ElementMet met = ray.meet(1.0);
+  ASSERT_TRUE(met.leaf.has_value());
+  EXPECT_NEAR(met.leaf->distance_m, 20.0 + 1.0 / 0.2, 1e-12);
+  EXPECT_EQ(met.leaf->crown, -1);
+  EXPECT_EQ(met.surface.kind, SurfaceKind::none);  // searched only as far as the leaf
+  EXPECT_EQ(ray.draws, 1);
+}
+
+TEST(ElementMet, TheGroundWhereTheFreePathWouldEndBeyondIt) {
+  Vegetation layer;
+  layer.layer = TurbidLayer{0.0, 0.0, 0.0, 10.0, 0.4, 0};
+  VerticalRay ray(layer);
+  const ElementMet met = ray.meet(2.5);  // the layer holds 2.0 of optical depth
+  EXPECT_FALSE(met.leaf.has_value());
+  EXPECT_EQ(met.surface.kind, SurfaceKind::ground);
+  EXPECT_NEAR(met.surface.distance_m, 30.0, 1e-5);
+  EXPECT_NEAR(met.surface.normal[2], 1.0, 1e-12);
+  EXPECT_EQ(ray.draws, 0);
+}
+
+// A crown centred on the ground: its foliage goes on below the ground, where the free path of
+// depth 3 would end (35 m), but the ground at 30 m comes first. Depth 1 ends at 25 m, above it.
+TEST(ElementMet, FoliageBelowTheGroundIsNeverMet) {
+  Vegetation crown;
+  crown.crowns = {{CrownShape::ellipsoid, {0.0, 0.0, -10.0}, 50.0, 10.0, 0.4}};
+  VerticalRay ray(crown);
+  const ElementMet below = ray.meet(3.0);
+  EXPECT_FALSE(below.leaf.has_value());
+  EXPECT_EQ(below.surface.kind, SurfaceKind::ground);
+  EXPECT_NEAR(below.surface.distance_m, 30.0, 1e-5);
+  const ElementMet above = ray.meet(1.0);
+  ASSERT_TRUE(above.leaf.has_value());
+  EXPECT_NEAR(above.leaf->distance_m, 25.0, 1e-12);
+  EXPECT_EQ(above.leaf->crown, 0);
+  EXPECT_EQ(ray.draws, 1);
+}
+
+// Without foliage only the surfaces are searched; nothing is met short of the limit.
+TEST(ElementMet, OnlyTheSurfacesWithoutFoliageAndNothingBeyondTheLimit) {
+  VerticalRay bare({});
+  EXPECT_EQ(bare.meet(std::nullopt).surface.kind, SurfaceKind::ground);
+  Vegetation layer;
+  layer.layer = TurbidLayer{0.0, 0.0, 0.0, 10.0, 0.4, 0};
+  VerticalRay ray(layer);
+  const ElementMet met = ray.meet(2.5, 28.0);
+  EXPECT_FALSE(met.leaf.has_value());
+  EXPECT_EQ(met.surface.kind, SurfaceKind::none);
+}
+
+// Spans searched for a free path stop short of crowns beyond it: through a forest of 400 crowns
+// of two densities, rays in every direction find the free path, and the foliage met there, that
+// every span along them gives, while fewer crowns are visited in all.
+TEST(ElementMet, SpansCutAtTheFreePathGiveTheFreePathOfEverySpan) {
+  RayDevice device;
+  GroundMesh ground;
+  ground.vertices_m = {-100, -100, 0, 100, -100, 0, 100, 100, 0, -100, 100, 0};
+  ground.triangles = {0, 1, 2, 0, 2, 3};
+  Vegetation forest;
+  RayRandom place(5, 0, 0);
+  for (int k = 0; k < 400; ++k)
+    forest.crowns.push_back(
+        {k % 3 ? CrownShape::ellipsoid : CrownShape::cone,
+         {100.0 * place.uniform() - 50.0, 100.0 * place.uniform() - 50.0, 4.0 * place.uniform()},
+         1.0 + 3.0 * place.uniform(),
+         2.0 + 4.0 * place.uniform(),
+         k % 2 ? 0.3 : 1.2,
+         k % 2});
+  const Scene scene(device, ground, forest);
+  const std::vector<double> projection{0.5, 0.8};
+  std::vector<VolumeSpan> every, cut;
+  std::size_t spans_every = 0, spans_cut = 0;
+  int leaves = 0;
+  RayRandom random(6, 0, 0);
+  for (int ray = 0; ray < 4000; ++ray) {
+    const Vec3 origin{60.0 * random.uniform() - 30.0, 60.0 * random.uniform() - 30.0,
+                      20.0 * random.uniform()};
+    const double cos_zenith = 2.0 * random.uniform() - 1.0, azimuth = 6.283 * random.uniform();
+    const double sin_zenith = std::sqrt(1.0 - cos_zenith * cos_zenith);
+    const Vec3 direction{sin_zenith * std::cos(azimuth), sin_zenith * std::sin(azimuth),
+                         cos_zenith};
+    const double depth = -std::log1p(-random.uniform()), pick = random.uniform();
+    scene.volume_spans(origin, direction, far_m, every);
+    scene.volume_spans(origin, direction, far_m, cut, depth, projection);
+    spans_every += every.size();
+    spans_cut += cut.size();
+    const auto a = free_path_depth(every, projection, depth);
+    const auto b = free_path_depth(cut, projection, depth);
+    ASSERT_EQ(a.has_value(), b.has_value()) << "ray " << ray;
+    if (!a) continue;
+    ++leaves;
+    EXPECT_EQ(a->distance_m, b->distance_m) << "ray " << ray;
+    EXPECT_EQ(a->extinction_per_m, b->extinction_per_m) << "ray " << ray;
+    auto same = [pick] { return pick; };
+    EXPECT_EQ(foliage_met(every, projection, *a, same).crown,
+              foliage_met(cut, projection, *b, same).crown)
+        << "ray " << ray;
+  }
+  EXPECT_GT(leaves, 1000);
+  EXPECT_LT(spans_cut, spans_every * 9 / 10);
 }
 
 }  // namespace
