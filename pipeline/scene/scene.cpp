@@ -236,7 +236,7 @@ void Scene::collect_spans(const Vec3& origin, const Vec3& direction, double max_
     collector.spans = &spans;
     collector.origin = origin;
     collector.direction = direction;
-    collector.max_distance_m = static_cast<float>(max_distance_m);
+    collector.max_distance_m = static_cast<float>(max_distance_m);  // as Embree's tfar holds it
     collector.depth = depth;
     collector.extinction_per_density = extinction_per_density;
     RTCRayHit query{};

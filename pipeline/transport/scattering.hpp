@@ -84,11 +84,11 @@ Interaction foliage_met(const std::vector<VolumeSpan>& spans, const std::vector<
 // whichever is nearer (PHYSICS.md section 8). The free path is found first, through the foliage
 // up to the limit (crowns beyond its end are not searched): up to that end these are the spans
 // before any surface, so the surfaces are searched only that far, and a ray that meets a leaf
-// rarely traverses the ground's mesh. Products are the same bits as when the surface came
-// first. `spans` is the caller's scratch, `projection` its G for the ray's direction; two ray
-// queries.
+// rarely traverses the ground's mesh. What is met is what searching the surfaces first, and
+// the foliage up to them, finds, to the bit. `spans` is the caller's scratch, `projection` its G
+// for the ray's direction; two ray queries.
 struct ElementMet {
-  SurfaceHit surface;               // the nearest before the leaf, if any
+  SurfaceHit surface;               // the nearest within reach (the leaf's, when one is met)
   std::optional<Interaction> leaf;  // set when no surface comes before it
 };
 template <class Uniform>

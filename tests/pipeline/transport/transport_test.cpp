@@ -1,4 +1,5 @@
-// The lidar model (pulse, bins, beam sampling) and the determinism of the shot transport.
+// The lidar model (pulse, bins, beam sampling), the determinism of the shot transport, and
+// what a ray meets first (a leaf by its free path, or a surface).
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
