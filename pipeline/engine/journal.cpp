@@ -116,19 +116,18 @@ void RunJournal::write_frame(const std::string& raw, std::size_t records,
                                         std::to_string(raw.size()) + " bytes)");
   // The frame is built in place in a buffer kept from frame to frame: a new one each time cost
   // its page faults and zeroing, more than LZ4 itself.
-  const std::array<std::uint64_t, 5> words = {
-      kFrameMarker, records, static_cast<std::uint64_t>(ray_queries), 0, raw.size()};
-  constexpr std::size_t kHeader = sizeof words;
+  constexpr std::size_t kHeader = 5 * sizeof(std::uint64_t);  // marker, records, queries, sizes
   const auto bound = static_cast<std::size_t>(LZ4_compressBound(static_cast<int>(raw.size())));
   if (frame_.size() < kHeader + bound + sizeof(std::uint64_t))
     frame_.resize(kHeader + bound + sizeof(std::uint64_t));
   const int size = LZ4_compress_default(raw.data(), frame_.data() + kHeader,
                                         static_cast<int>(raw.size()), static_cast<int>(bound));
   if (size <= 0) throw run_error(path_.string(), "cannot compress the journal's records");
+  const std::array<std::uint64_t, 5> words = {kFrameMarker, records,
+                                              static_cast<std::uint64_t>(ray_queries),
+                                              static_cast<std::uint64_t>(size), raw.size()};
   std::memcpy(frame_.data(), words.data(), kHeader);
-  const auto payload = static_cast<std::uint64_t>(size);
-  std::memcpy(frame_.data() + 3 * sizeof(std::uint64_t), &payload, sizeof payload);
-  const std::size_t checked = kHeader + payload;
+  const std::size_t checked = kHeader + static_cast<std::size_t>(size);
   const std::uint64_t checksum = fnv1a(frame_.data(), checked);
   std::memcpy(frame_.data() + checked, &checksum, sizeof checksum);
   write_all(frame_.data(), checked + sizeof checksum);

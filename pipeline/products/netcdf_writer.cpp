@@ -330,8 +330,8 @@ struct NetcdfWriter::Impl {
     chunks.insert(chunks.end(), lengths.begin(), lengths.end());
     check(nc_def_var_chunking(nc.id(), varid, NC_CHUNKED, chunks.data()), what + " chunking");
     check(nc_def_var_deflate(nc.id(), varid, 1, 1, kDeflateLevel), what + " compression");
-    // Each chunk is written once, whole: with no chunk cache HDF5 compresses and writes it then,
-    // beside the next batch's simulation, not all at once when the file closes (a bare slope
+    // Each chunk is written once, whole: with no room to cache it HDF5 compresses and writes it
+    // then, beside the next batch's simulation, not all at once when the file closes (a bare slope
     // spent 12 % of its run there, on one thread, after the last shot). netCDF-C 4.9 takes a
     // cache of 0 bytes for "the file's default", so the cache is one byte: smaller than any chunk.
     check(nc_set_var_chunk_cache(nc.id(), varid, 1, 1, 1.0f), what + " chunk cache");

@@ -137,7 +137,7 @@ Event SunTracer::next_event(Photon& photon, RandomStream& random, BatchTally& ta
     }
     const ElementMet met = element_met(scene_, origin, d, limit_m, min_distance_m, target, spans_,
                                        projection_, uniform);
-    tally.ray_queries += target ? 2 : 1;
+    tally.ray_queries += met.ray_queries;
     const SurfaceHit& hit = met.surface;
     const std::optional<Interaction>& leaf = met.leaf;
     if (leaf) {

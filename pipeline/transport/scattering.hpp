@@ -86,24 +86,26 @@ Interaction foliage_met(const std::vector<VolumeSpan>& spans, const std::vector<
 // before any surface, so the surfaces are searched only that far, and a ray that meets a leaf
 // rarely traverses the ground's mesh. What is met is what searching the surfaces first, and
 // the foliage up to them, finds, to the bit. `spans` is the caller's scratch, `projection` its G
-// for the ray's direction; two ray queries.
+// for the ray's direction.
 struct ElementMet {
   SurfaceHit surface;               // the nearest within reach (the leaf's, when one is met)
   std::optional<Interaction> leaf;  // set when no surface comes before it
+  int ray_queries = 1;              // the surfaces', and the foliage's when there is any
 };
 template <class Uniform>
 ElementMet element_met(const Scene& scene, const Vec3& origin, const Vec3& direction,
                        double limit_m, double min_distance_m, std::optional<double> target,
                        std::vector<VolumeSpan>& spans, const std::vector<double>& projection,
                        Uniform&& uniform) {
+  ElementMet met;
   std::optional<FreePath> free;
   if (target) {
     scene.volume_spans(origin, direction, limit_m, spans, *target, projection);
     free = free_path_depth(spans, projection, *target);
+    ++met.ray_queries;
   }
   // Embree's range is in float: a little beyond the free path's end, so that rounding loses no
   // surface before it.
-  ElementMet met;
   met.surface = scene.intersect(origin, direction,
                                 free ? std::min(free->distance_m * (1.0 + 1e-6), limit_m) : limit_m,
                                 min_distance_m);

@@ -286,7 +286,7 @@ std::optional<Vertex> PathTracer::find_vertex(const Path& path, RayRandom& rando
   }
   const ElementMet met = element_met(scene_, path.position, path.direction, far_m,
                                      path.min_distance_m, target, spans_, projection_, uniform);
-  tally.ray_queries += foliage_ ? 2 : 1;
+  tally.ray_queries += met.ray_queries;
   const SurfaceHit& hit = met.surface;
   const std::optional<Interaction>& leaf = met.leaf;
   if (!leaf && hit.kind == SurfaceKind::none) return std::nullopt;

@@ -196,12 +196,17 @@ TEST(ShotTransport, SameBitsForAnyThreadCountInAForest) {
 // from 30 m over flat ground, through foliage of extinction G u = 0.5 * 0.4 = 0.2 per metre.
 // Optical depth tau is reached 20 + tau / 0.2 m along the ray from the foliage's top at 10 m
 // (height); the ground lies 30 m along it.
+// Level ground at z = 0, 200 m square about the origin.
+GroundMesh square_ground() {
+  GroundMesh ground;
+  ground.vertices_m = {-100, -100, 0, 100, -100, 0, 100, 100, 0, -100, 100, 0};
+  ground.triangles = {0, 1, 2, 0, 2, 3};
+  return ground;
+}
+
 struct VerticalRay {
-  explicit VerticalRay(Vegetation vegetation) {
-    ground.vertices_m = {-100, -100, 0, 100, -100, 0, 100, 100, 0, -100, 100, 0};
-    ground.triangles = {0, 1, 2, 0, 2, 3};
-    scene = std::make_unique<Scene>(device, ground, vegetation);
-  }
+  explicit VerticalRay(const Vegetation& vegetation)
+      : scene(std::make_unique<Scene>(device, square_ground(), vegetation)) {}
   ElementMet meet(std::optional<double> depth, double limit_m = far_m) {
     auto uniform = [this] {
       ++draws;
@@ -211,7 +216,6 @@ struct VerticalRay {
                        projection, uniform);
   }
   RayDevice device;
-  GroundMesh ground;
   std::unique_ptr<Scene> scene;
   std::vector<VolumeSpan> spans;
   const std::vector<double> projection{0.5};
@@ -262,13 +266,16 @@ TEST(ElementMet, FoliageBelowTheGroundIsNeverMet) {
 // Without foliage only the surfaces are searched; nothing is met short of the limit.
 TEST(ElementMet, OnlyTheSurfacesWithoutFoliageAndNothingBeyondTheLimit) {
   VerticalRay bare({});
-  EXPECT_EQ(bare.meet(std::nullopt).surface.kind, SurfaceKind::ground);
+  const ElementMet ground = bare.meet(std::nullopt);
+  EXPECT_EQ(ground.surface.kind, SurfaceKind::ground);
+  EXPECT_EQ(ground.ray_queries, 1);
   Vegetation layer;
   layer.layer = TurbidLayer{0.0, 0.0, 0.0, 10.0, 0.4, 0};
   VerticalRay ray(layer);
   const ElementMet met = ray.meet(2.5, 28.0);
   EXPECT_FALSE(met.leaf.has_value());
   EXPECT_EQ(met.surface.kind, SurfaceKind::none);
+  EXPECT_EQ(met.ray_queries, 2);
 }
 
 // Spans searched for a free path stop short of crowns beyond it: through a forest of 400 crowns
@@ -276,9 +283,6 @@ TEST(ElementMet, OnlyTheSurfacesWithoutFoliageAndNothingBeyondTheLimit) {
 // every span along them gives, while fewer crowns are visited in all.
 TEST(ElementMet, SpansCutAtTheFreePathGiveTheFreePathOfEverySpan) {
   RayDevice device;
-  GroundMesh ground;
-  ground.vertices_m = {-100, -100, 0, 100, -100, 0, 100, 100, 0, -100, 100, 0};
-  ground.triangles = {0, 1, 2, 0, 2, 3};
   Vegetation forest;
   RayRandom place(5, 0, 0);
   for (int k = 0; k < 400; ++k)
@@ -289,7 +293,7 @@ TEST(ElementMet, SpansCutAtTheFreePathGiveTheFreePathOfEverySpan) {
          2.0 + 4.0 * place.uniform(),
          k % 2 ? 0.3 : 1.2,
          k % 2});
-  const Scene scene(device, ground, forest);
+  const Scene scene(device, square_ground(), forest);
   const std::vector<double> projection{0.5, 0.8};
   std::vector<VolumeSpan> every, cut;
   std::size_t spans_every = 0, spans_cut = 0;
