@@ -1,9 +1,9 @@
 // The benchmark that ./scripts/benchmark runs: whole runs (run_simulation, NetCDF and GeoJSON
 // written, no plots) of the seed's base case, a bare 20 degree slope against flat ground, 19-ray
-// shots (with and without the waveform metrics), one thread against every core, a raw Embree
-// probe beside them, and the share of each stage of a shot. Every figure is measured in this one
-// run, so that the ratios hold on a shared machine whose absolute speed drifts. Not a test:
-// `--quick` is the short mode that ctest runs.
+// shots (with and without the waveform metrics, with the footprints as GPKG, with NetCDF alone),
+// one thread against every core, a raw Embree probe beside them, and the share of each stage of
+// a shot. Every figure is measured in this one run, so that the ratios hold on a shared machine
+// whose absolute speed drifts. Not a test: `--quick` is the short mode that ctest runs.
 #include <embree3/rtcore.h>
 #include <sys/resource.h>
 #include <tbb/parallel_for.h>
@@ -239,9 +239,14 @@ int main(int argc, char** argv) {
   const glaswave::Config short_shots = pass_config(n.short_shots, 19, 8, 0.0, false);
   glaswave::Config short_no_metrics = short_shots;  // output.metrics false
   short_no_metrics.output.metrics = false;
+  // Where the footprints go decides what a short shot costs: OGR's GeoJSON is most of it.
+  glaswave::Config short_gpkg = short_shots;
+  short_gpkg.output.footprints_format = "GPKG";
+  glaswave::Config short_netcdf_only = short_shots;
+  short_netcdf_only.output.geojson = false;
 
   std::printf(
-      "glaswave benchmark%s: %d cores; whole runs (NetCDF and GeoJSON, no plots), "
+      "glaswave benchmark%s: %d cores; whole runs (NetCDF and GeoJSON unless named, no plots), "
       "north2010 sensor, passes over planes; the fastest of %d round%s\n",
       quick ? " (--quick)" : "", cores, n.rounds, n.rounds > 1 ? "s" : "");
   std::printf("%-34s %6s %6s %7s %10s %12s %12s\n", "case", "shots", "rays", "threads", "shots/s",
@@ -251,7 +256,8 @@ int main(int argc, char** argv) {
   const std::vector<std::pair<const glaswave::Config*, int>> cases = {
       {&base, cores},        {&base, 1},
       {&flat, cores},        {&slope, cores},
-      {&short_shots, cores}, {&short_no_metrics, cores}};
+      {&short_shots, cores}, {&short_no_metrics, cores},
+      {&short_gpkg, cores},  {&short_netcdf_only, cores}};
   std::vector<RunFigures> fastest(cases.size());
   double probe = 0.0;
   for (int round = 0; round < n.rounds; ++round) {
@@ -262,13 +268,16 @@ int main(int argc, char** argv) {
     }
   }
   const RunFigures &base_all = fastest[0], &base_one = fastest[1], &flat_run = fastest[2],
-                   &slope_run = fastest[3], &short_run = fastest[4], &short_bare_run = fastest[5];
+                   &slope_run = fastest[3], &short_run = fastest[4], &short_bare_run = fastest[5],
+                   &short_gpkg_run = fastest[6], &short_netcdf_run = fastest[7];
   print_run("base case (forest, order 8)", n.base_rays, cores, base_all);
   print_run("base case, one thread", n.base_rays, 1, base_one);
   print_run("bare flat ground (order 1)", n.slope_rays, cores, flat_run);
   print_run("bare 20 degree slope (order 1)", n.slope_rays, cores, slope_run);
   print_run("bare flat ground, 19-ray shots", 19, cores, short_run);
   print_run("19-ray shots, output.metrics false", 19, cores, short_bare_run);
+  print_run("19-ray shots, footprints as GPKG", 19, cores, short_gpkg_run);
+  print_run("19-ray shots, NetCDF only", 19, cores, short_netcdf_run);
   std::printf("%-34s %6s %6s %7d %10s %12s %12.3g\n", "raw Embree probe (ground mesh)", "", "",
               cores, "", "", probe);
 
@@ -293,8 +302,10 @@ int main(int argc, char** argv) {
   print_stages("19-ray shots", short_stages, 100 * n.stage_shots);
 
   // The short mode is a CI check that every figure came out.
-  for (double figure : {probe_ratio, slope_ratio, scaling, short_run.shots_per_s(),
-                        short_bare_run.shots_per_s(), base_stages.total(), short_stages.total()}) {
+  for (double figure :
+       {probe_ratio, slope_ratio, scaling, short_run.shots_per_s(), short_bare_run.shots_per_s(),
+        short_gpkg_run.shots_per_s(), short_netcdf_run.shots_per_s(), base_stages.total(),
+        short_stages.total()}) {
     if (!(std::isfinite(figure) && figure > 0.0)) {
       std::printf("a figure is missing\n");
       return 1;
