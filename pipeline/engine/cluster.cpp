@@ -51,6 +51,7 @@ void broadcast_text(std::string& text, int root) {
 
 Cluster::Cluster() {
   if (!mpi_running()) return;
+  launched_ = true;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
   MPI_Comm local;

@@ -21,6 +21,8 @@ class Cluster {
   int size() const { return size_; }
   // Processes on this machine (each takes its share of the cores).
   int local_size() const { return local_size_; }
+  // Whether mpirun started this process (MPI runs it, even as the only process).
+  bool launched() const { return launched_; }
 
   // Every process calls it with its failure (null when none): when any failed, every process
   // throws the failure of the lowest rank that failed, as an Error of the same kind and text
@@ -40,6 +42,7 @@ class Cluster {
  private:
   Cluster();
   int rank_ = 0, size_ = 1, local_size_ = 1;
+  bool launched_ = false;
   bool failed_together_ = false;
 };
 

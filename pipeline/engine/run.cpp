@@ -11,7 +11,10 @@
 #include <chrono>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <span>
+#include <string>
+#include <thread>
 
 #include "core/error.hpp"
 #include "footprints/track.hpp"
@@ -54,6 +57,31 @@ int threads_of_process(int threads, int processes_here) {
   // More threads than cores would only wait for each other (and TBB would warn on stderr).
   const int cores = tbb::this_task_arena::max_concurrency();
   return threads > 0 ? std::min(threads, cores) : std::max(1, cores / std::max(1, processes_here));
+}
+
+// The cores a process may run on are its affinity's (TBB counts those), which can be fewer than
+// the machine's: mpirun binds each process to one core when it starts two or fewer (to a socket
+// beyond), taskset and batch systems narrow it too. A warning when that leaves the process fewer
+// threads than `--threads` asks for, or, under mpirun, than its share of the machine.
+std::optional<std::string> narrowed_threads_warning(int threads, const Cluster& cluster) {
+  const int usable = tbb::this_task_arena::max_concurrency();
+  const int machine = static_cast<int>(std::thread::hardware_concurrency());
+  if (usable >= machine) return std::nullopt;
+  const int share = std::max(1, machine / std::max(1, cluster.local_size()));
+  const bool short_of_request = threads > usable;
+  const bool short_of_share = threads == 0 && cluster.launched() && usable < share;
+  if (!short_of_request && !short_of_share) return std::nullopt;
+  const int wanted = short_of_request ? std::min(threads, machine) : share;
+  std::string text = "--threads " + std::to_string(threads) + ": this process may run on " +
+                     std::to_string(usable) + " of the machine's " + std::to_string(machine) +
+                     " cores, so it runs " + std::to_string(usable) + " thread" +
+                     (usable == 1 ? "" : "s") + " where " + std::to_string(wanted) + " were meant";
+  if (cluster.launched())
+    text +=
+        " (mpirun binds each process to a core when it starts two or fewer: give mpirun "
+        "--bind-to none, or --map-by slot:PE=" +
+        std::to_string(wanted) + ")";
+  return text;
 }
 
 // Receives a batch of records in order: the index of its first, the records, the ray queries
@@ -349,6 +377,9 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   }
   cluster.agree(failure);
   const std::int64_t done = cluster.broadcast(output ? output->written : 0);
+  if (cluster.rank() == 0)
+    if (auto warning = narrowed_threads_warning(request.threads, cluster))
+      summary.warnings.push_back(std::move(*warning));
 
   simulate_shared(
       cluster, *setup->simulator, *setup->track, first + done, last, request.threads,

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "tests/pipeline/engine/engine_test_support.hpp"
@@ -225,6 +226,32 @@ TEST_F(Cli, ResultsDoNotDependOnThreadsOrShotSplits) {
       run_glaswave("run " + config + " --quiet --seed 4 --out " + (dir_ / "seed4").string()).status,
       0);
   EXPECT_NE(one, read_waveforms(dir_ / "seed4" / "shots.nc"));
+}
+
+// --threads asks for more threads than the cores the process may run on (taskset narrows them,
+// as batch systems and mpirun do): it runs on those, and says so rather than silently.
+TEST_F(Cli, ThreadsBeyondTheProcessesCoresAreNamed) {
+  const unsigned cores = std::thread::hardware_concurrency();
+  if (cores < 2) GTEST_SKIP() << "one core: nothing to narrow";
+  if (std::system("command -v taskset >/dev/null 2>&1") != 0) GTEST_FAIL() << "no taskset";
+  const std::string config = write_config({{"simulation", {{"rays_per_shot", 200}}}});
+  const CommandOutcome narrowed =
+      run_command("taskset -c 0 " + std::string(GLASWAVE_BINARY) + " run " + config +
+                  " --quiet --threads 2 --out " + (dir_ / "narrowed").string() + " 2>&1");
+  ASSERT_EQ(narrowed.status, 0) << narrowed.output;
+  EXPECT_NE(narrowed.output.find("glaswave: warning: --threads 2: this process may run on 1 of "
+                                 "the machine's " +
+                                 std::to_string(cores) +
+                                 " cores, so it runs 1 thread where 2 were meant\n"),
+            std::string::npos)
+      << narrowed.output;
+  // Not under mpirun: no word of its binding.
+  EXPECT_EQ(narrowed.output.find("mpirun"), std::string::npos) << narrowed.output;
+  // On every core, two threads are what was asked for.
+  const CommandOutcome whole =
+      run_glaswave("run " + config + " --quiet --threads 2 --out " + (dir_ / "whole").string());
+  ASSERT_EQ(whole.status, 0) << whole.output;
+  EXPECT_EQ(whole.output.find("warning"), std::string::npos) << whole.output;
 }
 
 // Each bad configuration: exit status 2, one line starting "glaswave: error:" naming the place,

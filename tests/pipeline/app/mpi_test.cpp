@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 
 #include "tests/pipeline/app/product_compare.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
@@ -19,17 +20,19 @@ namespace fs = std::filesystem;
 using namespace test_support;
 
 // Two processes on this machine whatever its cores; shared memory between them only; root
-// (a container) allowed; mpirun's own notices off (-q). Sanitized, OpenMPI's own allocations
-// kept to the exit are not reported (openmpi_lsan.supp says why and how); nothing changes
-// otherwise.
-CommandOutcome run_mpi(int processes, const std::string& arguments) {
+// (a container) allowed; mpirun's own notices off (-q); `options` more of mpirun's. Sanitized,
+// OpenMPI's own allocations kept to the exit are not reported (openmpi_lsan.supp says why and
+// how); nothing changes otherwise.
+CommandOutcome run_mpi(int processes, const std::string& arguments,
+                       const std::string& options = "") {
   const std::string root = geteuid() == 0 ? " --allow-run-as-root" : "";
   const std::string lsan = std::string("LSAN_OPTIONS=\"${LSAN_OPTIONS:+$LSAN_OPTIONS:}") +
                            "suppressions=" + GLASWAVE_SOURCE_DIR +
                            "/tests/pipeline/app/openmpi_lsan.supp:fast_unwind_on_malloc=0:"
                            "print_suppressions=0\" ";
-  return run_command(lsan + "mpirun -q --oversubscribe --mca btl self,vader" + root + " -np " +
-                     std::to_string(processes) + " " + GLASWAVE_BINARY + " " + arguments + " 2>&1");
+  return run_command(lsan + "mpirun -q --oversubscribe --mca btl self,vader" + root + " " +
+                     options + " -np " + std::to_string(processes) + " " + GLASWAVE_BINARY + " " +
+                     arguments + " 2>&1");
 }
 
 class Mpi : public ::testing::Test {
@@ -89,6 +92,26 @@ TEST_F(Mpi, AnErrorIsReportedOnceAndEndsEveryProcess) {
   EXPECT_EQ(taken.status, 2) << taken.output;
   EXPECT_EQ(std::count(taken.output.begin(), taken.output.end(), '\n'), 1) << taken.output;
   EXPECT_NE(taken.output.find("output directory exists"), std::string::npos) << taken.output;
+}
+
+// mpirun binds a process to one core when it starts two or fewer. A process alone on a machine of
+// several cores then runs one thread, not the machine's cores that --threads 0 means, and the run
+// says so; unbound, it runs them all and says nothing.
+TEST_F(Mpi, AProcessBoundToFewerCoresThanItsShareIsNamed) {
+  if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: nothing to fall short of";
+  const std::string run = "run " + config_ + " --quiet --threads 0 --shots 0:2 --out ";
+  const CommandOutcome bound = run_mpi(1, run + (dir_ / "bound").string(), "--bind-to core");
+  ASSERT_EQ(bound.status, 0) << bound.output;
+  EXPECT_NE(bound.output.find("glaswave: warning: --threads 0: this process may run on 1 of the "
+                              "machine's " +
+                              std::to_string(std::thread::hardware_concurrency()) +
+                              " cores, so it runs 1 thread where "),
+            std::string::npos)
+      << bound.output;
+  EXPECT_NE(bound.output.find("give mpirun --bind-to none"), std::string::npos) << bound.output;
+  const CommandOutcome unbound = run_mpi(1, run + (dir_ / "unbound").string(), "--bind-to none");
+  ASSERT_EQ(unbound.status, 0) << unbound.output;
+  EXPECT_EQ(unbound.output.find("warning"), std::string::npos) << unbound.output;
 }
 
 }  // namespace
