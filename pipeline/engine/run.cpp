@@ -66,21 +66,20 @@ int threads_of_process(int threads, int processes_here) {
 std::optional<std::string> narrowed_threads_warning(int threads, const Cluster& cluster) {
   const int usable = tbb::this_task_arena::max_concurrency();
   const int machine = static_cast<int>(std::thread::hardware_concurrency());
-  if (usable >= machine) return std::nullopt;
-  const int share = std::max(1, machine / std::max(1, cluster.local_size()));
-  const bool short_of_request = threads > usable;
-  const bool short_of_share = threads == 0 && cluster.launched() && usable < share;
-  if (!short_of_request && !short_of_share) return std::nullopt;
-  const int wanted = short_of_request ? std::min(threads, machine) : share;
+  const int processes_here = cluster.local_size();
+  const int meant =
+      threads > 0 ? std::min(threads, machine) : std::max(1, machine / std::max(1, processes_here));
+  // Alone, --threads 0 means the cores it may run on: a batch system's cpuset is what was meant.
+  if (usable >= meant || (threads == 0 && !cluster.launched())) return std::nullopt;
+  const int runs = threads_of_process(threads, processes_here);
   std::string text = "--threads " + std::to_string(threads) + ": this process may run on " +
                      std::to_string(usable) + " of the machine's " + std::to_string(machine) +
-                     " cores, so it runs " + std::to_string(usable) + " thread" +
-                     (usable == 1 ? "" : "s") + " where " + std::to_string(wanted) + " were meant";
+                     " cores, so it runs " + std::to_string(runs) + " thread" +
+                     (runs == 1 ? "" : "s") + " where " + std::to_string(meant) + " were meant";
   if (cluster.launched())
     text +=
         " (mpirun binds each process to a core when it starts two or fewer: give mpirun "
-        "--bind-to none, or --map-by slot:PE=" +
-        std::to_string(wanted) + ")";
+        "--bind-to none)";
   return text;
 }
 

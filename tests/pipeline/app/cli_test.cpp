@@ -247,6 +247,12 @@ TEST_F(Cli, ThreadsBeyondTheProcessesCoresAreNamed) {
       << narrowed.output;
   // Not under mpirun: no word of its binding.
   EXPECT_EQ(narrowed.output.find("mpirun"), std::string::npos) << narrowed.output;
+  // --threads 0 alone means the cores it may run on (a batch system's cpuset is meant): silent.
+  const CommandOutcome narrowed_all =
+      run_command("taskset -c 0 " + std::string(GLASWAVE_BINARY) + " run " + config +
+                  " --quiet --threads 0 --out " + (dir_ / "narrowed_all").string() + " 2>&1");
+  ASSERT_EQ(narrowed_all.status, 0) << narrowed_all.output;
+  EXPECT_EQ(narrowed_all.output.find("warning"), std::string::npos) << narrowed_all.output;
   // On every core, two threads are what was asked for.
   const CommandOutcome whole =
       run_glaswave("run " + config + " --quiet --threads 2 --out " + (dir_ / "whole").string());
