@@ -18,6 +18,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
+#include "pipeline/app/reference.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/engine/brf.hpp"
 #include "pipeline/engine/cluster.hpp"
@@ -43,7 +44,8 @@ struct Arguments {
   bool json = false;                 // run --json: the summary as one JSON object
   std::string debug_ray;             // SHOT:RAY
   bool schema = false;               // check --schema
-  bool keys_markdown = false;        // check --keys-markdown (hidden: scripts/readme-keys)
+  bool keys_markdown = false;        // check --keys-markdown (hidden: scripts/docs-reference)
+  bool fields_json = false;          // check --fields-json (hidden: scripts/docs-reference)
 };
 
 // Text from the command line or a file for a one-line message on stderr: control characters
@@ -297,6 +299,10 @@ int check(const Arguments& arguments) {
     std::printf("%s", configuration_keys_markdown().c_str());
     return 0;
   }
+  if (arguments.fields_json) {
+    std::printf("%s\n", product_fields_json().dump(2).c_str());
+    return 0;
+  }
   if (arguments.config_file.empty())
     throw config_error("check", "give CONFIG, or --schema for the configuration's JSON Schema");
   const CheckSummary summary = check_inputs(load(arguments));
@@ -446,8 +452,10 @@ class Commands {
     add_config(check_, false);
     check_->add_flag("--schema", arguments_.schema,
                      "print the configuration's JSON Schema (draft 2020-12) and exit");
-    // The README's table of keys, for scripts/readme-keys.
+    // The manual's generated reference (scripts/docs-reference): the table of keys, the
+    // product field table.
     check_->add_flag("--keys-markdown", arguments_.keys_markdown)->group("");
+    check_->add_flag("--fields-json", arguments_.fields_json)->group("");
   }
 
   void add_sweep() {

@@ -1,5 +1,5 @@
 // Tests of the one declaration of keys: the JSON Schema generated from it names exactly the keys
-// the parser accepts, with their ranges; the README's table is the one generated from it; the
+// the parser accepts, with their ranges; the manual's table is the one generated from it; the
 // parser cannot read a key that is not declared; the sizes a run cannot hold are refused, the
 // limit in the message; and the rules of `run` that `check` shares.
 #include "pipeline/config/keys.hpp"
@@ -256,32 +256,42 @@ TEST(Schema, ValidatesWithPythonJsonschema) {
   EXPECT_EQ(status, 0);
 }
 
-// ---- the README's table ---------------------------------------------------------------------
+// ---- the manual's table --------------------------------------------------------------------
 
-TEST(Readme, KeyTableIsTheOneGeneratedFromTheDeclaration) {
-  std::ifstream in(std::filesystem::path(GLASWAVE_SOURCE_DIR) / "README.md");
-  ASSERT_TRUE(in) << "README.md";
+// The rows of a Markdown table of keys ("| `key` | ..."), without headers and section titles.
+std::string key_rows(const std::string& markdown) {
+  std::istringstream in(markdown);
+  std::string line, rows;
+  while (std::getline(in, line))
+    if (line.rfind("| `", 0) == 0) rows += line + "\n";
+  return rows;
+}
+
+TEST(Manual, KeyTableIsTheOneGeneratedFromTheDeclaration) {
+  const auto page = std::filesystem::path(GLASWAVE_SOURCE_DIR) / "docs/reference/configuration.md";
+  std::ifstream in(page);
+  ASSERT_TRUE(in) << page;
   std::stringstream text;
   text << in.rdbuf();
-  const std::string readme = text.str();
-  const std::string begin = "<!-- keys:begin -->\n", end = "<!-- keys:end -->";
-  const auto from = readme.find(begin);
-  const auto to = readme.find(end);
+  const std::string manual = text.str();
+  const std::string begin = "<!-- generated:keys:begin -->\n", end = "<!-- generated:keys:end -->";
+  const auto from = manual.find(begin);
+  const auto to = manual.find(end);
   ASSERT_NE(from, std::string::npos);
   ASSERT_NE(to, std::string::npos);
-  const std::string table = readme.substr(from + begin.size(), to - from - begin.size());
+  const std::string table = key_rows(manual.substr(from + begin.size(), to - from - begin.size()));
   // The first line that differs, rather than two pages of table.
-  std::istringstream in_readme(table), in_declaration(configuration_keys_markdown());
-  std::string readme_line, declared_line;
+  std::istringstream in_manual(table), in_declaration(key_rows(configuration_keys_markdown()));
+  std::string manual_line, declared_line;
   for (int line = 1;; ++line) {
-    const bool more_readme = static_cast<bool>(std::getline(in_readme, readme_line));
+    const bool more_manual = static_cast<bool>(std::getline(in_manual, manual_line));
     const bool more_declared = static_cast<bool>(std::getline(in_declaration, declared_line));
-    if (!more_readme && !more_declared) break;
-    if (!more_readme) readme_line = "(the README's table ends)";
+    if (!more_manual && !more_declared) break;
+    if (!more_manual) manual_line = "(the manual's table ends)";
     if (!more_declared) declared_line = "(the declaration's table ends)";
-    ASSERT_EQ(readme_line, declared_line)
-        << "line " << line << " of README.md's table of keys differs from the declaration in "
-        << "pipeline/config/keys.cpp: run ./scripts/readme-keys";
+    ASSERT_EQ(manual_line, declared_line)
+        << "row " << line << " of the manual's table of keys differs from the declaration in "
+        << "pipeline/config/keys.cpp: run ./scripts/docs-reference";
   }
   // Every key of the schema has its row.
   const nlohmann::json schema = configuration_schema();  // the loop below must not outlive it
