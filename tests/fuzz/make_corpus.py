@@ -158,9 +158,71 @@ def gdal_pack(kind, value):
     return struct.pack({gdal.GDT_Float32: "<f", gdal.GDT_Int16: "<h"}[kind], value)
 
 
+def las_bytes(minor, fmt, points, wkt=None, geo_keys=None, extra=0):
+    """A LAS file from the ASPRS LAS 1.4 tables: header of the version's size, records, points."""
+    import struct
+    lengths = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67]
+    header = 375 if minor >= 4 else 235 if minor == 3 else 227
+    vlrs = []
+
+    def vlr(record_id, data):
+        vlrs.append(struct.pack("<H16sHH32s", 0, b"LASF_Projection", record_id, len(data), b"")
+                    + data)
+    if wkt:
+        vlr(2112, wkt.encode() + b"\0")
+    if geo_keys:
+        vlr(34735, struct.pack("<4H", 1, 1, 0, len(geo_keys))
+            + b"".join(struct.pack("<4H", k, 0, 1, v) for k, v in geo_keys))
+    length = lengths[fmt] + extra
+    offset = header + sum(len(v) for v in vlrs)
+    h = bytearray(header)
+    h[0:4] = b"LASF"
+    h[24], h[25] = 1, minor
+    struct.pack_into("<HIIBHI", h, 94, header, offset, len(vlrs), fmt, length,
+                     len(points) if fmt <= 5 else 0)
+    struct.pack_into("<6d", h, 131, 0.01, 0.01, 0.01, 500000.0, 4000000.0, 0.0)
+    if minor >= 4:
+        struct.pack_into("<H", h, 6, 16 if wkt else 0)
+        struct.pack_into("<Q", h, 247, len(points))
+    body = b""
+    for i, (x, y, z, ret, n, cls) in enumerate(points):
+        r = bytearray(length)
+        struct.pack_into("<iiiH", r, 0, round((x - 500000) / 0.01), round((y - 4000000) / 0.01),
+                         round(z / 0.01), 50)
+        if fmt >= 6:
+            r[14], r[16] = ret | n << 4, cls
+            struct.pack_into("<d", r, 22, 1.5 * i)
+        else:
+            r[14], r[15] = ret | n << 3, cls
+            if fmt not in (0, 2):
+                struct.pack_into("<d", r, 20, 1.5 * i)
+        body += bytes(r)
+    return bytes(h) + b"".join(vlrs) + body
+
+
+def las_corpus():
+    pts = [(500001.0, 4000002.0, 12.5, 1, 2, 5), (500001.0, 4000002.0, 0.3, 2, 2, 2),
+           (500003.5, 3999999.0, 0.1, 1, 1, 2)]
+    utm = ('PROJCS["WGS 84 / UTM zone 33N",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",'
+           '6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],'
+           'PROJECTION["Transverse_Mercator"],PARAMETER["latitude_of_origin",0],'
+           'PARAMETER["central_meridian",15],PARAMETER["scale_factor",0.9996],'
+           'PARAMETER["false_easting",500000],PARAMETER["false_northing",0],UNIT["metre",1]]')
+    write("las", "v12-format0.las", las_bytes(2, 0, pts))
+    write("las", "v12-format3-keys.las", las_bytes(2, 3, pts, geo_keys=[(1024, 1), (3072, 32633)]))
+    write("las", "v13-format5.las", las_bytes(3, 5, pts, extra=4))
+    write("las", "v14-format6-wkt.las", las_bytes(4, 6, pts, wkt=utm))
+    write("las", "v14-format10.las", las_bytes(4, 10, pts, wkt=utm))
+    good = las_bytes(4, 7, pts, wkt=utm)
+    write("las", "broken-truncated.las", good[: len(good) - 10])
+    write("las", "broken-laz.las", good[:104] + bytes([good[104] | 0x80]) + good[105:])
+    write("las", "broken-count.las", good[:247] + (1000).to_bytes(8, "little") + good[255:])
+
+
 if __name__ == "__main__":
     config_corpus()
     csv_corpus()
     ephemeris_corpus()
     stands_corpus()
     dem_corpus()
+    las_corpus()
