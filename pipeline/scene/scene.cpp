@@ -121,6 +121,7 @@ Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation
       crossings_(crowns_.begin(), crowns_.end()),
       trunk_materials_(vegetation.trunk_materials),
       layer_(vegetation.layer),
+      voxels_(vegetation.voxels && vegetation.voxels->nx > 0 ? vegetation.voxels : nullptr),
       top_m_(ground.max_height_m) {
   check_device(device.handle(), "creating a scene");
   if (!ground.triangles.empty()) attach_mesh(device.handle(), surfaces_, ground, ground_geometry);
@@ -156,6 +157,7 @@ Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation
     top_m_ = std::max(top_m_, layer_->top_m + reach_m * (std::abs(layer_->ground_slope_x) +
                                                          std::abs(layer_->ground_slope_y)));
   }
+  if (voxels_) top_m_ = std::max(top_m_, voxels_->top_m());
 }
 
 Scene::~Scene() {
@@ -246,6 +248,8 @@ void Scene::collect_spans(const Vec3& origin, const Vec3& direction, double max_
     rtcIntersect1(crown_scene_, &collector.context, &query);
   }
   if (layer_) layer_span(*layer_, origin, direction, max_distance_m, spans);
+  if (voxels_)
+    voxel_spans(*voxels_, origin, direction, max_distance_m, spans, depth, extinction_per_density);
 }
 
 }  // namespace glaswave

@@ -4,10 +4,12 @@
 // small (PHYSICS.md section 0).
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "canopy/crown.hpp"
+#include "pipeline/scene/voxel_field.hpp"
 #include "terrain/ground_mesh.hpp"
 
 struct RTCDeviceTy;
@@ -43,6 +45,7 @@ struct Vegetation {
   GroundMesh trunks;                 // bark-covered cylinders, triangulated
   std::vector<int> trunk_materials;  // the material of each trunk triangle
   std::optional<TurbidLayer> layer;
+  std::shared_ptr<const VoxelField> voxels;  // a voxel grid of plant area density, when given
 };
 
 enum class SurfaceKind { none, ground, trunk };
@@ -59,7 +62,7 @@ struct VolumeSpan {
   double start_m = 0.0, end_m = 0.0;  // distances along the ray
   double area_density_m2_m3 = 0.0;
   int material = 0;
-  int crown = -1;  // index of the crown in Vegetation::crowns; -1 for the layer
+  int crown = -1;  // index of the crown in Vegetation::crowns; -1 for the layer and voxels
 };
 
 class Scene {
@@ -91,7 +94,7 @@ class Scene {
                     const std::vector<double>& extinction_per_density) const;
 
   double top_m() const { return top_m_; }  // highest point of anything, local frame
-  bool has_volumes() const { return !crowns_.empty() || layer_.has_value(); }
+  bool has_volumes() const { return !crowns_.empty() || layer_.has_value() || voxels_; }
 
  private:
   void collect_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
@@ -104,6 +107,7 @@ class Scene {
   std::vector<CrownCrossing> crossings_;  // one a crown, made once
   std::vector<int> trunk_materials_;
   std::optional<TurbidLayer> layer_;
+  std::shared_ptr<const VoxelField> voxels_;
   double top_m_;
 };
 

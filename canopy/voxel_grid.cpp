@@ -1,0 +1,407 @@
+// Voxel grids of plant area density: NetCDF through NetCDF-C, other rasters through GDAL.
+#include "canopy/voxel_grid.hpp"
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal.h>
+#include <netcdf.h>
+#include <ogr_srs_api.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <mutex>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/netcdf_lock.hpp"
+
+namespace glaswave {
+
+bool VoxelBlock::column_of(double x, double y, int& i, int& j) const {
+  const double u = (x - x0) / dx, v = (y - y0) / dy;
+  if (!(u >= 0.0 && u < nx && v >= 0.0 && v < ny)) return false;
+  i = static_cast<int>(u);
+  j = static_cast<int>(v);
+  return true;
+}
+
+double VoxelBlock::plant_area_index(int i, int j) const {
+  double sum = 0.0;
+  for (int k = 0; k < nz; ++k) sum += at(i, j, k) * (z_edges_m[k + 1] - z_edges_m[k]);
+  return sum;
+}
+
+namespace {
+
+// Regular coordinates: their spacing (signed); an input error when they are not.
+double regular_step(const std::vector<double>& c, const std::string& place, const char* axis) {
+  if (c.size() < 2) throw input_error(place, std::string("the ") + axis + " axis needs 2 cells");
+  const double step = c[1] - c[0];
+  if (!(std::isfinite(step) && step != 0.0))
+    throw input_error(place, std::string("the ") + axis + " coordinates are not regular");
+  for (std::size_t i = 1; i < c.size(); ++i)
+    if (!(std::abs((c[i] - c[0]) - i * step) <= 1e-6 * std::abs(step) * (i + 1)))
+      throw input_error(place, std::string("the ") + axis + " coordinates are not regular");
+  return step;
+}
+
+void check_layers(const std::vector<double>& edges, const std::string& place) {
+  for (std::size_t k = 0; k + 1 < edges.size(); ++k)
+    if (!(std::isfinite(edges[k]) && edges[k + 1] > edges[k]))
+      throw input_error(place,
+                        "the layers' heights do not increase (layer " + std::to_string(k) + ")");
+}
+
+void check_values(const VoxelBlock& block, const std::string& place, double fill) {
+  for (std::size_t n = 0; n < block.pad.size(); ++n) {
+    const float v = block.pad[n];
+    if (!(v >= 0.0f) || !std::isfinite(v) || (std::isfinite(fill) && v == fill)) {
+      const std::size_t i = n % block.nx, j = n / block.nx % block.ny, k = n / block.nx / block.ny;
+      throw input_error(place, "plant area density at voxel (x " + std::to_string(i) + ", y " +
+                                   std::to_string(j) + ", z " + std::to_string(k) +
+                                   " of the window) is negative, missing or not finite");
+    }
+  }
+}
+
+// The columns [first, first + count) of an axis of `n` cells from `origin` by `step` that meet
+// [lo, hi]; count 0 when none.
+void axis_window(double origin, double step, int n, double lo, double hi, int& first, int& count) {
+  double a = (lo - origin) / step, b = (hi - origin) / step;
+  if (a > b) std::swap(a, b);
+  const double f = std::max(0.0, std::floor(a)), l = std::min<double>(n, std::ceil(b));
+  if (!(l > f)) {
+    first = count = 0;
+    return;
+  }
+  first = static_cast<int>(f);
+  count = static_cast<int>(l) - first;
+}
+
+std::string text_attribute(int ncid, int varid, const char* name) {
+  std::size_t length = 0;
+  nc_type type;
+  if (nc_inq_att(ncid, varid, name, &type, &length) != NC_NOERR || type != NC_CHAR) return {};
+  std::string text(length, '\0');
+  if (nc_get_att_text(ncid, varid, name, text.data()) != NC_NOERR) return {};
+  while (!text.empty() && text.back() == '\0') text.pop_back();
+  return text;
+}
+
+}  // namespace
+
+struct VoxelGridFile::Impl {
+  std::string place;
+  VoxelBlock shape;
+  bool netcdf = false;
+  int ncid = -1, pad_var = -1;
+  double fill = std::numeric_limits<double>::quiet_NaN();
+  GDALDatasetH dataset = nullptr;
+  std::vector<int> band_of_layer;  // GDAL band (1-based) of each layer, bottom up
+  mutable std::mutex mutex;
+
+  void open_netcdf(const std::filesystem::path& file);
+  void open_gdal(const std::filesystem::path& file);
+};
+
+void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
+  std::lock_guard lock(netcdf_library_mutex());
+  netcdf = true;
+  if (nc_open(file.c_str(), NC_NOWRITE, &ncid) != NC_NOERR)
+    throw input_error(place, "cannot open the voxel grid as NetCDF");
+  if (nc_inq_varid(ncid, "pad", &pad_var) != NC_NOERR)
+    throw input_error(place, "no variable `pad` (plant area density over z, y, x)");
+  int ndims = 0;
+  nc_inq_varndims(ncid, pad_var, &ndims);
+  if (ndims != 3) throw input_error(place, "`pad` must have three dimensions (z, y, x)");
+  int dims[3];
+  nc_inq_vardimid(ncid, pad_var, dims);
+  std::size_t sizes[3];
+  std::vector<double> coords[3];
+  const char* names[3] = {"z", "y", "x"};
+  for (int d = 0; d < 3; ++d) {
+    char name[NC_MAX_NAME + 1] = {};
+    nc_inq_dim(ncid, dims[d], name, &sizes[d]);
+    if (sizes[d] == 0 || sizes[d] > (std::size_t{1} << 24))
+      throw input_error(place, std::string("the ") + names[d] + " dimension's size is unusable");
+    int var = -1;
+    if (nc_inq_varid(ncid, name, &var) != NC_NOERR)
+      throw input_error(place, std::string("no coordinate variable for `pad`'s ") + names[d] +
+                                   " dimension (" + name + ")");
+    coords[d].resize(sizes[d]);
+    if (nc_get_var_double(ncid, var, coords[d].data()) != NC_NOERR)
+      throw input_error(place, std::string("cannot read the ") + names[d] + " coordinates");
+    if (d == 0) {
+      const std::string bounds = text_attribute(ncid, var, "bounds");
+      int bvar = -1;
+      std::vector<double>& edges = shape.z_edges_m;
+      if (!bounds.empty() && nc_inq_varid(ncid, bounds.c_str(), &bvar) == NC_NOERR) {
+        std::vector<double> b(2 * sizes[0]);
+        int bdims = 0;
+        nc_inq_varndims(ncid, bvar, &bdims);
+        std::size_t second = 0;
+        if (bdims == 2) {
+          int bd[2];
+          nc_inq_vardimid(ncid, bvar, bd);
+          nc_inq_dimlen(ncid, bd[1], &second);
+        }
+        if (second != 2 || nc_get_var_double(ncid, bvar, b.data()) != NC_NOERR)
+          throw input_error(place, "the z bounds are not (z, 2)");
+        edges.assign(1, b[0]);
+        for (std::size_t k = 0; k < sizes[0]; ++k) {
+          if (std::abs(b[2 * k] - edges.back()) > 1e-6)
+            throw input_error(place,
+                              "the layers leave a gap or overlap at layer " + std::to_string(k));
+          edges.push_back(b[2 * k + 1]);
+        }
+      } else {
+        const auto& c = coords[0];
+        if (c.size() < 2)
+          throw input_error(place, "one layer and no z bounds: its thickness is unknown");
+        edges.push_back(c[0] - (c[1] - c[0]) / 2);
+        for (std::size_t k = 0; k + 1 < c.size(); ++k) edges.push_back((c[k] + c[k + 1]) / 2);
+        edges.push_back(c.back() + (c.back() - c[c.size() - 2]) / 2);
+      }
+      check_layers(edges, place);
+    }
+  }
+  shape.nz = static_cast<int>(sizes[0]);
+  shape.ny = static_cast<int>(sizes[1]);
+  shape.nx = static_cast<int>(sizes[2]);
+  shape.dy = regular_step(coords[1], place, "y");
+  shape.dx = regular_step(coords[2], place, "x");
+  if (shape.dx < 0.0) throw input_error(place, "x must increase");
+  shape.x0 = coords[2][0] - shape.dx / 2;
+  shape.y0 = coords[1][0] - shape.dy / 2;
+  double fill_value = 0.0;
+  if (nc_get_att_double(ncid, pad_var, "_FillValue", &fill_value) == NC_NOERR) fill = fill_value;
+  std::string mapping = text_attribute(ncid, pad_var, "grid_mapping");
+  int crs_var = -1;
+  if (mapping.empty() || nc_inq_varid(ncid, mapping.c_str(), &crs_var) != NC_NOERR)
+    nc_inq_varid(ncid, "crs", &crs_var);
+  if (crs_var >= 0) {
+    shape.crs_wkt = text_attribute(ncid, crs_var, "crs_wkt");
+    if (shape.crs_wkt.empty()) shape.crs_wkt = text_attribute(ncid, crs_var, "spatial_ref");
+  }
+  if (shape.crs_wkt.empty())
+    throw input_error(place, "no CRS (a grid_mapping variable with crs_wkt or spatial_ref)");
+}
+
+void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
+  GDALAllRegister();
+  CPLPushErrorHandler(CPLQuietErrorHandler);
+  dataset = GDALOpen(file.c_str(), GA_ReadOnly);
+  CPLPopErrorHandler();
+  if (!dataset) throw input_error(place, "cannot open the voxel grid (not a raster GDAL reads)");
+  double t[6];
+  if (GDALGetGeoTransform(dataset, t) != CE_None)
+    throw input_error(place, "the voxel grid has no geotransform");
+  if (t[2] != 0.0 || t[4] != 0.0 || !(t[1] > 0.0) || t[5] == 0.0)
+    throw input_error(place, "the voxel grid is rotated or has no cell size");
+  OGRSpatialReferenceH srs = GDALGetSpatialRef(dataset);
+  if (!srs) throw input_error(place, "the voxel grid has no CRS");
+  char* wkt = nullptr;
+  const char* options[] = {"FORMAT=WKT2_2019", nullptr};
+  OSRExportToWktEx(srs, &wkt, options);
+  shape.crs_wkt = wkt ? wkt : "";
+  CPLFree(wkt);
+  shape.nx = GDALGetRasterXSize(dataset);
+  shape.ny = GDALGetRasterYSize(dataset);
+  shape.x0 = t[0];
+  shape.y0 = t[3];
+  shape.dx = t[1];
+  shape.dy = t[5];
+  const int bands = GDALGetRasterCount(dataset);
+  if (bands < 1) throw input_error(place, "the voxel grid has no band");
+  std::vector<std::pair<double, int>> bottoms;
+  std::vector<double> tops(bands + 1);
+  for (int b = 1; b <= bands; ++b) {
+    GDALRasterBandH band = GDALGetRasterBand(dataset, b);
+    const char* bottom = GDALGetMetadataItem(band, "z_bottom_m", nullptr);
+    const char* top = GDALGetMetadataItem(band, "z_top_m", nullptr);
+    if (!bottom || !top)
+      throw input_error(place, "band " + std::to_string(b) +
+                                   " has no z_bottom_m and z_top_m metadata (its heights)");
+    bottoms.emplace_back(CPLAtof(bottom), b);
+    tops[b] = CPLAtof(top);
+  }
+  std::sort(bottoms.begin(), bottoms.end());
+  shape.z_edges_m.assign(1, bottoms.front().first);
+  for (const auto& [bottom, b] : bottoms) {
+    if (std::abs(bottom - shape.z_edges_m.back()) > 1e-6)
+      throw input_error(
+          place, "band " + std::to_string(b) + "'s layer leaves a gap or overlaps the one below");
+    shape.z_edges_m.push_back(tops[b]);
+    band_of_layer.push_back(b);
+    int has_nodata = 0;
+    const double nodata = GDALGetRasterNoDataValue(GDALGetRasterBand(dataset, b), &has_nodata);
+    if (has_nodata) fill = nodata;
+  }
+  shape.nz = bands;
+  check_layers(shape.z_edges_m, place);
+}
+
+VoxelGridFile::VoxelGridFile(const std::filesystem::path& file) : impl_(std::make_unique<Impl>()) {
+  impl_->place = file.string();
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(file, error))
+    throw input_error(impl_->place, "no such voxel grid (or not a regular file)");
+  std::ifstream in(file, std::ios::binary);
+  char magic[4] = {};
+  in.read(magic, 4);
+  const bool netcdf = (magic[0] == 'C' && magic[1] == 'D' && magic[2] == 'F') ||
+                      (magic[1] == 'H' && magic[2] == 'D' && magic[3] == 'F');
+  if (netcdf)
+    impl_->open_netcdf(file);
+  else
+    impl_->open_gdal(file);
+}
+
+VoxelGridFile::~VoxelGridFile() {
+  if (impl_->ncid >= 0) {
+    std::lock_guard lock(netcdf_library_mutex());
+    nc_close(impl_->ncid);
+  }
+  if (impl_->dataset) GDALClose(impl_->dataset);
+}
+
+const VoxelBlock& VoxelGridFile::shape() const { return impl_->shape; }
+
+VoxelBlock VoxelGridFile::window(double x_min, double x_max, double y_min, double y_max) const {
+  const VoxelBlock& s = impl_->shape;
+  VoxelBlock block;
+  block.crs_wkt = s.crs_wkt;
+  block.z_edges_m = s.z_edges_m;
+  block.nz = s.nz;
+  block.dx = s.dx;
+  block.dy = s.dy;
+  int i0 = 0, ni = 0, j0 = 0, nj = 0;
+  axis_window(s.x0, s.dx, s.nx, x_min, x_max, i0, ni);
+  axis_window(s.y0, s.dy, s.ny, y_min, y_max, j0, nj);
+  if (ni == 0 || nj == 0) return block;
+  const std::size_t voxels = std::size_t(ni) * nj * s.nz;
+  if (voxels > max_window_voxels)
+    throw input_error(impl_->place, "a window of " + std::to_string(voxels) +
+                                        " voxels is more than the limit of " +
+                                        std::to_string(max_window_voxels));
+  block.nx = ni;
+  block.ny = nj;
+  block.x0 = s.x0 + i0 * s.dx;
+  block.y0 = s.y0 + j0 * s.dy;
+  block.pad.resize(voxels);
+  if (impl_->netcdf) {
+    std::lock_guard lock(netcdf_library_mutex());
+    const std::size_t start[3] = {0, std::size_t(j0), std::size_t(i0)};
+    const std::size_t count[3] = {std::size_t(s.nz), std::size_t(nj), std::size_t(ni)};
+    if (nc_get_vara_float(impl_->ncid, impl_->pad_var, start, count, block.pad.data()) != NC_NOERR)
+      throw input_error(impl_->place, "cannot read the plant area density");
+  } else {
+    std::lock_guard lock(impl_->mutex);
+    for (int k = 0; k < s.nz; ++k) {
+      GDALRasterBandH band = GDALGetRasterBand(impl_->dataset, impl_->band_of_layer[k]);
+      CPLPushErrorHandler(CPLQuietErrorHandler);
+      const CPLErr status =
+          GDALRasterIO(band, GF_Read, i0, j0, ni, nj, block.pad.data() + std::size_t(k) * ni * nj,
+                       ni, nj, GDT_Float32, 0, 0);
+      CPLPopErrorHandler();
+      if (status != CE_None)
+        throw input_error(impl_->place, "cannot read band " +
+                                            std::to_string(impl_->band_of_layer[k]) +
+                                            " (truncated or corrupt)");
+    }
+  }
+  check_values(block, impl_->place, impl_->fill);
+  return block;
+}
+
+namespace {
+
+void check_nc(int status, const std::string& place) {
+  if (status != NC_NOERR) throw run_error(place, std::string("NetCDF: ") + nc_strerror(status));
+}
+
+}  // namespace
+
+void write_voxel_netcdf(const std::filesystem::path& file, const VoxelBlock& block,
+                        const std::vector<float>& ground_m, const std::string& history) {
+  AtomicFile product(file);
+  const std::string place = file.string();
+  std::lock_guard lock(netcdf_library_mutex());
+  int nc = -1;
+  check_nc(nc_create(product.part_path().c_str(), NC_NETCDF4 | NC_CLOBBER, &nc), place);
+  try {
+    int dz, dy, dx, dnv;
+    check_nc(nc_def_dim(nc, "z", block.nz, &dz), place);
+    check_nc(nc_def_dim(nc, "y", block.ny, &dy), place);
+    check_nc(nc_def_dim(nc, "x", block.nx, &dx), place);
+    check_nc(nc_def_dim(nc, "nv", 2, &dnv), place);
+    auto text = [&](int var, const char* name, const std::string& value) {
+      check_nc(nc_put_att_text(nc, var, name, value.size(), value.c_str()), place);
+    };
+    int vx, vy, vz, vzb, vcrs, vpad, vground = -1;
+    check_nc(nc_def_var(nc, "x", NC_DOUBLE, 1, &dx, &vx), place);
+    text(vx, "standard_name", "projection_x_coordinate");
+    text(vx, "long_name", "x of the column centres in the grid's CRS");
+    text(vx, "units", "m");
+    check_nc(nc_def_var(nc, "y", NC_DOUBLE, 1, &dy, &vy), place);
+    text(vy, "standard_name", "projection_y_coordinate");
+    text(vy, "long_name", "y of the column centres in the grid's CRS");
+    text(vy, "units", "m");
+    check_nc(nc_def_var(nc, "z", NC_DOUBLE, 1, &dz, &vz), place);
+    text(vz, "long_name", "height above the ground of the layer centres");
+    text(vz, "units", "m");
+    text(vz, "positive", "up");
+    text(vz, "axis", "Z");
+    text(vz, "bounds", "z_bounds");
+    const int zb_dims[2] = {dz, dnv};
+    check_nc(nc_def_var(nc, "z_bounds", NC_DOUBLE, 2, zb_dims, &vzb), place);
+    check_nc(nc_def_var(nc, "crs", NC_INT, 0, nullptr, &vcrs), place);
+    text(vcrs, "crs_wkt", block.crs_wkt);
+    text(vcrs, "spatial_ref", block.crs_wkt);
+    const int pad_dims[3] = {dz, dy, dx};
+    check_nc(nc_def_var(nc, "pad", NC_FLOAT, 3, pad_dims, &vpad), place);
+    const std::size_t chunk[3] = {std::size_t(block.nz), std::size_t(std::min(block.ny, 64)),
+                                  std::size_t(std::min(block.nx, 64))};
+    check_nc(nc_def_var_chunking(nc, vpad, NC_CHUNKED, chunk), place);
+    check_nc(nc_def_var_deflate(nc, vpad, 1, 1, 4), place);
+    text(vpad, "long_name", "plant area density (one-sided)");
+    text(vpad, "units", "m2 m-3");
+    text(vpad, "grid_mapping", "crs");
+    if (!ground_m.empty()) {
+      const int g_dims[2] = {dy, dx};
+      check_nc(nc_def_var(nc, "ground_elevation", NC_FLOAT, 2, g_dims, &vground), place);
+      text(vground, "long_name", "ground elevation under each column, in the CRS's heights");
+      text(vground, "units", "m");
+      text(vground, "grid_mapping", "crs");
+    }
+    text(NC_GLOBAL, "Conventions", "CF-1.10");
+    text(NC_GLOBAL, "title", "plant area density voxel grid (glaswave voxels format)");
+    if (!history.empty()) text(NC_GLOBAL, "history", history);
+    check_nc(nc_enddef(nc), place);
+    std::vector<double> c(block.nx);
+    for (int i = 0; i < block.nx; ++i) c[i] = block.x0 + (i + 0.5) * block.dx;
+    check_nc(nc_put_var_double(nc, vx, c.data()), place);
+    c.resize(block.ny);
+    for (int j = 0; j < block.ny; ++j) c[j] = block.y0 + (j + 0.5) * block.dy;
+    check_nc(nc_put_var_double(nc, vy, c.data()), place);
+    std::vector<double> zc(block.nz), zb(2 * block.nz);
+    for (int k = 0; k < block.nz; ++k) {
+      zc[k] = (block.z_edges_m[k] + block.z_edges_m[k + 1]) / 2;
+      zb[2 * k] = block.z_edges_m[k];
+      zb[2 * k + 1] = block.z_edges_m[k + 1];
+    }
+    check_nc(nc_put_var_double(nc, vz, zc.data()), place);
+    check_nc(nc_put_var_double(nc, vzb, zb.data()), place);
+    check_nc(nc_put_var_float(nc, vpad, block.pad.data()), place);
+    if (vground >= 0) check_nc(nc_put_var_float(nc, vground, ground_m.data()), place);
+    check_nc(nc_close(nc), place);
+  } catch (...) {
+    nc_close(nc);
+    throw;
+  }
+  product.commit();
+}
+
+}  // namespace glaswave

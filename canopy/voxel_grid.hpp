@@ -1,0 +1,72 @@
+// Voxel grids of plant area density (PAD, one-sided m^2 of plant per m^3), the `voxels` format of
+// PRODUCT.md section 8:
+//   - a CF NetCDF file with a variable `pad(z, y, x)`, coordinate variables x and y (cell
+//     centres, in the CRS its grid_mapping variable gives as `crs_wkt` or `spatial_ref`), and z
+//     the height above the ground of each layer's centre (its `bounds` variable, when present,
+//     gives the layers' bottoms and tops; else layers are contiguous about the centres);
+//   - a multi-band GeoTIFF (any raster GDAL reads), band i the layer between the heights its band
+//     metadata `z_bottom_m` and `z_top_m` give.
+// Heights are above the local ground. Columns are regular in x and y (north up, no rotation);
+// layers may differ in thickness but neither overlap nor leave gaps.
+//
+// A grid is opened once and read by windows of columns (a shot needs a few hundred metres of a
+// grid that may cover many km^2), as the DEM is.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace glaswave {
+
+// A block of a grid: nx * ny columns of nz layers, PAD at [(k * ny + j) * nx + i], row j = 0 the
+// northernmost when north_up (GeoTIFF order) or the southernmost otherwise (NetCDF order with
+// increasing y); x0, y0 the outer corner of column (0, 0), dx > 0, dy signed (negative north up).
+struct VoxelBlock {
+  std::string crs_wkt;
+  int nx = 0, ny = 0, nz = 0;
+  double x0 = 0.0, y0 = 0.0, dx = 1.0, dy = 1.0;
+  std::vector<double> z_edges_m;  // nz + 1 heights above the ground, increasing
+  std::vector<float> pad;         // m^2/m^3, >= 0
+
+  float at(int i, int j, int k) const {
+    return pad[(static_cast<std::size_t>(k) * ny + j) * nx + i];
+  }
+  // The column holding (x, y) in the grid's CRS; false when it is outside the block.
+  bool column_of(double x, double y, int& i, int& j) const;
+  double plant_area_index(int i, int j) const;  // sum of PAD x thickness over the column
+};
+
+class VoxelGridFile {
+ public:
+  // Largest grid a window read may return, in voxels (the configuration's windows are far less).
+  static constexpr std::size_t max_window_voxels = std::size_t{1} << 28;
+
+  // Opens a NetCDF (.nc) or GDAL raster file and checks it: dimensions, coordinates (regular),
+  // layer heights (increasing, no gap), a CRS. An input error naming the file otherwise.
+  explicit VoxelGridFile(const std::filesystem::path& file);
+  ~VoxelGridFile();
+  VoxelGridFile(const VoxelGridFile&) = delete;
+  VoxelGridFile& operator=(const VoxelGridFile&) = delete;
+
+  // The whole grid's extent and layers (pad left empty).
+  const VoxelBlock& shape() const;
+
+  // The columns that meet the rectangle [x_min, x_max] x [y_min, y_max] (the grid's CRS), read
+  // from the file. Empty (nx = 0) when the rectangle misses the grid. Negative, NaN or fill PAD
+  // values are an input error naming the file and the voxel. Thread-safe.
+  VoxelBlock window(double x_min, double x_max, double y_min, double y_max) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Writes a block as the `voxels` NetCDF format (CF-1.10), to `file`.part then renamed.
+// `ground_m`, when not empty (nx * ny, rows as in the block), is written as `ground_elevation`.
+void write_voxel_netcdf(const std::filesystem::path& file, const VoxelBlock& block,
+                        const std::vector<float>& ground_m = {}, const std::string& history = "");
+
+}  // namespace glaswave

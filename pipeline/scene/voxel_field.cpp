@@ -1,0 +1,214 @@
+// Voxel fields: the column DDA, and windows of a grid file carried into a shot's frame.
+#include "pipeline/scene/voxel_field.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "canopy/voxel_grid.hpp"
+#include "core/error.hpp"
+#include "pipeline/scene/scene.hpp"
+#include "terrain/crs_transform.hpp"
+#include "terrain/local_frame.hpp"
+#include "terrain/terrain.hpp"
+
+namespace glaswave {
+
+double VoxelField::top_m() const {
+  double top = -std::numeric_limits<double>::infinity();
+  const std::size_t columns = static_cast<std::size_t>(nx) * ny;
+  for (std::size_t c = 0; c < columns; ++c) {
+    if (!std::isfinite(ground_m[c])) continue;
+    for (int k = nz - 1; k >= 0; --k) {
+      if (pad[k * columns + c] > 0.0f) {
+        top = std::max(top, ground_m[c] + z_edges_m[k + 1]);
+        break;
+      }
+    }
+  }
+  return top;
+}
+
+namespace {
+
+struct Emitter {
+  std::vector<VolumeSpan>& spans;
+  std::size_t first;  // spans before this index are not ours to merge with
+  int material;
+  const std::vector<double>* extinction_per_density;
+  double depth_left;
+
+  // Adds [t0, t1] at `density`; false when the free path has ended (stop).
+  bool add(double t0, double t1, float density) {
+    if (!(t1 > t0) || !(density > 0.0f)) return true;
+    const double d = density;
+    if (spans.size() > first && spans.back().end_m == t0 && spans.back().area_density_m2_m3 == d)
+      spans.back().end_m = t1;
+    else
+      spans.push_back({t0, t1, d, material, -1});
+    if (!extinction_per_density) return true;
+    depth_left -= d * (*extinction_per_density)[material] * (t1 - t0);
+    return depth_left > 0.0;
+  }
+};
+
+}  // namespace
+
+void voxel_spans(const VoxelField& f, const Vec3& origin, const Vec3& direction,
+                 double max_distance_m, std::vector<VolumeSpan>& spans, double depth,
+                 const std::vector<double>* extinction_per_density) {
+  if (f.nx <= 0 || f.ny <= 0 || f.nz <= 0) return;
+  // The ray in column coordinates (u, v): p = origin + u * axis_i + v * axis_j.
+  const double a = f.axis_i_m[0], b = f.axis_j_m[0], c = f.axis_i_m[1], d = f.axis_j_m[1];
+  const double det = a * d - b * c;
+  if (det == 0.0) return;
+  const double px = origin[0] - f.origin_m[0], py = origin[1] - f.origin_m[1];
+  const double u0 = (d * px - b * py) / det, v0 = (a * py - c * px) / det;
+  const double du = (d * direction[0] - b * direction[1]) / det;
+  const double dv = (a * direction[1] - c * direction[0]) / det;
+  double t_enter = 0.0, t_exit = max_distance_m;
+  const auto clip = [&](double start, double rate, int n) {
+    if (rate == 0.0) return start >= 0.0 && start < n;
+    double t0 = (0.0 - start) / rate, t1 = (n - start) / rate;
+    if (t0 > t1) std::swap(t0, t1);
+    t_enter = std::max(t_enter, t0);
+    t_exit = std::min(t_exit, t1);
+    return true;
+  };
+  if (!clip(u0, du, f.nx) || !clip(v0, dv, f.ny) || !(t_enter < t_exit)) return;
+
+  const auto cell = [](double x, int n) {
+    return std::clamp(static_cast<int>(std::floor(x)), 0, n - 1);
+  };
+  int i = cell(u0 + t_enter * du, f.nx), j = cell(v0 + t_enter * dv, f.ny);
+  const double inf = std::numeric_limits<double>::infinity();
+  const int step_i = du > 0.0 ? 1 : -1, step_j = dv > 0.0 ? 1 : -1;
+  const double delta_i = du != 0.0 ? 1.0 / std::abs(du) : inf;
+  const double delta_j = dv != 0.0 ? 1.0 / std::abs(dv) : inf;
+  double next_i = du > 0.0 ? (i + 1 - u0) / du : du < 0.0 ? (i - u0) / du : inf;
+  double next_j = dv > 0.0 ? (j + 1 - v0) / dv : dv < 0.0 ? (j - v0) / dv : inf;
+
+  Emitter emit{spans, spans.size(), f.material, extinction_per_density, depth};
+  const std::vector<double>& edges = f.z_edges_m;
+  const std::size_t columns = static_cast<std::size_t>(f.nx) * f.ny;
+  const double oz = origin[2], dz = direction[2];
+  for (double t_a = t_enter;;) {
+    const double t_b = std::min({next_i, next_j, t_exit});
+    const std::size_t column = static_cast<std::size_t>(j) * f.nx + i;
+    const double ground = f.ground_m[column];
+    if (t_b > t_a && std::isfinite(ground)) {
+      const float* pad = f.pad.data() + column;
+      if (dz == 0.0) {
+        const double h = oz - ground;
+        const auto above = std::upper_bound(edges.begin(), edges.end(), h);
+        if (above != edges.begin() && above != edges.end()) {
+          const std::size_t k = static_cast<std::size_t>(above - edges.begin()) - 1;
+          if (!emit.add(t_a, t_b, pad[k * columns])) return;
+        }
+      } else {
+        // Heights above this column's ground at the stretch's ends; the layers between them in
+        // the order the ray crosses them.
+        const double h_a = oz + t_a * dz - ground, h_b = oz + t_b * dz - ground;
+        const double low = std::min(h_a, h_b), high = std::max(h_a, h_b);
+        if (high > edges.front() && low < edges.back()) {
+          int k_low =
+              static_cast<int>(std::upper_bound(edges.begin(), edges.end(), low) - edges.begin()) -
+              1;
+          int k_high =
+              static_cast<int>(std::lower_bound(edges.begin(), edges.end(), high) - edges.begin()) -
+              1;
+          k_low = std::max(k_low, 0);
+          k_high = std::min(k_high, f.nz - 1);
+          const int k_step = dz > 0.0 ? 1 : -1;
+          const int k_first = dz > 0.0 ? k_low : k_high, k_last = dz > 0.0 ? k_high : k_low;
+          for (int k = k_first;; k += k_step) {
+            double t0 = (ground + edges[k] - oz) / dz, t1 = (ground + edges[k + 1] - oz) / dz;
+            if (t0 > t1) std::swap(t0, t1);
+            if (!emit.add(std::max(t0, t_a), std::min(t1, t_b), pad[k * columns])) return;
+            if (k == k_last) break;
+          }
+        }
+      }
+    }
+    if (t_b >= t_exit) return;
+    if (next_i <= next_j) {
+      i += step_i;
+      next_i += delta_i;
+      if (i < 0 || i >= f.nx) return;
+    } else {
+      j += step_j;
+      next_j += delta_j;
+      if (j < 0 || j >= f.ny) return;
+    }
+    t_a = t_b;
+  }
+}
+
+struct VoxelFieldSource::Impl {
+  const VoxelGridFile* grid;
+  std::string place;
+  std::unique_ptr<CrsTransform> crs;
+};
+
+VoxelFieldSource::VoxelFieldSource(const VoxelGridFile& grid, const std::string& place)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->grid = &grid;
+  impl_->place = place;
+  impl_->crs = std::make_unique<CrsTransform>(grid.shape().crs_wkt, "ellipsoid", place);
+}
+
+VoxelFieldSource::~VoxelFieldSource() = default;
+
+std::shared_ptr<const VoxelField> VoxelFieldSource::field(const LocalFrame& frame,
+                                                          const Terrain& terrain,
+                                                          double half_size_m, int material) const {
+  auto field = std::make_shared<VoxelField>();
+  field->material = material;
+  const VoxelBlock& shape = impl_->grid->shape();
+  const Geodetic& centre = frame.origin();
+  const auto [cx, cy] = impl_->crs->from_wgs84(centre.lon_deg, centre.lat_deg);
+  if (!std::isfinite(cx) || !std::isfinite(cy)) return field;
+  // The grid's axes carried into the frame (scale and meridian convergence included): one
+  // cell's step in x and in y about the footprint, through PROJ and the frame.
+  double x[3] = {cx, cx + shape.dx, cx}, y[3] = {cy, cy, cy + shape.dy}, z[3] = {0.0, 0.0, 0.0};
+  impl_->crs->to_wgs84(3, x, y, z);
+  Vec3 local[3];
+  for (int p = 0; p < 3; ++p) {
+    if (!std::isfinite(x[p]) || !std::isfinite(y[p])) return field;
+    local[p] = frame.to_local(Geodetic{y[p], x[p], centre.h_m});
+  }
+  field->axis_i_m = {local[1][0] - local[0][0], local[1][1] - local[0][1]};
+  field->axis_j_m = {local[2][0] - local[0][0], local[2][1] - local[0][1]};
+  const double cell_i_m = std::hypot(field->axis_i_m[0], field->axis_i_m[1]);
+  const double cell_j_m = std::hypot(field->axis_j_m[0], field->axis_j_m[1]);
+  if (!(cell_i_m > 0.0 && cell_j_m > 0.0)) return field;
+  const double hx = half_size_m / cell_i_m * std::abs(shape.dx);
+  const double hy = half_size_m / cell_j_m * std::abs(shape.dy);
+  VoxelBlock block = impl_->grid->window(cx - hx, cx + hx, cy - hy, cy + hy);
+  if (block.nx == 0) return field;
+  const double ci = (block.x0 - cx) / shape.dx, cj = (block.y0 - cy) / shape.dy;
+  field->origin_m = {local[0][0] + ci * field->axis_i_m[0] + cj * field->axis_j_m[0],
+                     local[0][1] + ci * field->axis_i_m[1] + cj * field->axis_j_m[1]};
+  field->nx = block.nx;
+  field->ny = block.ny;
+  field->nz = block.nz;
+  field->z_edges_m = std::move(block.z_edges_m);
+  field->pad = std::move(block.pad);
+  field->ground_m.resize(static_cast<std::size_t>(block.nx) * block.ny);
+  for (int j = 0; j < block.ny; ++j) {
+    for (int i = 0; i < block.nx; ++i) {
+      const double lx =
+          field->origin_m[0] + (i + 0.5) * field->axis_i_m[0] + (j + 0.5) * field->axis_j_m[0];
+      const double ly =
+          field->origin_m[1] + (i + 0.5) * field->axis_i_m[1] + (j + 0.5) * field->axis_j_m[1];
+      const Geodetic g = frame.to_geodetic({lx, ly, 0.0});
+      const double h = terrain.height_m(g.lat_deg, g.lon_deg);
+      field->ground_m[static_cast<std::size_t>(j) * block.nx + i] =
+          std::isfinite(h) ? frame.to_local(Geodetic{g.lat_deg, g.lon_deg, h})[2]
+                           : std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+  return field;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,70 @@
+// A voxel grid of plant area density in a shot's local frame, and the stretches of a ray inside
+// its non-empty voxels as the transport's VolumeSpans.
+//
+// Each column of the grid stands on the ground under its centre: its layers are heights above
+// that ground, so a column is a prism from ground + z_edges[0] to ground + z_edges[nz]. On level
+// ground this is a regular 3-D lattice and the traversal below is exactly Amanatides and Woo's
+// (1987) 3-D DDA; over terrain the layers of neighbouring columns do not line up, so the DDA
+// steps through columns in x and y (Amanatides-Woo in 2-D) and, in each column, cuts the ray at
+// the column's own layer heights. The spans are exact for the prisms, in double precision.
+// Where the ground mesh and a column's flat foot differ (a slope under a wide column: up to
+// half the column's width times the slope), the surface the ray meets first wins, as for crowns.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/vec3.hpp"
+
+namespace glaswave {
+
+class Terrain;
+class LocalFrame;
+class VoxelGridFile;
+struct VolumeSpan;
+
+struct VoxelField {
+  // Column (i, j) is the parallelogram origin + a * axis_i + b * axis_j, a in [i, i + 1),
+  // b in [j, j + 1): horizontal vectors in the local frame (a cell's edges).
+  std::array<double, 2> origin_m{}, axis_i_m{1.0, 0.0}, axis_j_m{0.0, 1.0};
+  int nx = 0, ny = 0, nz = 0;
+  std::vector<double> z_edges_m;  // nz + 1 heights above the ground, increasing
+  std::vector<double> ground_m;   // local height of the ground under each column, [j * nx + i]
+  std::vector<float> pad;         // m^2/m^3 at [(k * ny + j) * nx + i]
+  int material = 0;               // the foliage of every voxel
+
+  // Highest point of any non-empty voxel (local frame); -infinity for an empty field.
+  double top_m() const;
+};
+
+// Appends to `spans` every stretch of origin + t * direction, t in [0, max_distance_m], inside a
+// voxel of non-zero density, in order along the ray; adjacent stretches of equal density are
+// merged. With `extinction_per_density` (by material), the traversal stops after the span in
+// which the voxels' own optical depth reaches `depth`: the free path has ended there.
+void voxel_spans(const VoxelField& field, const Vec3& origin, const Vec3& direction,
+                 double max_distance_m, std::vector<VolumeSpan>& spans, double depth = 0.0,
+                 const std::vector<double>* extinction_per_density = nullptr);
+
+// A voxel grid file placed under shots: for each shot, the window of the grid within
+// `half_size_m` of the footprint, carried into the shot's frame, each column standing on the
+// terrain under its centre.
+class VoxelFieldSource {
+ public:
+  // `grid` must outlive this. Its CRS is read with PROJ; an input error naming `place` when PROJ
+  // cannot use it.
+  VoxelFieldSource(const VoxelGridFile& grid, const std::string& place);
+  ~VoxelFieldSource();
+
+  // The field around the frame's origin (empty, nx = 0, when the grid does not reach it).
+  // Columns over terrain without data are left empty.
+  std::shared_ptr<const VoxelField> field(const LocalFrame& frame, const Terrain& terrain,
+                                          double half_size_m, int material) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace glaswave
