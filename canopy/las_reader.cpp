@@ -334,12 +334,14 @@ void LasFile::read_points(std::uint64_t first, std::uint64_t count,
         point.number_of_returns = p[14] >> 4;
         point.withheld = (p[15] & 0x04) != 0;
         point.classification = p[16];
+        point.scan_angle_deg = static_cast<std::int16_t>(u16(p + 18)) * 0.006;
         point.gps_time = f64(p + 22);
       } else {
         point.return_number = p[14] & 0x07;
         point.number_of_returns = (p[14] >> 3) & 0x07;
         point.classification = p[15] & 0x1F;
         point.withheld = (p[15] & 0x80) != 0;
+        point.scan_angle_deg = static_cast<std::int8_t>(p[16]);
         if (has_time) point.gps_time = f64(p + 20);
       }
       points.push_back(point);

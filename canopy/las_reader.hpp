@@ -44,7 +44,8 @@ struct LasPoint {
   std::uint8_t number_of_returns = 0;
   std::uint8_t classification = 0;  // ASPRS class: 2 ground, 3-5 vegetation, 7 noise, ...
   bool withheld = false;
-  double gps_time = 0.0;  // formats with a GPS time; 0 otherwise
+  double scan_angle_deg = 0.0;  // from nadir, signed (formats 0-5: whole degrees)
+  double gps_time = 0.0;        // formats with a GPS time; 0 otherwise
 };
 
 // A variable length record (or an extended one) as found: its user and record ids and its data.

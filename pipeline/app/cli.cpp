@@ -1,4 +1,4 @@
-// Command line: run, sweep, brf, check, --help, --version.
+// Command line: run, sweep, brf, check, voxelize, --help, --version.
 #include "pipeline/app/cli.hpp"
 
 #include <unistd.h>
@@ -16,6 +16,7 @@
 #include <string_view>
 #include <tuple>
 
+#include "canopy/gap_fraction.hpp"
 #include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/app/reference.hpp"
@@ -46,6 +47,9 @@ struct Arguments {
   bool schema = false;               // check --schema
   bool keys_markdown = false;        // check --keys-markdown (hidden: scripts/docs-reference)
   bool fields_json = false;          // check --fields-json (hidden: scripts/docs-reference)
+  std::string cloud_file;            // voxelize CLOUD.las
+  double voxel_size_m = 1.0;         // voxelize --voxel-size-m
+  std::string crs;                   // voxelize --crs
 };
 
 // Text from the command line or a file for a one-line message on stderr: control characters
@@ -372,6 +376,32 @@ int brf(const Arguments& arguments) {
   return 0;
 }
 
+// voxelize: a LAS point cloud -> the voxel grid of plant area density (and the ground) that
+// canopy.point_cloud would use, written in the `voxels` NetCDF format.
+int voxelize(const Arguments& arguments, const std::string& command_line) {
+  if (!(arguments.voxel_size_m >= 0.05 && arguments.voxel_size_m <= 100.0))
+    throw config_error("--voxel-size-m",
+                       "must be in [0.05, 100] m, got " + std::to_string(arguments.voxel_size_m));
+  const LasFile cloud(arguments.cloud_file);
+  GapFractionSettings settings;
+  settings.voxel_size_m = arguments.voxel_size_m;
+  const VoxelizeResult result = voxelize_point_cloud(cloud, arguments.crs, "--crs", settings);
+  write_voxel_netcdf(arguments.out_dir, result.voxels, result.ground.height_m, command_line);
+  const VoxelBlock& v = result.voxels;
+  double pai = 0.0;
+  for (int j = 0; j < v.ny; ++j)
+    for (int i = 0; i < v.nx; ++i) pai += v.plant_area_index(i, j);
+  const VoxelizeReport& r = result.report;
+  std::printf(
+      "glaswave: %llu points (%llu ground, %llu dropped as noise); %d x %d columns x %d layers "
+      "of %g m, mean plant area index %.3f, %llu occluded layers; %s\n",
+      static_cast<unsigned long long>(r.points), static_cast<unsigned long long>(r.ground_points),
+      static_cast<unsigned long long>(r.noise_dropped), v.nx, v.ny, v.nz, settings.voxel_size_m,
+      pai / std::max(1, v.nx * v.ny), static_cast<unsigned long long>(r.occluded_layers),
+      arguments.out_dir.c_str());
+  return 0;
+}
+
 // The command line's commands and the options they share, bound to one Arguments.
 class Commands {
  public:
@@ -380,6 +410,7 @@ class Commands {
     add_check();
     add_sweep();
     add_brf();
+    add_voxelize();
   }
 
   // Runs the command the line chose.
@@ -391,6 +422,7 @@ class Commands {
                        "only `glaswave run` shares its shots among processes; run "
                        "this command without mpirun")));
     if (*brf_) return brf(arguments_);
+    if (*voxelize_) return voxelize(arguments_, command_line);
     if (*run_) return run(arguments_, command_line);
     if (*sweep_) return sweep(arguments_, variations_);
     return check(arguments_);
@@ -479,6 +511,20 @@ class Commands {
     brf_->add_flag("--quiet", arguments_.quiet, "no progress bar");
   }
 
+  void add_voxelize() {
+    voxelize_ = app_.add_subcommand(
+        "voxelize",
+        "an airborne lidar point cloud (LAS) -> a voxel grid of plant area density (NetCDF)");
+    voxelize_->add_option("CLOUD", arguments_.cloud_file, "point cloud (LAS 1.0-1.4)")->required();
+    given_.push_back(
+        voxelize_->add_option("--out", arguments_.out_dir, "the grid to write (NetCDF)")
+            ->required());
+    voxelize_->add_option("--voxel-size-m", arguments_.voxel_size_m,
+                          "voxel size, across and in height (m; default 1)");
+    given_.push_back(voxelize_->add_option(
+        "--crs", arguments_.crs, "the cloud's CRS when the file has none (EPSG:32633, WKT)"));
+  }
+
   CLI::App& app_;
   Arguments& arguments_;
   std::vector<std::string> variations_;
@@ -486,6 +532,7 @@ class Commands {
   CLI::App* check_ = nullptr;
   CLI::App* sweep_ = nullptr;
   CLI::App* brf_ = nullptr;
+  CLI::App* voxelize_ = nullptr;
   std::vector<CLI::Option*> given_;  // options refused when given empty
   static constexpr std::uint64_t max_threads = 65536;
 };

@@ -3,6 +3,7 @@
 // any format 0-10. Fields the tests do not set stay zero.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -16,6 +17,7 @@ struct LasFixturePoint {
   double x = 0.0, y = 0.0, z = 0.0;
   int return_number = 1, number_of_returns = 1, classification = 1;
   double gps_time = 0.0;
+  double scan_angle_deg = 0.0;
 };
 
 struct LasFixture {
@@ -105,10 +107,13 @@ inline std::vector<std::uint8_t> las_bytes(const LasFixture& f) {
     if (f.point_format >= 6) {
       r[14] = static_cast<std::uint8_t>(p.return_number | p.number_of_returns << 4);
       r[16] = static_cast<std::uint8_t>(p.classification);
+      put_value<std::int16_t>(r, 18,
+                              static_cast<std::int16_t>(std::lround(p.scan_angle_deg / 0.006)));
       put_value<double>(r, 22, p.gps_time);
     } else {
       r[14] = static_cast<std::uint8_t>(p.return_number | p.number_of_returns << 3);
       r[15] = static_cast<std::uint8_t>(p.classification);
+      r[16] = static_cast<std::uint8_t>(static_cast<std::int8_t>(std::lround(p.scan_angle_deg)));
       if (f.point_format != 0 && f.point_format != 2) put_value<double>(r, 20, p.gps_time);
     }
     b.insert(b.end(), r.begin(), r.end());

@@ -1,0 +1,230 @@
+// Gap-fraction inversion of airborne lidar returns, and the ground DEM through GDAL's gridding.
+#include "canopy/gap_fraction.hpp"
+
+#include <cpl_error.h>
+#include <gdal_alg.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "core/error.hpp"
+
+namespace glaswave {
+
+double GroundGrid::height_at(double x, double y) const {
+  const double u = (x - x0) / cell_m - 0.5, v = (y - y0) / cell_m - 0.5;
+  if (!(u >= -0.5 && u <= nx - 0.5 && v >= -0.5 && v <= ny - 0.5))
+    return std::numeric_limits<double>::quiet_NaN();
+  const double uc = std::clamp(u, 0.0, nx - 1.0), vc = std::clamp(v, 0.0, ny - 1.0);
+  const int i = std::min(static_cast<int>(uc), std::max(nx - 2, 0));
+  const int j = std::min(static_cast<int>(vc), std::max(ny - 2, 0));
+  const double fu = nx > 1 ? uc - i : 0.0, fv = ny > 1 ? vc - j : 0.0;
+  const auto h = [&](int di, int dj) {
+    return double{height_m[std::size_t(std::min(j + dj, ny - 1)) * nx + std::min(i + di, nx - 1)]};
+  };
+  return (1 - fv) * ((1 - fu) * h(0, 0) + fu * h(1, 0)) + fv * ((1 - fu) * h(0, 1) + fu * h(1, 1));
+}
+
+GroundGrid grid_ground(const std::vector<std::array<double, 3>>& points, double x0, double y0,
+                       int nx, int ny, double cell_m, const std::string& place) {
+  GroundGrid grid;
+  grid.nx = nx;
+  grid.ny = ny;
+  grid.x0 = x0;
+  grid.y0 = y0;
+  grid.cell_m = cell_m;
+  // One point a quarter cell, the mean of its ground points: the triangulation stays a few
+  // times the size of the grid, however dense the cloud, and its hull still holds the centre of
+  // every cell whose quarters have ground (one point a cell would leave the edge cells' centres
+  // outside it, to be filled by the nearest point: 14 cm off on a 10 % slope).
+  const std::size_t cells = std::size_t(nx) * ny;
+  const std::size_t thin = 4 * cells;
+  std::vector<double> sx(thin, 0.0), sy(thin, 0.0), sz(thin, 0.0), n(thin, 0.0);
+  for (const auto& p : points) {
+    const int i = static_cast<int>(std::floor(2.0 * (p[0] - x0) / cell_m));
+    const int j = static_cast<int>(std::floor(2.0 * (p[1] - y0) / cell_m));
+    if (i < 0 || j < 0 || i >= 2 * nx || j >= 2 * ny) continue;
+    const std::size_t c = std::size_t(j) * 2 * nx + i;
+    sx[c] += p[0];
+    sy[c] += p[1];
+    sz[c] += p[2];
+    n[c] += 1.0;
+  }
+  std::vector<double> gx, gy, gz;
+  for (std::size_t c = 0; c < thin; ++c) {
+    if (n[c] == 0.0) continue;
+    gx.push_back(sx[c] / n[c]);
+    gy.push_back(sy[c] / n[c]);
+    gz.push_back(sz[c] / n[c]);
+  }
+  if (gx.empty()) throw input_error(place, "no ground point (class 2): the terrain is unknown");
+  grid.height_m.assign(cells, std::numeric_limits<float>::quiet_NaN());
+  GDALGridLinearOptions options{};
+  options.nSizeOfStructure = sizeof options;
+  options.dfRadius = -1.0;  // beyond the triangulation: the nearest ground point
+  options.dfNoDataValue = std::numeric_limits<double>::quiet_NaN();
+  const GDALGridAlgorithm algorithm = gx.size() >= 3 ? GGA_Linear : GGA_NearestNeighbor;
+  GDALGridNearestNeighborOptions nearest{};
+  nearest.nSizeOfStructure = sizeof nearest;
+  nearest.dfNoDataValue = std::numeric_limits<double>::quiet_NaN();
+  CPLPushErrorHandler(CPLQuietErrorHandler);
+  // GDALGridCreate's node (i, j) lies at (xmin + (i + 0.5) dx, ymin + (j + 0.5) dy), row 0 at
+  // ymin: the grid's own layout.
+  const CPLErr status = GDALGridCreate(
+      algorithm, algorithm == GGA_Linear ? static_cast<const void*>(&options) : &nearest,
+      static_cast<GUInt32>(gx.size()), gx.data(), gy.data(), gz.data(), x0, x0 + nx * cell_m, y0,
+      y0 + ny * cell_m, nx, ny, GDT_Float32, grid.height_m.data(), nullptr, nullptr);
+  const std::string cause = CPLGetLastErrorMsg();
+  CPLPopErrorHandler();
+  if (status != CE_None) throw input_error(place, "gridding the ground points failed: " + cause);
+  return grid;
+}
+
+GapFractionInversion::GapFractionInversion(const VoxelBlock& shape, const GroundGrid& ground,
+                                           const GapFractionSettings& settings)
+    : shape_(shape), ground_(&ground), settings_(settings) {
+  const std::size_t columns = std::size_t(shape.nx) * shape.ny;
+  weight_.assign(columns * (shape.nz + 1), 0.0);
+  cos_sum_.assign(columns, 0.0);
+  column_weight_.assign(columns, 0.0);
+}
+
+void GapFractionInversion::add(const LasPoint& p, VoxelizeReport& report) {
+  if (p.withheld || p.classification == 7 || p.classification == 18) {
+    ++report.noise_dropped;
+    return;
+  }
+  int i = 0, j = 0;
+  if (!shape_.column_of(p.x, p.y, i, j)) return;
+  const double ground = ground_->height_at(p.x, p.y);
+  if (!std::isfinite(ground)) return;
+  const double h = p.z - ground;
+  if (h > settings_.max_height_m) {
+    ++report.noise_dropped;
+    return;
+  }
+  const double w = 1.0 / std::max<int>(1, p.number_of_returns);
+  const std::size_t column = std::size_t(j) * shape_.nx + i;
+  // Ground returns, and anything below the lowest layer, passed every layer.
+  int slot = 0;
+  if (p.classification != 2 && h >= shape_.z_edges_m[0])
+    slot = 1 + std::min(shape_.nz - 1,
+                        static_cast<int>((h - shape_.z_edges_m[0]) / settings_.voxel_size_m));
+  weight_[column * (shape_.nz + 1) + slot] += w;
+  column_weight_[column] += w;
+  cos_sum_[column] += w * std::cos(p.scan_angle_deg * std::numbers::pi / 180.0);
+  ++report.returns_used;
+}
+
+VoxelBlock GapFractionInversion::result(VoxelizeReport& report) const {
+  VoxelBlock block = shape_;
+  const int nz = shape_.nz;
+  const std::size_t columns = std::size_t(shape_.nx) * shape_.ny;
+  block.pad.assign(columns * nz, 0.0f);
+  report.columns = columns;
+  for (std::size_t c = 0; c < columns; ++c) {
+    const double total = column_weight_[c];
+    if (!(total > 0.0)) continue;
+    ++report.columns_with_pulses;
+    const double mu = cos_sum_[c] / total;  // mean cosine of the path from nadir
+    const double floor = 0.5 / total;       // occlusion: half a pulse passed
+    // P at each layer's bottom and top: the weight returned below it, over the total.
+    const double* w = weight_.data() + c * (nz + 1);
+    double below = w[0];
+    for (int k = 0; k < nz; ++k) {
+      const double p_bottom = below / total;
+      below += w[k + 1];
+      const double p_top = below / total;
+      if (!(p_top > 0.0)) continue;  // nothing reached this layer: it is not seen
+      double bottom = p_bottom;
+      if (bottom <= 0.0) {
+        ++report.occluded_layers;
+        bottom = std::min(floor, p_top);
+      }
+      const double dz = shape_.z_edges_m[k + 1] - shape_.z_edges_m[k];
+      block.pad[std::size_t(k) * columns + c] = static_cast<float>(
+          std::max(0.0, mu * std::log(p_top / bottom) / (settings_.leaf_projection * dz)));
+    }
+  }
+  return block;
+}
+
+VoxelizeResult voxelize_point_cloud(const LasFile& cloud, const std::string& crs,
+                                    const std::string& crs_place,
+                                    const GapFractionSettings& settings) {
+  VoxelizeResult out;
+  const std::string place = cloud.path().string();
+  const double s = settings.voxel_size_m;
+  if (!(s > 0.0)) throw config_error("voxel_size_m", "must be > 0");
+  out.voxels.crs_wkt = las_crs(cloud, crs, crs_place);
+  const LasHeader& h = cloud.header();
+  const std::uint64_t count = h.point_count;
+  constexpr std::uint64_t window = 1 << 20;
+  // Pass 1: the extent, and the ground points.
+  double lo[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  double hi[2] = {-lo[0], -lo[1]};
+  std::vector<std::array<double, 3>> ground;
+  std::vector<LasPoint> points;
+  for (std::uint64_t first = 0; first < count; first += window) {
+    points.clear();
+    cloud.read_points(first, window, points);
+    for (const LasPoint& p : points) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+      lo[0] = std::min(lo[0], p.x);
+      lo[1] = std::min(lo[1], p.y);
+      hi[0] = std::max(hi[0], p.x);
+      hi[1] = std::max(hi[1], p.y);
+      if (p.classification == 2 && !p.withheld) ground.push_back({p.x, p.y, p.z});
+    }
+  }
+  out.report.points = count;
+  out.report.ground_points = ground.size();
+  if (!(hi[0] >= lo[0])) throw input_error(place, "the point cloud holds no point");
+  const double x0 = std::floor(lo[0] / s) * s, y0 = std::floor(lo[1] / s) * s;
+  const double nx_real = std::floor((hi[0] - x0) / s) + 1,
+               ny_real = std::floor((hi[1] - y0) / s) + 1;
+  const double nz_real = std::ceil(settings.max_height_m / s);
+  if (nx_real * ny_real * nz_real > double(VoxelGridFile::max_window_voxels))
+    throw input_error(place, "the cloud spans " + std::to_string(nx_real) + " x " +
+                                 std::to_string(ny_real) + " columns of " + std::to_string(s) +
+                                 " m: more voxels than the limit of " +
+                                 std::to_string(VoxelGridFile::max_window_voxels) +
+                                 " (a larger voxel size, or tiles)");
+  const int nx = static_cast<int>(nx_real), ny = static_cast<int>(ny_real);
+  out.ground = grid_ground(ground, x0, y0, nx, ny, s, place);
+  ground.clear();
+  ground.shrink_to_fit();
+
+  VoxelBlock shape;
+  shape.crs_wkt = out.voxels.crs_wkt;
+  shape.nx = nx;
+  shape.ny = ny;
+  shape.nz = static_cast<int>(nz_real);
+  shape.x0 = x0;
+  shape.y0 = y0;
+  shape.dx = shape.dy = s;
+  for (int k = 0; k <= shape.nz; ++k) shape.z_edges_m.push_back(k * s);
+  GapFractionInversion inversion(shape, out.ground, settings);
+  // Pass 2: every return into its column and layer.
+  for (std::uint64_t first = 0; first < count; first += window) {
+    points.clear();
+    cloud.read_points(first, window, points);
+    for (const LasPoint& p : points) inversion.add(p, out.report);
+  }
+  out.voxels = inversion.result(out.report);
+  // Layers above the highest non-empty one are dropped.
+  const std::size_t columns = std::size_t(nx) * ny;
+  int top = 0;
+  for (int k = 0; k < out.voxels.nz; ++k)
+    for (std::size_t c = 0; c < columns && top <= k; ++c)
+      if (out.voxels.pad[k * columns + c] > 0.0f) top = k + 1;
+  top = std::max(top, 1);
+  out.voxels.nz = top;
+  out.voxels.z_edges_m.resize(top + 1);
+  out.voxels.pad.resize(columns * top);
+  return out;
+}
+
+}  // namespace glaswave
