@@ -20,6 +20,7 @@
 #include "core/error.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/app/reference.hpp"
+#include "pipeline/app/run_outline.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/engine/brf.hpp"
 #include "pipeline/engine/cluster.hpp"
@@ -309,7 +310,8 @@ int check(const Arguments& arguments) {
   }
   if (arguments.config_file.empty())
     throw config_error("check", "give CONFIG, or --schema for the configuration's JSON Schema");
-  const CheckSummary summary = check_inputs(load(arguments));
+  const Config config = load(arguments);
+  const CheckSummary summary = check_inputs(config);
   print_warnings(summary.warnings);
   std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain",
               arguments.config_file.c_str(), static_cast<long long>(summary.shots),
@@ -320,6 +322,8 @@ int check(const Arguments& arguments) {
                 static_cast<long long>(summary.shots),
                 static_cast<long long>(summary.sequence_length));
   std::printf("\n");
+  // Then what a run would do, for a person; the line above stays first, for scripts.
+  std::printf("%s", run_outline(config, summary, arguments.config_file).c_str());
   return 0;
 }
 
@@ -430,14 +434,23 @@ class Commands {
 
  private:
   void add_config(CLI::App* command, bool required) {
-    auto* config = command->add_option("CONFIG", arguments_.config_file, "configuration (JSON)");
+    auto* config = command->add_option("CONFIG", arguments_.config_file,
+                                       "the configuration, a JSON file (see the manual's "
+                                       "reference/configuration page, or `check --schema`)");
+    config->type_name("CONFIG.json");
     if (required) config->required();
-    command->add_option("--set", arguments_.overrides,
-                        "override a configuration key: KEY=VALUE (dotted KEY)");
+    command
+        ->add_option("--set", arguments_.overrides,
+                     "override a configuration key by its dotted path, e.g. --set canopy.pai=2 "
+                     "(VALUE read as JSON when it parses, else as a string); repeatable")
+        ->type_name("KEY=VALUE");
   }
   void add_threads(CLI::App* command) {
-    given_.push_back(command->add_option("--threads", arguments_.threads_text,
-                                         "threads (0: every core; at most the cores)"));
+    given_.push_back(command
+                         ->add_option("--threads", arguments_.threads_text,
+                                      "threads to simulate on; 0 (the default) uses every core "
+                                      "this process may use; results do not depend on it")
+                         ->type_name("N"));
   }
 
   // Options given empty are refused rather than taken as absent; numbers are read as decimal.
@@ -458,15 +471,31 @@ class Commands {
 
   void add_run() {
     run_ = app_.add_subcommand("run", "simulate the track's shots and write the products");
+    run_->footer(
+        "Examples:\n"
+        "  glaswave run share/demo/demo.json --out out/demo\n"
+        "  glaswave run pass.json --set canopy.pai=2 --shots 0:500 --out out/part1\n"
+        "  mpirun -q -np 4 glaswave run pass.json --out out/pass   (shots shared among 4 "
+        "processes)\n"
+        "Prints one summary line at the end (--json: one JSON object). Exit status: 0 done, 2 bad "
+        "command line or configuration, 3 unusable input data, 4 failure while running.\n"
+        "Manual: docs/guide/command-line.md in the source (./scripts/docs builds the site); the "
+        "keys: docs/reference/configuration.md.");
     add_config(run_, true);
     given_.push_back(run_->add_option("--out", arguments_.out_dir,
-                                      "output directory (default out/<config name>)"));
+                                      "output directory, which must not exist (default "
+                                      "out/<config name>)")
+                         ->type_name("DIR"));
     add_threads(run_);
-    given_.push_back(
-        run_->add_option("--shots", arguments_.shots, "simulate shot numbers A to B-1 only (A:B)"));
+    given_.push_back(run_->add_option("--shots", arguments_.shots,
+                                      "simulate shot numbers A to B-1 only, to split a track "
+                                      "across jobs; either side may be empty")
+                         ->type_name("A:B"));
     given_.push_back(run_->add_option("--seed", arguments_.seed_text,
-                                      "random seed (overrides the configuration's)"));
-    run_->add_flag("--resume", arguments_.resume, "finish an interrupted run");
+                                      "random seed (overrides the configuration's `seed`)")
+                         ->type_name("S"));
+    run_->add_flag("--resume", arguments_.resume,
+                   "finish a run that was killed, keeping the shots its journal holds");
     run_->add_flag("--quiet", arguments_.quiet, "no progress bar (nor progress lines)");
     run_->add_option("--progress-interval", arguments_.progress_interval_s)
         ->check(CLI::Range(0.0, 3600.0))
@@ -476,11 +505,21 @@ class Commands {
     given_.push_back(
         run_->add_option("--debug-ray", arguments_.debug_ray,
                          "re-run ray RAY of shot SHOT alone and print its events, one a line; "
-                         "writes no products (SHOT:RAY)"));
+                         "writes no products")
+            ->type_name("SHOT:RAY"));
   }
 
   void add_check() {
     check_ = app_.add_subcommand("check", "validate the configuration and its inputs, run nothing");
+    check_->footer(
+        "Examples:\n"
+        "  glaswave check share/demo/demo.json\n"
+        "  glaswave check pass.json --set track.shots=10000\n"
+        "  glaswave check --schema > glaswave.schema.json\n"
+        "On success: a first line `glaswave: CONFIG is valid: N shots, M off the terrain`, then "
+        "what a run would do (track, sensor, terrain, vegetation, rays, estimated time and "
+        "memory, products). Whatever `run` refuses before simulating, `check` refuses, with the "
+        "same message.");
     add_config(check_, false);
     check_->add_flag("--schema", arguments_.schema,
                      "print the configuration's JSON Schema (draft 2020-12) and exit");
@@ -494,9 +533,22 @@ class Commands {
     sweep_ = app_.add_subcommand(
         "sweep", "sensitivity study: the base case and each varied value, one key at a time");
     add_config(sweep_, true);
-    sweep_->add_option("--vary", variations_, "a key and its values: KEY=V1,V2,...")->required();
-    given_.push_back(sweep_->add_option("--out", arguments_.out_dir,
-                                        "output directory (default out/<config name>-sweep)"));
+    sweep_->footer(
+        "Example (the seed's Table 3):\n"
+        "  glaswave sweep share/studies/base.json --vary canopy.pai=1,2,4,5 "
+        "--vary canopy.lad=planophile,erectophile\n"
+        "Writes sensitivity.csv and sensitivity.md (TR, CR, GR and their % change from the base "
+        "case, per band). Manual: docs/guide/sweep.md.");
+    sweep_
+        ->add_option("--vary", variations_,
+                     "a key and the values it takes, one key at a time, the others at the base "
+                     "case; repeatable")
+        ->type_name("KEY=V1,V2,...")
+        ->required();
+    given_.push_back(sweep_
+                         ->add_option("--out", arguments_.out_dir,
+                                      "output directory (default out/<config name>-sweep)")
+                         ->type_name("DIR"));
     add_threads(sweep_);
     sweep_->add_flag("--quiet", arguments_.quiet, "no progress bar");
   }
@@ -504,9 +556,15 @@ class Commands {
   void add_brf() {
     brf_ = app_.add_subcommand(
         "brf", "scene reflectance under the sun (FLIGHT's mode): brf.json and scene.tif");
+    brf_->footer(
+        "Example:\n"
+        "  glaswave brf forest.json --out out/forest-brf\n"
+        "The sun, the views and the photons are the configuration's `brf` keys. Prints each "
+        "band's albedo and BRF per view. Manual: docs/guide/brf.md.");
     add_config(brf_, true);
     given_.push_back(brf_->add_option("--out", arguments_.out_dir,
-                                      "output directory (default out/<config name>-brf)"));
+                                      "output directory (default out/<config name>-brf)")
+                         ->type_name("DIR"));
     add_threads(brf_);
     brf_->add_flag("--quiet", arguments_.quiet, "no progress bar");
   }
@@ -543,6 +601,12 @@ int run_command_line(int argc, char** argv) {
   CLI::App app{
       "glaswave: Monte Carlo simulation of satellite waveform lidar over vegetation and terrain"};
   app.set_version_flag("--version", std::string("glaswave ") + GLASWAVE_VERSION);
+  app.footer(
+      "Examples:\n"
+      "  glaswave check share/demo/demo.json     what a run would do, simulating nothing\n"
+      "  glaswave run share/demo/demo.json       simulate it; products in out/demo\n"
+      "  glaswave run --help                     a command's options\n"
+      "Manual: docs/ in the source (./scripts/docs builds it; start at docs/index.md).");
   app.require_subcommand(1);
   Arguments arguments;
   Commands commands(app, arguments);

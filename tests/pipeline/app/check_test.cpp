@@ -1,7 +1,8 @@
 // `glaswave check` against `glaswave run` (PRODUCT.md section 2): the two accept exactly the same
 // configurations, so each bad configuration here ends both with the same status and the same
 // one-line message, and run leaves nothing behind. And `check --schema` prints the schema, and
-// the footprints' GeoPackage, once refused, is accepted and written.
+// the footprints' GeoPackage, once refused, is accepted and written. On success `check` outlines
+// what a run would do; every command's help gives an example.
 #include <cpl_error.h>
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
@@ -208,6 +209,54 @@ TEST_F(Check, SchemaIsPrinted) {
   const CommandOutcome nothing = run_glaswave("check");
   EXPECT_EQ(nothing.status, 2);
   EXPECT_EQ(nothing.output.rfind("glaswave: error: check: give CONFIG", 0), 0u) << nothing.output;
+}
+
+// On success the first line is what scripts read; then what a run would do, a line a part.
+TEST_F(Check, OutlinesWhatARunWouldDo) {
+  const std::string forest = write_config({{"canopy", json::object()}, {"track", {{"shots", 3}}}});
+  const CommandOutcome check = run_glaswave("check " + forest);
+  ASSERT_EQ(check.status, 0) << check.output;
+  EXPECT_EQ(
+      check.output.rfind("glaswave: " + forest + " is valid: 3 shots, 0 off the terrain\n", 0), 0u)
+      << check.output;
+  for (const std::string line :
+       {"\n  track:      pass from 46, 8 heading 0 deg",
+        "\n  sensor:     glas, 2 bands (532, 1064 nm)", "\n  terrain:    plane at 0 m, slope 0 deg",
+        "\n  vegetation: ellipsoid crowns of 8 m radius",
+        "\n  rays:       100 a shot, up to 8 scattering orders", "\n  time:       ",
+        "\n  memory:     about ", "\n  products:   shots.nc, footprints.geojson into out/config"})
+    EXPECT_NE(check.output.find(line), std::string::npos) << line << " in\n" << check.output;
+  const CommandOutcome bare = run_glaswave("check " + write_config(json::object()));
+  EXPECT_NE(bare.output.find("\n  vegetation: none (bare ground)\n"), std::string::npos)
+      << bare.output;
+}
+
+TEST_F(Check, EveryCommandsHelpGivesAnExample) {
+  for (const std::string command : {"", "run ", "check ", "sweep ", "brf "}) {
+    const CommandOutcome help = run_glaswave(command + "--help");
+    EXPECT_EQ(help.status, 0) << command;
+    EXPECT_NE(help.output.find("Example"), std::string::npos) << command << help.output;
+  }
+  const CommandOutcome run = run_glaswave("run --help");
+  EXPECT_NE(run.output.find("docs/guide/command-line.md"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("--out DIR"), std::string::npos) << run.output;
+}
+
+// The product field table as the manual's reference is generated from it.
+TEST_F(Check, FieldTableIsPrinted) {
+  const CommandOutcome fields = run_glaswave("check --fields-json");
+  ASSERT_EQ(fields.status, 0) << fields.output;
+  const json parsed = json::parse(fields.output);
+  ASSERT_TRUE(parsed.is_array());
+  bool found = false;
+  for (const json& field : parsed)
+    if (field["name"] == "rx_waveform") {
+      found = true;
+      EXPECT_EQ(field["dims"], json({"shot", "band", "bin"}));
+      EXPECT_EQ(field["gedi_name"], "rxwaveform");
+      EXPECT_EQ(field["units"], "W");
+    }
+  EXPECT_TRUE(found) << fields.output;
 }
 
 }  // namespace

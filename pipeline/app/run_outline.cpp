@@ -1,0 +1,201 @@
+// `glaswave check`'s outline of a run, read from the resolved configuration (every default filled
+// in, as the products' `config` attribute holds it) and the engine's estimates.
+#include "pipeline/app/run_outline.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace glaswave {
+namespace {
+
+using nlohmann::json;
+
+// A number as a person writes it: at most `digits` significant digits, no trailing zeros.
+std::string number(double value, int digits = 3) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*g", digits, value);
+  return text;
+}
+
+std::string plural(double count, const std::string& one, const std::string& many) {
+  return number(count, 12) + " " + (count == 1 ? one : many);
+}
+
+std::string duration(double seconds) {
+  if (seconds < 1.0) return "under a second";
+  if (seconds < 120.0) return "about " + number(seconds, 2) + " s";
+  if (seconds < 7200.0) return "about " + number(seconds / 60.0, 2) + " min";
+  if (seconds < 2.0 * 86400.0) return "about " + number(seconds / 3600.0, 2) + " h";
+  return "about " + number(seconds / 86400.0, 2) + " days";
+}
+
+std::string bytes(double value) {
+  if (value < 1024.0 * 1024.0 * 1024.0) return number(value / (1024.0 * 1024.0), 3) + " MiB";
+  return number(value / (1024.0 * 1024.0 * 1024.0), 3) + " GiB";
+}
+
+// A value of the resolved configuration: a string as it is, anything else as JSON.
+std::string text(const json& value) {
+  return value.is_string() ? value.get<std::string>() : value.dump();
+}
+
+// A per-band value (a number or an object keyed by band) in a few characters.
+std::string per_band(const json& value) {
+  if (!value.is_object()) return text(value);
+  std::string out;
+  for (const auto& [band, v] : value.items())
+    out += (out.empty() ? "" : ", ") + band + ": " + text(v);
+  return out;
+}
+
+std::string track_line(const json& track, const CheckSummary& summary) {
+  const std::string type = track.value("type", "pass");
+  std::string line = type;
+  if (type == "pass") {
+    line += " from " + number(track.value("start_lat_deg", 0.0), 7) + ", " +
+            number(track.value("start_lon_deg", 0.0), 7) + " heading " +
+            number(track.value("heading_deg", 0.0)) + " deg";
+    if (track.contains("spacing_m") && track["spacing_m"].is_number())
+      line += ", shots " + number(track["spacing_m"].get<double>()) + " m apart";
+  } else if (type == "granule" || type == "ephemeris") {
+    line += " " + text(track.value(type == "granule" ? "file" : "ephemeris", json("")));
+  }
+  line += ", from " + number(track.value("altitude_m", 600000.0) / 1000.0) + " km";
+  if (track.value("off_nadir_deg", 0.0) != 0.0)
+    line += ", " + number(track.value("off_nadir_deg", 0.0)) + " deg off nadir";
+  line += ": " + plural(static_cast<double>(summary.shots), "shot", "shots");
+  if (summary.shots_off_terrain > 0)
+    line += " (" + number(static_cast<double>(summary.shots_off_terrain), 12) +
+            " off the terrain, flagged)";
+  return line;
+}
+
+std::string sensor_line(const json& sensor, const json& track) {
+  std::string line = sensor.contains("preset") ? text(sensor["preset"]) : "custom";
+  std::vector<std::string> bands;
+  for (const json& band : sensor.value("bands", json::array()))
+    bands.push_back(number(band.value("wavelength_nm", 0.0), 6));
+  line += ", " + plural(static_cast<double>(bands.size()), "band", "bands") + " (";
+  for (std::size_t i = 0; i < bands.size(); ++i) line += (i ? ", " : "") + bands[i];
+  line += " nm)";
+  // The beam's 1/e^2 diameter on level ground below: 4 sigma_theta H.
+  const double diameter_m =
+      4.0 * sensor.value("divergence_sigma_rad", 0.0) * track.value("altitude_m", 600000.0);
+  line += ", a beam about " + number(diameter_m, 2) + " m across at 1/e2, " +
+          number(sensor.value("bins", 0.0), 12) + " bins of " +
+          number(sensor.value("bin_ns", 1.0)) + " ns";
+  return line;
+}
+
+std::string terrain_line(const json& terrain) {
+  std::string line;
+  if (terrain.contains("dem")) {
+    const std::string datum = text(terrain.value("vertical_datum", json("ellipsoid")));
+    line = "DEM " + std::filesystem::path(text(terrain["dem"])).filename().string() +
+           " (heights above " +
+           (datum == "ellipsoid" ? std::string("the WGS84 ellipsoid")
+            : datum == "egm96"   ? std::string("the EGM96 geoid")
+                                 : datum) +
+           ")";
+  } else {
+    const json plane = terrain.value("plane", json::object());
+    line = "plane at " + number(plane.value("elevation_m", 0.0)) + " m, slope " +
+           number(plane.value("slope_deg", 0.0)) + " deg facing " +
+           number(plane.value("aspect_deg", 0.0)) + " deg";
+  }
+  const json roughness = terrain.value("roughness", json::object());
+  if (roughness.value("rms_m", 0.0) > 0.0)
+    line += ", roughness " + number(roughness.value("rms_m", 0.0)) + " m RMS over " +
+            number(roughness.value("correlation_m", 0.0)) + " m";
+  line += ", soil reflectance " + per_band(terrain.value("soil_reflectance", json(0.15)));
+  return line;
+}
+
+std::string vegetation_line(const json& canopy) {
+  if (canopy.is_null()) return "none (bare ground)";
+  std::string line;
+  if (canopy.contains("crowns_file")) {
+    line = "explicit crowns from " +
+           std::filesystem::path(text(canopy["crowns_file"])).filename().string();
+  } else {
+    const std::string shape = canopy.value("crown_shape", "ellipsoid");
+    line = shape == "layer" ? "a homogeneous layer"
+                            : shape + " crowns of " + number(canopy.value("crown_radius_m", 0.0)) +
+                                  " m radius at cover " + number(canopy.value("cover", 0.0));
+  }
+  line += ", PAI " + number(canopy.value("pai", 0.0)) + ", " +
+          text(canopy.value("lad", json("spherical"))) + " leaves";
+  if (canopy.contains("stands"))
+    line += "; stands from " + std::filesystem::path(text(canopy["stands"])).filename().string();
+  return line;
+}
+
+std::string products_line(const json& output, const std::string& config_file) {
+  std::vector<std::string> products;
+  if (output.value("netcdf", true)) products.push_back("shots.nc");
+  if (output.value("geojson", true))
+    products.push_back(output.value("footprints_format", "GeoJSON") == "GPKG"
+                           ? "footprints.gpkg"
+                           : "footprints.geojson");
+  if (output.value("plots", false)) products.push_back("plots/");
+  std::string line;
+  for (std::size_t i = 0; i < products.size(); ++i) line += (i ? ", " : "") + products[i];
+  if (output.value("per_order", false)) line += " (with per-order waveforms)";
+  if (!output.value("metrics", true)) line += " (no waveform metrics)";
+  const auto folder = std::filesystem::path("out") / std::filesystem::path(config_file).stem();
+  return line + " into " + folder.string() + " (or --out DIR)";
+}
+
+}  // namespace
+
+double estimated_run_s(double shots, double rays_per_shot, int max_order, bool vegetation,
+                       int threads) {
+  constexpr double shot_s = 3e-4;       // geometry, processing and writing of a shot
+  constexpr double writing_s = 2.5e-4;  // a shot's writing, on one thread whatever the threads
+  const double ray_s = vegetation ? 1.0e-6 + 0.78e-6 * (std::max(max_order, 1) - 1) : 0.7e-6;
+  const double cpu_s = shot_s + rays_per_shot * ray_s;
+  return 0.2 + shots * std::max(cpu_s / std::max(threads, 1), writing_s);
+}
+
+std::string run_outline(const Config& config, const CheckSummary& summary,
+                        const std::string& config_file) {
+  const json& resolved = config.resolved;
+  const json simulation = resolved.value("simulation", json::object());
+  const json canopy = resolved.value("canopy", json());
+  const double rays = simulation.value("rays_per_shot", 10000.0);
+  const int max_order = simulation.value("max_order", 8);
+  const RunMemory memory = estimate_run_memory(config);
+  const double shots = static_cast<double>(summary.shots - summary.shots_off_terrain);
+
+  std::string out;
+  const auto line = [&](const char* label, const std::string& text) {
+    char head[32];
+    std::snprintf(head, sizeof head, "  %-12s", label);
+    out += head + text + "\n";
+  };
+  line("track:", track_line(resolved.value("track", json::object()), summary));
+  line("sensor:", sensor_line(resolved.value("sensor", json::object()),
+                              resolved.value("track", json::object())));
+  line("terrain:", terrain_line(resolved.value("terrain", json::object())));
+  line("vegetation:", vegetation_line(canopy));
+  line("rays:", number(rays, 12) + " a shot, up to " + number(max_order, 12) +
+                    " scattering orders, " + text(simulation.value("sampling", json("random"))) +
+                    " sampling");
+  line("time:",
+       duration(estimated_run_s(shots, rays, max_order, !canopy.is_null(), memory.threads)) +
+           " on " + plural(memory.threads, "thread", "threads") +
+           " (scaled from the benchmark's 2-core machine; expect within about 2x)");
+  line("memory:", "about " + bytes(memory.bytes) + " for " +
+                      plural(memory.threads, "thread's", "threads'") + " scenes (" +
+                      number(std::round(memory.trees), 12) + " trees each) and waveforms, of the " +
+                      bytes(memory.available_bytes) + " this process may have");
+  line("products:", products_line(resolved.value("output", json::object()), config_file));
+  return out;
+}
+
+}  // namespace glaswave
