@@ -573,14 +573,25 @@ class Commands {
     voxelize_ = app_.add_subcommand(
         "voxelize",
         "an airborne lidar point cloud (LAS) -> a voxel grid of plant area density (NetCDF)");
-    voxelize_->add_option("CLOUD", arguments_.cloud_file, "point cloud (LAS 1.0-1.4)")->required();
+    voxelize_->footer(
+        "Example:\n"
+        "  glaswave voxelize plot.las --out plot_voxels.nc --voxel-size-m 2\n"
+        "The grid is then a configuration's vegetation. Manual: docs/vegetation.md.");
+    voxelize_->add_option("CLOUD", arguments_.cloud_file, "point cloud (LAS 1.0-1.4)")
+        ->type_name("CLOUD.las")
+        ->required();
     given_.push_back(
         voxelize_->add_option("--out", arguments_.out_dir, "the grid to write (NetCDF)")
+            ->type_name("GRID.nc")
             ->required());
-    voxelize_->add_option("--voxel-size-m", arguments_.voxel_size_m,
-                          "voxel size, across and in height (m; default 1)");
-    given_.push_back(voxelize_->add_option(
-        "--crs", arguments_.crs, "the cloud's CRS when the file has none (EPSG:32633, WKT)"));
+    voxelize_
+        ->add_option("--voxel-size-m", arguments_.voxel_size_m,
+                     "voxel size, across and in height (m; default 1)")
+        ->type_name("S");
+    given_.push_back(voxelize_
+                         ->add_option("--crs", arguments_.crs,
+                                      "the cloud's CRS when the file has none (EPSG:32633, WKT)")
+                         ->type_name("CRS"));
   }
 
   CLI::App& app_;

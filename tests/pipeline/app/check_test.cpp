@@ -232,7 +232,7 @@ TEST_F(Check, OutlinesWhatARunWouldDo) {
 }
 
 TEST_F(Check, EveryCommandsHelpGivesAnExample) {
-  for (const std::string command : {"", "run ", "check ", "sweep ", "brf "}) {
+  for (const std::string command : {"", "run ", "check ", "sweep ", "brf ", "voxelize "}) {
     const CommandOutcome help = run_glaswave(command + "--help");
     EXPECT_EQ(help.status, 0) << command;
     EXPECT_NE(help.output.find("Example"), std::string::npos) << command << help.output;
