@@ -202,7 +202,8 @@ void print_warnings(const std::vector<std::string>& warnings) {
     std::fprintf(stderr, "glaswave: warning: %s\n", one_line(warning).c_str());
 }
 
-// --debug-ray SHOT:RAY: one line per event on stdout, columns as README.md describes them.
+// --debug-ray SHOT:RAY: one line per event on stdout, columns as docs/guide/command-line.md
+// describes them.
 int debug_ray_command(const Arguments& arguments) {
   const auto [shot, ray] = parse_shot_and_ray(arguments.debug_ray);
   const Config config = load(arguments);
@@ -645,8 +646,8 @@ int run_command_line(int argc, char** argv) {
     return report(one_line(e.what()).c_str(), e.exit_status());
   } catch (const std::bad_alloc&) {
     return report(
-        "out of memory; the configuration's limits (README, \"Limits\") assume the machine's "
-        "memory is free",
+        "out of memory; the configuration's limits (the manual's docs/guide/limits.md) assume the "
+        "machine's memory is free",
         static_cast<int>(ErrorKind::run));
   } catch (const std::exception& e) {
     return report(one_line(e.what()).c_str(), static_cast<int>(ErrorKind::run));

@@ -266,7 +266,8 @@ def table3_markdown(rows, explained, canopy_share, size, band):
         f"Table 3 at {band} nm: % change of the mean return over {size['shots']} footprints "
         f"({size['rays_per_shot']} rays each) from the base case (Tables 1-2), partitioned by "
         "position in the waveform; the seed's numbers beside. Base case: canopy return "
-        f"{100 * canopy_share:.1f} % of the total (the seed's rows imply 67.7 %: see the README).",
+        f"{100 * canopy_share:.1f} % of the total (the seed's rows imply 67.7 %: see "
+        "docs/guide/studies.md).",
         "",
         "| parameter | value | TR | CR | GR | seed TR | seed CR | seed GR |",
         "|---|---|---:|---:|---:|---:|---:|---:|",
@@ -274,7 +275,7 @@ def table3_markdown(rows, explained, canopy_share, size, band):
     for r in rows:
         lines.append(f"| {r[0]} | {r[1]} | " + " | ".join(cell(v) for v in r[2:8]) + " |")
     if explained:
-        lines += ["", "Other readings of the rows that differ (see the README):", "",
+        lines += ["", "Other readings of the rows that differ (see docs/guide/studies.md):", "",
                   "| parameter | value | TR | CR | GR | what |", "|---|---|---:|---:|---:|---|"]
         for r in explained:
             lines.append(f"| {r[0]} | {r[1]} | " + " | ".join(cell(v) for v in r[2:5]) +

@@ -63,7 +63,7 @@ TEST(WaveformProcessing, BareGroundAtFewRaysHasNoCanopy) {
 // rays keeps its canopy: most of the return is canopy (the layer lets exp(-0.5 * 5) = 8 % of
 // the beam through to the ground) and the ground is found under it, within 1.5 m. (At 1000 rays
 // and fewer the ground's peak, 5 % of the canopy's, is not always told from the canopy's
-// noise and broad tail: README, Waveform processing.)
+// noise and broad tail: docs/physics.md, Waveform processing: measured.)
 TEST(WaveformProcessing, DenseCanopyAtFewRaysKeepsItsCanopy) {
   for (const std::int64_t rays : {3000}) {
     const test_support::SimulatedTrack run = test_support::simulate_track(nlohmann::json{
