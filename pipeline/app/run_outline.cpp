@@ -189,11 +189,11 @@ std::string run_outline(const Config& config, const CheckSummary& summary,
   line("time:",
        duration(estimated_run_s(shots, rays, max_order, !canopy.is_null(), memory.threads)) +
            " on " + plural(memory.threads, "thread", "threads") +
-           " (scaled from the benchmark's 2-core machine; expect within about 2x)");
-  line("memory:", "about " + bytes(memory.bytes) + " for " +
-                      plural(memory.threads, "thread's", "threads'") + " scenes (" +
-                      number(std::round(memory.trees), 12) + " trees each) and waveforms, of the " +
-                      bytes(memory.available_bytes) + " this process may have");
+           " (scaled from the benchmark; expect within about 2x)");
+  line("memory:", "about " + bytes(memory.bytes) + " (" + number(memory.threads, 12) +
+                      " x a scene of " + number(std::round(memory.trees), 12) +
+                      " trees and its waveforms), of " + bytes(memory.available_bytes) +
+                      " available");
   line("products:", products_line(resolved.value("output", json::object()), config_file));
   return out;
 }
