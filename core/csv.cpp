@@ -5,6 +5,8 @@
 #include <charconv>
 #include <cmath>
 
+#include "core/input_file.hpp"
+
 namespace glaswave {
 namespace {
 
@@ -55,11 +57,9 @@ std::string field_excerpt(std::string_view field, std::string_view also) {
 
 CsvReader::CsvReader(const std::filesystem::path& file, std::string what)
     : path_(file.string()), what_(std::move(what)) {
+  require_input_file(path_, what_);  // a FIFO or a device is waited on or read for ever
   std::error_code error;
-  if (std::filesystem::exists(file, error) && !std::filesystem::is_regular_file(file, error))
-    throw input_error(path_, "cannot read " + what_ + ": not a regular file");
-  if (std::filesystem::is_regular_file(file, error) &&
-      std::filesystem::file_size(file, error) > max_file_bytes)
+  if (std::filesystem::file_size(file, error) > max_file_bytes)
     throw input_error(path_, what_ + " is larger than the limit of " +
                                  std::to_string(max_file_bytes >> 20) + " MiB");
   in_.open(file, std::ios::binary);

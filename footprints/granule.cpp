@@ -8,6 +8,8 @@
 #include <system_error>
 
 #include "core/error.hpp"
+#include "core/input_file.hpp"
+#include "core/netcdf_lock.hpp"
 #include "footprints/glas_time.hpp"
 
 namespace glaswave {
@@ -133,10 +135,11 @@ std::vector<std::string> gedi_beams(hid_t file) {
 std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
                                       const std::vector<std::string>& beams) {
   const std::string path = file.string();
+  // HDF5 (Debian's, not built thread-safe) is the library under libnetcdf: one lock for both,
+  // held until every handle below is closed.
+  const std::lock_guard lock(netcdf_library_mutex());
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are ours to report
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(file, ec))
-    throw input_error(path, "the granule file does not exist or is not a file");
+  require_input_file(path, "the granule");
   if (H5Fis_hdf5(path.c_str()) <= 0)
     throw input_error(path, "the granule is not an HDF5 file (GEDI L2A or GLAH14)");
   Handle h5(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);

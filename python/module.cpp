@@ -4,11 +4,13 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/netcdf_lock.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/engine/brf.hpp"
@@ -112,6 +114,23 @@ py::dict check(const std::optional<std::string>& path, const std::optional<std::
   return result;
 }
 
+// libnetcdf's lock (core/netcdf_lock.hpp) for Python's own netCDF reads (netCDF4-python, under
+// xarray, calls the same libnetcdf and HDF5 with the GIL released). Waited for without the GIL:
+// a run holding the lock never takes the GIL while it does.
+class NetcdfLock {
+ public:
+  void enter() {
+    py::gil_scoped_release release;
+    lock_ = std::unique_lock(netcdf_library_mutex());
+  }
+  void exit(const py::args&) {
+    if (lock_.owns_lock()) lock_.unlock();
+  }
+
+ private:
+  std::unique_lock<std::mutex> lock_;
+};
+
 PyObject* add_exception(py::module_& m, const char* name, PyObject* base, const char* doc) {
   const std::string qualified = std::string("glaswave.") + name;
   PyObject* type = PyErr_NewExceptionWithDoc(qualified.c_str(), doc, base, nullptr);
@@ -161,6 +180,12 @@ PYBIND11_MODULE(_glaswave, m) {
         "run's summary.");
   m.def("brf", &brf, arg("path"), arg("document"), arg("folder"), arg("overrides"), arg("threads"),
         "Runs `glaswave brf` without writing its products; returns brf.json's text.");
+  py::class_<NetcdfLock>(m, "netcdf_lock",
+                         "A context manager holding the engine's libnetcdf/HDF5 lock (for reading "
+                         "its products with netCDF4-python while another thread runs).")
+      .def(py::init<>())
+      .def("__enter__", &NetcdfLock::enter)
+      .def("__exit__", &NetcdfLock::exit);
   m.def("check", &check, arg("path"), arg("document"), arg("folder"), arg("overrides"),
         "Loads the configuration and opens its inputs, simulating nothing; returns what it found.");
 }

@@ -23,6 +23,7 @@
 #include "core/error.hpp"
 #include "core/netcdf_lock.hpp"
 #include "terrain/crs_transform.hpp"
+#include "terrain/gdal_source.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
@@ -60,6 +61,8 @@ class GdalErrorTrap {
 
 struct DatasetCloser {
   void operator()(GDALDataset* dataset) const {
+    // A netCDF or HDF5 DEM is closed through libnetcdf (see core/netcdf_lock.hpp).
+    const std::lock_guard lock(netcdf_library_mutex());
     const GdalErrorTrap trap;
     GDALClose(dataset);
   }
@@ -201,19 +204,11 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
 }
 
 void DemTerrain::Impl::open_dataset() {
-  namespace fs = std::filesystem;
-  // GDAL's virtual file systems (/vsizip/, /vsicurl/) are left to GDAL to find.
-  if (path.rfind("/vsi", 0) != 0) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) throw input_error(path, "cannot read the DEM: no such file");
-    if (fs::is_directory(path, ec))
-      throw input_error(path, "cannot read the DEM: it is a directory");
-    // A pipe nobody writes would be waited for, a device read for ever.
-    if (!fs::is_regular_file(path, ec))
-      throw input_error(path, "cannot read the DEM: not a regular file");
-  }
+  // A FIFO, a device, /vsistdin/ or a VRT naming one would be waited on or read for ever.
+  require_gdal_source(path, "the DEM");
   {
     const GdalErrorTrap trap;
+    const std::lock_guard lock(netcdf_library_mutex());  // a netCDF DEM opens libnetcdf
     dataset.reset(GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
     if (!dataset)
       throw input_error(

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/input_file.hpp"
 #include "core/names.hpp"
 #include "footprints/ephemeris.hpp"
 #include "footprints/glas_time.hpp"
@@ -683,12 +684,9 @@ void resolve_path(std::string& path, json& resolved_section, const char* key,
 
 json read_json_file(const std::filesystem::path& file) {
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec))
-    throw config_error(file.string(), "cannot read: it is a directory");
   // A device or a pipe (/dev/zero) would be read for ever, and opening a pipe nobody writes
   // waits for ever: a configuration is a file, and a small one, which is seen before opening.
-  if (std::filesystem::exists(file, ec) && !std::filesystem::is_regular_file(file, ec))
-    throw config_error(file.string(), "cannot read: not a regular file");
+  require_input_file(file.native(), "the configuration", ErrorKind::config);
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     throw config_error(file.string(),

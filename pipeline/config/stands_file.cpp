@@ -15,6 +15,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/config/json_reader.hpp"
+#include "terrain/gdal_source.hpp"
 
 namespace glaswave {
 namespace {
@@ -141,10 +142,7 @@ json feature_properties(const OGRFeature& feature, const std::string& path,
 std::vector<StandFeature> read_stand_features(const std::string& path) {
   // A pipe or a device would be waited for or read for ever (a Shapefile's folder is fine).
   std::error_code error;
-  const auto status = std::filesystem::status(path, error);
-  if (!error && status.type() != std::filesystem::file_type::regular &&
-      status.type() != std::filesystem::file_type::directory)
-    throw input_error(path, "cannot be read as a vector file: not a regular file");
+  if (!std::filesystem::is_directory(path, error)) require_gdal_source(path, "the stands file");
   GDALAllRegister();
   const QuietGdal quiet;
   const std::unique_ptr<GDALDataset, DatasetCloser> dataset(GDALDataset::FromHandle(

@@ -1,7 +1,8 @@
 // The run journal on disk: a 16-byte header (magic, identity hash), then frames: a marker, the
-// record count, the ray queries, the payload's size and its size uncompressed, the payload
-// (records as record_codec writes them, compressed with LZ4) and an FNV-1a checksum of all that.
-// Written with POSIX calls so that every write and flush is checked.
+// index in the run of the frame's first record, the record count, the ray queries, the payload's
+// size and its size uncompressed, the payload (records as record_codec writes them, compressed with
+// LZ4) and an FNV-1a checksum of all that. Written with POSIX calls so that every write and flush
+// is checked.
 #include "pipeline/engine/journal.hpp"
 
 #include <fcntl.h>
@@ -17,13 +18,14 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/input_file.hpp"
 #include "core/write_error.hpp"
 #include "pipeline/products/record_codec.hpp"
 
 namespace glaswave {
 namespace {
 
-constexpr std::uint64_t kMagic = 0x33304c4e524a5747;  // "GWJRNL03"
+constexpr std::uint64_t kMagic = 0x34304c4e524a5747;  // "GWJRNL04"
 constexpr std::uint64_t kFrameMarker = 0x454d415246574721;
 // A run's longest wait between flushes of the journal to the disk.
 constexpr double kSyncInterval_s = 1.0;
@@ -99,6 +101,7 @@ void RunJournal::append(std::span<const ShotRecord> records, std::int64_t ray_qu
     const bool last = i + 1 == records.size();
     if (last || raw_.size() >= kFrameBytes) {
       write_frame(raw_, in_frame, last ? ray_queries : 0);
+      records_ += in_frame;
       raw_.clear();
       in_frame = 0;
     }
@@ -116,16 +119,20 @@ void RunJournal::write_frame(const std::string& raw, std::size_t records,
                                         std::to_string(raw.size()) + " bytes)");
   // The frame is built in place in a buffer kept from frame to frame: a new one each time cost
   // its page faults and zeroing, more than LZ4 itself.
-  constexpr std::size_t kHeader = 5 * sizeof(std::uint64_t);  // marker, records, queries, sizes
+  // marker, first record, records, queries, sizes
+  constexpr std::size_t kHeader = 6 * sizeof(std::uint64_t);
   const auto bound = static_cast<std::size_t>(LZ4_compressBound(static_cast<int>(raw.size())));
   if (frame_.size() < kHeader + bound + sizeof(std::uint64_t))
     frame_.resize(kHeader + bound + sizeof(std::uint64_t));
   const int size = LZ4_compress_default(raw.data(), frame_.data() + kHeader,
                                         static_cast<int>(raw.size()), static_cast<int>(bound));
   if (size <= 0) throw run_error(path_.string(), "cannot compress the journal's records");
-  const std::array<std::uint64_t, 5> words = {kFrameMarker, records,
+  const std::array<std::uint64_t, 6> words = {kFrameMarker,
+                                              records_,
+                                              records,
                                               static_cast<std::uint64_t>(ray_queries),
-                                              static_cast<std::uint64_t>(size), raw.size()};
+                                              static_cast<std::uint64_t>(size),
+                                              raw.size()};
   std::memcpy(frame_.data(), words.data(), kHeader);
   const std::size_t checked = kHeader + static_cast<std::size_t>(size);
   const std::uint64_t checksum = fnv1a(frame_.data(), checked);
@@ -149,6 +156,8 @@ std::unique_ptr<RunJournal> RunJournal::resume(
     const std::filesystem::path& path, const std::string& identity,
     const std::function<void(const ShotRecord&)>& consume, std::int64_t& ray_queries) {
   ray_queries = 0;
+  // A journal replaced by a FIFO would be waited on for ever.
+  require_input_file(path.native(), "the run journal", ErrorKind::config);
   std::ifstream in(path, std::ios::binary);
   std::array<std::uint64_t, 2> header{};
   // A journal killed before its header was whole holds no shot: begin it again.
@@ -168,30 +177,42 @@ std::unique_ptr<RunJournal> RunJournal::resume(
                        "--seed or --shots (or another glaswave version): --resume must repeat "
                        "its command; or remove the directory");
   std::uint64_t valid_end = sizeof header;
+  std::uint64_t records = 0;  // handed on so far: the index the next frame must begin at
   std::string frame, raw;
-  for (;;) {
-    std::array<std::uint64_t, 5> words{};  // marker, records, ray queries, sizes
+  for (std::uint64_t number = 0;; ++number) {
+    // marker, first record, records, ray queries, sizes
+    std::array<std::uint64_t, 6> words{};
     if (!in.read(reinterpret_cast<char*>(words.data()), sizeof words)) break;
     // Sizes beyond what LZ4 takes: not a frame.
     if (words[0] != kFrameMarker ||
-        words[3] > static_cast<std::uint64_t>(LZ4_COMPRESSBOUND(kLargestFrame)) ||
-        words[4] > kLargestFrame)
+        words[4] > static_cast<std::uint64_t>(LZ4_COMPRESSBOUND(kLargestFrame)) ||
+        words[5] > kLargestFrame)
       break;
     frame.assign(reinterpret_cast<const char*>(words.data()), sizeof words);
-    frame.resize(sizeof words + words[3] + sizeof(std::uint64_t));
+    frame.resize(sizeof words + words[4] + sizeof(std::uint64_t));
     if (!in.read(frame.data() + sizeof words,
                  static_cast<std::streamsize>(frame.size() - sizeof words)))
       break;
     std::uint64_t checksum = 0;
     std::memcpy(&checksum, frame.data() + frame.size() - sizeof checksum, sizeof checksum);
     if (checksum != fnv1a(frame.data(), frame.size() - sizeof checksum)) break;  // torn
-    raw.resize(words[4]);
-    if (LZ4_decompress_safe(frame.data() + sizeof words, raw.data(), static_cast<int>(words[3]),
+    // A whole frame out of its place (a frame repeated, one lost, frames swapped) is not a
+    // torn end: the journal no longer says which shots were done, and resuming would double
+    // some and lose others.
+    if (words[1] != records)
+      throw config_error(path.string(),
+                         "frame " + std::to_string(number + 1) + " holds records from " +
+                             std::to_string(words[1]) + " where " + std::to_string(records) +
+                             " was due (frames repeated, missing or out of order): the journal "
+                             "does not describe one run; remove the output directory");
+    raw.resize(words[5]);
+    if (LZ4_decompress_safe(frame.data() + sizeof words, raw.data(), static_cast<int>(words[4]),
                             static_cast<int>(raw.size())) != static_cast<int>(raw.size()))
       break;
     std::size_t offset = 0;
-    for (std::uint64_t i = 0; i < words[1]; ++i) consume(decode_record(raw, offset));
-    ray_queries += static_cast<std::int64_t>(words[2]);
+    for (std::uint64_t i = 0; i < words[2]; ++i) consume(decode_record(raw, offset));
+    records += words[2];
+    ray_queries += static_cast<std::int64_t>(words[3]);
     valid_end += frame.size();
   }
   in.close();
@@ -203,7 +224,9 @@ std::unique_ptr<RunJournal> RunJournal::resume(
     ::close(fd);
     throw write_error(path.string(), error_number);
   }
-  return std::unique_ptr<RunJournal>(new RunJournal(path, fd));
+  std::unique_ptr<RunJournal> journal(new RunJournal(path, fd));
+  journal->records_ = records;
+  return journal;
 }
 
 }  // namespace glaswave

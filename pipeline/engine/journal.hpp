@@ -2,7 +2,9 @@
 // .part files so that a run killed at any moment (SIGKILL, a machine lost) can be finished
 // with --resume and still write products identical to an uninterrupted run. It is a header
 // (the run's identity: a hash of the configuration and the shots) and frames of records, one
-// per batch, each with its checksum; a frame torn by the kill is dropped on resume. Frames are
+// per batch, each with its checksum and the index of its first record; a frame torn by the kill
+// is dropped on resume, and a whole frame out of its place (repeated, missing, swapped) refuses
+// the journal. Frames are
 // flushed to the disk at most about once a second.
 #pragma once
 
@@ -61,6 +63,7 @@ class RunJournal {
   double last_sync_s_ = 0.0;
   std::string raw_;    // a frame's records, uncompressed; kept, as frame_, for the next frame
   std::string frame_;  // a frame as written: header, LZ4 payload, checksum
+  std::uint64_t records_ = 0;  // records in the journal: the index of the next frame's first
 };
 
 }  // namespace glaswave

@@ -223,10 +223,13 @@ struct RunOutput {
 OutputDirectory::OutputDirectory(std::filesystem::path path, bool resume) : path_(std::move(path)) {
   std::error_code error;
   if (fs::exists(path_, error)) {
+    // Another run writing here (two --resume started together) must not be looked at half-way.
+    if (fs::is_directory(path_, error)) lock_ = std::make_unique<DirectoryLock>(path_);
     has_journal_ = fs::exists(path_ / RunJournal::kFileName, error);
     bool only_parts = true;  // a run killed before its journal was made
     for (const auto& entry : fs::directory_iterator(path_, error))
-      only_parts = only_parts && entry.is_regular_file() && is_part(entry);
+      only_parts = only_parts && ((entry.is_regular_file() && is_part(entry)) ||
+                                  entry.path().filename() == DirectoryLock::kFileName);
     if (resume && !has_journal_ && !only_parts)
       throw config_error(path_.string(),
                          "holds no interrupted run to resume (no " +
@@ -245,9 +248,13 @@ OutputDirectory::OutputDirectory(std::filesystem::path path, bool resume) : path
   fs::create_directories(path_, error);
   if (error)
     throw config_error(path_.string(), "cannot create the output directory: " + error.message());
+  // A run started with this one may have created the directory too and hold it: then it is
+  // that run's, and this constructor's failure leaves it alone.
+  lock_ = std::make_unique<DirectoryLock>(path_);
 }
 
 OutputDirectory::~OutputDirectory() {
+  lock_.reset();  // its file goes first, so that an empty directory is seen as one
   std::error_code ignored;
   if (!kept_ && fs::is_empty(path_, ignored)) fs::remove(path_, ignored);
 }

@@ -7,9 +7,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
+#include "core/directory_lock.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/engine/shot_simulation.hpp"
@@ -63,6 +65,7 @@ class OutputDirectory {
 
  private:
   std::filesystem::path path_;
+  std::unique_ptr<DirectoryLock> lock_;  // taken before anything in the directory is looked at
   bool kept_ = false;
   bool has_journal_ = false;
 };

@@ -725,12 +725,24 @@ NetcdfWriter::NetcdfWriter(std::filesystem::path final_path, const RunInfo& info
   impl.written.assign(impl.shots, false);
 
   const std::string part = impl.file.part_path().string();
-  impl.check(nc_create(part.c_str(), NC_NETCDF4 | NC_CLOBBER, impl.nc.out()),
-             "cannot create " + part);
-  impl.define(info);
+  // libnetcdf is called under its lock only: another run in this process (two Python threads)
+  // may be writing, or reading a netCDF DEM, meanwhile.
+  const std::lock_guard lock(netcdf_library_mutex());
+  try {
+    impl.check(nc_create(part.c_str(), NC_NETCDF4 | NC_CLOBBER, impl.nc.out()),
+               "cannot create " + part);
+    impl.define(info);
+  } catch (...) {
+    impl_.reset();  // the half-defined file is aborted here, still under the lock
+    throw;
+  }
 }
 
-NetcdfWriter::~NetcdfWriter() = default;
+NetcdfWriter::~NetcdfWriter() {
+  // An unfinished product's id is aborted as Impl goes: under the library's lock too.
+  const std::lock_guard lock(netcdf_library_mutex());
+  impl_.reset();
+}
 
 NetcdfWriter::Impl& NetcdfWriter::impl() {
   if (!impl_) throw run_error(final_path_.string(), "the product was aborted");

@@ -13,6 +13,7 @@ line's `glaswave: error:` line and the `place` it names.
 """
 
 import json
+import operator
 import os
 import tempfile
 import warnings
@@ -71,7 +72,10 @@ def _source(config):
             raise ConfigError(f"the configuration is not a JSON document: {error}") from None
         return None, document, os.getcwd()
     if isinstance(config, (str, bytes, os.PathLike)):
-        return os.fsdecode(config), None, os.getcwd()
+        path = os.fsdecode(config)
+        if "\0" in path:  # the C library would read the file named by the part before it
+            raise _config_error(repr(path)[1:-1], "a path must not hold a NUL byte")
+        return path, None, os.getcwd()
     raise TypeError(f"config must be a path or a dict, not {type(config).__name__}")
 
 
@@ -92,6 +96,9 @@ def _assignments(overrides):
     return assignments
 
 
+_MAX_SHOT = 2**63 - 1  # the engine's shot numbers are 64-bit signed
+
+
 def _shot_range(shots):
     """None, range(a, b) or (a, b) -> the half-open (first, last) of `--shots A:B`."""
     if shots is None:
@@ -105,10 +112,20 @@ def _shot_range(shots):
             first, last = shots
         except (TypeError, ValueError):
             raise ConfigError(f"shots: a range or (first, last), got {shots!r}") from None
+    bounds = []
     for value in (first, last):
-        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
-            raise ConfigError(f"shots: shot numbers >= 0, got {shots!r}")
-    return first, last
+        if value is not None:
+            # Any integer type (numpy's too, through __index__), not bool nor a float.
+            try:
+                value = None if isinstance(value, bool) else operator.index(value)
+            except TypeError:
+                value = None
+            if value is None or value < 0:
+                raise ConfigError(f"shots: integer shot numbers >= 0, got {shots!r}")
+            if value > _MAX_SHOT:
+                raise ConfigError(f"shots: shot number {value} is too large (at most 2**63 - 1)")
+        bounds.append(value)
+    return bounds[0], bounds[1]
 
 
 def _threads(threads):
@@ -153,7 +170,10 @@ def run(config, shots=None, threads=0, overrides=None):
         summary = _glaswave.run(path, document, folder, assignments, out_dir, threads, first,
                                 last, command_line)
         _warn(summary)
-        return xarray.load_dataset(os.path.join(out_dir, "shots.nc"))
+        # netCDF4-python calls the libnetcdf and HDF5 the engine uses, with the GIL released:
+        # under the engine's lock, so that another thread's run is not writing meanwhile.
+        with _glaswave.netcdf_lock():
+            return xarray.load_dataset(os.path.join(out_dir, "shots.nc"))
 
 
 def brf(config, threads=0, overrides=None):

@@ -64,7 +64,7 @@ TEST(CsvReader, SkipsBlankAndCommentLinesAndNamesTheLineOfAnError) {
     CsvReader missing(file, "the test file");
     FAIL() << "a missing file was opened";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), file.string() + ": cannot open the test file");
+    EXPECT_EQ(std::string(e.what()), file.string() + ": cannot read the test file: no such file");
   }
 }
 
@@ -103,7 +103,8 @@ TEST(CsvReader, RefusesDevicesAndOverlongLines) {
     FAIL() << "/dev/zero was opened";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::input);
-    EXPECT_EQ(std::string(e.what()), "/dev/zero: cannot read the test file: not a regular file");
+    EXPECT_EQ(std::string(e.what()),
+              "/dev/zero: cannot read the test file: it is a device, not a regular file");
   }
   const test_support::ScratchDir dir("glaswave_csv_test");
   const fs::path file = dir / "long.csv";

@@ -175,7 +175,7 @@ TEST_F(HostileInput, EachItemOfTheListGetsAClearError) {
   expect_refused(write_config({{"canopy", {{"crowns_file", crowns}}}}), "", 3,
                  crowns + ":2: x must be within 1000000 m of the plane's origin");
   expect_refused(write_config({{"canopy", {{"crowns_file", "/dev/zero"}}}}), "", 3,
-                 "/dev/zero: cannot read the crowns file: not a regular file");
+                 "/dev/zero: cannot read the crowns file: it is a device, not a regular file");
   // A number in JSON is decimal: 0x10 is malformed JSON, from a file; a string from --set.
   const std::string hex = write("hex.json", R"({"seed": 0x10})");
   expect_refused(hex, "", 2, hex + ": malformed JSON at line 1");
@@ -193,13 +193,18 @@ TEST_F(HostileInput, EachItemOfTheListGetsAClearError) {
 TEST_F(HostileInput, FifosAndEmptyStandsAreRefusedAndSpreadsheetCsvIsRead) {
   const fs::path fifo = dir_ / "fifo";
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
-  expect_refused(fifo.string(), "", 2, fifo.string() + ": cannot read: not a regular file");
-  expect_refused(write_config({{"canopy", {{"stands", fifo.string()}}}}), "", 3,
-                 fifo.string() + ": cannot be read as a vector file: not a regular file");
-  expect_refused(write_config({{"canopy", {{"crowns_file", fifo.string()}}}}), "", 3,
-                 fifo.string() + ": cannot read the crowns file: not a regular file");
-  expect_refused(write_config({{"terrain", {{"plane", nullptr}, {"dem", fifo.string()}}}}), "", 3,
-                 fifo.string() + ": cannot read the DEM: not a regular file");
+  expect_refused(
+      fifo.string(), "", 2,
+      fifo.string() + ": cannot read the configuration: it is a FIFO (a pipe), not a regular file");
+  expect_refused(
+      write_config({{"canopy", {{"stands", fifo.string()}}}}), "", 3,
+      fifo.string() + ": cannot read the stands file: it is a FIFO (a pipe), not a regular file");
+  expect_refused(
+      write_config({{"canopy", {{"crowns_file", fifo.string()}}}}), "", 3,
+      fifo.string() + ": cannot read the crowns file: it is a FIFO (a pipe), not a regular file");
+  expect_refused(
+      write_config({{"terrain", {{"plane", nullptr}, {"dem", fifo.string()}}}}), "", 3,
+      fifo.string() + ": cannot read the DEM: it is a FIFO (a pipe), not a regular file");
   const std::string empty =
       write("empty.geojson", R"({"type": "FeatureCollection", "features": []})");
   expect_refused(write_config({{"canopy", {{"stands", empty}}}}), "", 3,

@@ -221,5 +221,50 @@ TEST(FullDisk, EndsTheRunWithStatus4OneLineAndNothingLeft) {
   }
 }
 
+// Found by tests/reliability/inputs_tried.py: two runs on one --out (two fresh runs, or two
+// --resume of one killed run) started together removed and wrote each other's files and both
+// failed half-way with exit status 4. The first holds the directory's lock; the second is refused
+// at once, with exit status 2, saying so, and leaves the first's files alone.
+TEST(OutputLock, ASecondRunOnTheSameOutIsRefusedAtOnce) {
+  const ScratchDir dir("glaswave_output_lock");
+  const std::string config = write_config(dir.path(), 400);  // long enough to be caught running
+  const fs::path out = dir / "out";
+  const std::string arguments = "run " + config + " --quiet --threads 1 --out " + out.string();
+  const auto wait_for_holder = [&](pid_t pid) {
+    // The holder writes its process id into the lock file once it holds it.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (std::chrono::steady_clock::now() < deadline) {
+      std::ifstream lock(out / ".glaswave.lock");
+      std::string holder;
+      if (lock >> holder && holder == std::to_string(pid)) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return false;
+  };
+  const auto expect_refused = [&](const std::string& command, pid_t holder) {
+    const CommandOutcome refused = run_glaswave(command);
+    EXPECT_EQ(refused.status, 2) << refused.output;
+    EXPECT_EQ(refused.output, "glaswave: error: " + out.string() +
+                                  ": another glaswave run is writing into this output directory "
+                                  "(process " +
+                                  std::to_string(holder) +
+                                  "): wait for it to end, or choose another --out\n");
+  };
+  // Two fresh runs.
+  const pid_t first = start_glaswave(arguments);
+  ASSERT_TRUE(wait_for_holder(first));
+  expect_refused(arguments, first);
+  ASSERT_TRUE(kill_when(first, out / "glaswave.journal", 17));
+  // Two --resume of the killed run: the stale lock file of the killed run does not block the
+  // first, which holds the directory; the second is refused.
+  const pid_t resumed = start_glaswave(arguments + " --resume");
+  ASSERT_TRUE(wait_for_holder(resumed));
+  expect_refused(arguments + " --resume", resumed);
+  EXPECT_TRUE(fs::exists(out / "glaswave.journal"));
+  kill(resumed, SIGTERM);
+  int status = 0;
+  waitpid(resumed, &status, 0);
+}
+
 }  // namespace
 }  // namespace glaswave

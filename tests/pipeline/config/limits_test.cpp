@@ -80,7 +80,9 @@ TEST(ConfigFile, AFifoIsRefusedNotWaitedFor) {
     read_json_file(fifo);
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), fifo.string() + ": cannot read: not a regular file");
+    EXPECT_EQ(std::string(e.what()),
+              fifo.string() +
+                  ": cannot read the configuration: it is a FIFO (a pipe), not a regular file");
   }
 }
 

@@ -3,13 +3,17 @@
 #include "pipeline/engine/journal.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <array>
 #include <cstdint>
 #include <fstream>
 #include <random>
+#include <string>
+#include <utility>
 #include <vector>
 
+#include "core/error.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace glaswave {
@@ -17,18 +21,31 @@ namespace {
 
 using test_support::ScratchDir;
 
-// Frames in the file, walked by their sizes: a 16-byte header, then per frame five words
-// (marker, records, ray queries, payload size, raw size), the payload and a checksum word.
-int count_frames(const std::filesystem::path& file) {
+// The file's header and its frames, walked by their sizes: a 16-byte header, then per frame six
+// words (marker, first record, records, ray queries, payload size, raw size), the payload and a
+// checksum word.
+struct JournalBytes {
+  std::string header;
+  std::vector<std::string> frames;
+};
+
+JournalBytes split_frames(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
-  in.seekg(16);
-  int frames = 0;
-  std::array<std::uint64_t, 5> words{};
+  JournalBytes bytes;
+  bytes.header.resize(16);
+  in.read(bytes.header.data(), 16);
+  std::array<std::uint64_t, 6> words{};
   while (in.read(reinterpret_cast<char*>(words.data()), sizeof words)) {
-    ++frames;
-    in.seekg(static_cast<std::streamoff>(words[3] + sizeof(std::uint64_t)), std::ios::cur);
+    std::string frame(reinterpret_cast<const char*>(words.data()), sizeof words);
+    frame.resize(sizeof words + words[4] + sizeof(std::uint64_t));
+    in.read(frame.data() + sizeof words, static_cast<std::streamsize>(frame.size() - sizeof words));
+    bytes.frames.push_back(std::move(frame));
   }
-  return frames;
+  return bytes;
+}
+
+int count_frames(const std::filesystem::path& file) {
+  return static_cast<int>(split_frames(file).frames.size());
 }
 
 TEST(RunJournal, ABatchLargerThanAFrameComesBackWhole) {
@@ -65,6 +82,80 @@ TEST(RunJournal, ABatchLargerThanAFrameComesBackWhole) {
     EXPECT_EQ(back[i].rx_waveform_W, batch[i].rx_waveform_W) << i;
   }
   EXPECT_EQ(back[5].rx_waveform_W, small[0].rx_waveform_W);
+}
+
+// Found by tests/reliability/inputs_tried.py: a journal whose frames were each whole (their
+// checksums right) but repeated, lost or swapped resumed "successfully", doubling some shots and
+// losing others. Each frame says where its records begin in the run: such a journal is refused.
+TEST(RunJournal, FramesRepeatedMissingOrSwappedAreRefused) {
+  const ScratchDir dir;
+  const auto path = dir.path() / RunJournal::kFileName;
+  {
+    RunJournal journal(path, "identity");
+    for (std::int64_t batch = 0; batch < 3; ++batch) {
+      std::vector<ShotRecord> records(2);
+      for (std::size_t i = 0; i < records.size(); ++i) records[i].shot_number = 2 * batch + i;
+      journal.append(records, 10);
+    }
+  }
+  const JournalBytes bytes = split_frames(path);
+  ASSERT_EQ(bytes.frames.size(), 3u);
+  const auto& f = bytes.frames;
+  const std::vector<std::pair<std::string, std::vector<std::string>>> broken = {
+      {"repeated", {f[0], f[1], f[1], f[2]}},
+      {"repeated in place of another", {f[0], f[1], f[1]}},
+      {"missing", {f[0], f[2]}},
+      {"swapped", {f[0], f[2], f[1]}},
+  };
+  for (const auto& [what, frames] : broken) {
+    {
+      std::ofstream out(path, std::ios::binary | std::ios::trunc);
+      out << bytes.header;
+      for (const std::string& frame : frames) out << frame;
+    }
+    std::int64_t ray_queries = 0;
+    try {
+      RunJournal::resume(
+          path, "identity", [](const ShotRecord&) {}, ray_queries);
+      ADD_FAILURE() << what << ": resumed";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::config) << what;
+      EXPECT_NE(std::string(e.what()).find("(frames repeated, missing or out of order): the "
+                                           "journal does not describe one run"),
+                std::string::npos)
+          << what << ": " << e.what();
+    }
+  }
+  // The frames in their order still resume, each record once.
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << bytes.header << f[0] << f[1] << f[2];
+  }
+  std::vector<std::int64_t> shots;
+  std::int64_t ray_queries = 0;
+  RunJournal::resume(
+      path, "identity", [&](const ShotRecord& r) { shots.push_back(r.shot_number); }, ray_queries);
+  EXPECT_EQ(shots, (std::vector<std::int64_t>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(ray_queries, 30);
+}
+
+// Found by tests/reliability/inputs_tried.py: a journal replaced by a FIFO was waited on for
+// ever by --resume; it is refused by the regular-file rule before it is opened.
+TEST(RunJournal, AFifoIsRefusedNotWaitedOn) {
+  const ScratchDir dir;
+  const auto path = dir.path() / RunJournal::kFileName;
+  ASSERT_EQ(mkfifo(path.c_str(), 0600), 0);
+  std::int64_t ray_queries = 0;
+  try {
+    RunJournal::resume(
+        path, "identity", [](const ShotRecord&) {}, ray_queries);
+    ADD_FAILURE() << "resumed";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path.string() +
+                  ": cannot read the run journal: it is a FIFO (a pipe), not a "
+                  "regular file");
+  }
 }
 
 }  // namespace

@@ -1,0 +1,52 @@
+"""The library from several Python threads at once: two threads calling glaswave.run together
+(each run writing shots.nc through libnetcdf and HDF5 while the other reads its own back) end
+without a crash and give the products of one call; and the shot range accepts numpy integers."""
+
+import threading
+
+import numpy as np
+import pytest
+
+import glaswave
+from conftest import assert_datasets_identical, small_config
+
+ROUNDS = 100
+
+
+def test_two_threads_run_together_and_give_the_products_of_one_call():
+    config = small_config(shots=1, rays=20)
+    reference = glaswave.run(config, threads=1)
+    failures = []
+    start = threading.Barrier(2)
+
+    def runs():
+        try:
+            for _ in range(ROUNDS):
+                start.wait(timeout=60)  # the two runs begin together, round after round
+                dataset = glaswave.run(config, threads=1)
+                assert_datasets_identical(dataset, reference)
+        except Exception as error:  # noqa: BLE001 - reported by the main thread
+            failures.append(repr(error))
+            start.abort()
+
+    threads = [threading.Thread(target=runs) for _ in range(2)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert failures == []
+
+
+def test_numpy_integers_select_shots_and_too_large_a_shot_is_a_value_error():
+    config = small_config(shots=3, rays=20)
+    part = glaswave.run(config, shots=(np.int64(1), np.int64(3)))
+    assert list(part["shot_number"].values) == [1, 2]
+    with pytest.raises(ValueError, match=r"shot number 18446744073709551616 is too large"):
+        glaswave.run(config, shots=(0, 2**64))
+    with pytest.raises(glaswave.ConfigError, match=r"integer shot numbers >= 0"):
+        glaswave.run(config, shots=(0.0, 2))
+
+
+def test_a_config_path_with_a_nul_byte_is_refused():
+    with pytest.raises(glaswave.ConfigError, match="NUL byte"):
+        glaswave.check("track.json\0.ignored")
