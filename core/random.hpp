@@ -2,8 +2,9 @@
 // fixed by (seed, shot, ray) and the purpose that draws from it, and its successive draws are
 // the dimensions. A shot's numbers are then the same bits for any thread count and any split of
 // the track. The transport keys rays by (seed, shot, ray); the detector bins by (seed, shot,
-// band and bin); stands tiles by (seed, tile, kind of canopy); roughness lattice nodes by
-// (seed, node, zone); the sun's photons of `brf` by (seed, batch, photon).
+// band and bin); the photon-counting receiver its events by (seed, shot, beam and bin); stands
+// tiles by (seed, tile, kind of canopy); roughness lattice nodes by (seed, node, zone); the sun's
+// photons of `brf` by (seed, batch, photon).
 #pragma once
 
 #include <cstdint>
@@ -29,6 +30,7 @@ enum class RandomPurpose : std::uint64_t {
   roughness = 0x2009e1a7715ce5adULL,
   sun = 0x5a7b1e55f0c0ffeeULL,          // `brf`: photons traced from the sun
   beam_points = 0xb3a9501b01c0ffeeULL,  // the transport's scrambling of a shot's Sobol' points
+  photons = 0x9407025c0a7e1a5eULL,      // photon counting: a shot's photon events by (beam, bin)
 };
 
 // Two signed indices (a 2-D grid's row and column, each within +-2^31) as one key.

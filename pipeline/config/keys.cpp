@@ -199,8 +199,10 @@ Key sensor_keys() {
   const SensorSettings s;
   Key preset = choice("preset", std::nullopt, preset_names(),
                       "`north2010` (the seed's Table 2, exactly), `glas` (the same with "
-                      "GLAS's ~70 m beam) or `gedi` (GEDI's power beam: 1064 nm, 15.6 ns FWHM, "
-                      "~25 m from 420 km; set `track.altitude_m` to 420000); keys beside it "
+                      "GLAS's ~70 m beam), `gedi` (GEDI's power beam: 1064 nm, 15.6 ns FWHM, "
+                      "~25 m from 420 km; set `track.altitude_m` to 420000) or `atlas` (ICESat-2's "
+                      "strong beam: 532 nm, 1.5 ns FWHM, ~11 m from 496 km; set "
+                      "`track.altitude_m` to 496000; docs/icesat2.md); keys beside it "
                       "override it (`bands` as a whole); absent: the values of `north2010`");
   preset.default_text = "none";
   return object(

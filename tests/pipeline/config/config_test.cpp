@@ -122,6 +122,31 @@ TEST(SensorPreset, GediMatchesThePublishedInstrument) {
   EXPECT_LE(c.sensor.bands[0].atmos_transmission_roundtrip, 1.0);
 }
 
+// ATLAS on ICESat-2 (docs/icesat2.md gives each source): a 1.5 ns FWHM pulse at 532 nm; a
+// footprint about 11 m across (86 % of the energy, i.e. 1/e^2, measured on orbit by Magruder et al.
+// 2021; under 17.4 m by requirement, Markus et al. 2017) from about 496 km; an 83.5 urad field of
+// view; the 0.8 m telescope's 0.41 m^2 unobscured; 175 uJ a strong beam's pulse.
+TEST(SensorPreset, AtlasMatchesThePublishedInstrument) {
+  const Config c = parse_config(doc(R"({"sensor": {"preset": "atlas"}})"));
+  EXPECT_EQ(c.sensor.preset, "atlas");
+  const double fwhm_ns = 2.0 * std::sqrt(2.0 * std::log(2.0)) * c.sensor.pulse_sigma_ns;
+  EXPECT_NEAR(fwhm_ns, 1.5, 0.01);
+  EXPECT_NEAR(4.0 * c.sensor.divergence_sigma_rad * 496000.0, 11.0, 0.05);
+  EXPECT_NEAR(c.sensor.ifov_rad, 83.5e-6, 1e-10);
+  EXPECT_LT(c.sensor.telescope_area_m2, std::numbers::pi * 0.4 * 0.4);
+  EXPECT_NEAR(c.sensor.telescope_area_m2, 0.41, 1e-9);
+  // The field of view takes in the whole beam (its half angle is 7.5 beam sigmas).
+  EXPECT_GT(0.5 * c.sensor.ifov_rad, 6.0 * c.sensor.divergence_sigma_rad);
+  // Bins much finer than the pulse, and a window holding a 50 m canopy on a slope.
+  EXPECT_LT(c.sensor.bin_ns, 0.5 * c.sensor.pulse_sigma_ns);
+  EXPECT_GE(c.sensor.bin_ns * c.sensor.bins * 0.299792458 / 2.0, 70.0);
+  ASSERT_EQ(c.sensor.bands.size(), 1u);
+  EXPECT_EQ(c.sensor.bands[0].name, "532");
+  EXPECT_EQ(c.sensor.bands[0].wavelength_nm, 532.0);
+  EXPECT_NEAR(c.sensor.bands[0].pulse_energy_mJ, 0.175, 1e-12);
+  EXPECT_NEAR(c.sensor.bands[0].atmos_transmission_roundtrip, 0.8 * 0.8, 1e-12);
+}
+
 TEST(SensorPreset, KeysBesidePresetOverrideIt) {
   const Config c = parse_config(doc(R"({"sensor": {"preset": "glas", "pulse_sigma_ns": 3.5,
       "bins": 200, "bands": [{"name": "1064", "wavelength_nm": 1064, "pulse_energy_mJ": 75,
@@ -152,6 +177,7 @@ TEST(SensorPreset, CompiledPresetsParse) {
   ASSERT_TRUE(sensor_presets().count("north2010"));
   ASSERT_TRUE(sensor_presets().count("glas"));
   ASSERT_TRUE(sensor_presets().count("gedi"));
+  ASSERT_TRUE(sensor_presets().count("atlas"));
   for (const auto& [name, text] : sensor_presets())
     EXPECT_TRUE(json::parse(text).is_object()) << name;
 }

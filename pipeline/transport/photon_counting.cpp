@@ -1,0 +1,126 @@
+// Photon counting: expected counts, the sun's background, keyed Poisson draws and dead time.
+#include "pipeline/transport/photon_counting.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <tuple>
+
+#include "core/random.hpp"
+#include "core/samplers.hpp"
+
+namespace glaswave {
+namespace {
+
+constexpr double planck_J_s = 6.62607015e-34;
+constexpr double light_m_s = 299792458.0;
+constexpr std::size_t bin_bits = 24;
+constexpr std::uint64_t background_key = (std::uint64_t{1} << bin_bits) - 1;
+
+RandomStream photon_stream(const PhotonDraw& draw, std::uint64_t bin) {
+  return RandomStream(draw.seed, static_cast<std::uint64_t>(draw.shot),
+                      (std::uint64_t{draw.beam} << bin_bits) | bin, RandomPurpose::photons);
+}
+
+std::uint8_t draw_channel(RandomStream& random, int channels) {
+  return static_cast<std::uint8_t>(
+      std::min(channels - 1, static_cast<int>(random.uniform() * channels)));
+}
+
+void check(const PhotonDraw& draw, std::span<const PhotonSource> sources) {
+  if (draw.beam >= 256 || draw.bins >= background_key || draw.channels < 1 || draw.channels > 255 ||
+      !(draw.bin_ns > 0.0) || !(draw.background_rate_Hz >= 0.0))
+    throw std::invalid_argument(
+        "draw_photons: beam < 256, bins < 2^24 - 1, 1..255 channels, bin_ns > 0 and a "
+        "background rate >= 0");
+  for (const PhotonSource& source : sources)
+    if (source.mean_per_bin.size() != draw.bins)
+      throw std::invalid_argument("draw_photons: every source has one mean per bin");
+}
+
+// The signal photons of one bin, `total` being the sum of the sources' means there.
+void draw_bin(const PhotonDraw& draw, std::span<const PhotonSource> sources, std::size_t bin,
+              double total, std::vector<PhotonEvent>& events) {
+  RandomStream random = photon_stream(draw, bin);
+  const double count = poisson(random, total);
+  for (double k = 0.0; k < count; k += 1.0) {
+    double pick = random.uniform() * total;
+    std::size_t source = 0;
+    while (source + 1 < sources.size() && pick >= sources[source].mean_per_bin[bin]) {
+      pick -= sources[source].mean_per_bin[bin];
+      ++source;
+    }
+    const double time_ns = (static_cast<double>(bin) + random.uniform()) * draw.bin_ns;
+    events.push_back({time_ns, sources[source].truth_class, sources[source].order,
+                      draw_channel(random, draw.channels)});
+  }
+}
+
+}  // namespace
+
+double photon_energy_J(double wavelength_nm) {
+  return planck_J_s * light_m_s / (wavelength_nm * 1e-9);
+}
+
+std::vector<double> expected_photons(std::span<const double> power_W, double bin_ns,
+                                     double wavelength_nm, double efficiency) {
+  const double per_W = bin_ns * 1e-9 * efficiency / photon_energy_J(wavelength_nm);
+  std::vector<double> photons(power_W.size());
+  std::transform(power_W.begin(), power_W.end(), photons.begin(),
+                 [per_W](double p) { return std::max(p, 0.0) * per_W; });
+  return photons;
+}
+
+double background_rate_Hz(const SolarBackground& b) {
+  const double cos_sun = std::cos(b.sun_zenith_deg * std::numbers::pi / 180.0);
+  if (!(cos_sun > 0.0)) return 0.0;
+  const double radiance = b.reflectance / std::numbers::pi * b.irradiance_W_m2_nm * cos_sun *
+                          std::pow(b.transmission_one_way, 1.0 / cos_sun);
+  const double solid_angle_sr = 2.0 * std::numbers::pi * (1.0 - std::cos(0.5 * b.ifov_rad));
+  const double power_W = radiance * b.transmission_one_way * b.telescope_area_m2 * solid_angle_sr *
+                         b.filter_bandwidth_nm;
+  return power_W * b.efficiency / photon_energy_J(b.wavelength_nm);
+}
+
+std::vector<PhotonEvent> draw_photons(const PhotonDraw& draw,
+                                      std::span<const PhotonSource> sources) {
+  check(draw, sources);
+  std::vector<PhotonEvent> events;
+  for (std::size_t bin = 0; bin < draw.bins; ++bin) {
+    double total = 0.0;
+    for (const PhotonSource& source : sources) total += std::max(source.mean_per_bin[bin], 0.0);
+    if (total > 0.0) draw_bin(draw, sources, bin, total, events);
+  }
+  const double window_ns = static_cast<double>(draw.bins) * draw.bin_ns;
+  if (draw.background_rate_Hz > 0.0) {
+    RandomStream random = photon_stream(draw, background_key);
+    const double count = poisson(random, draw.background_rate_Hz * window_ns * 1e-9);
+    for (double k = 0.0; k < count; k += 1.0) {
+      const double time_ns = random.uniform() * window_ns;
+      events.push_back({time_ns, PhotonClass::background, 0, draw_channel(random, draw.channels)});
+    }
+  }
+  // A total order, so that the sequence (and the dead time after it) never depends on the sort.
+  std::sort(events.begin(), events.end(), [](const PhotonEvent& a, const PhotonEvent& b) {
+    return std::tie(a.time_ns, a.truth_class, a.order, a.channel) <
+           std::tie(b.time_ns, b.truth_class, b.order, b.channel);
+  });
+  return events;
+}
+
+std::vector<PhotonEvent> apply_dead_time(std::span<const PhotonEvent> events, double dead_time_ns) {
+  std::vector<double> live_from(256, -std::numeric_limits<double>::infinity());
+  std::vector<PhotonEvent> recorded;
+  recorded.reserve(events.size());
+  for (const PhotonEvent& event : events) {
+    double& live = live_from[event.channel];
+    if (event.time_ns < live) continue;
+    recorded.push_back(event);
+    live = event.time_ns + dead_time_ns;
+  }
+  return recorded;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,222 @@
+// Tests of the photon-counting physics against numbers computed here, independently of the code:
+// signal photons over flat Lambertian ground at nadir (the transport's received power turned into
+// counts) against E T A_T rho f_fov eta / (pi R^2 h nu), Poisson in their variance; the sun's
+// background against the radiometric closed form; the recorded rate under dead time against the
+// non-paralysable law r / (1 + r tau); the keying by (seed, shot, beam); and ATLAS's strong and
+// weak beams over a surface of reflectance 0.9 against the mission's published range.
+#include "pipeline/transport/photon_counting.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "tests/pipeline/transport/transport_test_support.hpp"
+
+namespace glaswave {
+namespace {
+
+// h c / lambda at 532 nm from the CODATA 2018 constants: 3.7340e-19 J.
+constexpr double kPhoton532J = 6.62607015e-34 * 299792458.0 / 532e-9;
+
+// ATLAS as the atlas preset declares it (share/presets/atlas.json, docs/icesat2.md): a 1.5 ns
+// FWHM pulse, a footprint 11 m across at 1/e^2 from 496 km, an 83.5 um-rad field of view, 0.41 m^2
+// of unobscured telescope, 45 % optical throughput times 15 % detection efficiency.
+constexpr double kRangeM = 496000.0;
+constexpr double kSigmaRad = 11.0 / (4.0 * kRangeM);
+constexpr double kIfovRad = 83.5e-6;
+constexpr double kAreaM2 = 0.41;
+constexpr double kEfficiency = 0.45 * 0.15;
+
+LidarSettings atlas_sensor(double energy_mJ, double transmission) {
+  LidarSettings s;
+  s.pulse_sigma_ns = 1.5 / (2.0 * std::sqrt(2.0 * std::log(2.0)));
+  s.divergence_sigma_rad = kSigmaRad;
+  s.ifov_rad = kIfovRad;
+  s.telescope_area_m2 = kAreaM2;
+  s.bin_ns = 0.1;
+  s.bins = 150;
+  s.bands = {{532.0, energy_mJ, transmission}};
+  return s;
+}
+
+// The received power over level Lambertian ground of reflectance rho at nadir from 496 km.
+std::vector<double> flat_ground_power_W(double rho, double energy_mJ, double transmission) {
+  test_support::CrownScene scene({}, {}, {rho});
+  scene.geometry.sensor_m = {0.0, 0.0, kRangeM};
+  scene.geometry.range_m = kRangeM;
+  const LidarModel lidar(atlas_sensor(energy_mJ, transmission));
+  TransportOptions options;
+  options.rays = 2000;
+  options.max_order = 1;
+  return simulate_shot(*scene.scene, lidar, scene.geometry, scene.optics, options, 5).total_W[0];
+}
+
+// E T A_T rho cos(0) f_fov eta / (pi R^2 h nu), f_fov = 1 - exp(-ifov^2 / (8 sigma^2)).
+double flat_ground_photons(double rho, double energy_J, double transmission) {
+  const double f_fov = 1.0 - std::exp(-kIfovRad * kIfovRad / (8.0 * kSigmaRad * kSigmaRad));
+  return energy_J * transmission * kAreaM2 * rho * f_fov * kEfficiency /
+         (std::numbers::pi * kRangeM * kRangeM * kPhoton532J);
+}
+
+struct CountMoments {
+  double mean = 0.0, variance = 0.0;
+};
+
+CountMoments signal_counts(std::span<const double> photons, int shots, std::uint32_t beam) {
+  const PhotonSource ground{photons, PhotonClass::ground, 1};
+  std::vector<double> counts;
+  for (int shot = 0; shot < shots; ++shot) {
+    PhotonDraw draw{7, shot, beam, 0.1, photons.size(), 0.0, 16};
+    counts.push_back(static_cast<double>(draw_photons(draw, {&ground, 1}).size()));
+  }
+  CountMoments m;
+  for (double c : counts) m.mean += c;
+  m.mean /= shots;
+  for (double c : counts) m.variance += (c - m.mean) * (c - m.mean);
+  m.variance /= shots - 1;
+  return m;
+}
+
+// 20 000 shots of a strong beam over rho = 0.3 through a clear atmosphere (T = 0.64 both ways):
+// the mean count to 3 standard errors, and its variance equal to the mean to 3 standard errors
+// of a Poisson sample variance, sqrt((mu + 2 mu^2) / N).
+TEST(PhotonCounting, SignalOverFlatLambertianGroundAtNadir) {
+  const std::vector<double> photons =
+      expected_photons(flat_ground_power_W(0.3, 0.175, 0.64), 0.1, 532.0, kEfficiency);
+  const double mu = flat_ground_photons(0.3, 175e-6, 0.64);
+  const int shots = 20000;
+  const CountMoments m = signal_counts(photons, shots, 0);
+  EXPECT_NEAR(m.mean, mu, 3.0 * std::sqrt(mu / shots));
+  EXPECT_NEAR(m.variance, mu, 3.0 * std::sqrt((mu + 2.0 * mu * mu) / shots));
+}
+
+// The background rate over a bright (0.9) and a dark (0.05) surface under a sun 30 degrees from
+// the zenith, one-way transmission 0.8, a 38 pm filter, measured from the drawn events (10 us
+// windows) against L = (rho/pi) F cos(30) 0.8^(1/cos 30), rate = L 0.8 A_T pi (ifov/2)^2 dlambda
+// eta / (h nu), F = 1.87 W m^-2 nm^-1 (ASTM E-490 at 532 nm), within 2 %.
+TEST(PhotonCounting, SolarBackgroundEqualsTheClosedForm) {
+  for (const double rho : {0.9, 0.05}) {
+    SolarBackground sun;
+    sun.sun_zenith_deg = 30.0;
+    sun.reflectance = rho;
+    sun.transmission_one_way = 0.8;
+    sun.filter_bandwidth_nm = 0.038;
+    sun.ifov_rad = kIfovRad;
+    sun.telescope_area_m2 = kAreaM2;
+    sun.efficiency = kEfficiency;
+    const double cos30 = std::sqrt(3.0) / 2.0;
+    const double radiance = rho / std::numbers::pi * 1.87 * cos30 * std::pow(0.8, 1.0 / cos30);
+    const double closed_form_Hz = radiance * 0.8 * kAreaM2 * std::numbers::pi * kIfovRad *
+                                  kIfovRad / 4.0 * 0.038 * kEfficiency / kPhoton532J;
+    EXPECT_NEAR(background_rate_Hz(sun) / closed_form_Hz, 1.0, 1e-6);
+    const int shots = 4000;
+    double events = 0.0;
+    for (int shot = 0; shot < shots; ++shot)
+      events += static_cast<double>(
+          draw_photons({3, shot, 2, 1.0, 10000, background_rate_Hz(sun), 4}, {}).size());
+    const double measured_Hz = events / (shots * 10e-6);
+    EXPECT_NEAR(measured_Hz / closed_form_Hz, 1.0, 0.02) << "rho " << rho;
+  }
+  SolarBackground night;
+  night.sun_zenith_deg = 95.0;
+  night.reflectance = 0.9;
+  EXPECT_EQ(background_rate_Hz(night), 0.0);
+}
+
+// 16 channels, 3.2 ns dead time, true rates per channel r tau = 0.1, 1 and 4: the recorded rate
+// per channel r / (1 + r tau) within 1.5 % (20 us windows, 10 shots: 10^4 - 10^6 events).
+TEST(PhotonCounting, DeadTimeFollowsTheNonParalysableLaw) {
+  const double tau_ns = 3.2;
+  for (const double r_tau : {0.1, 1.0, 4.0}) {
+    const double per_channel_Hz = r_tau / (tau_ns * 1e-9);
+    double recorded = 0.0, window_s = 0.0;
+    for (int shot = 0; shot < 10; ++shot) {
+      const std::vector<PhotonEvent> events =
+          draw_photons({11, shot, 0, 1.0, 20000, 16.0 * per_channel_Hz, 16}, {});
+      recorded += static_cast<double>(apply_dead_time(events, tau_ns).size());
+      window_s += 20e-6;
+    }
+    const double recorded_per_channel_Hz = recorded / window_s / 16.0;
+    EXPECT_NEAR(recorded_per_channel_Hz / (per_channel_Hz / (1.0 + r_tau)), 1.0, 0.015)
+        << "r tau " << r_tau;
+  }
+}
+
+TEST(PhotonCounting, DeadTimeIsPerChannelAndKeepsTimeOrder) {
+  const std::vector<PhotonEvent> events = {{1.0, PhotonClass::ground, 1, 0},
+                                           {2.0, PhotonClass::ground, 1, 1},
+                                           {3.0, PhotonClass::canopy, 1, 0},
+                                           {4.5, PhotonClass::background, 0, 0},
+                                           {5.0, PhotonClass::canopy, 2, 0}};
+  const std::vector<PhotonEvent> kept = apply_dead_time(events, 3.2);
+  // Channel 0 counts at 1.0 and is dead until 4.2 (the 3.0 event lost does not extend it);
+  // it counts at 4.5, dead until 7.7, losing 5.0. Channel 1 counts its only event.
+  ASSERT_EQ(kept.size(), 3u);
+  EXPECT_EQ(kept[0].time_ns, 1.0);
+  EXPECT_EQ(kept[1].time_ns, 2.0);
+  EXPECT_EQ(kept[2].time_ns, 4.5);
+}
+
+// A shot's events depend on (seed, shot, beam) alone: the same call twice gives the same bits,
+// another beam or shot other events; each source keeps its class and order.
+TEST(PhotonCounting, EventsAreKeyedBySeedShotAndBeam) {
+  std::vector<double> ground(100, 0.0), canopy(100, 0.0);
+  for (std::size_t bin = 40; bin < 60; ++bin) ground[bin] = 0.5;
+  for (std::size_t bin = 10; bin < 30; ++bin) canopy[bin] = 0.3;
+  const PhotonSource sources[] = {{ground, PhotonClass::ground, 1},
+                                  {canopy, PhotonClass::canopy, 2}};
+  const PhotonDraw draw{5, 123, 1, 0.5, 100, 2e8, 16};
+  const std::vector<PhotonEvent> a = draw_photons(draw, sources);
+  EXPECT_EQ(a, draw_photons(draw, sources));
+  PhotonDraw other_beam = draw, other_shot = draw;
+  other_beam.beam = 2;
+  other_shot.shot = 124;
+  EXPECT_NE(a, draw_photons(other_beam, sources));
+  EXPECT_NE(a, draw_photons(other_shot, sources));
+  ASSERT_FALSE(a.empty());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (i > 0) {
+      EXPECT_LE(a[i - 1].time_ns, a[i].time_ns);
+    }
+    EXPECT_LT(a[i].channel, 16);
+    if (a[i].truth_class == PhotonClass::ground) {
+      EXPECT_GE(a[i].time_ns, 20.0);
+      EXPECT_LT(a[i].time_ns, 30.0);
+      EXPECT_EQ(a[i].order, 1);
+    } else if (a[i].truth_class == PhotonClass::canopy) {
+      EXPECT_GE(a[i].time_ns, 5.0);
+      EXPECT_LT(a[i].time_ns, 15.0);
+      EXPECT_EQ(a[i].order, 2);
+    } else {
+      EXPECT_EQ(a[i].order, 0);
+    }
+  }
+  EXPECT_THROW(draw_photons({5, 1, 256, 0.5, 100, 0.0, 16}, sources), std::invalid_argument);
+}
+
+// ICESat-2's specification gives about 1.6-12 signal photons a shot for a strong beam and
+// 0.4-3 for a weak one over the ice sheet (reflectance 0.9), depending on the atmosphere. With
+// the preset's 175 and 45 uJ: a clear atmosphere (one-way 0.8, T = 0.64) and a hazy one (one-way
+// 0.5, T = 0.25) both fall in the range, the clear one near its top.
+TEST(PhotonCounting, StrongAndWeakBeamsOverIceFallInTheMissionsRange) {
+  for (const double t : {0.64, 0.25}) {
+    const double strong =
+        signal_counts(expected_photons(flat_ground_power_W(0.9, 0.175, t), 0.1, 532.0, kEfficiency),
+                      4000, 0)
+            .mean;
+    const double weak =
+        signal_counts(expected_photons(flat_ground_power_W(0.9, 0.045, t), 0.1, 532.0, kEfficiency),
+                      4000, 1)
+            .mean;
+    EXPECT_GT(strong, 1.6) << "T " << t;
+    EXPECT_LT(strong, 12.0) << "T " << t;
+    EXPECT_GT(weak, 0.4) << "T " << t;
+    EXPECT_LT(weak, 3.0) << "T " << t;
+    EXPECT_NEAR(strong / weak, 175.0 / 45.0, 0.35);
+  }
+}
+
+}  // namespace
+}  // namespace glaswave
