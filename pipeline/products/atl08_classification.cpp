@@ -1,0 +1,246 @@
+// ATL08-style classification of a photon cloud: neighbour-count noise filter, iterative ground
+// surface, canopy and top of canopy, and the 100 m land segments.
+#include "pipeline/products/atl08_classification.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace glaswave {
+namespace {
+
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+double median(std::vector<double> values) {
+  if (values.empty()) return nan;
+  const std::size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
+  const double upper = values[mid];
+  if (values.size() % 2 == 1) return upper;
+  return 0.5 * (upper + *std::max_element(values.begin(),
+                                          values.begin() + static_cast<std::ptrdiff_t>(mid)));
+}
+
+// The q-quantile by linear interpolation between order statistics (numpy's default).
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return nan;
+  std::sort(values.begin(), values.end());
+  const double position = q * static_cast<double>(values.size() - 1);
+  const std::size_t below = static_cast<std::size_t>(std::floor(position));
+  const std::size_t above = std::min(below + 1, values.size() - 1);
+  return values[below] + (position - static_cast<double>(below)) * (values[above] - values[below]);
+}
+
+// Fills the NaN entries by linear interpolation between the nearest known ones (constant beyond).
+void fill_gaps(std::vector<double>& values) {
+  std::vector<std::size_t> known;
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (!std::isnan(values[i])) known.push_back(i);
+  if (known.empty()) return;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!std::isnan(values[i])) continue;
+    const auto next = std::lower_bound(known.begin(), known.end(), i);
+    if (next == known.begin()) {
+      values[i] = values[known.front()];
+    } else if (next == known.end()) {
+      values[i] = values[known.back()];
+    } else {
+      const std::size_t a = *(next - 1), b = *next;
+      const double t = static_cast<double>(i - a) / static_cast<double>(b - a);
+      values[i] = values[a] + t * (values[b] - values[a]);
+    }
+  }
+}
+
+struct Cells {
+  double first_m = 0.0, cell_m = 1.0;
+  std::size_t count = 0;
+  std::size_t of(double along_m) const {
+    const double i = std::floor((along_m - first_m) / cell_m);
+    return static_cast<std::size_t>(std::clamp(i, 0.0, static_cast<double>(count - 1)));
+  }
+};
+
+Cells cells_over(std::span<const CloudPhoton> photons, double cell_m) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const CloudPhoton& p : photons) {
+    lo = std::min(lo, p.along_m);
+    hi = std::max(hi, p.along_m);
+  }
+  Cells cells;
+  cells.cell_m = cell_m;
+  cells.first_m = std::floor(lo / cell_m) * cell_m;
+  cells.count = static_cast<std::size_t>(std::floor((hi - cells.first_m) / cell_m)) + 1;
+  return cells;
+}
+
+// Step 1: each photon's neighbour count against the noise expected in its box.
+void filter_noise(std::span<const CloudPhoton> photons, const Atl08Settings& s, Atl08Classes& out,
+                  std::vector<bool>& signal) {
+  std::vector<std::size_t> order(photons.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return photons[a].along_m < photons[b].along_m; });
+  const double box_m2 = 4.0 * s.search_along_m * s.search_vertical_m;
+  std::size_t begin = 0, end = 0;
+  for (const std::size_t i : order) {
+    const CloudPhoton& p = photons[i];
+    while (photons[order[begin]].along_m < p.along_m - s.search_along_m) ++begin;
+    while (end < order.size() && photons[order[end]].along_m <= p.along_m + s.search_along_m) ++end;
+    double neighbours = -1.0;  // not itself
+    for (std::size_t k = begin; k < end; ++k)
+      if (std::abs(photons[order[k]].h_m - p.h_m) <= s.search_vertical_m) neighbours += 1.0;
+    const double mu = p.noise_per_m2 * box_m2;
+    const double threshold = mu + s.noise_sigmas * std::sqrt(mu) + 1.0;
+    signal[i] = neighbours > threshold;
+    out.confidence[i] = !signal[i]                      ? 0
+                        : neighbours >= 2.0 * threshold ? 4
+                        : neighbours >= 1.5 * threshold ? 3
+                                                        : 2;
+  }
+}
+
+// Step 2: the ground surface at the cells' centres.
+std::vector<double> fit_ground(std::span<const CloudPhoton> photons,
+                               const std::vector<bool>& signal, const Cells& cells) {
+  // Each cell's candidate: the lowest 1 m height bin holding at least 3 signal photons and a
+  // tenth of the fullest bin's (a lone noise photon below the ground does not make one).
+  std::vector<std::vector<double>> heights(cells.count);
+  for (std::size_t i = 0; i < photons.size(); ++i)
+    if (signal[i]) heights[cells.of(photons[i].along_m)].push_back(photons[i].h_m);
+  std::vector<double> lowest(cells.count, nan);
+  for (std::size_t c = 0; c < cells.count; ++c) {
+    if (heights[c].empty()) continue;
+    const auto [lo, hi] = std::minmax_element(heights[c].begin(), heights[c].end());
+    std::vector<double> bins(static_cast<std::size_t>(*hi - *lo) + 1, 0.0);
+    for (const double h : heights[c]) bins[static_cast<std::size_t>(h - *lo)] += 1.0;
+    const double needed = std::max(3.0, 0.1 * *std::max_element(bins.begin(), bins.end()));
+    for (std::size_t k = 0; k < bins.size(); ++k)
+      if (bins[k] >= needed) {
+        lowest[c] = *lo + static_cast<double>(k) + 0.5;
+        break;
+      }
+  }
+  std::vector<double> ground(cells.count, nan);
+  for (std::size_t c = 0; c < cells.count; ++c) {
+    std::vector<double> around;
+    for (std::size_t k = c >= 2 ? c - 2 : 0; k < std::min(cells.count, c + 3); ++k)
+      if (!std::isnan(lowest[k])) around.push_back(lowest[k]);
+    if (!std::isnan(lowest[c]) && lowest[c] <= median(around) + 5.0) ground[c] = lowest[c];
+  }
+  fill_gaps(ground);
+  for (const double band_m : {3.0, 1.5, 1.0}) {
+    std::vector<std::vector<double>> near(cells.count);
+    for (std::size_t i = 0; i < photons.size(); ++i) {
+      if (!signal[i]) continue;
+      const std::size_t c = cells.of(photons[i].along_m);
+      if (std::abs(photons[i].h_m - ground[c]) <= band_m) near[c].push_back(photons[i].h_m);
+    }
+    for (std::size_t c = 0; c < cells.count; ++c) ground[c] = median(near[c]);
+    fill_gaps(ground);
+  }
+  return ground;
+}
+
+// Step 3: ground, canopy and top of canopy about the fitted surface.
+void assign_classes(std::span<const CloudPhoton> photons, const std::vector<bool>& signal,
+                    const Cells& cells, const Atl08Settings& s, Atl08Classes& out) {
+  std::vector<double> residuals;
+  for (std::size_t i = 0; i < photons.size(); ++i) {
+    const double r = photons[i].h_m - out.ground_at(photons[i].along_m);
+    if (signal[i] && std::abs(r) <= 1.5) residuals.push_back(std::abs(r));
+  }
+  const double sigma = residuals.empty() ? 0.0 : 1.4826 * median(residuals);
+  const double band_m = std::max(s.min_ground_band_m, 2.5 * sigma);
+  std::vector<std::vector<double>> canopy(cells.count);
+  for (std::size_t i = 0; i < photons.size(); ++i) {
+    out.classes[i] = 0;
+    if (!signal[i]) continue;
+    const double r = photons[i].h_m - out.ground_at(photons[i].along_m);
+    if (std::abs(r) <= band_m) {
+      out.classes[i] = 1;
+    } else if (r > band_m) {
+      out.classes[i] = 2;
+      canopy[cells.of(photons[i].along_m)].push_back(r);
+    }
+  }
+  std::vector<double> top(cells.count, nan);
+  for (std::size_t c = 0; c < cells.count; ++c)
+    top[c] = quantile(canopy[c], s.top_of_canopy_quantile);
+  for (std::size_t i = 0; i < photons.size(); ++i) {
+    if (out.classes[i] != 2) continue;
+    const double r = photons[i].h_m - out.ground_at(photons[i].along_m);
+    if (r >= top[cells.of(photons[i].along_m)]) out.classes[i] = 3;
+  }
+}
+
+}  // namespace
+
+double Atl08Classes::ground_at(double along_m) const {
+  if (ground_m.empty()) return nan;
+  const double position = (along_m - first_cell_m) / cell_m;
+  if (position <= 0.0) return ground_m.front();
+  const std::size_t below = static_cast<std::size_t>(std::floor(position));
+  if (below + 1 >= ground_m.size()) return ground_m.back();
+  const double t = position - static_cast<double>(below);
+  return ground_m[below] + t * (ground_m[below + 1] - ground_m[below]);
+}
+
+Atl08Classes classify_photons(std::span<const CloudPhoton> photons, const Atl08Settings& settings) {
+  Atl08Classes out;
+  out.classes.assign(photons.size(), 0);
+  out.confidence.assign(photons.size(), 0);
+  out.cell_m = settings.cell_m;
+  if (photons.empty()) return out;
+  std::vector<bool> signal(photons.size(), false);
+  filter_noise(photons, settings, out, signal);
+  const Cells cells = cells_over(photons, settings.cell_m);
+  out.first_cell_m = cells.first_m + 0.5 * cells.cell_m;
+  out.ground_m = fit_ground(photons, signal, cells);
+  assign_classes(photons, signal, cells, settings, out);
+  return out;
+}
+
+std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
+                                       const Atl08Classes& classes, double first_m, double end_m,
+                                       const Atl08Settings& settings) {
+  const std::size_t count =
+      end_m > first_m ? static_cast<std::size_t>(std::ceil((end_m - first_m) / settings.segment_m))
+                      : 0;
+  std::vector<LandSegment> segments(count);
+  std::vector<std::vector<double>> canopy(count);
+  for (std::size_t i = 0; i < photons.size(); ++i) {
+    const double k = std::floor((photons[i].along_m - first_m) / settings.segment_m);
+    if (k < 0.0 || k >= static_cast<double>(count)) continue;
+    LandSegment& segment = segments[static_cast<std::size_t>(k)];
+    const std::uint8_t c = classes.classes[i];
+    if (c == 1) ++segment.n_te_photons;
+    if (c == 2) ++segment.n_ca_photons;
+    if (c == 3) ++segment.n_toc_photons;
+    if (c >= 2)
+      canopy[static_cast<std::size_t>(k)].push_back(photons[i].h_m -
+                                                    classes.ground_at(photons[i].along_m));
+  }
+  for (std::size_t k = 0; k < count; ++k) {
+    LandSegment& segment = segments[k];
+    segment.start_m = first_m + static_cast<double>(k) * settings.segment_m;
+    segment.h_te_best_fit = segment.n_te_photons >= settings.min_ground_photons
+                                ? classes.ground_at(segment.start_m + 0.5 * settings.segment_m)
+                                : nan;
+    const std::vector<double>& heights = canopy[k];
+    if (static_cast<int>(heights.size()) < settings.min_canopy_photons) {
+      segment.h_canopy = segment.canopy_openness = nan;
+      continue;
+    }
+    segment.h_canopy = quantile(heights, 0.98);
+    const double mean =
+        std::accumulate(heights.begin(), heights.end(), 0.0) / static_cast<double>(heights.size());
+    double sum2 = 0.0;
+    for (const double h : heights) sum2 += (h - mean) * (h - mean);
+    segment.canopy_openness = std::sqrt(sum2 / static_cast<double>(heights.size() - 1));
+  }
+  return segments;
+}
+
+}  // namespace glaswave

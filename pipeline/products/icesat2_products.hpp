@@ -1,0 +1,82 @@
+// ATL03- and ATL08-like HDF5 granules (PRODUCT.md section 9) in the layout ICESat-2's users read:
+// per beam gtXY, ATL03's heights/ per photon and geolocation/ 20 m segments with 1-based photon
+// index ranges, ATL08's land_segments/ of 100 m from the photons' own classification and
+// signal_photons/ linking each classified photon back to ATL03, the simulation's truth beside
+// them. Each file is written under a temporary name and renamed when complete.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "pipeline/products/atl08_classification.hpp"
+
+namespace glaswave {
+
+// Seconds from the GLAS epoch (2000-01-01T12:00:00Z) to the ATLAS standard data product epoch
+// (2018-01-01T00:00:00Z), both counted without leap seconds: 6574.5 days.
+inline constexpr double atlas_epoch_since_glas_epoch_s = 6574.5 * 86400.0;
+// GPS seconds of the ATLAS epoch, ATL03's ancillary_data/atlas_sdp_gps_epoch.
+inline constexpr double atlas_sdp_gps_epoch_s = 1198800018.0;
+
+// One recorded photon of a beam.
+struct BeamPhoton {
+  double h_m = 0.0;  // above the WGS84 ellipsoid
+  double lat_deg = 0.0, lon_deg = 0.0;
+  double delta_time_s = 0.0;     // since the ATLAS epoch
+  std::uint8_t truth_class = 0;  // 0 background, 1 ground, 2 canopy, 3 top of canopy
+  std::uint8_t order = 0;        // scattering order, 0 for background
+};
+
+// One shot of a beam: where it fell and what the simulation knows there.
+struct BeamShot {
+  double along_m = 0.0;  // along-track distance from the track's start
+  double lat_deg = 0.0, lon_deg = 0.0, delta_time_s = 0.0;
+  double ground_h_m = 0.0;       // the terrain at the footprint centre
+  double canopy_height_m = 0.0;  // the simulation's truth over the footprint
+  double canopy_cover = 0.0, pai = 0.0;
+  double background_rate_Hz = 0.0;  // the background photons' rate in the receiver (ATL03's
+                                    // bckgrd_atlas/bckgrd_rate): measured by ATLAS, here known
+  std::uint32_t first_photon = 0, photon_count = 0;  // its photons in BeamTrack::photons
+};
+
+// One beam's shots (in time order) and their photons (shot by shot, each shot's in time order).
+struct BeamTrack {
+  std::string name;  // gt1l ... gt3r
+  bool strong = true;
+  int spot_number = 1;  // ATLAS's spot, 1-6
+  std::vector<BeamShot> shots;
+  std::vector<BeamPhoton> photons;
+};
+
+struct GranuleInfo {
+  std::string history;  // the command line
+  std::string config_json;
+};
+
+// DIR/atl03.h5. Per beam: heights/{h_ph, lat_ph, lon_ph, delta_time, dist_ph_along,
+// signal_conf_ph (photons x 5 surface types, the land column from the classification, -1 "not
+// considered" in the others), glaswave_truth_class, glaswave_order}; geolocation/ 20 m segments
+// {segment_id (1-based from the track start), ph_index_beg (1-based, 0 when empty),
+// segment_ph_cnt, segment_dist_x, segment_length, reference_photon_lat, reference_photon_lon,
+// delta_time}; bckgrd_atlas/{bckgrd_rate, delta_time} per shot; ancillary_data/atlas_sdp_gps_epoch.
+// Throws Error (run) on a failed write.
+void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>& beams,
+                 const std::vector<Atl08Classes>& classes, const GranuleInfo& info);
+
+// DIR/atl08.h5. Per beam: land_segments/{latitude, longitude, delta_time, segment_id_beg,
+// segment_id_end, terrain/{h_te_best_fit, n_te_photons}, canopy/{h_canopy, canopy_openness,
+// n_ca_photons, n_toc_photons}, glaswave_truth/{h_te, h_canopy, canopy_cover, pai}};
+// signal_photons/{classed_pc_flag, classed_pc_indx, ph_segment_id, ph_h, delta_time}.
+void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>& beams,
+                 const std::vector<Atl08Classes>& classes, const Atl08Settings& settings,
+                 const GranuleInfo& info);
+
+// The classification of each beam's photons (CloudPhoton: the shot's along-track distance, the
+// photon's height, the shot's background rate over the track's mean shot spacing), in the beams'
+// order.
+std::vector<Atl08Classes> classify_beams(const std::vector<BeamTrack>& beams,
+                                         const Atl08Settings& settings);
+
+}  // namespace glaswave
