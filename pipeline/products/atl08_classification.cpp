@@ -229,7 +229,9 @@ std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
                                 ? classes.ground_at(segment.start_m + 0.5 * settings.segment_m)
                                 : nan;
     const std::vector<double>& heights = canopy[k];
-    if (static_cast<int>(heights.size()) < settings.min_canopy_photons) {
+    const double signal = static_cast<double>(heights.size()) + segment.n_te_photons;
+    if (static_cast<int>(heights.size()) < settings.min_canopy_photons ||
+        static_cast<double>(heights.size()) < settings.min_canopy_fraction * signal) {
       segment.h_canopy = segment.canopy_openness = nan;
       continue;
     }

@@ -19,10 +19,11 @@ struct Atl08Settings {
   double cell_m = 10.0;            // along-track cells of the ground fit
   double min_ground_band_m = 0.5;  // ground photons lie within this of the fit at least
   double top_of_canopy_quantile =
-      0.9;                     // canopy photons at or above it in their cell: top of canopy
-  double segment_m = 100.0;    // land segments
-  int min_ground_photons = 5;  // for a segment's terrain height
-  int min_canopy_photons = 5;  // for its canopy height and openness
+      0.9;                            // canopy photons at or above it in their cell: top of canopy
+  double segment_m = 100.0;           // land segments
+  int min_ground_photons = 5;         // for a segment's terrain height
+  int min_canopy_photons = 5;         // for its canopy height and openness, and
+  double min_canopy_fraction = 0.05;  // this part of its signal photons (ATL08's rule)
 };
 
 // One photon as the classification sees it: along-track distance and height, and the density of
@@ -75,7 +76,9 @@ struct LandSegment {
 };
 
 // The land segments covering [first_m, end_m) every segment_m, from the classified photons:
-// h_te_best_fit is the ground surface at the segment's centre, with at least min_ground_photons.
+// h_te_best_fit is the ground surface at the segment's centre, with at least min_ground_photons;
+// the canopy's metrics need min_canopy_photons canopy and top-of-canopy photons and
+// min_canopy_fraction of the segment's signal photons (ground, canopy and top of canopy).
 std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
                                        const Atl08Classes& classes, double first_m, double end_m,
                                        const Atl08Settings& settings);

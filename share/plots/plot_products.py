@@ -15,7 +15,10 @@ that no half-written plot lies under its final name:
   footprints_map.png  the footprints, coloured by reflectance, over a hillshade of the run's
                       DEM in the DEM's own CRS (the resolved configuration, global attribute
                       `config`, names it), or in longitude and latitude for a synthetic plane
-                      or a DEM that can no longer be read.
+                      or a DEM that can no longer be read;
+  photon_cloud.png    when DIR/atl03.h5 is there (ICESat-2): each beam's photons, height against
+                      distance along track, coloured by their true class, with ATL08's terrain
+                      and canopy top estimates (DIR/atl08.h5) beside the simulation's truth.
  On unreadable inputs it prints one line,
 "plot_products: error: ...", on stderr and exits with status 1. Run by `glaswave run`
 (pipeline/app/plots.cpp) when output.plots is true.
@@ -438,6 +441,68 @@ def save(fig, path, description=None):
             os.remove(part)
 
 
+PHOTON_CLASSES = [  # glaswave_truth_class: 0 background, 1 ground, 2 canopy, 3 top of canopy
+    ("background", "0.6", 2), ("ground", "saddlebrown", 3), ("canopy", "forestgreen", 3),
+    ("top of canopy", "limegreen", 3)]
+MAX_PHOTON_BEAMS = 3
+
+
+def read_beam_photons(atl03, beam):
+    """A beam's photons: along-track distance (its 20 m segment's start plus dist_ph_along),
+    height and true class."""
+    geo, heights = atl03[beam]["geolocation"], atl03[beam]["heights"]
+    count = geo["segment_ph_cnt"][:].astype(np.int64)
+    start = np.repeat(geo["segment_dist_x"][:], count)
+    along = start + heights["dist_ph_along"][:]
+    return along, heights["h_ph"][:], heights["glaswave_truth_class"][:]
+
+
+def plot_photon_cloud(atl03_path, atl08_path, path):
+    import h5py  # only ICESat-2 runs need it
+    with h5py.File(atl03_path, "r") as atl03:
+        beams = [b for b in sorted(atl03) if b.startswith("gt")]
+        strong = [b for b in beams if atl03[b].attrs.get("atlas_beam_type", b"") in
+                  (b"strong", "strong")]
+        beams = (strong or beams)[:MAX_PHOTON_BEAMS]
+        clouds = {b: read_beam_photons(atl03, b) for b in beams}
+    segments = {}
+    if os.path.exists(atl08_path):
+        with h5py.File(atl08_path, "r") as atl08:
+            for b in beams:
+                land = atl08[b]["land_segments"]
+                read = lambda name: np.where(land[name][:] > 1e37, np.nan, land[name][:])
+                segments[b] = {name: read(name) for name in (
+                    "terrain/h_te_best_fit", "canopy/h_canopy", "glaswave_truth/h_te",
+                    "glaswave_truth/h_canopy")}
+                first = atl08[b]["land_segments"]["segment_id_beg"][:]
+                segments[b]["centre_m"] = (first - 1) * 20.0 + 50.0
+    fig, axes = plt.subplots(len(beams), 1, figsize=(11, 3.6 * len(beams)), squeeze=False)
+    for ax, beam in zip(axes[:, 0], beams):
+        along, h, truth = clouds[beam]
+        for code, (label, colour, size) in enumerate(PHOTON_CLASSES):
+            mask = truth == code
+            ax.scatter(along[mask] / 1000.0, h[mask], s=size, c=colour, lw=0,
+                       label=f"{label} ({mask.sum()})", rasterized=True)
+        if beam in segments:
+            s = segments[beam]
+            x = s["centre_m"] / 1000.0
+            ax.plot(x, s["glaswave_truth/h_te"], "k-", lw=1.2, label="terrain (truth)")
+            ax.plot(x, s["glaswave_truth/h_te"] + s["glaswave_truth/h_canopy"], "-",
+                    color="darkgreen", lw=1.2, label="canopy top (truth)")
+            ax.plot(x, s["terrain/h_te_best_fit"], "o--", color="tab:orange", ms=3, lw=1,
+                    label="ATL08 h_te_best_fit")
+            ax.plot(x, s["terrain/h_te_best_fit"] + s["canopy/h_canopy"], "s--",
+                    color="tab:blue", ms=3, lw=1, label="ATL08 terrain + h_canopy")
+        ax.set_title(f"{beam}: {len(h)} photons")
+        ax.set_xlabel("distance along track (km)")
+        ax.set_ylabel("height above WGS84 (m)")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, markerscale=3,
+                  frameon=False)
+    fig.tight_layout()
+    save(fig, path)
+
+
 def main(argv):
     if len(argv) != 2:
         raise ValueError("usage: plot_products.py DIR")
@@ -450,6 +515,10 @@ def main(argv):
     plot_waveforms(shots, os.path.join(plots, "waveforms.png"))
     plot_track_profile(shots, os.path.join(plots, "track_profile.png"))
     plot_footprints_map(geojson, shots, os.path.join(plots, "footprints_map.png"))
+    atl03 = os.path.join(out_dir, "atl03.h5")
+    if os.path.exists(atl03):
+        plot_photon_cloud(atl03, os.path.join(out_dir, "atl08.h5"),
+                          os.path.join(plots, "photon_cloud.png"))
 
 
 if __name__ == "__main__":

@@ -103,7 +103,7 @@ TEST(Atl08Classification, SeparatesGroundCanopyAndNoiseWithoutTheTruth) {
 // heights uniform over 2-25 m is 2 + 0.98 * 23 = 24.54 m (to 1 m: noise photons join the canopy)
 // and the openness their standard deviation 23 / sqrt(12) = 6.64 m (to 1 m: noise); outside, no
 // canopy but the noise within the ground's neighbour box, 0.5-3 m above it (about 143 shots *
-// 1.5 * 2.5 / 75 = 7 photons a segment; 3 times that at most).
+// 1.5 * 2.5 / 75 = 7 photons a segment; 3 times that at most), too few for a canopy height.
 TEST(Atl08Classification, LandSegmentsMatchTheCloudsTruth) {
   const BeamTrack beam = synthetic_beam("gt1l", 4);
   const Atl08Settings settings;
@@ -125,6 +125,7 @@ TEST(Atl08Classification, LandSegmentsMatchTheCloudsTruth) {
       EXPECT_GT(s.n_ca_photons + s.n_toc_photons, 200);
     } else if (s.start_m + 100.0 <= kForestFrom || s.start_m >= kForestTo) {
       EXPECT_LT(s.n_ca_photons + s.n_toc_photons, 21) << s.start_m;
+      EXPECT_TRUE(std::isnan(s.h_canopy)) << "under 5 % of the signal: no canopy height";
     }
   }
 }
