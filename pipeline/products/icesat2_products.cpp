@@ -11,6 +11,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/netcdf_lock.hpp"
 
 namespace glaswave {
 namespace {
@@ -310,6 +311,7 @@ std::vector<Atl08Classes> classify_beams(const std::vector<BeamTrack>& beams,
 
 void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>& beams,
                  const std::vector<Atl08Classes>& classes, const GranuleInfo& info) {
+  const std::lock_guard<std::mutex> hdf5(netcdf_library_mutex());  // HDF5 is not thread-safe
   Granule g(path);
   g.ancillary(info, "ATL03");
   for (std::size_t b = 0; b < beams.size(); ++b) {
@@ -458,6 +460,7 @@ void write_signal_photons(Granule& g, hid_t beam_group, const BeamTrack& beam,
 void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>& beams,
                  const std::vector<Atl08Classes>& classes, const Atl08Settings& settings,
                  const GranuleInfo& info) {
+  const std::lock_guard<std::mutex> hdf5(netcdf_library_mutex());  // HDF5 is not thread-safe
   Granule g(path);
   g.ancillary(info, "ATL08");
   for (std::size_t b = 0; b < beams.size(); ++b) {
