@@ -53,6 +53,13 @@ std::string per_band(const json& value) {
   return out;
 }
 
+// The spacecraft's height above the ground, roughly: an orbit's from its semi-major axis.
+double height_m(const json& track) {
+  if (track.value("type", "pass") == "orbit")
+    return track.value("semi_major_axis_m", 6978137.0) - 6378137.0;
+  return track.value("altitude_m", 600000.0);
+}
+
 std::string track_line(const json& track, const CheckSummary& summary) {
   const std::string type = track.value("type", "pass");
   std::string line = type;
@@ -65,7 +72,11 @@ std::string track_line(const json& track, const CheckSummary& summary) {
   } else if (type == "granule" || type == "ephemeris") {
     line += " " + text(track.value(type == "granule" ? "file" : "ephemeris", json("")));
   }
-  line += ", from " + number(track.value("altitude_m", 600000.0) / 1000.0) + " km";
+  if (type == "orbit")
+    line += " of " + number(track.value("inclination_deg", 0.0)) + " deg inclination, from about " +
+            number(height_m(track) / 1000.0) + " km";
+  else
+    line += ", from " + number(height_m(track) / 1000.0) + " km";
   if (track.value("off_nadir_deg", 0.0) != 0.0)
     line += ", " + number(track.value("off_nadir_deg", 0.0)) + " deg off nadir";
   line += ": " + plural(static_cast<double>(summary.shots), "shot", "shots");
@@ -84,9 +95,8 @@ std::string sensor_line(const json& sensor, const json& track) {
   for (std::size_t i = 0; i < bands.size(); ++i) line += (i ? ", " : "") + bands[i];
   line += " nm)";
   // The beam's 1/e^2 diameter on level ground below: 4 sigma_theta H.
-  const double diameter_m =
-      4.0 * sensor.value("divergence_sigma_rad", 0.0) * track.value("altitude_m", 600000.0);
-  line += ", a beam about " + number(diameter_m, 2) + " m across at 1/e2, " +
+  const double diameter_m = 4.0 * sensor.value("divergence_sigma_rad", 0.0) * height_m(track);
+  line += ", a beam about " + number(std::round(diameter_m), 12) + " m across at 1/e2, " +
           number(sensor.value("bins", 0.0), 12) + " bins of " +
           number(sensor.value("bin_ns", 1.0)) + " ns";
   return line;
