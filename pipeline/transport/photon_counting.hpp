@@ -81,7 +81,8 @@ struct PhotonDraw {
 };
 
 // The photon events of one shot and beam, in time order, before dead time:
-// - signal: in each bin with signal, Poisson(sum of the sources' means) photons from the stream
+// - signal: in each bin expecting more than 1e-12 photons (fewer than 2e-5 a shot are left out
+//   over the longest window), Poisson(sum of the sources' means) photons from the stream
 //   (seed, shot, beam, bin), each given a source with probability proportional to its mean (so
 //   each source's counts are Poisson of its own mean), a time uniform within the bin and a channel;
 // - background: a Poisson process of `background_rate_Hz` over the whole window, from the one
