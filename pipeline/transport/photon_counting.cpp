@@ -103,7 +103,7 @@ std::vector<PhotonEvent> draw_photons(const PhotonDraw& draw,
     const double count = poisson(random, draw.background_rate_Hz * window_ns * 1e-9);
     for (double k = 0.0; k < count; k += 1.0) {
       const double time_ns = random.uniform() * window_ns;
-      events.push_back({time_ns, PhotonClass::background, 0, draw_channel(random, draw.channels)});
+      events.push_back({time_ns, PhotonTruth::background, 0, draw_channel(random, draw.channels)});
     }
   }
   // A total order, so that the sequence (and the dead time after it) never depends on the sort.

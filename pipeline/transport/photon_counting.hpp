@@ -48,13 +48,13 @@ struct SolarBackground {
 double background_rate_Hz(const SolarBackground& background);
 
 // Truth classes of photon events, the coding of ATL08's classed_pc_flag.
-enum class PhotonClass : std::uint8_t { background = 0, ground = 1, canopy = 2, top_of_canopy = 3 };
+enum class PhotonTruth : std::uint8_t { background = 0, ground = 1, canopy = 2, top_of_canopy = 3 };
 
 // One source of signal photons: its expected photons per bin (all sources of a shot share the
 // bins) and what its photons are in truth.
 struct PhotonSource {
   std::span<const double> mean_per_bin;
-  PhotonClass truth_class = PhotonClass::ground;
+  PhotonTruth truth_class = PhotonTruth::ground;
   std::uint8_t order = 1;  // the scattering order, 0 for background
 };
 
@@ -62,7 +62,7 @@ struct PhotonSource {
 // the detector channel that counted it.
 struct PhotonEvent {
   double time_ns = 0.0;
-  PhotonClass truth_class = PhotonClass::background;
+  PhotonTruth truth_class = PhotonTruth::background;
   std::uint8_t order = 0;
   std::uint8_t channel = 0;
 

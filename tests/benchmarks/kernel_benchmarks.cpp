@@ -202,8 +202,8 @@ void photon_shot(benchmark::State& state) {
     ground[k] = 7.0 * 0.2 / (0.637 * 2.5066) * std::exp(-0.5 * std::pow((t - 333.0) / 0.637, 2));
     canopy[k] = (t > 233.0 && t < 333.0) ? 3.0 / 500.0 : 0.0;
   }
-  const glaswave::PhotonSource sources[] = {{ground, glaswave::PhotonClass::ground, 1},
-                                            {canopy, glaswave::PhotonClass::canopy, 1}};
+  const glaswave::PhotonSource sources[] = {{ground, glaswave::PhotonTruth::ground, 1},
+                                            {canopy, glaswave::PhotonTruth::canopy, 1}};
   std::int64_t shot = 0;
   for (auto _ : state) {
     const auto events = glaswave::draw_photons({1, shot++, 0, 0.2, bins, 4.4e6, 16}, sources);

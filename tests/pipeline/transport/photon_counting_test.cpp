@@ -65,7 +65,7 @@ struct CountMoments {
 };
 
 CountMoments signal_counts(std::span<const double> photons, int shots, std::uint32_t beam) {
-  const PhotonSource ground{photons, PhotonClass::ground, 1};
+  const PhotonSource ground{photons, PhotonTruth::ground, 1};
   std::vector<double> counts;
   for (int shot = 0; shot < shots; ++shot) {
     PhotonDraw draw{7, shot, beam, 0.1, photons.size(), 0.0, 16};
@@ -147,11 +147,11 @@ TEST(PhotonCounting, DeadTimeFollowsTheNonParalysableLaw) {
 }
 
 TEST(PhotonCounting, DeadTimeIsPerChannelAndKeepsTimeOrder) {
-  const std::vector<PhotonEvent> events = {{1.0, PhotonClass::ground, 1, 0},
-                                           {2.0, PhotonClass::ground, 1, 1},
-                                           {3.0, PhotonClass::canopy, 1, 0},
-                                           {4.5, PhotonClass::background, 0, 0},
-                                           {5.0, PhotonClass::canopy, 2, 0}};
+  const std::vector<PhotonEvent> events = {{1.0, PhotonTruth::ground, 1, 0},
+                                           {2.0, PhotonTruth::ground, 1, 1},
+                                           {3.0, PhotonTruth::canopy, 1, 0},
+                                           {4.5, PhotonTruth::background, 0, 0},
+                                           {5.0, PhotonTruth::canopy, 2, 0}};
   const std::vector<PhotonEvent> kept = apply_dead_time(events, 3.2);
   // Channel 0 counts at 1.0 and is dead until 4.2 (the 3.0 event lost does not extend it);
   // it counts at 4.5, dead until 7.7, losing 5.0. Channel 1 counts its only event.
@@ -167,8 +167,8 @@ TEST(PhotonCounting, EventsAreKeyedBySeedShotAndBeam) {
   std::vector<double> ground(100, 0.0), canopy(100, 0.0);
   for (std::size_t bin = 40; bin < 60; ++bin) ground[bin] = 0.5;
   for (std::size_t bin = 10; bin < 30; ++bin) canopy[bin] = 0.3;
-  const PhotonSource sources[] = {{ground, PhotonClass::ground, 1},
-                                  {canopy, PhotonClass::canopy, 2}};
+  const PhotonSource sources[] = {{ground, PhotonTruth::ground, 1},
+                                  {canopy, PhotonTruth::canopy, 2}};
   const PhotonDraw draw{5, 123, 1, 0.5, 100, 2e8, 16};
   const std::vector<PhotonEvent> a = draw_photons(draw, sources);
   EXPECT_EQ(a, draw_photons(draw, sources));
@@ -183,11 +183,11 @@ TEST(PhotonCounting, EventsAreKeyedBySeedShotAndBeam) {
       EXPECT_LE(a[i - 1].time_ns, a[i].time_ns);
     }
     EXPECT_LT(a[i].channel, 16);
-    if (a[i].truth_class == PhotonClass::ground) {
+    if (a[i].truth_class == PhotonTruth::ground) {
       EXPECT_GE(a[i].time_ns, 20.0);
       EXPECT_LT(a[i].time_ns, 30.0);
       EXPECT_EQ(a[i].order, 1);
-    } else if (a[i].truth_class == PhotonClass::canopy) {
+    } else if (a[i].truth_class == PhotonTruth::canopy) {
       EXPECT_GE(a[i].time_ns, 5.0);
       EXPECT_LT(a[i].time_ns, 15.0);
       EXPECT_EQ(a[i].order, 2);
@@ -224,7 +224,7 @@ TEST(PhotonCounting, GroundPhotonsOnASlopeSpreadAsGardner) {
   const std::vector<double> photons =
       expected_photons(simulate_shot(scene, lidar, geometry, optics, options, 9).total_W[0], 0.1,
                        532.0, kEfficiency);
-  const PhotonSource ground{photons, PhotonClass::ground, 1};
+  const PhotonSource ground{photons, PhotonTruth::ground, 1};
   double n = 0.0, sum = 0.0, sum2 = 0.0;
   for (int shot = 0; shot < 3000; ++shot)
     for (const PhotonEvent& e :
