@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <system_error>
 
 #include "core/error.hpp"
@@ -43,22 +45,89 @@ bool has_link(hid_t location, const std::string& path) {
   }
 }
 
-// A one-dimensional dataset read as `type` (HDF5 converts the stored type).
-template <typename T>
-std::vector<T> read_vector(hid_t group, const std::string& name, hid_t type,
-                           const std::string& file, const std::string& group_name) {
-  const std::string place = file + ": " + group_name;
-  if (!has_link(group, name)) throw input_error(place, "no dataset \"" + name + "\"");
-  Handle dataset(H5Dopen2(group, name.c_str(), H5P_DEFAULT), H5Dclose);
-  if (!dataset.valid()) throw input_error(place, "\"" + name + "\" is not a dataset");
-  Handle space(H5Dget_space(dataset.get()), H5Sclose);
+// Where a dataset lives, for messages: "FILE: GROUP".
+struct Place {
+  const std::string& file;
+  const std::string& group;
+  std::string text() const { return file + ": " + group; }
+};
+
+// A one-dimensional dataset of at most kMostGranuleShots values, opened; its length and the
+// class (integer, float) and sign of its stored type.
+struct Dataset {
+  std::unique_ptr<Handle> handle;
+  std::size_t size = 0;
+  H5T_class_t type_class = H5T_NO_CLASS;
+  bool is_signed = false;
+};
+
+Dataset open_dataset(hid_t group, const std::string& name, const Place& place) {
+  if (!has_link(group, name)) throw input_error(place.text(), "no dataset \"" + name + "\"");
+  Dataset d;
+  d.handle = std::make_unique<Handle>(H5Dopen2(group, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!d.handle->valid()) throw input_error(place.text(), "\"" + name + "\" is not a dataset");
+  Handle space(H5Dget_space(d.handle->get()), H5Sclose);
   const int rank = space.valid() ? H5Sget_simple_extent_ndims(space.get()) : -1;
-  if (rank != 1) throw input_error(place, "\"" + name + "\" is not one-dimensional");
+  if (rank != 1) throw input_error(place.text(), "\"" + name + "\" is not one-dimensional");
   hsize_t size = 0;
   H5Sget_simple_extent_dims(space.get(), &size, nullptr);
-  std::vector<T> values(static_cast<std::size_t>(size));
-  if (size > 0 && H5Dread(dataset.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0)
-    throw input_error(place, "cannot read \"" + name + "\" as numbers");
+  // The declared length decides the allocation: it is checked before anything is read.
+  if (size > static_cast<hsize_t>(kMostGranuleShots))
+    throw input_error(place.text(), "\"" + name + "\" declares " + std::to_string(size) +
+                                        " values, more than the " +
+                                        std::to_string(kMostGranuleShots) +
+                                        " shots a beam of a granule may hold");
+  d.size = static_cast<std::size_t>(size);
+  Handle type(H5Dget_type(d.handle->get()), H5Tclose);
+  d.type_class = type.valid() ? H5Tget_class(type.get()) : H5T_NO_CLASS;
+  d.is_signed = d.type_class == H5T_INTEGER && H5Tget_sign(type.get()) == H5T_SGN_2;
+  if (d.type_class != H5T_INTEGER && d.type_class != H5T_FLOAT)
+    throw input_error(place.text(), "\"" + name + "\" does not hold numbers");
+  return d;
+}
+
+template <typename T>
+std::vector<T> read_values(const Dataset& d, hid_t memory_type, const std::string& name,
+                           const Place& place) {
+  std::vector<T> values(d.size);
+  if (d.size > 0 &&
+      H5Dread(d.handle->get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0)
+    throw input_error(place.text(), "cannot read \"" + name + "\" (truncated or corrupt)");
+  return values;
+}
+
+std::vector<double> read_doubles(hid_t group, const std::string& name, const Place& place) {
+  const Dataset d = open_dataset(group, name, place);
+  return read_values<double>(d, H5T_NATIVE_DOUBLE, name, place);
+}
+
+// An integer dataset read exactly, each value checked to lie in [low, high]: HDF5 would round
+// floating point and clip what does not fit, silently.
+std::vector<std::int64_t> read_integers(hid_t group, const std::string& name, std::int64_t low,
+                                        std::int64_t high, const Place& place) {
+  const Dataset d = open_dataset(group, name, place);
+  if (d.type_class != H5T_INTEGER)
+    throw input_error(place.text(), "\"" + name +
+                                        "\" is stored as floating point: it must hold integers, "
+                                        "and is not rounded");
+  auto out_of_range = [&](const std::string& value) {
+    return input_error(place.text(), "\"" + name + "\" holds " + value + ", outside " +
+                                         std::to_string(low) + ".." + std::to_string(high));
+  };
+  std::vector<std::int64_t> values;
+  if (d.is_signed) {
+    values = read_values<std::int64_t>(d, H5T_NATIVE_INT64, name, place);
+    for (std::int64_t v : values)
+      if (v < low || v > high) throw out_of_range(std::to_string(v));
+  } else {
+    const auto raw = read_values<std::uint64_t>(d, H5T_NATIVE_UINT64, name, place);
+    values.reserve(raw.size());
+    for (std::uint64_t v : raw) {
+      if (v > static_cast<std::uint64_t>(high) || static_cast<std::int64_t>(v) < low)
+        throw out_of_range(std::to_string(v));
+      values.push_back(static_cast<std::int64_t>(v));
+    }
+  }
   return values;
 }
 
@@ -67,52 +136,94 @@ bool valid_position(double lat_deg, double lon_deg) {
          lon_deg >= -180.0 && lon_deg <= 360.0;
 }
 
-void check_lengths(std::size_t n, std::initializer_list<std::size_t> others,
-                   const std::string& place) {
+void check_lengths(std::size_t n, std::initializer_list<std::size_t> others, const Place& place) {
   for (std::size_t other : others)
     if (other != n)
-      throw input_error(place, "its datasets differ in length (" + std::to_string(n) + " and " +
-                                   std::to_string(other) + " values)");
+      throw input_error(place.text(), "its datasets differ in length (" + std::to_string(n) +
+                                          " and " + std::to_string(other) + " values)");
+}
+
+// The footprints skipped for a fill position, for the warning.
+struct Skipped {
+  std::int64_t count = 0;
+  std::string first;  // "BEAM0101 shot_number 123"
+};
+
+// BEAMxxxx's digits in binary; -1 for a name that is not four binary digits.
+int beam_number(const std::string& name) {
+  if (name.size() != 8) return -1;
+  int number = 0;
+  for (std::size_t i = 4; i < 8; ++i) {
+    if (name[i] != '0' && name[i] != '1') return -1;
+    number = number * 2 + (name[i] - '0');
+  }
+  return number;
 }
 
 void read_gedi_beam(hid_t file, const std::string& beam, const std::string& path,
-                    std::vector<GranuleShot>& shots) {
+                    std::vector<GranuleShot>& shots, Skipped& skipped) {
+  const Place place{path, beam};
   Handle group(H5Gopen2(file, beam.c_str(), H5P_DEFAULT), H5Gclose);
-  if (!group.valid()) throw input_error(path + ": " + beam, "is not a group");
+  if (!group.valid()) throw input_error(place.text(), "is not a group");
   const auto numbers =
-      read_vector<std::uint64_t>(group.get(), "shot_number", H5T_NATIVE_UINT64, path, beam);
-  const auto lat =
-      read_vector<double>(group.get(), "lat_lowestmode", H5T_NATIVE_DOUBLE, path, beam);
-  const auto lon =
-      read_vector<double>(group.get(), "lon_lowestmode", H5T_NATIVE_DOUBLE, path, beam);
-  const auto time = read_vector<double>(group.get(), "delta_time", H5T_NATIVE_DOUBLE, path, beam);
-  check_lengths(numbers.size(), {lat.size(), lon.size(), time.size()}, path + ": " + beam);
+      read_integers(group.get(), "shot_number", 0, std::numeric_limits<std::int64_t>::max(), place);
+  const auto lat = read_doubles(group.get(), "lat_lowestmode", place);
+  const auto lon = read_doubles(group.get(), "lon_lowestmode", place);
+  const auto time = read_doubles(group.get(), "delta_time", place);
+  check_lengths(numbers.size(), {lat.size(), lon.size(), time.size()}, place);
+  std::vector<std::int64_t> degrade;
+  if (has_link(group.get(), "degrade_flag")) {
+    degrade = read_integers(group.get(), "degrade_flag", 0, 255, place);
+    check_lengths(numbers.size(), {degrade.size()}, place);
+  }
   static const double gedi_epoch_s = parse_iso8601_utc("2018-01-01T00:00:00Z");
+  const int number = beam_number(beam);
   for (std::size_t i = 0; i < numbers.size(); ++i) {
-    if (!valid_position(lat[i], lon[i])) continue;
-    shots.push_back(
-        {static_cast<std::int64_t>(numbers[i]), gedi_epoch_s + time[i], lat[i], lon[i]});
+    if (!valid_position(lat[i], lon[i])) {
+      if (skipped.count++ == 0) skipped.first = beam + " shot_number " + std::to_string(numbers[i]);
+      continue;
+    }
+    GranuleShot shot;
+    shot.shot_number = numbers[i];
+    shot.time_s = gedi_epoch_s + time[i];
+    shot.lat_deg = lat[i];
+    shot.lon_deg = lon[i];
+    shot.beam = number;
+    shot.degrade_flag = degrade.empty() ? 0 : static_cast<std::uint8_t>(degrade[i]);
+    shots.push_back(shot);
   }
 }
 
-void read_glah14(hid_t file, const std::string& path, std::vector<GranuleShot>& shots) {
+void read_glah14(hid_t file, const std::string& path, std::vector<GranuleShot>& shots,
+                 Skipped& skipped) {
   const std::string beam = "Data_40HZ";
+  const Place place{path, beam};
   Handle group(H5Gopen2(file, beam.c_str(), H5P_DEFAULT), H5Gclose);
-  if (!group.valid()) throw input_error(path + ": " + beam, "is not a group");
-  const auto lat =
-      read_vector<double>(group.get(), "Geolocation/d_lat", H5T_NATIVE_DOUBLE, path, beam);
-  const auto lon =
-      read_vector<double>(group.get(), "Geolocation/d_lon", H5T_NATIVE_DOUBLE, path, beam);
-  const auto time =
-      read_vector<double>(group.get(), "Time/d_UTCTime_40", H5T_NATIVE_DOUBLE, path, beam);
-  const auto record =
-      read_vector<std::int64_t>(group.get(), "Time/i_rec_ndx", H5T_NATIVE_INT64, path, beam);
-  check_lengths(lat.size(), {lon.size(), time.size(), record.size()}, path + ": " + beam);
-  std::int64_t in_record = 0;
+  if (!group.valid()) throw input_error(place.text(), "is not a group");
+  const auto lat = read_doubles(group.get(), "Geolocation/d_lat", place);
+  const auto lon = read_doubles(group.get(), "Geolocation/d_lon", place);
+  const auto time = read_doubles(group.get(), "Time/d_UTCTime_40", place);
+  // i_rec_ndx * 40 + 39 must fit a shot number.
+  const auto record = read_integers(group.get(), "Time/i_rec_ndx", 0,
+                                    (std::numeric_limits<std::int64_t>::max() - 39) / 40, place);
+  const auto count = read_integers(group.get(), "Time/i_shot_count", 1, 40, place);
+  check_lengths(lat.size(), {lon.size(), time.size(), record.size(), count.size()}, place);
   for (std::size_t i = 0; i < lat.size(); ++i) {
-    in_record = i > 0 && record[i] == record[i - 1] ? in_record + 1 : 0;
-    if (!valid_position(lat[i], lon[i])) continue;
-    shots.push_back({record[i] * 40 + in_record, time[i], lat[i], lon[i]});
+    const std::int64_t number = record[i] * 40 + count[i] - 1;
+    if (!valid_position(lat[i], lon[i])) {
+      if (skipped.count++ == 0)
+        skipped.first =
+            "i_rec_ndx " + std::to_string(record[i]) + " i_shot_count " + std::to_string(count[i]);
+      continue;
+    }
+    GranuleShot shot;
+    shot.shot_number = number;
+    shot.time_s = time[i];
+    shot.lat_deg = lat[i];
+    shot.lon_deg = lon[i];
+    shot.record_index = record[i];
+    shot.shot_count = static_cast<int>(count[i]);
+    shots.push_back(shot);
   }
 }
 
@@ -133,7 +244,8 @@ std::vector<std::string> gedi_beams(hid_t file) {
 }  // namespace
 
 std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
-                                      const std::vector<std::string>& beams) {
+                                      const std::vector<std::string>& beams,
+                                      std::vector<std::string>* warnings) {
   const std::string path = file.string();
   // HDF5 (Debian's, not built thread-safe) is the library under libnetcdf: one lock for both,
   // held until every handle below is closed.
@@ -144,8 +256,15 @@ std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
     throw input_error(path, "the granule is not an HDF5 file (GEDI L2A or GLAH14)");
   Handle h5(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!h5.valid()) throw input_error(path, "cannot open the granule");
+  for (std::size_t i = 0; i < beams.size(); ++i)
+    if (std::find(beams.begin(), beams.begin() + static_cast<std::ptrdiff_t>(i), beams[i]) !=
+        beams.begin() + static_cast<std::ptrdiff_t>(i))
+      throw input_error(path + ": " + beams[i],
+                        "the beam is named twice in track.beams: its shots would be simulated "
+                        "twice");
 
   std::vector<GranuleShot> shots;
+  Skipped skipped;
   const std::vector<std::string> all_beams = gedi_beams(h5.get());
   if (!all_beams.empty()) {
     for (const std::string& beam : beams)
@@ -153,14 +272,18 @@ std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
         throw input_error(path + ": " + beam, "no such beam in the GEDI granule (it has " +
                                                   std::to_string(all_beams.size()) +
                                                   " BEAM groups, from " + all_beams.front() + ")");
-    for (const std::string& beam : beams.empty() ? all_beams : beams)
-      read_gedi_beam(h5.get(), beam, path, shots);
+    for (const std::string& beam : beams.empty() ? all_beams : beams) {
+      read_gedi_beam(h5.get(), beam, path, shots, skipped);
+      if (shots.size() > static_cast<std::size_t>(kMostGranuleShots))
+        throw input_error(path, "the beams hold more than " + std::to_string(kMostGranuleShots) +
+                                    " shots together: name fewer in track.beams");
+    }
   } else if (has_link(h5.get(), "Data_40HZ")) {
     for (const std::string& beam : beams)
       if (beam != "Data_40HZ")
         throw input_error(path + ": " + beam,
                           "no such beam in the GLAH14 granule (its one beam is Data_40HZ)");
-    read_glah14(h5.get(), path, shots);
+    read_glah14(h5.get(), path, shots, skipped);
   } else {
     throw input_error(path,
                       "neither a GEDI L2A granule (no BEAMxxxx group) nor a GLAH14 granule (no "
@@ -168,6 +291,11 @@ std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
   }
   if (shots.empty())
     throw input_error(path, "the granule holds no shot with a valid latitude and longitude");
+  if (skipped.count > 0 && warnings)
+    warnings->push_back(path + ": " + std::to_string(skipped.count) +
+                        " footprints with a fill latitude or longitude are no shots of the track "
+                        "(the first: " +
+                        skipped.first + ")");
   return shots;
 }
 

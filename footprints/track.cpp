@@ -89,7 +89,7 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
       sequence_length_ = static_cast<std::int64_t>(ephemeris_.size());
       break;
     case TrackType::granule:
-      granule_ = read_granule(settings_.granule, settings_.beams);
+      granule_ = read_granule(settings_.granule, settings_.beams, &warnings_);
       sequence_length_ = static_cast<std::int64_t>(granule_.size());
       settings_.points.clear();
       for (const GranuleShot& shot : granule_)
@@ -210,6 +210,11 @@ Footprint Track::locate_shot(std::int64_t shot) const {
     const GranuleShot& g = granule_.at(static_cast<std::size_t>(shot));
     f.source_shot_number = g.shot_number;
     f.time_s = g.time_s;
+    f.beam = g.beam;
+    f.degrade_flag = g.degrade_flag;
+    f.record_index = g.record_index;
+    f.shot_count = g.shot_count;
+    if (gedi_coverage_beam(g.beam)) f.pulse_energy_scale = 0.5;
   }
   f.off_nadir_deg = settings_.off_nadir_deg;
   if (!place_spacecraft(shot, f)) return f;

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -20,9 +21,18 @@ namespace glaswave {
 struct Footprint {
   std::int64_t shot_number = 0;
   // The instrument's own number of the shot: a granule's (GEDI shot_number, GLAH14
-  // i_rec_ndx * 40 + the shot in its record); shot_number for the synthetic tracks.
+  // i_rec_ndx * 40 + i_shot_count - 1); shot_number for the synthetic tracks.
   std::int64_t source_shot_number = 0;
   double time_s = 0.0;  // seconds since 2000-01-01T12:00:00Z
+  // A granule's beam (GEDI: its number, BEAM0101 is 5; -1 for GLAH14 and the synthetic tracks)
+  // and degrade_flag; GLAH14's i_rec_ndx and i_shot_count (-1 and 0 elsewhere).
+  int beam = -1;
+  std::uint8_t degrade_flag = 0;
+  std::int64_t record_index = -1;
+  int shot_count = 0;
+  // The pulse energy against the sensor's: 0.5 on GEDI's coverage beams, each half a laser's
+  // pulse (https://gedi.umd.edu/instrument/specifications/: three 10 mJ lasers, one split in two).
+  double pulse_energy_scale = 1.0;
   Geodetic spacecraft;
   Vec3 spacecraft_ecef{};
   Vec3 beam_ecef{};  // unit vector of the beam axis, spacecraft -> ground
@@ -67,6 +77,9 @@ class Track {
   // The records [first, last) whose shot numbers lie in [first_shot, last_shot).
   std::pair<std::int64_t, std::int64_t> records_of_shots(std::int64_t first_shot,
                                                          std::int64_t last_shot) const;
+  // What the planning found that a user should know (a granule's skipped footprints), one line
+  // each.
+  const std::vector<std::string>& warnings() const { return warnings_; }
 
   // The footprint of a record, and of the records [first, last).
   Footprint footprint(std::int64_t record) const { return locate_shot(shot_number(record)); }
@@ -83,9 +96,10 @@ class Track {
   const Terrain& terrain_;
   TerrainLimits limits_;
   std::int64_t sequence_length_ = 0;
-  std::unique_ptr<Orbit> orbit_;          // orbit
-  std::vector<EphemerisRow> ephemeris_;   // ephemeris
-  std::vector<GranuleShot> granule_;      // granule
+  std::unique_ptr<Orbit> orbit_;         // orbit
+  std::vector<EphemerisRow> ephemeris_;  // ephemeris
+  std::vector<GranuleShot> granule_;     // granule
+  std::vector<std::string> warnings_;
   std::vector<std::int64_t> kept_shots_;  // orbit: shot numbers of the records, ascending
   double pass_spacing_m_ = 0.0;           // pass
 };

@@ -288,6 +288,7 @@ CheckSummary check_inputs(const Config& config) {
   CheckSummary summary;
   summary.shots = track->size();
   summary.sequence_length = track->sequence_length();
+  summary.warnings = track->warnings();
   std::vector<std::array<double, 2>> centres;
   for (std::int64_t record = 0; record < track->size(); ++record) {
     const Footprint footprint = track->footprint(record);
@@ -386,6 +387,8 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   if (cluster.rank() == 0)
     if (auto warning = narrowed_threads_warning(request.threads, cluster))
       summary.warnings.push_back(std::move(*warning));
+  if (cluster.rank() == 0)
+    for (const std::string& warning : setup->track->warnings()) summary.warnings.push_back(warning);
 
   simulate_shared(
       cluster, *setup->simulator, *setup->track, first + done, last, request.threads,

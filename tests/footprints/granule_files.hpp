@@ -37,6 +37,22 @@ class Hdf5Writer {
   void int32s(const std::string& path, const std::vector<std::int32_t>& v) {
     write(path, H5T_STD_I32BE, H5T_NATIVE_INT32, v.size(), v.data());
   }
+  void int64s(const std::string& path, const std::vector<std::int64_t>& v) {
+    write(path, H5T_STD_I64LE, H5T_NATIVE_INT64, v.size(), v.data());
+  }
+  void uint8s(const std::string& path, const std::vector<std::uint8_t>& v) {
+    write(path, H5T_STD_U8LE, H5T_NATIVE_UINT8, v.size(), v.data());
+  }
+  // A chunked dataset that declares `n` doubles and stores none of them (a file of a few KB).
+  void declared_doubles(const std::string& path, hsize_t n) {
+    const hid_t space = H5Screate_simple(1, &n, nullptr);
+    const hid_t create = H5Pcreate(H5P_DATASET_CREATE);
+    const hsize_t chunk = 1024;
+    H5Pset_chunk(create, 1, &chunk);
+    H5Dclose(H5Dcreate2(file_, path.c_str(), H5T_IEEE_F64LE, space, link_, create, H5P_DEFAULT));
+    H5Pclose(create);
+    H5Sclose(space);
+  }
 
  private:
   void write(const std::string& path, hid_t file_type, hid_t memory_type, std::size_t n,
@@ -72,8 +88,9 @@ inline void write_gedi_l2a(const std::filesystem::path& file) {
   h5.doubles("BEAM1011/elev_lowestmode", {0.0, 0.0, 0.0});
 }
 
-// Two 1 s records of 40 Hz shots, the first record's last two and the second's first three;
-// the fourth shot's position is a fill value (GLAH14 stores lon in [0, 360)).
+// Two 1 s records of 40 Hz shots, the first record's last two (an incomplete record: its first
+// 38 shots are missing) and the second's first three; the fourth shot's position is a fill
+// value (GLAH14 stores lon in [0, 360)).
 inline void write_glah14(const std::filesystem::path& file) {
   Hdf5Writer h5(file);
   h5.group("ANCILLARY_DATA");
@@ -84,6 +101,7 @@ inline void write_glah14(const std::filesystem::path& file) {
   h5.doubles("Data_40HZ/Time/d_UTCTime_40",
              {181000000.0, 181000000.025, 181000000.050, 181000000.075, 181000000.100});
   h5.int32s("Data_40HZ/Time/i_rec_ndx", {5000, 5000, 5001, 5001, 5001});
+  h5.int32s("Data_40HZ/Time/i_shot_count", {39, 40, 1, 2, 3});
 }
 
 }  // namespace glaswave::testing

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
+#include <limits>
 
 #include "core/error.hpp"
 #include "footprints/glas_time.hpp"
@@ -72,6 +74,9 @@ TEST(GranuleTrack, GediL2aGivesOneShotPerFootprintAtItsPositionNumberAndTime) {
     EXPECT_NEAR(f.ground.h_m, 120.0, 1e-3);
     EXPECT_NEAR(f.spacecraft.h_m, 420000.0, 1e-3);
     EXPECT_NEAR(f.off_nadir_deg, 0.0, 1e-9);
+    // Both are full-power beams: the sensor's pulse energy as it is.
+    EXPECT_EQ(f.beam, i < 2 ? 5 : 11);
+    EXPECT_DOUBLE_EQ(f.pulse_energy_scale, 1.0);
   }
 }
 
@@ -89,21 +94,34 @@ TEST(GranuleTrack, BeamsSelectTheGroupsInTheirOrder) {
   EXPECT_EQ(both[3].shot_number, 11110101000001LL);
 }
 
-TEST(GranuleTrack, Glah14GivesOneShotPerFootprintNumberedByRecord) {
+// A record missing its first shots keeps its shots' true numbers: i_rec_ndx * 40 +
+// i_shot_count - 1, not their places in the file.
+TEST(GranuleTrack, Glah14GivesOneShotPerFootprintNumberedByRecordAndShotCount) {
   test_support::ScratchDir dir;
   const auto file = dir.path() / "GLAH14_small.H5";
   testing::write_glah14(file);
   const LevelTerrain terrain(-30.0);
   const Track track(granule_track(file), terrain);
   ASSERT_EQ(track.size(), 4);  // the fourth footprint's fill position skipped
-  const std::int64_t numbers[] = {5000 * 40, 5000 * 40 + 1, 5001 * 40, 5001 * 40 + 2};
+  const std::int64_t numbers[] = {5000 * 40 + 38, 5000 * 40 + 39, 5001 * 40, 5001 * 40 + 2};
+  const std::int64_t records[] = {5000, 5000, 5001, 5001};
+  const int counts[] = {39, 40, 1, 3};
   const double lat[] = {34.30, 34.3015, 34.3030, 34.3060};
+  ASSERT_EQ(track.warnings().size(), 1u);
+  EXPECT_NE(track.warnings()[0].find("1 footprints with a fill latitude"), std::string::npos)
+      << track.warnings()[0];
+  EXPECT_NE(track.warnings()[0].find("i_rec_ndx 5001 i_shot_count 2"), std::string::npos)
+      << track.warnings()[0];
   const double lon[] = {241.80, 241.8002, 241.8004, 241.8008};
   const double time[] = {181000000.0, 181000000.025, 181000000.050, 181000000.100};
   for (std::int64_t i = 0; i < track.size(); ++i) {
     const Footprint f = track.footprint(i);
     EXPECT_EQ(f.shot_number, i);
     EXPECT_EQ(f.source_shot_number, numbers[i]);
+    EXPECT_EQ(f.record_index, records[i]);
+    EXPECT_EQ(f.shot_count, counts[i]);
+    EXPECT_EQ(f.beam, -1);
+    EXPECT_DOUBLE_EQ(f.pulse_energy_scale, 1.0);
     EXPECT_DOUBLE_EQ(f.time_s, time[i]);  // d_UTCTime_40 is already on the GLAS epoch
     ASSERT_TRUE(f.on_terrain);
     EXPECT_NEAR(f.ground.lat_deg, lat[i], 1e-6);
@@ -151,6 +169,148 @@ TEST(GranuleTrack, FaultsAreInputErrorsNamingTheFileAndGroup) {
 
   const LevelTerrain terrain;
   input_error_of([&] { Track(granule_track(missing), terrain); }, missing);
+}
+
+// Issue 28: integers read exactly or refused, sizes checked before allocating, no shot lost or
+// doubled without a word.
+TEST(GranuleTrack, IntegersSizesAndBeamsAreCheckedNotReinterpreted) {
+  test_support::ScratchDir dir;
+  auto gedi_with = [&](const std::string& name, auto write_numbers) {
+    const auto file = dir.path() / name;
+    testing::Hdf5Writer h5(file);
+    write_numbers(h5);
+    h5.doubles("BEAM0000/lat_lowestmode", {1.0});
+    h5.doubles("BEAM0000/lon_lowestmode", {1.0});
+    h5.doubles("BEAM0000/delta_time", {1.0});
+    return file;
+  };
+  // A uint64 shot number above 2^63 - 1 would come out negative.
+  const auto huge = gedi_with("huge.h5", [](testing::Hdf5Writer& h5) {
+    h5.uint64s("BEAM0000/shot_number", {(1ULL << 63) + 5});
+  });
+  std::string message = input_error_of([&] { read_granule(huge, {}); }, "huge.h5: BEAM0000");
+  EXPECT_NE(message.find("9223372036854775813"), std::string::npos) << message;
+  // Shot numbers stored as floating point would be truncated.
+  const auto floats = gedi_with(
+      "floats.h5", [](testing::Hdf5Writer& h5) { h5.doubles("BEAM0000/shot_number", {12.5}); });
+  message = input_error_of([&] { read_granule(floats, {}); }, "floats.h5: BEAM0000");
+  EXPECT_NE(message.find("floating point"), std::string::npos) << message;
+  // A signed shot number below 0.
+  const auto negative = gedi_with(
+      "negative.h5", [](testing::Hdf5Writer& h5) { h5.int64s("BEAM0000/shot_number", {-3}); });
+  input_error_of([&] { read_granule(negative, {}); }, "negative.h5: BEAM0000");
+  // The largest exact number comes through.
+  const auto largest = gedi_with("largest.h5", [](testing::Hdf5Writer& h5) {
+    h5.uint64s("BEAM0000/shot_number", {(1ULL << 63) - 1});
+  });
+  EXPECT_EQ(read_granule(largest, {})[0].shot_number, std::numeric_limits<std::int64_t>::max());
+
+  // i_rec_ndx * 40 would overflow; i_shot_count outside 1..40.
+  auto glah14_with = [&](const std::string& name, std::int64_t record, std::int32_t count) {
+    const auto file = dir.path() / name;
+    testing::Hdf5Writer h5(file);
+    h5.doubles("Data_40HZ/Geolocation/d_lat", {1.0});
+    h5.doubles("Data_40HZ/Geolocation/d_lon", {1.0});
+    h5.doubles("Data_40HZ/Time/d_UTCTime_40", {1.0});
+    h5.int64s("Data_40HZ/Time/i_rec_ndx", {record});
+    h5.int32s("Data_40HZ/Time/i_shot_count", {count});
+    return file;
+  };
+  message = input_error_of(
+      [&] { read_granule(glah14_with("overflow.h5", std::int64_t{1} << 62, 1), {}); },
+      "overflow.h5: Data_40HZ");
+  EXPECT_NE(message.find("i_rec_ndx"), std::string::npos) << message;
+  message = input_error_of([&] { read_granule(glah14_with("count.h5", 7, 41), {}); },
+                           "count.h5: Data_40HZ");
+  EXPECT_NE(message.find("i_shot_count"), std::string::npos) << message;
+  EXPECT_EQ(read_granule(glah14_with("good.h5", 7, 40), {})[0].shot_number, 7 * 40 + 39);
+
+  // A beam named twice would simulate its shots twice.
+  const auto two = dir.path() / "two.h5";
+  testing::write_gedi_l2a(two);
+  message = input_error_of(
+      [&] {
+        read_granule(two, {"BEAM0101", "BEAM1011", "BEAM0101"});
+      },
+      "two.h5: BEAM0101");
+  EXPECT_NE(message.find("named twice"), std::string::npos) << message;
+
+  // 10^7 and 10^11 declared shots are refused from the declaration, at once, naming the path.
+  for (const hsize_t declared : {hsize_t{10'000'000}, hsize_t{100'000'000'000}}) {
+    const auto big = dir.path() / ("big" + std::to_string(declared) + ".h5");
+    {
+      testing::Hdf5Writer h5(big);
+      h5.uint64s("BEAM0000/shot_number", {1});
+      h5.declared_doubles("BEAM0000/lat_lowestmode", declared);
+    }
+    const auto started = std::chrono::steady_clock::now();
+    message = input_error_of([&] { read_granule(big, {}); }, big.string() + ": BEAM0000");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(),
+              1.0);
+    EXPECT_NE(message.find(std::to_string(declared)), std::string::npos) << message;
+  }
+}
+
+// GEDI's coverage beams carry half a laser's pulse, the full-power beams a whole one; the
+// beam's number is its name's digits in binary, and degrade_flag comes through.
+TEST(GranuleTrack, GediBeamsCarryTheirNumberTypeAndDegradeFlag) {
+  test_support::ScratchDir dir;
+  const auto file = dir.path() / "beams.h5";
+  {
+    testing::Hdf5Writer h5(file);
+    for (const std::string beam : {"BEAM0011", "BEAM0110"}) {
+      h5.uint64s(beam + "/shot_number", {1, 2});
+      h5.doubles(beam + "/lat_lowestmode", {1.0, 1.001});
+      h5.doubles(beam + "/lon_lowestmode", {1.0, 1.0});
+      h5.doubles(beam + "/delta_time", {1.0, 1.1});
+      h5.uint8s(beam + "/degrade_flag", {0, 3});
+    }
+  }
+  const LevelTerrain terrain;
+  const Track track(granule_track(file), terrain);
+  ASSERT_EQ(track.size(), 4);
+  EXPECT_TRUE(track.warnings().empty());
+  const int beams[] = {3, 3, 6, 6};
+  const double scales[] = {0.5, 0.5, 1.0, 1.0};
+  const std::uint8_t degrade[] = {0, 3, 0, 3};
+  for (std::int64_t i = 0; i < 4; ++i) {
+    const Footprint f = track.footprint(i);
+    EXPECT_EQ(f.beam, beams[i]);
+    EXPECT_DOUBLE_EQ(f.pulse_energy_scale, scales[i]);
+    EXPECT_EQ(f.degrade_flag, degrade[i]);
+  }
+}
+
+}  // namespace
+}  // namespace glaswave
+
+namespace glaswave {
+namespace {
+
+// The fuzz target's seed corpus (tests/fuzz/make_corpus.py): every `broken-*` granule, cut or
+// malformed, is refused as an input error naming the file; the others are read.
+TEST(GranuleTrack, TheFuzzCorpusIsReadOrRefusedAsInputErrors) {
+  const std::filesystem::path corpus =
+      std::filesystem::path(GLASWAVE_SOURCE_DIR) / "tests/fuzz/corpus/granule";
+  int refused = 0, read = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(corpus)) {
+    const std::string name = entry.path().filename().string();
+    std::vector<std::string> warnings;
+    if (name.rfind("broken-gedi-fill", 0) == 0) {  // read, with a word about the skipped shot
+      EXPECT_EQ(read_granule(entry.path(), {}, &warnings).size(), 2u);
+      EXPECT_EQ(warnings.size(), 1u);
+      ++read;
+    } else if (name.rfind("broken-", 0) == 0) {
+      input_error_of([&] { read_granule(entry.path(), {}); }, entry.path().string());
+      ++refused;
+    } else {
+      EXPECT_FALSE(read_granule(entry.path(), {}, &warnings).empty()) << name;
+      EXPECT_TRUE(warnings.empty()) << name;
+      ++read;
+    }
+  }
+  EXPECT_GE(refused, 6);
+  EXPECT_GE(read, 3);
 }
 
 }  // namespace

@@ -153,6 +153,51 @@ def dem_corpus():
         write("dem", "described-%d" % i, bytes(rng.randrange(256) for _ in range(400)))
 
 
+def granule_corpus():
+    """Small GEDI L2A and GLAH14 granules, whole and cut, and with the faults issue 28 found."""
+    import io
+    import h5py
+    import numpy as np
+
+    def h5(name, fill):
+        buffer = io.BytesIO()
+        with h5py.File(buffer, "w") as f:
+            fill(f)
+        data = buffer.getvalue()
+        write("granule", name, data)
+        return data
+
+    def gedi(f, numbers=np.array([1, 2], "u8"), lat=(1.0, 1.001)):
+        for beam in ("BEAM0000", "BEAM0101"):
+            f[beam + "/shot_number"] = numbers
+            f[beam + "/lat_lowestmode"] = np.array(lat)
+            f[beam + "/lon_lowestmode"] = np.array([2.0, 2.0])
+            f[beam + "/delta_time"] = np.array([1.0, 1.1])
+            f[beam + "/degrade_flag"] = np.array([0, 1], "u1")
+
+    def glah14(f, record=np.array([7, 7], "i4"), count=np.array([39, 40], "i2")):
+        f["Data_40HZ/Geolocation/d_lat"] = np.array([1.0, 1.001])
+        f["Data_40HZ/Geolocation/d_lon"] = np.array([2.0, 2.0])
+        f["Data_40HZ/Time/d_UTCTime_40"] = np.array([1.0, 1.025])
+        f["Data_40HZ/Time/i_rec_ndx"] = record
+        f["Data_40HZ/Time/i_shot_count"] = count
+
+    whole = h5("gedi.h5", gedi)
+    write("granule", "broken-gedi-truncated.h5", whole[: len(whole) // 2])
+    h5("broken-gedi-huge-number.h5", lambda f: gedi(f, np.array([2**63 + 1, 2], "u8")))
+    h5("broken-gedi-float-number.h5", lambda f: gedi(f, np.array([1.5, 2.0])))
+    h5("broken-gedi-fill.h5", lambda f: gedi(f, lat=(-999999.0, 1.0)))
+    whole = h5("glah14.h5", glah14)
+    write("granule", "broken-glah14-truncated.h5", whole[: len(whole) * 3 // 4])
+    h5("broken-glah14-overflow.h5", lambda f: glah14(f, np.array([2**61, 1], "i8")))
+    h5("broken-glah14-count.h5", lambda f: glah14(f, count=np.array([0, 41], "i2")))
+
+    def declared(f):
+        f.create_dataset("BEAM0000/shot_number", data=np.array([1], "u8"))
+        f.create_dataset("BEAM0000/lat_lowestmode", shape=(10**11,), dtype="f8", chunks=(1024,))
+    h5("broken-declared-1e11.h5", declared)
+
+
 def gdal_pack(kind, value):
     import struct
     return struct.pack({gdal.GDT_Float32: "<f", gdal.GDT_Int16: "<h"}[kind], value)
@@ -226,3 +271,4 @@ if __name__ == "__main__":
     stands_corpus()
     dem_corpus()
     las_corpus()
+    granule_corpus()

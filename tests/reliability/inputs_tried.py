@@ -600,6 +600,31 @@ def data_cases(t):
         "granule.json", track={"type": "granule", "file": t.write("g.h5", MARKER + "\n")})])
 
 
+def granule_cases(t):
+    """Issue 28's granules (tests/fuzz/corpus/granule, made by tests/fuzz/make_corpus.py): each
+    is refused naming its path, or (a fill latitude) read with a warning."""
+    corpus = pathlib.Path(__file__).resolve().parents[1] / "fuzz" / "corpus" / "granule"
+    for name, expect in [("broken-gedi-huge-number.h5", "error"),  # uint64 above 2^63
+                         ("broken-gedi-float-number.h5", "error"),  # not truncated
+                         ("broken-glah14-overflow.h5", "error"),  # i_rec_ndx * 40
+                         ("broken-glah14-count.h5", "error"),  # i_shot_count outside 1..40
+                         ("broken-gedi-truncated.h5", "error"),
+                         ("broken-glah14-truncated.h5", "error"),
+                         ("broken-declared-1e11.h5", "error"),  # at once, with its path
+                         ("broken-gedi-fill.h5", "ok")]:  # a warning names the skipped shots
+        t.run("granule: " + name, ["check", t.config("granule.json", track={
+            "type": "granule", "file": str(corpus / name)})], expect=expect)
+    t.run("granule: beams named twice", ["check", t.config("granule.json", track={
+        "type": "granule", "file": str(corpus / "gedi.h5"),
+        "beams": ["BEAM0101", "BEAM0101"]})])
+    import h5py  # python3-h5py
+    with h5py.File(t.path("declared-1e7.h5"), "w") as f:
+        f["BEAM0000/shot_number"] = [1]
+        f.create_dataset("BEAM0000/lat_lowestmode", shape=(10**7,), dtype="f8", chunks=(1024,))
+    t.run("granule: 10^7 shots declared", ["check", t.config("granule.json", track={
+        "type": "granule", "file": str(t.path("declared-1e7.h5"))})])
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     source = pathlib.Path(__file__).resolve().parents[2]
@@ -610,7 +635,7 @@ def main():
     glaswave = os.path.abspath(arguments.glaswave)
     with tempfile.TemporaryDirectory(prefix="glaswave_inputs_") as scratch:
         t = Trial(glaswave, scratch)
-        for group in (issue_items, configuration_cases, data_cases):
+        for group in (issue_items, configuration_cases, data_cases, granule_cases):
             if arguments.only in group.__name__:
                 group(t)
         pathlib.Path(arguments.out).write_text(t.table())

@@ -1,0 +1,56 @@
+// The sun's elevation and azimuth against a published reference: the worked example of NREL's
+// Solar Position Algorithm (Reda, I. and Andreas, A., 2004, "Solar position algorithm for solar
+// radiation applications", Solar Energy 76, 577-589; NREL/TP-560-34302, Table A5.1), whose
+// stated uncertainty is +-0.0003 deg.
+#include "footprints/solar_position.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "footprints/glas_time.hpp"
+
+namespace glaswave {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// SPA's example: 2003-10-17 12:30:30 local time at UTC-7 (19:30:30 UTC), 39.742476 N,
+// 105.1786 W, 1830.14 m; 820 mbar and 11 C for its refraction. Table A5.1 gives the topocentric
+// elevation without refraction e0 = 39.872046 deg, the zenith angle with refraction
+// 50.11162 deg and the azimuth (eastward from north) 194.34024 deg. SPA takes dUT1 = 0 and
+// dT = 67 s where ERFA's leap seconds give TT - UTC = 64.184 s: the 2.8 s apart move the sun by
+// 3e-5 deg.
+TEST(SolarPosition, MatchesTheSolarPositionAlgorithmsExampleWithinItsUncertainty) {
+  const double t = parse_iso8601_utc("2003-10-17T19:30:30Z");
+  const SolarPosition sun = solar_position(t, 39.742476, -105.1786, 1830.14);
+  constexpr double tolerance_deg = 0.0003;
+  EXPECT_NEAR(sun.elevation_deg, 39.872046, tolerance_deg);
+  EXPECT_NEAR(sun.azimuth_deg, 194.34024, tolerance_deg);
+  // SPA's refraction (its eq. 42), applied here to our geometric elevation, gives its zenith.
+  const double e0 = sun.elevation_deg;
+  const double refraction_deg = (820.0 / 1010.0) * (283.0 / (273.0 + 11.0)) * 1.02 /
+                                (60.0 * std::tan((e0 + 10.3 / (e0 + 5.11)) * kDeg));
+  EXPECT_NEAR(90.0 - (e0 + refraction_deg), 50.11162, tolerance_deg);
+}
+
+// Checks that need no table: the sun is below the horizon at local midnight and near the zenith
+// at the subsolar point (at the March 2005 equinox, 2005-03-20T12:33Z, the sun stood over the
+// equator; with the equation of time at -7.5 min the sun runs late, and local noon was at
+// longitude -(33 - 7.5) / 60 * 15 = -6.4 deg).
+TEST(SolarPosition, IsBelowTheHorizonAtMidnightAndOverheadAtTheSubsolarPoint) {
+  const double noon = parse_iso8601_utc("2005-03-20T12:33:00Z");
+  EXPECT_GT(solar_position(noon, 0.0, -6.4).elevation_deg, 89.5);
+  EXPECT_LT(solar_position(noon, 0.0, 173.6).elevation_deg, -89.5);
+  // 53.6 deg of hour angle before noon, on the equator: in the east, that far from the zenith.
+  const SolarPosition morning = solar_position(noon, 0.0, -60.0);
+  EXPECT_NEAR(morning.azimuth_deg, 90.0, 0.5);
+  EXPECT_NEAR(morning.elevation_deg, 90.0 - 53.6, 0.5);
+  EXPECT_THROW(solar_position(std::nan(""), 0.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(solar_position(1e12, 0.0, 0.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace glaswave
