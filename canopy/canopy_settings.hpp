@@ -23,6 +23,9 @@ enum class CrownShape { ellipsoid, cone, layer };
 struct StandArea;
 
 struct CanopySettings {
+  // Which vegetation source grows it (pipeline/shot/vegetation_source.hpp): "forest", the
+  // crowns, stands and layer below.
+  std::string kind = "forest";
   double pai = 3.0;  // one-sided plant area (leaves and bark) per unit ground area of the scene
   LeafAngleDistribution lad = LeafAngleDistribution::spherical;
   double lad_mean_deg = 57.3;  // mean inclination, for `ellipsoidal` only

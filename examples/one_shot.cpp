@@ -33,8 +33,9 @@ int main() try {
   // The terrain, the track planned on it, and the shot simulated where its beam meets the ground.
   const std::unique_ptr<glaswave::Terrain> terrain = glaswave::open_terrain(config);
   const std::unique_ptr<glaswave::Track> track = glaswave::plan_track(config, *terrain);
-  const glaswave::ShotSimulator simulator(config, *terrain);
-  const glaswave::ShotRecord shot = simulator.simulate(track->footprint(0));
+  const std::unique_ptr<glaswave::ShotSimulator> simulator =
+      glaswave::make_shot_simulator(config, *terrain);
+  const glaswave::ShotRecord shot = simulator->simulate(track->footprint(0));
 
   const glaswave::SensorSettings& sensor = config.sensor;
   const double f_fov =

@@ -54,6 +54,9 @@ struct OutputSettings {
 // Off by default: the waveform is then the noise-free received power. All levels are referred
 // to the detector's input (W of received light), so rx_waveform keeps its unit whatever the gain.
 struct DetectorSettings {
+  // Which receiver makes the record from the returns (pipeline/shot/receiver.hpp): "waveform",
+  // this analog detector and the waveform processing.
+  std::string kind = "waveform";
   bool enabled = false;
   double background_W = 0.0;        // mean background light in the field of view (sunlit scene)
   bool photon_noise = false;        // Poisson statistics of signal and background photons

@@ -14,12 +14,8 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "pipeline/engine/inputs.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/products/raster_writer.hpp"
-#include "pipeline/scene/vegetation.hpp"
-#include "pipeline/transport/brf_transport.hpp"
-#include "terrain/ground_mesh.hpp"
-#include "terrain/roughness.hpp"
+#include "pipeline/shot/brf_shot.hpp"
 
 namespace glaswave {
 namespace {
@@ -58,40 +54,6 @@ nlohmann::json brf_document(const Config& config, const BrfResult& result) {
   return {{"bands", bands}};
 }
 
-// The scene around the footprint: the tile and, beyond its sides, enough for the crowns that
-// reach into it (periodic) or for the light that wanders out (a DEM).
-struct BrfScene {
-  LocalFrame frame;
-  BrfTile tile;
-  std::unique_ptr<Scene> scene;
-};
-
-BrfScene build_brf_scene(const Config& config, const Terrain& terrain,
-                         const ShotSimulator& simulator, const Footprint& footprint,
-                         const RayDevice& device, int pixels) {
-  BrfScene built{LocalFrame(footprint.ground), {}, nullptr};
-  built.tile.half_size_m = 0.5 * pixels * config.brf.image_resolution_m;
-  built.tile.periodic = config.terrain.plane.has_value();
-  const SurfaceOrientation orientation = fit_surface_orientation(
-      terrain, built.frame, footprint.range_m * simulator.lidar().beam_sigma_rad());
-  // Across a periodic plane's tile the ground climbs as the plane does (a DEM's tile is lit and
-  // seen through its level top).
-  const double deg = std::numbers::pi / 180.0;
-  const double fall = built.tile.periodic ? std::tan(orientation.slope_deg * deg) : 0.0;
-  built.tile.ground_slope_x = -fall * std::sin(orientation.aspect_deg * deg);
-  built.tile.ground_slope_y = -fall * std::cos(orientation.aspect_deg * deg);
-  const double half_size_m = built.tile.half_size_m + (built.tile.periodic ? 5.0 : 100.0);
-  const RoughnessField roughness(config.terrain.roughness, config.seed);
-  const GroundMesh ground = build_ground_mesh(terrain, built.frame, half_size_m, terrain.detail_m(),
-                                              &roughness, half_size_m);
-  const Vegetation vegetation =
-      simulator.forest()
-          ? build_vegetation(*simulator.forest(), terrain, built.frame, half_size_m, orientation)
-          : Vegetation{};
-  built.scene = std::make_unique<Scene>(device, ground, vegetation);
-  return built;
-}
-
 }  // namespace
 
 BrfSummary run_brf(const Config& config, const BrfRequest& request,
@@ -101,7 +63,7 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
   const int pixels =
       static_cast<int>(std::ceil(config.brf.scene_size_m / config.brf.image_resolution_m));
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
-  const ShotSimulator simulator(config, *terrain);
+  const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
   const Footprint footprint = track->footprint(0);
   if (!footprint.on_terrain)
@@ -110,8 +72,9 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
 
   std::optional<OutputDirectory> directory;
   if (!request.out_dir.empty()) directory.emplace(request.out_dir);
-  const RayDevice device;
-  const BrfScene built = build_brf_scene(config, *terrain, simulator, footprint, device, pixels);
+  const double tile_half_size_m = 0.5 * pixels * config.brf.image_resolution_m;
+  const BrfScene scene =
+      build_brf_scene(*simulator, footprint, tile_half_size_m, config.terrain.plane.has_value());
   BrfOptions options;
   options.sun_direction = -1.0 * toward(config.brf.sun_zenith_deg, config.brf.sun_azimuth_deg);
   for (const BrfView& view : config.brf.views)
@@ -124,9 +87,7 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
   const int cores = tbb::this_task_arena::max_concurrency();
   tbb::task_arena arena(request.threads > 0 ? std::min(request.threads, cores) : cores);
   BrfResult result;
-  arena.execute([&] {
-    result = simulate_brf(*built.scene, simulator.optics(), built.tile, options, progress);
-  });
+  arena.execute([&] { result = trace_brf(scene, options, progress); });
 
   BrfSummary summary;
   summary.document = brf_document(config, result);
@@ -143,7 +104,7 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
   if (directory) {
     RasterImage image;
     image.columns = image.rows = pixels;
-    const double h = built.tile.half_size_m, pixel_m = config.brf.image_resolution_m;
+    const double h = tile_half_size_m, pixel_m = config.brf.image_resolution_m;
     image.geotransform = {-h, pixel_m, 0.0, h, 0.0, -pixel_m};
     image.crs = summary.crs;
     for (const Band& band : config.sensor.bands) image.band_names.push_back(band.name);

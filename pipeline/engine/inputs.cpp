@@ -9,11 +9,85 @@ std::unique_ptr<Terrain> open_terrain(const Config& config) {
   return at_section("/terrain", [&] { return make_terrain(config.terrain); });
 }
 
-std::optional<Forest> grow_forest(const Config& config) {
-  if (!config.canopy) return std::nullopt;
-  return at_section("/canopy", [&] {
-    return std::optional<Forest>(std::in_place, *config.canopy, config.seed, config.terrain.plane);
-  });
+LidarSettings lidar_settings(const SensorSettings& sensor) {
+  LidarSettings lidar;
+  lidar.pulse_sigma_ns = sensor.pulse_sigma_ns;
+  lidar.divergence_sigma_rad = sensor.divergence_sigma_rad;
+  lidar.ifov_rad = sensor.ifov_rad;
+  lidar.telescope_area_m2 = sensor.telescope_area_m2;
+  lidar.bin_ns = sensor.bin_ns;
+  lidar.bins = sensor.bins;
+  for (const Band& band : sensor.bands)
+    lidar.bands.push_back(
+        {band.wavelength_nm, band.pulse_energy_mJ, band.atmos_transmission_roundtrip});
+  return lidar;
+}
+
+ShotSettings shot_settings(const Config& config) {
+  ShotSettings settings;
+  settings.lidar = lidar_settings(config.sensor);
+  settings.transport.rays = config.simulation.rays_per_shot;
+  settings.transport.max_order = config.simulation.max_order;
+  settings.transport.quasi_random = config.simulation.quasi_random;
+  settings.transport.per_order = config.output.per_order;
+  settings.transport.seed = config.seed;
+  settings.soil_reflectance = config.terrain.soil_reflectance;
+  settings.roughness = config.terrain.roughness;
+  return settings;
+}
+
+ReceiverSettings receiver_settings(const Config& config) {
+  ReceiverSettings settings;
+  settings.kind = config.detector.kind;
+  settings.lidar = lidar_settings(config.sensor);
+  settings.metrics = config.output.metrics;
+  settings.seed = config.seed;
+  if (!config.detector.enabled) return settings;
+  const DetectorSettings& detector = config.detector;
+  Detector::Settings& chain = settings.detector.emplace();
+  chain.background_W = detector.background_W;
+  chain.photon_noise = detector.photon_noise;
+  chain.quantum_efficiency = detector.quantum_efficiency;
+  chain.noise_rms_W = detector.noise_rms_W;
+  chain.gain = detector.gain;
+  chain.bits = detector.bits;
+  chain.saturation_W = detector.saturation_W;
+  return settings;
+}
+
+VegetationSettings vegetation_settings(const Config& config) {
+  return {*config.canopy, config.seed, config.terrain.plane};
+}
+
+std::unique_ptr<VegetationSource> grow_vegetation(const Config& config) {
+  if (!config.canopy) return nullptr;
+  return at_section("/canopy", [&] { return make_vegetation_source(vegetation_settings(config)); });
+}
+
+std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain) {
+  std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config);
+  std::unique_ptr<Receiver> receiver =
+      at_section("/detector", [&] { return make_receiver(receiver_settings(config)); });
+  return std::make_unique<ShotSimulator>(shot_settings(config), terrain, std::move(vegetation),
+                                         std::move(receiver));
+}
+
+RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int64_t shots,
+                 const std::string& command_line) {
+  const LidarModel& lidar = simulator.lidar();
+  RunInfo info;
+  info.command_line = command_line;
+  info.config_json = config.resolved.dump();
+  info.seed = config.seed;
+  info.shots = shots;
+  for (const Band& band : config.sensor.bands)
+    info.bands.push_back({band.name, band.wavelength_nm});
+  info.bin_time_ns = lidar.bin_time_ns();
+  info.tx_time_ns = lidar.tx_time_ns();
+  for (std::size_t band = 0; band < lidar.band_count(); ++band)
+    info.tx_waveform_W.push_back(lidar.tx_waveform_W(band));
+  info.orders = config.output.per_order ? config.simulation.max_order : 0;
+  return info;
 }
 
 std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain) {

@@ -1,6 +1,6 @@
-// The run's inputs from the configuration: the terrain opened, the forest grown, the track
-// planned on the terrain. The floors below see only their settings; errors about those come out
-// here at their JSON paths.
+// The run's inputs from the configuration: the terrain opened, the vegetation source made, the
+// shot simulator given its typed settings, the track planned on the terrain. The floors below
+// see only their settings; errors about those come out here at their JSON paths.
 #pragma once
 
 #include <array>
@@ -9,16 +9,26 @@
 #include <string>
 #include <vector>
 
-#include "canopy/forest.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/config/config.hpp"
+#include "pipeline/shot/shot_simulator.hpp"
 #include "terrain/terrain.hpp"
 
 namespace glaswave {
 
 std::unique_ptr<Terrain> open_terrain(const Config& config);
-// Empty over bare ground.
-std::optional<Forest> grow_forest(const Config& config);
+// The shot layer's settings from the configuration's.
+LidarSettings lidar_settings(const SensorSettings& sensor);
+ShotSettings shot_settings(const Config& config);
+ReceiverSettings receiver_settings(const Config& config);
+VegetationSettings vegetation_settings(const Config& config);  // config.canopy must be set
+// The configuration's vegetation source (canopy.kind); null over bare ground.
+std::unique_ptr<VegetationSource> grow_vegetation(const Config& config);
+// The shot simulator of the configuration, its vegetation grown and its receiver made.
+std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain);
+// What the products need to know besides the shots.
+RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int64_t shots,
+                 const std::string& command_line);
 std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain);
 
 // A warning, at the stands' JSON path, when the configuration has stands and no shot falls

@@ -6,7 +6,6 @@
 #include "core/error.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/engine/inputs.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
 
 namespace glaswave {
 
@@ -27,14 +26,14 @@ RayDebug debug_ray(const Config& config, std::int64_t shot_number, std::int64_t 
     throw config_error("--debug-ray", "ray " + std::to_string(ray) + " is not one of the shot's " +
                                           std::to_string(rays) + " rays (0 to " +
                                           std::to_string(rays - 1) + ")");
-  const ShotSimulator simulator(config, *terrain);
+  const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
   RayDebug debug;
   debug.shot_number = shot_number;
   debug.ray = ray;
   debug.rays_per_shot = rays;
   for (const Band& band : config.sensor.bands) debug.band_names.push_back(band.name);
-  std::optional<ShotWaveforms> waveforms =
-      simulator.simulate_ray(track.footprint(first), ray, observer);
+  std::optional<ShotWaveforms> waveforms = at_section(
+      "/terrain", [&] { return simulator->simulate_ray(track.footprint(first), ray, observer); });
   if (!waveforms)
     throw config_error("--debug-ray", "shot " + std::to_string(shot_number) +
                                           " is flagged: its beam does not fall on the terrain's "

@@ -9,8 +9,7 @@
 #include <vector>
 
 #include "pipeline/config/config.hpp"
-#include "pipeline/transport/ray_event.hpp"
-#include "pipeline/transport/shot_transport.hpp"
+#include "pipeline/shot/shot_simulator.hpp"
 
 namespace glaswave {
 

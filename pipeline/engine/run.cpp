@@ -21,7 +21,6 @@
 #include "pipeline/engine/cluster.hpp"
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/journal.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/record_codec.hpp"
 
@@ -43,7 +42,8 @@ std::vector<ShotRecord> simulate_range(const ShotSimulator& simulator, const Tra
   arena.execute([&] {
     tbb::parallel_for(std::size_t{0}, footprints.size(), [&](std::size_t i) {
       std::int64_t n = 0;
-      records[i] = simulator.simulate(footprints[i], &n);
+      // Roughness too fine to mesh under this beam is refused there, named in /terrain.
+      records[i] = at_section("/terrain", [&] { return simulator.simulate(footprints[i], &n); });
       ray_queries += n;
     });
   });
@@ -185,7 +185,7 @@ std::unique_ptr<RunSetup> set_up(const Config& config, const RunRequest& request
   // the track is planned, in check_inputs' order, so that both name the same first fault.
   setup->used = config;
   setup->used.resolved["terrain"]["vertical_datum"] = setup->terrain->vertical_datum().key;
-  setup->simulator = std::make_unique<ShotSimulator>(setup->used, *setup->terrain);
+  setup->simulator = make_shot_simulator(setup->used, *setup->terrain);
   // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
   setup->track = plan_track(config, *setup->terrain);
   const Track& track = *setup->track;
@@ -282,8 +282,8 @@ CheckSummary check_inputs(const Config& config) {
   check_run(config);  // what run refuses before simulating
   check_brf(config);  // ... and brf
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
-  // The forest reads its crowns file and checks what the configuration cannot alone.
-  grow_forest(config);
+  // The vegetation reads its crowns file and checks what the configuration cannot alone.
+  grow_vegetation(config);
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
   CheckSummary summary;
   summary.shots = track->size();
@@ -302,7 +302,8 @@ CheckSummary check_inputs(const Config& config) {
   if (config.terrain.roughness.rms_m > 0.0) {
     for (std::int64_t record = 0; record < track->size(); ++record)
       if (const Footprint footprint = track->footprint(record); footprint.on_terrain) {
-        ShotSimulator(config, *terrain).check_scene(footprint);
+        const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
+        at_section("/terrain", [&] { simulator->check_scene(footprint); });
         break;
       }
   }
@@ -372,7 +373,7 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   cluster.agree(failure);
   const std::int64_t first = setup->first, last = setup->last;
 
-  RunInfo info = setup->simulator->run_info(last - first, request.command_line);
+  RunInfo info = run_info(setup->used, *setup->simulator, last - first, request.command_line);
   info.vertical_datum = setup->terrain->vertical_datum().description;
   RunSummary summary;
   std::vector<std::array<double, 2>> centres;

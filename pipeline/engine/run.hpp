@@ -14,7 +14,7 @@
 #include "core/directory_lock.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/config/config.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/shot/shot_simulator.hpp"
 
 namespace glaswave {
 

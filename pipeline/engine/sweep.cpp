@@ -29,13 +29,13 @@ CaseReturns simulate_case(const SweepRequest& request, const std::string& key,
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
   const std::unique_ptr<Track> planned = plan_track(config, *terrain);
   const Track& track = *planned;
-  const ShotSimulator simulator(config, *terrain);
+  const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
   const std::size_t bands = config.sensor.bands.size();
   CaseReturns returns{key, value, std::vector<double>(bands, 0.0), std::vector<double>(bands, 0.0),
                       std::vector<double>(bands, 0.0)};
   std::vector<std::int64_t> counted(bands, 0);
   simulate_records(
-      simulator, track, 0, track.size(), request.threads,
+      *simulator, track, 0, track.size(), request.threads,
       [&](std::int64_t, const ShotRecord& shot) {
         for (std::size_t b = 0; b < bands; ++b) {
           if (shot.quality_flag != quality_good || !std::isfinite(shot.energy_cr_J[b]) ||

@@ -1,11 +1,8 @@
-// The vegetation of one shot in its local frame: the stand's trees near the footprint as
-// crowns on their trunks, each standing on the terrain under its stem, or a homogeneous layer
-// following the footprint's mean ground.
+// The truth of a shot's vegetation, measured on its scene: what the beam falls on. (What grows
+// in the scene comes from a vegetation source, pipeline/shot/vegetation_source.hpp.)
 #pragma once
 
-#include "canopy/forest.hpp"
 #include "pipeline/scene/scene.hpp"
-#include "terrain/ground_mesh.hpp"
 
 namespace glaswave {
 
@@ -19,9 +16,5 @@ struct VegetationTruth {
 };
 
 VegetationTruth measure_vegetation(const Scene& scene, double sigma_m);
-
-// Crowns are tagged with their forest kind as material.
-Vegetation build_vegetation(const Forest& forest, const Terrain& terrain, const LocalFrame& frame,
-                            double half_size_m, const SurfaceOrientation& ground);
 
 }  // namespace glaswave

@@ -13,7 +13,7 @@
 #include "canopy/crown.hpp"
 #include "canopy/leaf_angles.hpp"
 #include "core/random.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "pipeline/products/gaussian_decomposition.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"

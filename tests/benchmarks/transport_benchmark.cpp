@@ -22,8 +22,8 @@
 #include <vector>
 
 #include "footprints/track.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/run.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
 #include "terrain/ground_mesh.hpp"
@@ -177,7 +177,9 @@ StageSeconds stage_seconds(const glaswave::Config& config, int shots) {
   StageSeconds stages;
   const auto terrain = glaswave::make_terrain(config.terrain);
   const glaswave::Track track(config.track, *terrain);
-  const glaswave::ShotSimulator simulator(config, *terrain);
+  const std::unique_ptr<glaswave::ShotSimulator> made =
+      glaswave::make_shot_simulator(config, *terrain);
+  const glaswave::ShotSimulator& simulator = *made;
   auto start = Clock::now();
   const std::vector<glaswave::Footprint> footprints = track.footprints(0, shots);
   stages.footprints = seconds_since(start);
@@ -200,7 +202,8 @@ StageSeconds stage_seconds(const glaswave::Config& config, int shots) {
   fs::create_directories(out);
   start = Clock::now();
   {
-    const auto writers = glaswave::make_writers(out, {}, simulator.run_info(shots, "benchmark"));
+    const auto writers =
+        glaswave::make_writers(out, {}, glaswave::run_info(config, simulator, shots, "benchmark"));
     for (std::size_t i = 0; i < records.size(); ++i)
       for (const auto& writer : writers) writer->write(static_cast<std::int64_t>(i), records[i]);
     for (const auto& writer : writers) writer->finish({});

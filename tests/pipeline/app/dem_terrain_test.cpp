@@ -17,7 +17,7 @@
 #include <string>
 
 #include "footprints/track.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 #include "tests/terrain/dem_fixture.hpp"
 

@@ -7,7 +7,7 @@
 #include <numbers>
 
 #include "footprints/track.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 
 namespace glaswave {

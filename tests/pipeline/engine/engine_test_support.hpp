@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "footprints/track.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/engine/inputs.hpp"
 
 namespace glaswave::test_support {
 
@@ -55,7 +55,8 @@ inline SimulatedTrack simulate_track(Config config) {
   const auto terrain = make_terrain(run.config.terrain);
   const Track track(run.config.track, *terrain);
   run.footprints = track.footprints(0, track.size());
-  const ShotSimulator simulator(run.config, *terrain);
+  const std::unique_ptr<ShotSimulator> made = make_shot_simulator(run.config, *terrain);
+  const ShotSimulator& simulator = *made;
   for (const Footprint& footprint : run.footprints)
     run.records.push_back(simulator.simulate(footprint));
   run.bin_time_ns = simulator.lidar().bin_time_ns();

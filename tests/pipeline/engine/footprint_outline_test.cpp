@@ -10,7 +10,7 @@
 #include <numbers>
 
 #include "footprints/track.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 
 namespace glaswave {
@@ -29,7 +29,8 @@ Outline outline(double off_nadir_deg, double slope_deg) {
   const Config config = parse_config(document);
   const auto terrain = make_terrain(config.terrain);
   const Footprint footprint = Track(config.track, *terrain).footprint(0);
-  const ShotSimulator simulator(config, *terrain);
+  const std::unique_ptr<ShotSimulator> made = make_shot_simulator(config, *terrain);
+  const ShotSimulator& simulator = *made;
   const ShotRecord record = simulator.simulate(footprint);
   EXPECT_GE(record.footprint_lonlat.size(), 30u);
 

@@ -17,7 +17,7 @@
 
 #include "core/error.hpp"
 #include "footprints/track.hpp"
-#include "pipeline/engine/shot_simulation.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -237,7 +237,7 @@ TEST_F(Forests, BadFilesAreNamedWithTheirPlace) {
       {{"terrain", {{"plane", nlohmann::json::object()}}}, {"canopy", {{"crowns_file", crowns}}}});
   const auto terrain = make_terrain(config.terrain);
   try {
-    const ShotSimulator simulator(config, *terrain);
+    make_shot_simulator(config, *terrain);
     FAIL() << "a bad crowns file was accepted";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::input);

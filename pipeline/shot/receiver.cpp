@@ -1,0 +1,52 @@
+// The registry of receivers, with the analog waveform receiver registered from the start.
+#include "pipeline/shot/receiver.hpp"
+
+#include <map>
+#include <mutex>
+
+#include "core/error.hpp"
+#include "pipeline/shot/waveform_receiver.hpp"
+
+namespace glaswave {
+namespace {
+
+struct Registry {
+  std::mutex mutex;
+  std::map<std::string, ReceiverFactory> kinds;
+};
+
+Registry& registry() {
+  static Registry receivers{{}, {{"waveform", [](const ReceiverSettings& s) {
+                                    return std::make_unique<WaveformReceiver>(s);
+                                  }}}};
+  return receivers;
+}
+
+}  // namespace
+
+void register_receiver(const std::string& name, ReceiverFactory make) {
+  Registry& receivers = registry();
+  const std::lock_guard lock(receivers.mutex);
+  if (!receivers.kinds.emplace(name, std::move(make)).second)
+    throw run_error("receiver \"" + name + "\"", "registered twice");
+}
+
+std::unique_ptr<Receiver> make_receiver(const ReceiverSettings& settings) {
+  Registry& receivers = registry();
+  ReceiverFactory make;
+  {
+    const std::lock_guard lock(receivers.mutex);
+    const auto found = receivers.kinds.find(settings.kind);
+    if (found == receivers.kinds.end()) {
+      std::string known;
+      for (const auto& [name, factory] : receivers.kinds)
+        known += (known.empty() ? "" : ", ") + name;
+      throw setting_error(ErrorKind::config, "kind",
+                          "no receiver \"" + settings.kind + "\" (there are: " + known + ")");
+    }
+    make = found->second;
+  }
+  return make(settings);
+}
+
+}  // namespace glaswave

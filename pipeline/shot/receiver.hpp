@@ -1,0 +1,73 @@
+// What the receiver makes of a shot: a Receiver turns the shot's binned returns (the received
+// power per band and time bin, as the transport tallies it) into what the record carries.
+//
+// The first receiver is the analog one (waveform_receiver.hpp): detector and digitiser, then
+// the waveform processing (Gaussian decomposition, metrics, eq. (1)'s reflectance). A photon-
+// counting receiver (ICESat-2's ATLAS) is the second: it draws photon events from the returns
+// and writes them to the record's variable-length fields (ShotRecord::photon_*, stored in
+// shots.nc as CF contiguous ragged arrays along the `photon` dimension).
+//
+// A new receiver is one class and one registration (register_receiver, keyed by
+// ReceiverSettings::kind): the engine and the transport do not change.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "pipeline/products/shot_record.hpp"
+#include "pipeline/transport/detector.hpp"
+#include "pipeline/transport/lidar_model.hpp"
+#include "pipeline/transport/shot_transport.hpp"
+#include "terrain/local_frame.hpp"
+
+namespace glaswave {
+
+// One shot's returns, as the receiver sees them.
+struct ShotReturns {
+  // [band][bin] received power (W) in the lidar's bins (LidarModel::bin_time_ns: two-way time
+  // after the return from range_m), its canopy and ground parts (the truth of each bin's
+  // light), per order when asked for, and the Monte Carlo variance of the total.
+  ShotWaveforms waveforms;
+  std::int64_t shot_number = 0;
+  double range_m = 0.0;  // to the footprint centre
+  // Where light of two-way time `time_ns` (the bins' clock) was scattered, on the beam's axis:
+  // latitude, longitude and height above the ellipsoid.
+  std::function<Geodetic(double time_ns)> position_at;
+};
+
+class Receiver {
+ public:
+  virtual ~Receiver() = default;
+
+  // Fills the record's receiver fields from the returns (the record already holds the shot's
+  // geolocation). Thread-safe: every thread of a run calls it at once. The result may depend
+  // only on the returns and the shot number (counter-based noise), never on the thread.
+  virtual void receive(ShotReturns returns, ShotRecord& record) const = 0;
+
+  // Whether records carry photon events: the products then hold the `photon` dimension and
+  // the ragged photon_* fields, which are left out otherwise.
+  virtual bool photon_events() const { return false; }
+};
+
+// What a receiver is made from.
+struct ReceiverSettings {
+  std::string kind = "waveform";               // register_receiver's name
+  LidarSettings lidar;                         // bands, bins, pulse, telescope
+  std::optional<Detector::Settings> detector;  // none: the noise-free received power
+  bool metrics = true;                         // the waveform processing (decomposition, metrics)
+  std::uint64_t seed = 1;  // the detector's noise is keyed by (seed, shot, band, bin)
+};
+
+using ReceiverFactory = std::function<std::unique_ptr<Receiver>(const ReceiverSettings&)>;
+
+// Registers a receiver under `name`; a name registered twice is an error. "waveform" is there
+// from the start.
+void register_receiver(const std::string& name, ReceiverFactory make);
+
+// The receiver of `settings.kind`. Throws a setting error at `kind` for an unknown name.
+std::unique_ptr<Receiver> make_receiver(const ReceiverSettings& settings);
+
+}  // namespace glaswave

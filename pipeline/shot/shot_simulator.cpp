@@ -1,0 +1,143 @@
+// Simulation of one footprint into a product record.
+#include "pipeline/shot/shot_simulator.hpp"
+
+#include <algorithm>
+
+#include "footprints/terrain_intersection.hpp"
+#include "pipeline/products/product_fields.hpp"
+#include "pipeline/shot/footprint_geometry.hpp"
+
+namespace glaswave {
+
+// The scene of one shot, built in its footprint's local frame: the ground patch the beam and
+// its diffuse light reach and what grows on it, as Embree sees them (the scene keeps copies of
+// the meshes).
+struct ShotSimulator::FootprintScene {
+  FootprintFrame where;
+  BuiltScene built;
+};
+
+ShotSimulator::ShotSimulator(const ShotSettings& settings, const Terrain& terrain,
+                             std::unique_ptr<VegetationSource> vegetation,
+                             std::unique_ptr<Receiver> receiver)
+    : settings_(settings),
+      lidar_(settings.lidar),
+      vegetation_(std::move(vegetation)),
+      receiver_(std::move(receiver)),
+      scenes_(terrain, settings.roughness, settings.transport.seed, settings.soil_reflectance,
+              vegetation_.get(), lidar_.band_count()) {}
+
+ShotSimulator::~ShotSimulator() = default;
+
+void ShotSimulator::check_scene(const Footprint& footprint) const { build_scene(footprint); }
+
+ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray_queries) const {
+  ShotRecord record;
+  record.shot_number = footprint.shot_number;
+  record.source_shot_number = footprint.source_shot_number;
+  record.time_s = footprint.time_s;
+  record.sc_lat_deg = footprint.spacecraft.lat_deg;
+  record.sc_lon_deg = footprint.spacecraft.lon_deg;
+  record.sc_alt_m = footprint.spacecraft.h_m;
+  record.off_nadir_deg = footprint.off_nadir_deg;
+  if (!beam_on_terrain_data(scenes_.terrain(), lidar_, footprint)) {
+    flag_off_terrain(record, footprint);
+    return record;
+  }
+  const FootprintScene shot = build_scene(footprint);
+  locate(record, footprint, shot);
+  const Scene& scene = *shot.built.scene;
+  ShotReturns returns;
+  returns.waveforms = simulate_shot(scene, lidar_, shot.where.geometry, shot.built.optics,
+                                    settings_.transport, footprint.shot_number);
+  if (ray_queries) *ray_queries += returns.waveforms.ray_queries + outline_vertices;
+  returns.shot_number = footprint.shot_number;
+  returns.range_m = footprint.range_m;
+  returns.position_at = [&shot](double time_ns) {
+    const double along_m = 0.5 * speed_of_light_m_s * time_ns * 1e-9;
+    return shot.where.frame.to_geodetic(along_m * shot.where.geometry.axis);
+  };
+  receiver_->receive(std::move(returns), record);
+  // The truth over the footprint, beside the estimates: what the beam really fell on.
+  const double sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
+  const VegetationTruth truth =
+      vegetation_ ? vegetation_->truth(scene, sigma_m) : measure_vegetation(scene, sigma_m);
+  record.cover_true = truth.cover;
+  record.pai_true = truth.pai;
+  record.canopy_height_true_m = truth.canopy_height_m;
+  record.footprint_lonlat = beam_outline(scene, lidar_, shot.where.geometry, shot.where.frame);
+  return record;
+}
+
+// The footprint's place, its ground's orientation and the bins' elevations along the beam axis
+// from the footprint centre.
+void ShotSimulator::locate(ShotRecord& record, const Footprint& footprint,
+                           const FootprintScene& shot) const {
+  record.lat_deg = footprint.ground.lat_deg;
+  record.lon_deg = footprint.ground.lon_deg;
+  record.elev_m = footprint.ground.h_m;
+  record.range_m = footprint.range_m;
+  record.slope_deg = shot.where.orientation.slope_deg;
+  record.aspect_deg = shot.where.orientation.aspect_deg;
+  const std::vector<double> bin_time_ns = lidar_.bin_time_ns();
+  auto elevation_at = [&](double time_ns) {
+    const double along_m = 0.5 * speed_of_light_m_s * time_ns * 1e-9;
+    return shot.where.frame.to_geodetic(along_m * shot.where.geometry.axis).h_m;
+  };
+  record.elev_bin0_m = elevation_at(bin_time_ns.front());
+  record.elev_lastbin_m = elevation_at(bin_time_ns.back());
+}
+
+std::optional<ShotWaveforms> ShotSimulator::simulate_ray(const Footprint& footprint,
+                                                         std::int64_t ray,
+                                                         const RayObserver& observer) const {
+  if (!beam_on_terrain_data(scenes_.terrain(), lidar_, footprint)) return std::nullopt;
+  const FootprintScene shot = build_scene(footprint);
+  return glaswave::simulate_ray(*shot.built.scene, lidar_, shot.where.geometry, shot.built.optics,
+                                settings_.transport, footprint.shot_number, ray, observer);
+}
+
+void ShotSimulator::flag_off_terrain(ShotRecord& record, const Footprint& footprint) const {
+  record.quality_flag = quality_invalid;
+  // The axis met the terrain, yet nodata or the DEM's edge lies under the beam.
+  record.quality_reason = footprint.on_terrain ? reason_nodata : reason_off_terrain;
+  const TransportOptions& transport = settings_.transport;
+  const std::size_t orders =
+      transport.per_order ? static_cast<std::size_t>(transport.max_order) : 0;
+  fill_flagged(record, {.bands = lidar_.band_count(),
+                        .bins = static_cast<std::size_t>(lidar_.bins()),
+                        .orders = orders});
+  // The shot keeps a position, as a trajectory's coordinates should: where the beam met the
+  // terrain (over nodata), or else where it crosses the ellipsoid; no height when it met none.
+  if (footprint.on_terrain) {
+    record.lat_deg = footprint.ground.lat_deg;
+    record.lon_deg = footprint.ground.lon_deg;
+    record.elev_m = footprint.ground.h_m;
+    record.range_m = footprint.range_m;
+  } else if (const auto t_m =
+                 ellipsoid_crossing(footprint.spacecraft_ecef, footprint.beam_ecef, 0.0)) {
+    const Geodetic aim = geodetic_from_ecef(footprint.spacecraft_ecef + *t_m * footprint.beam_ecef);
+    record.lat_deg = aim.lat_deg;
+    record.lon_deg = aim.lon_deg;
+  }
+}
+
+ShotSimulator::FootprintScene ShotSimulator::build_scene(const Footprint& footprint) const {
+  const Terrain& terrain = scenes_.terrain();
+  FootprintScene shot{footprint_frame(terrain, lidar_, footprint), {}};
+  const double half_size_m = traced_patch_half_size_m(terrain, lidar_, footprint, shot.where.frame,
+                                                      lidar_.max_angle_rad()) +
+                             (vegetation_ ? vegetation_margin_m : 0.0);
+  // Roughness is subdivided only where the beam is: beyond 4.5 sigma go 4e-5 of the rays.
+  const double rough_half_size_m =
+      scenes_.roughness().enabled()
+          ? traced_patch_half_size_m(
+                terrain, lidar_, footprint, shot.where.frame,
+                std::min(lidar_.max_angle_rad(), 4.5 * lidar_.beam_sigma_rad()))
+          : 0.0;
+  shot.built =
+      scenes_.build(shot.where.frame, shot.where.orientation, half_size_m, rough_half_size_m);
+  return shot;
+}
+
+}  // namespace glaswave

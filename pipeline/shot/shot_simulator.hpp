@@ -1,0 +1,71 @@
+// One footprint in, one product record out: the footprint's scene built in its local frame
+// (SceneBuilder: the terrain's ground and what the VegetationSource grows on it), its returns
+// traced by the transport, turned into the record's fields by the Receiver, and the record
+// completed with the geolocation, the truth under the beam and the beam's outline. Typed
+// settings only: the engine fills them from the configuration.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "footprints/track.hpp"
+#include "pipeline/products/shot_record.hpp"
+#include "pipeline/shot/receiver.hpp"
+#include "pipeline/shot/scene_builder.hpp"
+#include "pipeline/shot/vegetation_source.hpp"
+#include "pipeline/transport/lidar_model.hpp"
+#include "pipeline/transport/ray_event.hpp"
+#include "pipeline/transport/shot_transport.hpp"
+#include "terrain/terrain.hpp"
+#include "terrain/terrain_settings.hpp"
+
+namespace glaswave {
+
+struct ShotSettings {
+  LidarSettings lidar;
+  TransportOptions transport;            // rays, orders, sampling, per-order output, seed
+  std::vector<double> soil_reflectance;  // [band], Lambertian
+  RoughnessSettings roughness;
+};
+
+class ShotSimulator {
+ public:
+  // `vegetation` may be null (bare ground). `terrain` outlives the simulator.
+  ShotSimulator(const ShotSettings& settings, const Terrain& terrain,
+                std::unique_ptr<VegetationSource> vegetation, std::unique_ptr<Receiver> receiver);
+  ~ShotSimulator();
+
+  // Thread-safe; the record depends only on the settings and the footprint. Adds the shot's ray
+  // queries to `ray_queries` when given.
+  ShotRecord simulate(const Footprint& footprint, std::int64_t* ray_queries = nullptr) const;
+
+  // Ray `ray` of the footprint's shot alone, as it runs in simulate(), its events told to
+  // `observer` (--debug-ray): the ray's part of the shot's returns, before the receiver.
+  // Nothing for a shot that simulate() flags (no terrain under the beam).
+  std::optional<ShotWaveforms> simulate_ray(const Footprint& footprint, std::int64_t ray,
+                                            const RayObserver& observer) const;
+
+  // Builds the footprint's scene and drops it: what a shot refuses before tracing (roughness
+  // too fine to mesh under the beam), for `check`.
+  void check_scene(const Footprint& footprint) const;
+
+  const LidarModel& lidar() const { return lidar_; }
+  const SceneBuilder& scenes() const { return scenes_; }
+  const Receiver& receiver() const { return *receiver_; }
+
+ private:
+  struct FootprintScene;
+  FootprintScene build_scene(const Footprint& footprint) const;
+  void flag_off_terrain(ShotRecord& record, const Footprint& footprint) const;
+  void locate(ShotRecord& record, const Footprint& footprint, const FootprintScene& shot) const;
+
+  ShotSettings settings_;
+  LidarModel lidar_;
+  std::unique_ptr<VegetationSource> vegetation_;
+  std::unique_ptr<Receiver> receiver_;
+  SceneBuilder scenes_;
+};
+
+}  // namespace glaswave

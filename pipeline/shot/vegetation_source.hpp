@@ -1,0 +1,87 @@
+// What grows on the terrain, behind one interface: a VegetationSource hands a shot the
+// vegetation of a square region around its footprint, as geometry the scene holds (turbid
+// volumes: crowns, a layer; surfaces: triangles with one material each), the optical materials
+// that geometry's material numbers index, the truth under the beam and a memory estimate.
+//
+// A new source is one class and one registration (register_vegetation_source, keyed by the
+// configuration's canopy kind): the engine and the transport do not change. Sources to come (a
+// regular grid of turbid voxels, triangle meshes with a material per triangle, point clouds)
+// add what they need to `Vegetation` and the scene; the transport's VolumeSpan and SurfaceHit
+// stay as they are.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "canopy/canopy_settings.hpp"
+#include "pipeline/scene/scene.hpp"
+#include "pipeline/scene/vegetation.hpp"
+#include "pipeline/transport/scattering.hpp"
+#include "terrain/ground_mesh.hpp"
+#include "terrain/terrain.hpp"
+#include "terrain/terrain_settings.hpp"
+
+namespace glaswave {
+
+// A square region of the terrain around a footprint, in the footprint's local frame.
+struct VegetationRegion {
+  const Terrain& terrain;
+  const LocalFrame& frame;
+  double half_size_m = 0.0;   // the region is [-half_size_m, half_size_m]^2 east and north
+  SurfaceOrientation ground;  // the footprint's mean ground (a layer follows it)
+  std::size_t bands = 0;      // the materials' values are per band
+};
+
+// The vegetation of one region: what the scene holds, and the materials it is made of.
+struct RegionVegetation {
+  Vegetation geometry;
+  // Indexed by the geometry's material numbers (crowns', layer's, surfaces'): only those the
+  // region holds, so that a shot's cost depends on the materials it meets, not on how many the
+  // run knows.
+  std::vector<Foliage> materials;
+};
+
+class VegetationSource {
+ public:
+  virtual ~VegetationSource() = default;
+
+  // What grows in the region. Thread-safe: every thread of a run asks at once.
+  virtual RegionVegetation grow(const VegetationRegion& region) const = 0;
+
+  // The truth over a footprint (cover, PAI, canopy height along vertical lines under the beam,
+  // a Gaussian of RMS radius sigma_m about the frame's origin). By default measured on the
+  // scene's turbid volumes; a source of surfaces (leaf facets) says what its facets make.
+  virtual VegetationTruth truth(const Scene& scene, double sigma_m) const;
+};
+
+// What a source is made from: the configuration's canopy, its seed and its plane terrain.
+struct VegetationSettings {
+  CanopySettings canopy;
+  std::uint64_t seed = 1;
+  std::optional<PlaneSettings> plane;  // crowns files may be in metres on the plane
+};
+
+// One kind of source: how to make it, and what a region of it takes in memory before it is
+// made (bytes of a scene `side_m` across: the memory estimate, which runs before any file is
+// read).
+struct VegetationKind {
+  std::function<std::unique_ptr<VegetationSource>(const VegetationSettings&)> make;
+  std::function<double(const VegetationSettings&, double side_m)> region_bytes;
+};
+
+// Registers a kind of source under `name` (CanopySettings::kind); a name registered twice is an
+// error. "forest" (canopy/forest.hpp: random crowns, a crowns file, stands, a layer) is there
+// from the start.
+void register_vegetation_source(const std::string& name, VegetationKind kind);
+
+// The source of `settings.canopy.kind`. Throws a setting error at `kind` for an unknown name.
+std::unique_ptr<VegetationSource> make_vegetation_source(const VegetationSettings& settings);
+
+// Bytes a region `side_m` across of that source takes in a shot's scene.
+double vegetation_region_bytes(const VegetationSettings& settings, double side_m);
+
+}  // namespace glaswave

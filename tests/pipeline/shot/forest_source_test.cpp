@@ -1,0 +1,70 @@
+// The forest behind the VegetationSource interface: a region holds the materials of the kinds it
+// meets only, renumbered in the forest's order, so that a shot under one of thousands of stands
+// projects one leaf angle table, not thousands.
+#include "pipeline/shot/forest_source.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/pipeline/shot/shot_test_support.hpp"
+
+namespace glaswave {
+namespace {
+
+using namespace glaswave::testing;
+
+// A square stand of `half_deg` about (lat, lon).
+StandArea square_stand(const CanopySettings& scene, double lat, double lon, double half_deg,
+                       double leaf_reflectance) {
+  StandArea stand;
+  stand.rings = {{{lon - half_deg, lat - half_deg},
+                  {lon + half_deg, lat - half_deg},
+                  {lon + half_deg, lat + half_deg},
+                  {lon - half_deg, lat + half_deg},
+                  {lon - half_deg, lat - half_deg}}};
+  stand.canopy = scene;
+  stand.canopy.leaf_reflectance = {leaf_reflectance};
+  return stand;
+}
+
+TEST(ForestSource, RegionHoldsOnlyTheKindsItMeets) {
+  VegetationSettings settings;
+  CanopySettings& canopy = settings.canopy;
+  canopy.leaf_reflectance = {0.4};
+  canopy.leaf_transmittance = {0.4};
+  canopy.bark_reflectance = {0.3};
+  canopy.cover = 0.7;
+  canopy.crown_radius_m = 3.0;
+  settings.plane = PlaneSettings{kLat0, kLon0, 0.0, 0.0, 0.0};
+  // Kind 1 far to the north, kind 2 over the region (0.01 deg: about 1.1 km across).
+  canopy.stand_areas = {square_stand(canopy, kLat0 + 1.0, kLon0, 0.01, 0.1),
+                        square_stand(canopy, kLat0, kLon0, 0.01, 0.2)};
+  const ForestSource source(settings);
+  ASSERT_EQ(source.forest().kinds(), 3u);
+  const std::unique_ptr<Terrain> terrain = plane_terrain();
+  const LocalFrame frame(Geodetic{kLat0, kLon0, 0.0});
+  const RegionVegetation grown = source.grow({*terrain, frame, 60.0, {}, 1});
+  ASSERT_FALSE(grown.geometry.crowns.empty());
+  ASSERT_EQ(grown.materials.size(), 1u);
+  for (const Crown& crown : grown.geometry.crowns) EXPECT_EQ(crown.material, 0);
+  for (int material : grown.geometry.trunk_materials) EXPECT_EQ(material, 0);
+  // Kind 2's optics: f_green rho_leaf + f_bark rho_bark = 0.8 * 0.2 + 0.2 * 0.3.
+  EXPECT_NEAR(grown.materials[0].reflectance[0], 0.22, 1e-15);
+  EXPECT_EQ(grown.materials[0].leaf_angles, &source.forest().leaf_angles(2));
+}
+
+// Random crowns of cover c and radius r number -ln(1 - c) / (pi r^2) a square metre, each
+// taking 2.5 KiB of a scene.
+TEST(ForestSource, RegionBytesFromTheDensestKind) {
+  VegetationSettings settings;
+  settings.canopy.cover = 0.5;
+  settings.canopy.crown_radius_m = 2.0;
+  const double density = std::log(2.0) / (std::numbers::pi * 4.0);
+  EXPECT_NEAR(vegetation_region_bytes(settings, 100.0), density * 1e4 * 2560.0, 1e-6);
+  settings.canopy.crown_shape = CrownShape::layer;
+  EXPECT_EQ(vegetation_region_bytes(settings, 100.0), 0.0);
+}
+
+}  // namespace
+}  // namespace glaswave
