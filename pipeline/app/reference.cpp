@@ -58,10 +58,10 @@ nlohmann::json text(const char* value) { return value ? nlohmann::json(value) : 
 nlohmann::json product_fields_json() {
   nlohmann::json rows = nlohmann::json::array();
   for (const ProductField& field : product_fields()) {
-    nlohmann::json dims = {"shot"};
+    nlohmann::json dims = {field.ragged() ? "photon" : "shot"};
     if (field.per_band()) dims.push_back("band");
     for (const char* dim : field.inner_dims)
-      if (dim) dims.push_back(dim);
+      if (dim && !field.ragged()) dims.push_back(dim);
     rows.push_back({{"name", field.name},
                     {"type", type_name(field.type)},
                     {"dims", dims},

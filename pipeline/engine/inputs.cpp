@@ -87,6 +87,7 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
   for (std::size_t band = 0; band < lidar.band_count(); ++band)
     info.tx_waveform_W.push_back(lidar.tx_waveform_W(band));
   info.orders = config.output.per_order ? config.simulation.max_order : 0;
+  info.photon_events = simulator.receiver().photon_events();
   return info;
 }
 

@@ -316,7 +316,7 @@ namespace {
 // configuration, the records selected) and how they are stored (the version).
 std::string run_identity(const RunInfo& info, std::int64_t first, std::int64_t last) {
   return info.config_json + "\n" + std::to_string(first) + ":" + std::to_string(last) +
-         "\nglaswave " + GLASWAVE_VERSION + " journal 2";
+         "\nglaswave " + GLASWAVE_VERSION + " journal 3";
 }
 
 // Rank 0: the output directory made (or taken, to resume), the journal and the writers begun,

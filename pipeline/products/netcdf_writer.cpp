@@ -41,6 +41,8 @@ constexpr int kDeflateLevel = 2;
 // one shot in one chunk of at most this size (16 shots of two bands' waveforms).
 constexpr std::size_t kChunkTarget_B = 128 * 1024;
 constexpr std::size_t kMostShotsPerChunk = 1024;
+// Photon events are chunked along `photon` alone: 4096 of them (32 KiB of a float64 variable).
+constexpr std::size_t kPhotonsPerChunk = 4096;
 // The coordinates of a trajectory; they carry no `coordinates` attribute themselves.
 constexpr const char* kShotCoordinates = "time lat lon";
 // The grid mapping variable every geolocated variable names.
@@ -218,6 +220,12 @@ struct NetcdfWriter::Impl {
     std::vector<long long> int64s;
     std::vector<unsigned char> bytes;
   };
+  struct RaggedVariable {
+    const ProductField* def;
+    int varid;
+  };
+  // One record's photon events, a list per ragged variable.
+  using RaggedShot = std::vector<std::vector<double>>;
   // The variables shared by every shot, written once the definitions end.
   struct RunVariables {
     int trajectory = -1, band = -1, wavelength = -1, band_name = -1, bin_time = -1, tx_time = -1,
@@ -250,6 +258,12 @@ struct NetcdfWriter::Impl {
   std::vector<DefinedVariable> variables;
   std::vector<std::map<std::size_t, ChunkBuffer>> open_chunks;  // per variable, by chunk
   std::vector<bool> written;
+  // The photon events (ragged along `photon`, appended in record order: a record that comes
+  // early waits here for those before it) and their count variable.
+  std::vector<RaggedVariable> ragged;
+  int photon_count = -1;
+  std::size_t photons_written = 0, next_ragged = 0;
+  std::map<std::size_t, RaggedShot> waiting;
   bool finished = false;
   bool broken = false;  // a chunk's write failed: the file lacks records already taken
   // What ACDD's discovery attributes say of the records written.
@@ -359,7 +373,31 @@ struct NetcdfWriter::Impl {
     return fill;
   }
 
+  // A list a shot along `photon` (CF contiguous ragged array), chunked and compressed along it.
+  void define_ragged_variable(const ProductField& def) {
+    const int varid = define_variable(def.name, nc_type_of(def.type), {dim("photon")}, def.units,
+                                      def.long_name, def.standard_name);
+    put_text_if(varid, def.name, "comment", def.comment);
+    put_fill(varid, def);
+    const std::string what = std::string("variable '") + def.name + "'";
+    const std::size_t chunk[] = {kPhotonsPerChunk};
+    check(nc_def_var_chunking(nc.id(), varid, NC_CHUNKED, chunk), what + " chunking");
+    check(nc_def_var_deflate(nc.id(), varid, 1, 1, kDeflateLevel), what + " compression");
+    ragged.push_back({&def, varid});
+  }
+
+  // CF's count variable of the contiguous ragged arrays: photons a shot, in shot order.
+  void define_photon_count() {
+    photon_count = define_variable("photon_count", NC_INT, {dim("shot")}, "1",
+                                   "number of photon events of the shot");
+    put_text(photon_count, "photon_count", "sample_dimension", "photon");
+  }
+
   void define_shot_variable(const ProductField& def) {
+    if (def.ragged()) {
+      if (shape.photons) define_ragged_variable(def);
+      return;
+    }
     std::vector<std::size_t> lengths = shape.of(def);
     if (def.per_band() && lengths.empty()) return;  // this run has no such dimension
     std::vector<int> dimids = {dim("shot")};
@@ -443,6 +481,7 @@ struct NetcdfWriter::Impl {
     define_dim("gaussian", shape.length("gaussian"));
     define_dim("percentile", shape.length("percentile"));
     if (shape.orders > 0) define_dim("order", shape.orders);
+    if (shape.photons) define_dim("photon", NC_UNLIMITED);
   }
 
   RunVariables define_run_variables() const {
@@ -571,6 +610,7 @@ struct NetcdfWriter::Impl {
     define_dims();
     const RunVariables run_variables = define_run_variables();
     for (const ProductField& def : product_fields()) define_shot_variable(def);
+    if (shape.photons) define_photon_count();
     define_special_attributes();
     open_chunks.resize(variables.size());
     check(nc_enddef(nc.id()), "ending definitions");
@@ -600,6 +640,66 @@ struct NetcdfWriter::Impl {
           },
           variable.def->field);
     }
+    check_ragged(index, shot);
+  }
+
+  // A record's photon events: as many of each ragged field, and none in a run without them.
+  void check_ragged(std::size_t index, const ShotRecord& shot) const {
+    for (const ProductField& def : product_fields()) {
+      if (!def.ragged()) continue;
+      const std::size_t n = ragged_size(def, shot), expected = shot.photon_time_ns.size();
+      if (!shape.photons && n > 0)
+        fail(writing(def.name, index, shot) + ": the run declared no photon events");
+      if (n != expected)
+        fail(writing(def.name, index, shot) + ": " + std::to_string(n) + " photons, photon_time " +
+             std::to_string(expected));
+    }
+  }
+
+  static std::size_t ragged_size(const ProductField& def, const ShotRecord& shot) {
+    return std::visit(
+        [&](auto field) -> std::size_t {
+          const auto& value = shot.*field;
+          if constexpr (std::is_arithmetic_v<std::remove_cvref_t<decltype(value)>>)
+            return 0;
+          else
+            return value.size();
+        },
+        def.field);
+  }
+
+  // Record `index`'s photon events, appended along `photon` once every record before it has.
+  void hold_ragged(std::size_t index, const ShotRecord& shot) {
+    RaggedShot& events = waiting[index];
+    for (const RaggedVariable& variable : ragged)
+      std::visit(
+          [&](auto field) {
+            const auto& value = shot.*field;
+            using T = std::remove_cvref_t<decltype(value)>;
+            if constexpr (std::is_same_v<T, std::vector<double>> ||
+                          std::is_same_v<T, std::vector<std::int32_t>>)
+              events.emplace_back(value.begin(), value.end());
+          },
+          variable.def->field);
+    for (auto next = waiting.find(next_ragged); next != waiting.end();
+         next = waiting.find(next_ragged)) {
+      put_ragged(next_ragged, next->second);
+      waiting.erase(next);
+      ++next_ragged;
+    }
+  }
+
+  void put_ragged(std::size_t index, const RaggedShot& events) {
+    const std::size_t count = events.empty() ? 0 : events.front().size();
+    for (std::size_t i = 0; i < ragged.size() && count > 0; ++i)
+      check(
+          nc_put_vara_double(nc.id(), ragged[i].varid, &photons_written, &count, events[i].data()),
+          std::string("writing variable '") + ragged[i].def->name + "' of record " +
+              std::to_string(index));
+    const int n = static_cast<int>(count);
+    check(nc_put_var1_int(nc.id(), photon_count, &index, &n),
+          "writing variable 'photon_count' of record " + std::to_string(index));
+    photons_written += count;
   }
 
   // The buffer of the chunk that holds record `index` of variable `i`, begun full of fill.
@@ -671,6 +771,7 @@ struct NetcdfWriter::Impl {
     check_shapes(index, shot);
     broken = true;  // until every value is held: a failed chunk write loses records taken
     for (std::size_t i = 0; i < variables.size(); ++i) hold_value(i, index, shot);
+    if (shape.photons) hold_ragged(index, shot);
     broken = false;
     time_s.add(shot.time_s);
     lat_deg.add(shot.lat_deg);
@@ -720,7 +821,8 @@ NetcdfWriter::NetcdfWriter(std::filesystem::path final_path, const RunInfo& info
     impl.fail("a product needs bins and tx bins");
   if (info.orders < 0) impl.fail("orders must be >= 0, got " + std::to_string(info.orders));
   impl.shots = static_cast<std::size_t>(info.shots);
-  impl.shape = {info.bands.size(), info.bin_time_ns.size(), static_cast<std::size_t>(info.orders)};
+  impl.shape = {info.bands.size(), info.bin_time_ns.size(), static_cast<std::size_t>(info.orders),
+                info.photon_events};
   impl.tx_bins = info.tx_time_ns.size();
   impl.written.assign(impl.shots, false);
 

@@ -375,6 +375,47 @@ const ProductField kProductFields[] = {
      .units = "m",
      .long_name = "highest vegetation above the ground over the footprint (simulation truth)",
      .standard_name = "canopy_height"},
+    // A photon-counting receiver's events, a list a shot (ragged along `photon`).
+    {.name = "photon_time",
+     .type = S::float64,
+     .field = &R::photon_time_ns,
+     .source = F::simulation,
+     .units = "ns",
+     .long_name = "time of the detected photon after the return from range_m (two-way)",
+     .inner_dims = {"photon", nullptr},
+     .geojson = GeojsonProperty::none},
+    {.name = "photon_lat",
+     .type = S::float64,
+     .field = &R::photon_lat_deg,
+     .source = F::simulation,
+     .units = "degrees_north",
+     .long_name = "latitude of the detected photon's last scattering",
+     .inner_dims = {"photon", nullptr},
+     .geojson = GeojsonProperty::none},
+    {.name = "photon_lon",
+     .type = S::float64,
+     .field = &R::photon_lon_deg,
+     .source = F::simulation,
+     .units = "degrees_east",
+     .long_name = "longitude of the detected photon's last scattering",
+     .inner_dims = {"photon", nullptr},
+     .geojson = GeojsonProperty::none},
+    {.name = "photon_h",
+     .type = S::float64,
+     .field = &R::photon_h_m,
+     .source = F::simulation,
+     .units = "m",
+     .long_name = "height of the detected photon's last scattering above the WGS 84 ellipsoid",
+     .inner_dims = {"photon", nullptr},
+     .geojson = GeojsonProperty::none},
+    {.name = "photon_class",
+     .type = S::uint8,
+     .field = &R::photon_class,
+     .source = F::simulation,
+     .units = "1",
+     .long_name = "what the detected photon came from: 0 noise, 1 ground, 2 canopy (truth)",
+     .inner_dims = {"photon", nullptr},
+     .geojson = GeojsonProperty::none},
 };
 
 template <class T>
@@ -397,7 +438,12 @@ void shape_fill(std::vector<std::vector<T>>& values, std::span<const std::size_t
 
 }  // namespace
 
+bool ProductField::ragged() const {
+  return inner_dims[0] != nullptr && std::string_view(inner_dims[0]) == "photon";
+}
+
 bool ProductField::per_band() const {
+  if (ragged()) return false;
   return std::visit(
       [](auto member) {
         using T = std::remove_cvref_t<decltype(std::declval<ShotRecord>().*member)>;
@@ -443,7 +489,7 @@ std::size_t ProductShape::length(std::string_view name) const {
 }
 
 std::vector<std::size_t> ProductShape::of(const ProductField& field) const {
-  if (!field.per_band()) return {};
+  if (!field.per_band()) return {};  // a scalar, or a list of any length
   std::vector<std::size_t> shape = {bands};
   for (const char* inner : field.inner_dims) {
     if (inner == nullptr) continue;

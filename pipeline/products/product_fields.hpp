@@ -63,6 +63,7 @@ struct ProductField {
   const char* standard_name = nullptr;  // only where CF has one
   // Dimensions after (shot, band) of an array field: "bin", "order", "gaussian", "percentile".
   // A field whose dimension a run lacks (`order` without per-order output) is left out.
+  // "photon" alone makes a variable-length field: a list a shot (ragged()).
   std::array<const char*, 2> inner_dims = {nullptr, nullptr};
   const char* comment = nullptr;    // how a derived quantity is defined
   const char* gedi_name = nullptr;  // the GEDI L1B/L2A equivalent, where there is one
@@ -72,8 +73,12 @@ struct ProductField {
   MetricField metric = {};
   GeojsonProperty geojson = GeojsonProperty::value;
 
-  // True for [band]... fields; false for per-shot scalars.
+  // True for [band]... fields; false for per-shot scalars and ragged fields.
   bool per_band() const;
+  // True for a variable-length field: each shot's list of values along the `photon`
+  // dimension, stored as a CF contiguous ragged array (CF 1.10 section 9.3.3, appendix H.2.4)
+  // counted by photon_count; only in a run whose records carry photon events.
+  bool ragged() const;
 };
 
 // The rows, in the order of shots.nc's variables.
@@ -104,11 +109,13 @@ struct ProductShape {
   std::size_t bands = 0;
   std::size_t bins = 0;
   std::size_t orders = 0;  // 0 without per-order output
+  bool photons = false;    // the records carry photon events
 
   // Length of dimension `name` ("bin", "order", "gaussian", "percentile"); 0 when the run
   // has none.
   std::size_t length(std::string_view name) const;
-  // [band] then the inner dimensions of `field`; empty for a scalar or a field the run lacks.
+  // [band] then the inner dimensions of `field`; empty for a scalar, a ragged field or a field
+  // the run lacks.
   std::vector<std::size_t> of(const ProductField& field) const;
 };
 

@@ -75,6 +75,20 @@ struct ShotRecord {
 
   // The beam's 1/e^2 contour on the terrain: closed ring of (lon, lat), counter-clockwise.
   std::vector<std::array<double, 2>> footprint_lonlat;
+
+  // Photon events of a photon-counting receiver, as many a shot as it detected (none from the
+  // waveform receiver), one entry each, the five of the same length. Stored in shots.nc as CF
+  // contiguous ragged arrays along the `photon` dimension, counted by photon_count.
+  std::vector<double> photon_time_ns;  // two-way time after the return from range_m (bin clock)
+  std::vector<double> photon_lat_deg, photon_lon_deg, photon_h_m;  // where it was scattered
+  std::vector<std::int32_t> photon_class;  // PhotonClass: what it came from (simulation truth)
+};
+
+// photon_class values: what a detected photon was last scattered by, or noise.
+enum PhotonClass : std::int32_t {
+  photon_noise = 0,   // background light or detector noise
+  photon_ground = 1,  // last scattered by the ground
+  photon_canopy = 2,  // last scattered by vegetation
 };
 
 // What every shot of a run shares.
@@ -89,6 +103,7 @@ struct RunInfo {
   std::vector<double> tx_time_ns;                  // [tx_bin] centre, about the pulse peak
   std::vector<std::vector<double>> tx_waveform_W;  // [band][tx_bin]
   int orders = 0;                                  // per-order output: orders 1..orders; 0 when off
+  bool photon_events = false;  // the records carry photon events (the `photon` dimension)
 };
 
 struct RunStats {

@@ -5,6 +5,13 @@ Usage: tests/benchmarks/stands_scaling.py GLASWAVE [WORKDIR] [TIMEOUT_S]
 Writes stands files (none, 16, 1000 and 3000 squares of about 100 m over the track, one
 polygon of 10^6 vertices), runs 5 shots of 2000 rays over a plane for each, and prints the wall
 time of each run and its ratio to the run without stands.
+
+       tests/benchmarks/stands_scaling.py --per-shot GLASWAVE [WORKDIR] [SHOTS]
+The cost of a shot (issue 23, item 8): a track of SHOTS (default 200) shots of 1000 rays, 10 m
+apart, inside 3000 squares of alternating PAI 2 and 4 (one leaf angle distribution), against
+the same track without stands. Each case runs SHOTS shots and one shot, interleaved, three
+rounds; a shot's cost is the difference over SHOTS - 1 (the start, reading the stands, cancels),
+the fastest round kept. Prints both costs and their ratio.
 """
 import json
 import math
@@ -46,6 +53,43 @@ def feature(ring, properties):
             "geometry": {"type": "Polygon", "coordinates": [ring]}}
 
 
+def alternating(count):
+    """`count` squares as squares() makes them, PAI 2 and 4 alternating."""
+    features = squares(count)
+    for k, f in enumerate(features):
+        f["properties"] = {"pai": 2.0 if k % 2 else 4.0}
+    return features
+
+
+def per_shot(binary, work, shots):
+    os.makedirs(work, exist_ok=True)
+    stands = os.path.abspath(os.path.join(work, "alternating_3000.geojson"))
+    with open(stands, "w") as f:
+        json.dump({"type": "FeatureCollection", "features": alternating(3000)}, f)
+    best = {}
+    for round_ in range(3):
+        for name, path in [("none", None), ("3000 stands", stands)]:
+            seconds = []
+            for n in (shots, 1):
+                document = config(path)
+                document["simulation"]["rays_per_shot"] = 1000
+                document["track"].update({"shots": n, "spacing_m": 10.0})
+                conf = os.path.join(work, "config.json")
+                with open(conf, "w") as f:
+                    json.dump(document, f)
+                out = os.path.join(work, "out")
+                subprocess.run(["rm", "-rf", out], check=True)
+                start = time.monotonic()
+                subprocess.run([binary, "run", conf, "--out", out, "--threads", "1", "--quiet"],
+                               check=True, capture_output=True)
+                seconds.append(time.monotonic() - start)
+            cost = (seconds[0] - seconds[1]) / (shots - 1)
+            best[name] = min(best.get(name, cost), cost)
+    print(f"a shot's cost over {shots} shots of 1000 rays (fastest of 3 rounds): "
+          f"none {best['none'] * 1e3:.1f} ms, 3000 stands {best['3000 stands'] * 1e3:.1f} ms, "
+          f"ratio {best['3000 stands'] / best['none']:.2f}", flush=True)
+
+
 def config(stands):
     canopy = {"pai": 3.0, "cover": 0.6, "crown_radius_m": 6.0, "crown_half_height_m": 7.0,
               "crown_base_m": [8.0, 14.0]}
@@ -63,6 +107,10 @@ def config(stands):
 
 
 def main():
+    if sys.argv[1] == "--per-shot":
+        per_shot(os.path.abspath(sys.argv[2]), sys.argv[3] if len(sys.argv) > 3 else "stands_per_shot",
+                 int(sys.argv[4]) if len(sys.argv) > 4 else 200)
+        return
     binary = os.path.abspath(sys.argv[1])
     work = sys.argv[2] if len(sys.argv) > 2 else "stands_scaling"
     limit_s = float(sys.argv[3]) if len(sys.argv) > 3 else 3600.0
