@@ -4,6 +4,7 @@
 #include <GeographicLib/LocalCartesian.hpp>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -73,13 +74,16 @@ int Forest::kind_at(double lat_deg, double lon_deg) const {
 std::vector<Tree> Forest::trees_near(double lat_deg, double lon_deg, double radius_m) const {
   std::vector<Tree> trees;
   // A stand's trees come only from the tiles trees_near visits, and grow only inside its
-  // polygons: stands whose boxes miss those tiles give none.
+  // polygons: stands whose boxes miss those tiles give none, and only those that meet them can
+  // hold a tree (searched once, highest first as kind_at takes them).
   std::vector<bool> near(kinds_.size(), true);
+  std::vector<int> meeting;
   if (areas_->size() > 0) {
     const TileBox box = stand_tiles_near(lat_deg, lon_deg, radius_m);
     std::fill(near.begin() + 1, near.end(), false);
-    for (int area : areas_->areas_meeting(box.lon0_deg, box.lat0_deg, box.lon1_deg, box.lat1_deg))
-      near[area + 1] = true;
+    meeting = areas_->areas_meeting(box.lon0_deg, box.lat0_deg, box.lon1_deg, box.lat1_deg);
+    for (int area : meeting) near[area + 1] = true;
+    std::sort(meeting.begin(), meeting.end(), std::greater<>());
   }
   for (std::size_t k = 0; k < kinds_.size(); ++k) {
     const Kind& kind = kinds_[k];
@@ -99,7 +103,9 @@ std::vector<Tree> Forest::trees_near(double lat_deg, double lon_deg, double radi
     }
     for (Tree& tree : candidates) {
       // A stand's trees grow inside its polygons only; the scene's canopy grows outside them.
-      if (kind.stand && kind_at(tree.lat_deg, tree.lon_deg) != static_cast<int>(k)) continue;
+      // Random trees lie in the tiles searched: kind_at's answer among the stands meeting them.
+      if (kind.stand && areas_->area_at(tree.lon_deg, tree.lat_deg, meeting) != static_cast<int>(k))
+        continue;
       tree.kind = static_cast<int>(k);
       trees.push_back(tree);
     }

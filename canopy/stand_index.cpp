@@ -148,6 +148,12 @@ int StandIndex::area_at(double lon_deg, double lat_deg) const {
   return 0;
 }
 
+int StandIndex::area_at(double lon_deg, double lat_deg, const std::vector<int>& candidates) const {
+  for (int k : candidates)
+    if (inside(areas_[k], lon_deg, lat_deg)) return k + 1;
+  return 0;
+}
+
 TileBox StandIndex::box(int area) const {
   const Area& a = areas_[area];
   return {a.lon0 - box_margin_deg, a.lat0, a.lon1 + box_margin_deg, a.lat1};

@@ -30,6 +30,11 @@ class StandIndex {
   // 1 + the index of the last stand holding the point (later stands lie over earlier ones), or 0.
   int area_at(double lon_deg, double lat_deg) const;
 
+  // The same among `candidates` alone, sorted highest first: they must hold every stand whose
+  // box holds the point (areas_meeting a box around it), so that the answer is area_at's. A
+  // shot asks this of each of its trees: one search of the tree a shot, not one a tree.
+  int area_at(double lon_deg, double lat_deg, const std::vector<int>& candidates) const;
+
   // A stand's bounding box, a little wider in longitude: every point it holds is in there.
   TileBox box(int area) const;
 

@@ -1,6 +1,7 @@
 // Crowns, trunks and layers of the forest placed in a shot's frame.
 #include "pipeline/shot/forest_source.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -83,22 +84,19 @@ Vegetation crowns_vegetation(const Forest& forest, const VegetationRegion& regio
   return vegetation;
 }
 
-// Renumbers the geometry's kinds to those it holds, in the forest's order; returns the kinds.
-std::vector<int> renumber_kinds(Vegetation& vegetation, std::size_t kinds) {
-  std::vector<int> local(kinds, -1);
-  for (const Crown& crown : vegetation.crowns) local[crown.material] = 0;
-  for (int material : vegetation.trunk_materials) local[material] = 0;
-  if (vegetation.layer) local[vegetation.layer->material] = 0;
-  std::vector<int> held;
-  for (std::size_t kind = 0; kind < kinds; ++kind)
-    if (local[kind] == 0) {
-      local[kind] = static_cast<int>(held.size());
-      held.push_back(static_cast<int>(kind));
-    }
+// Renumbers the geometry's kinds to `local` (by kind; -1 for a kind it does not hold).
+void renumber(Vegetation& vegetation, const std::vector<int>& local) {
   for (Crown& crown : vegetation.crowns) crown.material = local[crown.material];
   for (int& material : vegetation.trunk_materials) material = local[material];
   if (vegetation.layer) vegetation.layer->material = local[vegetation.layer->material];
-  return held;
+}
+
+// Whether the two scatter alike: kinds that differ only in their structure (a stand's PAI or
+// cover) share one material, and a free path projects one G for both.
+bool same_optics(const Foliage& a, const Foliage& b) {
+  return a.reflectance == b.reflectance && a.transmittance == b.transmittance &&
+         a.trunk_reflectance == b.trunk_reflectance && a.leaf_angles == b.leaf_angles &&
+         a.leaf_size_m == b.leaf_size_m;
 }
 
 double tree_density_m2(const CanopySettings& canopy) {
@@ -117,8 +115,22 @@ RegionVegetation ForestSource::grow(const VegetationRegion& region) const {
   grown.geometry = forest_.canopy(0).crown_shape == CrownShape::layer
                        ? layer_vegetation(forest_, region.ground)
                        : crowns_vegetation(forest_, region);
-  for (int kind : renumber_kinds(grown.geometry, forest_.kinds()))
-    grown.materials.push_back(material(kind, region.bands));
+  // The kinds the region holds, in the forest's order, each given the first material that
+  // scatters as it does.
+  const Vegetation& geometry = grown.geometry;
+  std::vector<int> local(forest_.kinds(), -1);
+  for (const Crown& crown : geometry.crowns) local[crown.material] = 0;
+  for (int material : geometry.trunk_materials) local[material] = 0;
+  if (geometry.layer) local[geometry.layer->material] = 0;
+  for (std::size_t kind = 0; kind < local.size(); ++kind) {
+    if (local[kind] < 0) continue;
+    Foliage optics = material(static_cast<int>(kind), region.bands);
+    const auto same = std::find_if(grown.materials.begin(), grown.materials.end(),
+                                   [&](const Foliage& m) { return same_optics(m, optics); });
+    local[kind] = static_cast<int>(same - grown.materials.begin());
+    if (same == grown.materials.end()) grown.materials.push_back(std::move(optics));
+  }
+  renumber(grown.geometry, local);
   return grown;
 }
 

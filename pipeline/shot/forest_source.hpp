@@ -18,8 +18,8 @@ class ForestSource : public VegetationSource {
  public:
   explicit ForestSource(const VegetationSettings& settings);
 
-  // Crowns and trunks are tagged with their forest kind, renumbered to the kinds the region
-  // holds (in the forest's order).
+  // Crowns and trunks are tagged with their material: the region's kinds in the forest's order,
+  // kinds that scatter alike (stands differing only in PAI or cover) sharing one.
   RegionVegetation grow(const VegetationRegion& region) const override;
 
   const Forest& forest() const { return forest_; }

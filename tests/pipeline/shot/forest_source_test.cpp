@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "tests/pipeline/shot/shot_test_support.hpp"
 
@@ -52,6 +53,32 @@ TEST(ForestSource, RegionHoldsOnlyTheKindsItMeets) {
   // Kind 2's optics: f_green rho_leaf + f_bark rho_bark = 0.8 * 0.2 + 0.2 * 0.3.
   EXPECT_NEAR(grown.materials[0].reflectance[0], 0.22, 1e-15);
   EXPECT_EQ(grown.materials[0].leaf_angles, &source.forest().leaf_angles(2));
+}
+
+// Two stands side by side over the region, PAI 2 and 4 with the same optics: their crowns differ
+// in density but scatter alike, so the region holds one material; other optics make a second.
+TEST(ForestSource, KindsThatScatterAlikeShareOneMaterial) {
+  VegetationSettings settings;
+  CanopySettings& canopy = settings.canopy;
+  canopy.leaf_reflectance = {0.4};
+  canopy.leaf_transmittance = {0.4};
+  canopy.bark_reflectance = {0.3};
+  canopy.crown_radius_m = 3.0;
+  settings.plane = PlaneSettings{kLat0, kLon0, 0.0, 0.0, 0.0};
+  canopy.stand_areas = {square_stand(canopy, kLat0, kLon0 - 0.005, 0.005, 0.4),
+                        square_stand(canopy, kLat0, kLon0 + 0.005, 0.005, 0.4)};
+  canopy.stand_areas[0].canopy.pai = 2.0;
+  canopy.stand_areas[1].canopy.pai = 4.0;
+  const std::unique_ptr<Terrain> terrain = plane_terrain();
+  const LocalFrame frame(Geodetic{kLat0, kLon0, 0.0});
+  const RegionVegetation alike = ForestSource(settings).grow({*terrain, frame, 60.0, {}, 1});
+  std::set<double> densities;
+  for (const Crown& crown : alike.geometry.crowns) densities.insert(crown.area_density_m2_m3);
+  EXPECT_EQ(densities.size(), 2u);
+  EXPECT_EQ(alike.materials.size(), 1u);
+  canopy.stand_areas[1].canopy.leaf_reflectance = {0.5};
+  const RegionVegetation apart = ForestSource(settings).grow({*terrain, frame, 60.0, {}, 1});
+  EXPECT_EQ(apart.materials.size(), 2u);
 }
 
 // Random crowns of cover c and radius r number -ln(1 - c) / (pi r^2) a square metre, each
