@@ -49,8 +49,8 @@ void broadcast_text(std::string& text, int root) {
 
 }  // namespace
 
-Cluster::Cluster() {
-  if (!mpi_running()) return;
+Cluster::Cluster(bool world) {
+  if (!world || !mpi_running()) return;
   launched_ = true;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
@@ -61,7 +61,12 @@ Cluster::Cluster() {
 }
 
 Cluster& Cluster::world() {
-  static Cluster cluster;
+  static Cluster cluster(true);
+  return cluster;
+}
+
+Cluster& Cluster::alone() {
+  static Cluster cluster(false);
   return cluster;
 }
 

@@ -16,6 +16,9 @@ class Cluster {
  public:
   // The processes of this run: MPI_COMM_WORLD when MPI is initialised, else this one.
   static Cluster& world();
+  // This process alone, whatever started it: what a batch loop runs on when its work is not
+  // shared (a sweep's cases).
+  static Cluster& alone();
 
   int rank() const { return rank_; }
   int size() const { return size_; }
@@ -40,7 +43,7 @@ class Cluster {
   [[noreturn]] void abort(int status) const;
 
  private:
-  Cluster();
+  explicit Cluster(bool world);
   int rank_ = 0, size_ = 1, local_size_ = 1;
   bool launched_ = false;
   bool failed_together_ = false;

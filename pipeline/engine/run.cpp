@@ -97,14 +97,14 @@ struct Batch {
   std::exception_ptr failure;
 };
 
-// Records [first, last) shared among the cluster's processes: each batch is cut into one block
-// per rank, every rank simulates its block, rank 0 gathers the records in order and alone
-// hands them to `consume` and reports progress, while every rank simulates the next batch (the
-// writing would otherwise leave all but one core idle). A failure anywhere ends every rank.
-void simulate_shared(Cluster& cluster, const ShotSimulator& simulator, const Track& track,
-                     std::int64_t first, std::int64_t last, int threads,
-                     const BatchConsumer& consume, const ProgressCallback& progress,
-                     std::int64_t progress_first) {
+// The one batch loop. Records [first, last) shared among the cluster's processes: each batch is cut
+// into one block per rank, every rank simulates its block, rank 0 gathers the records in order and
+// alone hands them to `consume` and reports progress, while every rank simulates the next batch
+// (the writing would otherwise leave all but one core idle). A failure anywhere ends every rank.
+void simulate_batches(Cluster& cluster, const ShotSimulator& simulator, const Track& track,
+                      std::int64_t first, std::int64_t last, int threads,
+                      const BatchConsumer& consume, const ProgressCallback& progress,
+                      std::int64_t progress_first) {
   if (first >= last) return;
   threads = threads_of_process(threads, cluster.local_size());
   tbb::task_arena arena(threads);
@@ -262,19 +262,15 @@ OutputDirectory::~OutputDirectory() {
 std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track,
                               std::int64_t first, std::int64_t last, int threads,
                               const RecordConsumer& consume, const ProgressCallback& progress) {
-  threads = threads_of_process(threads, 1);
-  tbb::task_arena arena(threads);
-  // Batches keep memory bounded on long tracks and hand records on in record order.
-  const std::int64_t batch_size = std::max<std::int64_t>(8, 4 * threads);
   std::int64_t ray_queries = 0;
-  for (std::int64_t batch_first = first; batch_first < last; batch_first += batch_size) {
-    const std::int64_t batch_last = std::min(batch_first + batch_size, last);
-    const std::vector<ShotRecord> records =
-        simulate_range(simulator, track, batch_first, batch_last, arena, ray_queries);
-    for (std::size_t i = 0; i < records.size(); ++i)
-      consume(batch_first + static_cast<std::int64_t>(i), records[i]);
-    if (progress) progress(batch_last - first, last - first);
-  }
+  simulate_batches(
+      Cluster::alone(), simulator, track, first, last, threads,
+      [&](std::int64_t batch_first, std::span<const ShotRecord> records, std::int64_t queries) {
+        for (std::size_t i = 0; i < records.size(); ++i)
+          consume(batch_first + static_cast<std::int64_t>(i), records[i]);
+        ray_queries += queries;
+      },
+      progress, first);
   return ray_queries;
 }
 
@@ -391,7 +387,7 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   if (cluster.rank() == 0)
     for (const std::string& warning : setup->track->warnings()) summary.warnings.push_back(warning);
 
-  simulate_shared(
+  simulate_batches(
       cluster, *setup->simulator, *setup->track, first + done, last, request.threads,
       [&](std::int64_t, std::span<const ShotRecord> records, std::int64_t queries) {
         for (const ShotRecord& shot : records) {

@@ -44,7 +44,8 @@ using ProgressCallback = std::function<void(std::int64_t, std::int64_t)>;
 using RecordConsumer = std::function<void(std::int64_t, const ShotRecord&)>;
 
 // Simulates records [first, last) of the track in batches on `threads` threads (0: every core),
-// handing each record to `consume` in record order. Returns the ray queries made.
+// handing each record to `consume` in record order: the run's one batch loop, on this process
+// alone (Cluster::alone). Returns the ray queries made.
 std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track,
                               std::int64_t first, std::int64_t last, int threads,
                               const RecordConsumer& consume, const ProgressCallback& progress);

@@ -232,7 +232,8 @@ struct NetcdfWriter::Impl {
         tx_waveform = -1, order = -1, percentile = -1, crs = -1;
   };
 
-  explicit Impl(std::filesystem::path final_path) : file(std::move(final_path)) {}
+  Impl(std::filesystem::path final_path, std::int64_t shots)
+      : file(final_path), ledger(std::move(final_path), shots) {}
   // An unfinished file is given up. Aborting still flushes HDF5's caches, and a flush that
   // fails crashes both netCDF-C's close (H5Iget_name from reportopenobjects) and HDF5's own at
   // exit (H5F__close_cb). Where a flush could fail (little room left, a file size limit) the
@@ -257,14 +258,13 @@ struct NetcdfWriter::Impl {
   std::vector<Dimension> dims;
   std::vector<DefinedVariable> variables;
   std::vector<std::map<std::size_t, ChunkBuffer>> open_chunks;  // per variable, by chunk
-  std::vector<bool> written;
+  RecordLedger ledger;
   // The photon events (ragged along `photon`, appended in record order: a record that comes
   // early waits here for those before it) and their count variable.
   std::vector<RaggedVariable> ragged;
   int photon_count = -1;
   std::size_t photons_written = 0, next_ragged = 0;
   std::map<std::size_t, RaggedShot> waiting;
-  bool finished = false;
   bool broken = false;  // a chunk's write failed: the file lacks records already taken
   // What ACDD's discovery attributes say of the records written.
   Bounds time_s, lat_deg, lon_deg, elev_m;
@@ -812,7 +812,7 @@ struct NetcdfWriter::Impl {
 };
 
 NetcdfWriter::NetcdfWriter(std::filesystem::path final_path, const RunInfo& info)
-    : final_path_(std::move(final_path)), impl_(std::make_unique<Impl>(final_path_)) {
+    : final_path_(std::move(final_path)), impl_(std::make_unique<Impl>(final_path_, info.shots)) {
   Impl& impl = *impl_;
   if (info.shots < 1)
     impl.fail("a product needs at least one shot, got " + std::to_string(info.shots));
@@ -824,7 +824,6 @@ NetcdfWriter::NetcdfWriter(std::filesystem::path final_path, const RunInfo& info
   impl.shape = {info.bands.size(), info.bin_time_ns.size(), static_cast<std::size_t>(info.orders),
                 info.photon_events};
   impl.tx_bins = info.tx_time_ns.size();
-  impl.written.assign(impl.shots, false);
 
   const std::string part = impl.file.part_path().string();
   // libnetcdf is called under its lock only: another run in this process (two Python threads)
@@ -854,26 +853,18 @@ NetcdfWriter::Impl& NetcdfWriter::impl() {
 void NetcdfWriter::write(std::int64_t index, const ShotRecord& shot) {
   const std::lock_guard lock(netcdf_library_mutex());  // a DEM may be read meanwhile
   Impl& impl = this->impl();
-  if (impl.finished) impl.fail("write after finish");
-  if (index < 0 || index >= static_cast<std::int64_t>(impl.shots)) {
-    impl.fail("record index " + std::to_string(index) + " outside [0, " +
-              std::to_string(impl.shots) + ")");
-  }
+  impl.ledger.check_write(index);
   if (impl.broken) impl.fail("a write failed before: the product lacks records");
-  const auto record = static_cast<std::size_t>(index);
-  if (impl.written[record]) impl.fail("record " + std::to_string(index) + " written twice");
-  impl.write_record(record, shot);
-  impl.written[record] = true;
+  impl.write_record(static_cast<std::size_t>(index), shot);
+  impl.ledger.taken(index);
 }
 
 void NetcdfWriter::finish(const RunStats& stats) {
   const std::lock_guard lock(netcdf_library_mutex());
   Impl& impl = this->impl();
-  if (impl.finished) impl.fail("finished twice");
-  if (impl.broken) impl.fail("a write failed before: the product lacks records");
-  for (std::size_t i = 0; i < impl.written.size(); ++i) {
-    if (!impl.written[i]) impl.fail("record " + std::to_string(i) + " was never written");
-  }
+  if (impl.broken && !impl.ledger.finished())
+    impl.fail("a write failed before: the product lacks records");
+  impl.ledger.check_finish();
   const int id = impl.nc.id();
   impl.check(nc_redef(id), "reopening definitions");
   impl.define_coverage();
@@ -891,13 +882,13 @@ void NetcdfWriter::finish(const RunStats& stats) {
   impl.check(nc_sync(id), "writing " + impl.file.part_path().string());
   impl.check(impl.nc.close(), "closing " + impl.file.part_path().string());
   impl.file.commit();
-  impl.finished = true;
+  impl.ledger.finish();
 }
 
 void NetcdfWriter::abort() noexcept {
   // A finished product stays: only an unfinished one has a .part to give up.
   const std::lock_guard lock(netcdf_library_mutex());
-  if (impl_ && !impl_->finished) impl_.reset();
+  if (impl_ && !impl_->ledger.finished()) impl_.reset();
 }
 
 }  // namespace glaswave

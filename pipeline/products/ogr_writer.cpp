@@ -177,7 +177,8 @@ void set_property(OGRFeature& feature, int index, const ShotRecord& shot, const 
 }  // namespace
 
 struct OgrWriter::Impl {
-  explicit Impl(std::filesystem::path final_path) : file(std::move(final_path)) {}
+  Impl(std::filesystem::path final_path, std::int64_t shots)
+      : file(final_path), ledger(std::move(final_path), shots) {}
 
   // Features and the dataset go before the .part is removed: the file is closed first, and
   // GDAL's messages about a dataset given up are nobody's business.
@@ -195,10 +196,9 @@ struct OgrWriter::Impl {
   GDALDatasetUniquePtr dataset;
   OGRLayer* layer = nullptr;  // owned by the dataset
   std::vector<Column> columns;
-  std::int64_t shots = 0;
+  RecordLedger ledger;
   std::int64_t next = 0;                                // the next record to go to the file
   std::map<std::int64_t, OGRFeatureUniquePtr> pending;  // records that came before their turn
-  bool finished = false;
 
   [[noreturn]] void fail(const std::string& message) const {
     throw run_error(file.final_path().string(), message);
@@ -299,11 +299,10 @@ struct OgrWriter::Impl {
 };
 
 OgrWriter::OgrWriter(std::filesystem::path final_path, FootprintsFormat format, const RunInfo& info)
-    : final_path_(std::move(final_path)), impl_(std::make_unique<Impl>(final_path_)) {
+    : final_path_(std::move(final_path)), impl_(std::make_unique<Impl>(final_path_, info.shots)) {
   Impl& impl = *impl_;
   if (info.shots < 1)
     impl.fail("a product needs at least one shot, got " + std::to_string(info.shots));
-  impl.shots = info.shots;
   impl.format = format;
   impl.create(info);
 }
@@ -317,19 +316,15 @@ OgrWriter::Impl& OgrWriter::impl() {
 
 void OgrWriter::write(std::int64_t index, const ShotRecord& shot) {
   Impl& impl = this->impl();
-  if (impl.finished) impl.fail("write after finish");
-  if (index < 0 || index >= impl.shots) {
-    impl.fail("record index " + std::to_string(index) + " outside [0, " +
-              std::to_string(impl.shots) + ")");
-  }
-  if (index < impl.next || impl.pending.contains(index))
-    impl.fail("record " + std::to_string(index) + " written twice");
+  impl.ledger.check_write(index);
   OGRFeatureUniquePtr feature = impl.feature(index, shot);
   if (index != impl.next) {
     impl.pending.emplace(index, std::move(feature));
+    impl.ledger.taken(index);
     return;
   }
-  impl.emit(*feature);
+  impl.emit(*feature);  // a record refused here can be written again
+  impl.ledger.taken(index);
   for (auto it = impl.pending.begin(); it != impl.pending.end() && it->first == impl.next;) {
     impl.emit(*it->second);
     it = impl.pending.erase(it);
@@ -338,9 +333,7 @@ void OgrWriter::write(std::int64_t index, const ShotRecord& shot) {
 
 void OgrWriter::finish(const RunStats& /*stats*/) {
   Impl& impl = this->impl();
-  if (impl.finished) impl.fail("finished twice");
-  if (impl.next != impl.shots)
-    impl.fail("record " + std::to_string(impl.next) + " was never written");
+  impl.ledger.check_finish();
   const std::string part = impl.file.part_path().string();
   {
     const GdalMessages messages;
@@ -356,12 +349,12 @@ void OgrWriter::finish(const RunStats& /*stats*/) {
     if (messages.failed()) impl.fail(messages.failure("cannot write " + part));
   }
   impl.file.commit();
-  impl.finished = true;
+  impl.ledger.finish();
 }
 
 void OgrWriter::abort() noexcept {
   // A finished product stays: only an unfinished one has a .part to give up.
-  if (impl_ && !impl_->finished) impl_.reset();
+  if (impl_ && !impl_->ledger.finished()) impl_.reset();
 }
 
 }  // namespace glaswave

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "pipeline/products/shot_record.hpp"
@@ -29,6 +30,31 @@ class ProductWriter {
   // Gives the product up: the file is closed without being flushed and its .part removed.
   // Nothing is written after it; destroying an unfinished writer does the same.
   virtual void abort() noexcept = 0;
+};
+
+// The checks every writer makes of the calls it gets, as ProductWriter promises them: each
+// record index within the run and taken once, none after finish(), finish() once and only with
+// every record written. Errors are Error (run) at the product's final path.
+class RecordLedger {
+ public:
+  RecordLedger(std::filesystem::path product, std::int64_t shots);
+
+  std::int64_t shots() const { return static_cast<std::int64_t>(written_.size()); }
+  bool finished() const { return finished_; }
+
+  // Before record `index` is taken; then, once it is, taken(index).
+  void check_write(std::int64_t index) const;
+  void taken(std::int64_t index) { written_[static_cast<std::size_t>(index)] = true; }
+  // Before the product is completed; then, once it is, finish().
+  void check_finish() const;
+  void finish() { finished_ = true; }
+
+ private:
+  [[noreturn]] void fail(const std::string& message) const;
+
+  std::filesystem::path product_;
+  std::vector<bool> written_;
+  bool finished_ = false;
 };
 
 // The footprints' format: DIR/footprints.geojson (RFC 7946) or DIR/footprints.gpkg.
