@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "core/excerpt.hpp"
 #include "core/input_file.hpp"
 
 namespace glaswave {
@@ -47,11 +48,7 @@ std::string field_excerpt(std::string_view field, std::string_view also) {
   for (char c : field)
     plain = plain && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' ||
                       c == '+' || c == '-' || also.find(c) != std::string_view::npos);
-  if (plain) {
-    std::string quoted(1, '"');  // not "\"" + std::string: GCC 12 warns of a false overlap there
-    quoted.append(field).push_back('"');
-    return quoted;
-  }
+  if (plain) return quoted_excerpt(field);
   return "a field of " + std::to_string(field.size()) + " characters";
 }
 

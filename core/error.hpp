@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/excerpt.hpp"
+
 namespace glaswave {
 
 enum class ErrorKind {
@@ -13,14 +15,15 @@ enum class ErrorKind {
   run = 4,     // failure while running
 };
 
+// The longest place kept whole: a path the system can open is shorter (PATH_MAX); a longer
+// one (a 1 MB string given as a file) is named by its excerpt (core/excerpt.hpp).
+inline constexpr std::size_t max_place_chars = 4096;
+
 // An error that names its place: a JSON path ("/canopy/pai"), a file path, or a shot.
 class Error : public std::runtime_error {
  public:
   Error(ErrorKind kind, std::string place, const std::string& message)
-      : std::runtime_error(place.empty() ? message : place + ": " + message),
-        kind_(kind),
-        place_(std::move(place)),
-        message_(message) {}
+      : Error(kind, bounded_place(std::move(place)), message, 0) {}
 
   ErrorKind kind() const { return kind_; }
   // Whether the place is a member of the settings the thrower was given ("vertical_datum"; empty
@@ -38,6 +41,15 @@ class Error : public std::runtime_error {
   int exit_status() const { return static_cast<int>(kind_); }
 
  private:
+  Error(ErrorKind kind, std::string place, const std::string& message, int /*bounded*/)
+      : std::runtime_error(place.empty() ? message : place + ": " + message),
+        kind_(kind),
+        place_(std::move(place)),
+        message_(message) {}
+  static std::string bounded_place(std::string place) {
+    return place.size() > max_place_chars ? excerpt(place) : place;
+  }
+
   ErrorKind kind_;
   std::string place_;
   std::string message_;

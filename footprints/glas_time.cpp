@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "core/excerpt.hpp"
+
 namespace glaswave {
 
 namespace {
@@ -46,8 +48,8 @@ int days_in_month(std::int64_t y, int m) {
 const std::int64_t glas_epoch_unix_s = days_from_civil(2000, 1, 1) * 86400 + 12 * 3600;
 
 [[noreturn]] void bad(const std::string& text, const std::string& why) {
-  throw std::invalid_argument("not an ISO 8601 UTC time (YYYY-MM-DDTHH:MM:SSZ): \"" + text +
-                              "\": " + why);
+  throw std::invalid_argument(
+      "not an ISO 8601 UTC time (YYYY-MM-DDTHH:MM:SSZ): " + quoted_excerpt(text) + ": " + why);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/excerpt.hpp"
 
 namespace glaswave {
 namespace {
@@ -172,8 +173,8 @@ PjPtr source_crs(PJ_CONTEXT* context, CrsParts& parts, const std::string& vertic
   const PJ* vertical = parts.vertical.get();
   if (!vertical || proj_get_type(vertical) != PJ_TYPE_VERTICAL_CRS)
     throw setting_error(ErrorKind::config, "vertical_datum",
-                        "must be \"ellipsoid\", \"egm96\" or a vertical CRS PROJ knows, got \"" +
-                            vertical_datum + "\"");
+                        "must be \"ellipsoid\", \"egm96\" or a vertical CRS PROJ knows, got " +
+                            quoted_excerpt(vertical_datum));
   PjPtr source(proj_create_compound_crs(context, (name_of(crs) + " + " + name_of(vertical)).c_str(),
                                         parts.crs.get(), parts.vertical.get()));
   if (!source)

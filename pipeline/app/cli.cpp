@@ -18,6 +18,7 @@
 
 #include "canopy/gap_fraction.hpp"
 #include "core/error.hpp"
+#include "core/excerpt.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/app/reference.hpp"
 #include "pipeline/app/run_outline.hpp"
@@ -77,9 +78,9 @@ std::uint64_t decimal_option(const std::string& text, const char* option, std::u
   std::uint64_t value = 0;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
   const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
-  if (!digits) throw config_error(option, range + ", got \"" + text + "\"");
+  if (!digits) throw config_error(option, range + ", got " + quoted_excerpt(text));
   if (error != std::errc() || end != text.data() + text.size() || value > max)
-    throw config_error(option, range + ", got " + text);
+    throw config_error(option, range + ", got " + excerpt(text));
   return value;
 }
 
@@ -105,13 +106,13 @@ std::pair<std::optional<std::int64_t>, std::optional<std::int64_t>> colon_pair(
 // "A:B" -> [A, B); either side may be empty.
 void parse_shot_range(const std::string& text, RunRequest& request) {
   std::tie(request.first_shot, request.last_shot) =
-      colon_pair(text, "--shots", "expected A:B with shot numbers, got \"" + text + "\"");
+      colon_pair(text, "--shots", "expected A:B with shot numbers, got " + quoted_excerpt(text));
 }
 
 // "SHOT:RAY" -> the two numbers, both needed.
 std::pair<std::int64_t, std::int64_t> parse_shot_and_ray(const std::string& text) {
   const std::string usage =
-      "expected SHOT:RAY, a shot number and a ray number, got \"" + text + "\"";
+      "expected SHOT:RAY, a shot number and a ray number, got " + quoted_excerpt(text);
   const auto [shot, ray] = colon_pair(text, "--debug-ray", usage);
   if (!shot || !ray) throw config_error("--debug-ray", usage);
   return {*shot, *ray};

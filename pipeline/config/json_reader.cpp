@@ -12,6 +12,7 @@
 #include <unordered_set>
 
 #include "core/error.hpp"
+#include "core/excerpt.hpp"
 #include "core/names.hpp"
 
 namespace glaswave {
@@ -20,7 +21,8 @@ using nlohmann::json;
 
 std::string json_pointer_child(const std::string& path, const std::string& key) {
   std::string escaped;
-  for (char c : key) {
+  // A place names a key the user gave, which may be of any length: an excerpt of it.
+  for (char c : key.size() > excerpt_max_chars ? excerpt(key) : key) {
     if (c == '~')
       escaped += "~0";
     else if (c == '/')
@@ -56,8 +58,8 @@ class NestingCheck {
         frame.key = parsed.get<std::string>();
         frame.keyed = true;
         if (!frame.keys.insert(frame.key).second)
-          throw config_error(pointer(stack_.size()),
-                             "duplicate key: the object gives \"" + frame.key + "\" twice");
+          throw config_error(pointer(stack_.size()), "duplicate key: the object gives " +
+                                                         quoted_excerpt(frame.key) + " twice");
         break;
       }
       case event_t::object_end:
@@ -114,10 +116,8 @@ std::string describe(const json& value) {
     return std::isnan(x) ? "nan" : x > 0 ? "inf" : "-inf";
   }
   // Replace invalid UTF-8 rather than throw while building an error message.
-  std::string text = value.dump(-1, ' ', false, json::error_handler_t::replace);
-  constexpr std::size_t max_length = 60;
-  if (text.size() > max_length) text = text.substr(0, max_length - 3) + "...";
-  return text;
+  if (value.is_string()) return quoted_excerpt(value.get<std::string>());
+  return excerpt(value.dump(-1, ' ', false, json::error_handler_t::replace));
 }
 
 std::string format_number(double x) {
@@ -129,7 +129,7 @@ std::string format_number(double x) {
 }
 
 std::string unknown_key_message(const std::string& key, const std::vector<std::string>& known) {
-  std::string message = "unknown key \"" + key + "\"";
+  std::string message = "unknown key " + quoted_excerpt(key);
   if (const std::string suggestion = did_you_mean(key, known); !suggestion.empty())
     return message + suggestion;
   if (known.empty()) return message + "; this object takes no keys";
@@ -403,7 +403,7 @@ void JsonReader::throw_not_one_of(const std::string& key, const std::string& got
                                   const std::vector<std::string>& names) const {
   std::string list;
   for (std::size_t i = 0; i < names.size(); ++i) list += (i ? ", " : "") + names[i];
-  fail(key, "must be one of " + list + ", got \"" + got + "\"" + did_you_mean(got, names));
+  fail(key, "must be one of " + list + ", got " + quoted_excerpt(got) + did_you_mean(got, names));
 }
 
 }  // namespace glaswave

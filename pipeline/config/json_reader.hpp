@@ -32,7 +32,7 @@ nlohmann::json parse_json_checked(const std::string& text, const std::string& pr
 // with '~' and '/' escaped as RFC 6901 asks.
 std::string json_pointer_child(const std::string& path, const std::string& key);
 
-// A value for an error message: compact JSON, cut short when long.
+// A value for an error message: compact JSON, as a bounded excerpt (core/excerpt.hpp).
 std::string describe(const nlohmann::json& value);
 
 // A number for an error message: no trailing zeros, no binary noise ("1.2", not

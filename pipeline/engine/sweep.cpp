@@ -9,6 +9,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/excerpt.hpp"
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/run.hpp"
 
@@ -94,16 +95,16 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 Variation parse_variation(const std::string& text) {
   const auto equals = text.find('=');
   if (equals == std::string::npos || equals == 0)
-    throw config_error("--vary", "expected KEY=V1,V2,..., got \"" + text + "\"");
+    throw config_error("--vary", "expected KEY=V1,V2,..., got " + quoted_excerpt(text));
   Variation variation{text.substr(0, equals), {}};
   std::string value;
   int depth = 0;
-  bool quoted = false;
+  bool in_string = false;
   for (char c : text.substr(equals + 1)) {
-    if (c == '"') quoted = !quoted;
-    if (!quoted && (c == '[' || c == '{')) ++depth;
-    if (!quoted && (c == ']' || c == '}')) --depth;
-    if (c == ',' && depth == 0 && !quoted) {
+    if (c == '"') in_string = !in_string;
+    if (!in_string && (c == '[' || c == '{')) ++depth;
+    if (!in_string && (c == ']' || c == '}')) --depth;
+    if (c == ',' && depth == 0 && !in_string) {
       variation.values.push_back(value);
       value.clear();
     } else {
@@ -112,7 +113,7 @@ Variation parse_variation(const std::string& text) {
   }
   variation.values.push_back(value);
   for (const std::string& v : variation.values)
-    if (v.empty()) throw config_error("--vary", "an empty value in \"" + text + "\"");
+    if (v.empty()) throw config_error("--vary", "an empty value in " + quoted_excerpt(text));
   return variation;
 }
 
