@@ -14,7 +14,9 @@
 #include <memory>
 
 #include "core/error.hpp"
+#include "core/excerpt.hpp"
 #include "pipeline/config/json_reader.hpp"
+#include "pipeline/config/keys.hpp"
 #include "terrain/gdal_source.hpp"
 
 namespace glaswave {
@@ -131,10 +133,80 @@ json feature_properties(const OGRFeature& feature, const std::string& path,
     try {
       properties[field] = field_value(feature, i);
     } catch (const Error& e) {
-      throw input_error(path, name + ": property " + field + e.place() + ": " + e.message());
+      throw input_error(path,
+                        name + ": property " + excerpt(field) + e.place() + ": " + e.message());
     }
   }
   return properties;
+}
+
+// Whether a ring's positions all lie on one line (within 1e-9 degrees, a tenth of a millimetre):
+// it encloses no area. The even-odd rule gives any other ring an area, a bow-tie's included.
+bool encloses_no_area(const Ring& ring) {
+  const auto& [x0, y0] = ring.front();
+  std::array<double, 2> far = ring.front();
+  double far_d2 = 0.0;
+  for (const auto& [x, y] : ring)
+    if (const double d2 = (x - x0) * (x - x0) + (y - y0) * (y - y0); d2 > far_d2) {
+      far_d2 = d2;
+      far = {x, y};
+    }
+  if (!(far_d2 > 0.0)) return true;
+  const double length = std::sqrt(far_d2);
+  for (const auto& [x, y] : ring) {
+    const double across = std::abs((far[0] - x0) * (y - y0) - (far[1] - y0) * (x - x0)) / length;
+    if (across > 1e-9) return false;
+  }
+  return true;
+}
+
+// A GeoJSON file's own `crs` member (the 2008 specification's), which GDAL replaces by WGS84
+// longitude and latitude when it cannot read it: a CRS it does not know is refused here, not
+// taken as longitude and latitude. Empty when the member is absent or null.
+void check_geojson_crs(OGRLayer& layer, const std::string& path) {
+  const char* native = layer.GetMetadataItem("NATIVE_DATA", "NATIVE_DATA");
+  if (!native) return;
+  const json members = json::parse(native, nullptr, false);
+  if (!members.is_object() || !members.contains("crs") || members["crs"].is_null()) return;
+  const json& crs = members["crs"];
+  std::string name;
+  if (crs.is_object() && crs.contains("properties") && crs["properties"].is_object()) {
+    const json& properties = crs["properties"];
+    if (crs.value("type", "") == "name" && properties.contains("name") &&
+        properties["name"].is_string())
+      name = properties["name"].get<std::string>();
+    if (crs.value("type", "") == "EPSG" && properties.contains("code") &&
+        properties["code"].is_number_integer())
+      name = "EPSG:" + std::to_string(properties["code"].get<std::int64_t>());
+  }
+  OGRSpatialReference known;
+  if (name.empty() ||
+      known.SetFromUserInput(
+          name.c_str(), OGRSpatialReference::SET_FROM_USER_INPUT_LIMITATIONS_get()) != OGRERR_NONE)
+    throw input_error(path, "its crs member " +
+                                (name.empty() ? describe(crs) : quoted_excerpt(name)) +
+                                " is not a CRS GDAL knows: give one as {\"type\": \"name\", "
+                                "\"properties\": {\"name\": \"EPSG:CODE\"}}, or none for "
+                                "longitude and latitude (RFC 7946)");
+}
+
+// A Shapefile cuts field names to 10 characters (its dBase table's limit), so that
+// `leaf_reflectance` arrives as `leaf_refle`: a field of 10 characters that is no canopy key is
+// told as that, not as an unknown key.
+void check_shapefile_fields(OGRLayer& layer, const std::string& path) {
+  const Key& canopy = *configuration_keys().child("canopy");
+  OGRFeatureDefn* definition = layer.GetLayerDefn();
+  for (int i = 0; i < definition->GetFieldCount(); ++i) {
+    const std::string field = definition->GetFieldDefn(i)->GetNameRef();
+    if (field.size() != 10 || canopy.child(field)) continue;
+    std::string meant;
+    for (const Key& key : canopy.children)
+      if (key.name.rfind(field, 0) == 0) meant = " (" + quoted_excerpt(key.name) + " cut short?)";
+    throw input_error(path, "field " + quoted_excerpt(field) + meant +
+                                ": a Shapefile cuts field names to 10 characters, too few for "
+                                "some canopy keys; write the stands as GeoPackage (.gpkg) or "
+                                "GeoJSON");
+  }
 }
 
 }  // namespace
@@ -145,8 +217,16 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
   if (!std::filesystem::is_directory(path, error)) require_gdal_source(path, "the stands file");
   GDALAllRegister();
   const QuietGdal quiet;
-  const std::unique_ptr<GDALDataset, DatasetCloser> dataset(GDALDataset::FromHandle(
-      GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+  // GeoJSON keeps its FeatureCollection's other members (a `crs`) as NATIVE_DATA when asked.
+  const char* const geojson[] = {"GeoJSON", nullptr};
+  const char* const native_data[] = {"NATIVE_DATA=YES", nullptr};
+  std::unique_ptr<GDALDataset, DatasetCloser> dataset(GDALDataset::FromHandle(
+      GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, geojson, native_data, nullptr)));
+  if (!dataset) {
+    CPLErrorReset();
+    dataset.reset(GDALDataset::FromHandle(
+        GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+  }
   if (!dataset)
     throw input_error(path, "cannot be read as a vector file (GeoJSON, GeoPackage, Shapefile...)" +
                                 QuietGdal::last());
@@ -157,6 +237,9 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
   std::vector<StandFeature> features;
   for (int l = 0; l < layers; ++l) {
     OGRLayer* layer = dataset->GetLayer(l);
+    const std::string driver = dataset->GetDriver()->GetDescription();
+    if (driver == "GeoJSON") check_geojson_crs(*layer, path);
+    if (driver == "ESRI Shapefile") check_shapefile_fields(*layer, path);
     const std::string prefix =
         layers > 1 ? "layer " + std::string(layer->GetName()) + " feature " : "feature ";
     std::unique_ptr<OGRCoordinateTransformation> to_wgs84;
@@ -200,6 +283,11 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
         throw input_error(path, stand.name + ": a position is not on the Earth (" + where +
                                     " in WGS84): longitude must be in [-180, 360], latitude in "
                                     "[-90, 90]");
+      for (const Ring& ring : stand.rings)
+        if (encloses_no_area(ring))
+          throw input_error(path, stand.name +
+                                      ": a ring encloses no area (its positions lie on one "
+                                      "line): a stand is a polygon with an area");
       stand.properties = feature_properties(*feature, path, stand.name);
       features.push_back(std::move(stand));
     }
