@@ -68,10 +68,16 @@ Columns read_header(const std::vector<std::string_view>& parts, const std::strin
 }
 
 double read_time(std::string_view text, const std::string& place) {
-  if (const auto seconds = parse_number(text)) return *seconds;
+  if (const auto seconds = parse_number(text)) {
+    if (const std::string why = time_out_of_range(*seconds); !why.empty())
+      throw input_error(place, "time " + why);
+    return *seconds;
+  }
   try {
     return parse_iso8601_utc(std::string(text));
-  } catch (const std::invalid_argument&) {
+  } catch (const std::invalid_argument& e) {
+    if (std::string_view(e.what()).find("outside the years") != std::string_view::npos)
+      throw input_error(place, "time outside the years 1900 to 2199 that a track may have");
     // The field is named, not echoed whole: the file may be of another kind.
     throw input_error(place,
                       "time: expected seconds since 2000-01-01T12:00:00Z or ISO 8601 UTC "

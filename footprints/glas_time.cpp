@@ -104,7 +104,20 @@ double parse_iso8601_utc(const std::string& text) {
 
   const std::int64_t unix_s =
       days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second;
-  return static_cast<double>(unix_s - glas_epoch_unix_s) + fraction;
+  const double seconds = static_cast<double>(unix_s - glas_epoch_unix_s) + fraction;
+  if (!(seconds >= earliest_time_s && seconds < latest_time_s))
+    throw std::invalid_argument(quoted_excerpt(text) +
+                                " is outside the years 1900 to 2199 that a track may have");
+  return seconds;
+}
+
+std::string time_out_of_range(double seconds) {
+  if (seconds >= earliest_time_s && seconds < latest_time_s) return "";
+  char text[64];
+  std::snprintf(text, sizeof text, "%.6g", seconds);
+  if (!std::isfinite(seconds)) return "must be a finite time, got " + std::string(text);
+  return "must be from 1900-01-01T00:00:00Z to 2200-01-01T00:00:00Z, got " + std::string(text) +
+         " s from 2000-01-01T12:00:00Z";
 }
 
 std::string format_iso8601_utc(double seconds_since_glas_epoch) {

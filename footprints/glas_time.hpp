@@ -8,8 +8,21 @@ namespace glaswave {
 
 // Parses "YYYY-MM-DDTHH:MM:SS[.fff...](Z|+00:00)" into seconds since 2000-01-01T12:00:00Z,
 // ignoring leap seconds. Only UTC is accepted, so a time stamp never depends on a local zone.
-// Throws std::invalid_argument on any other text or an impossible date or time.
+// Throws std::invalid_argument on any other text, an impossible date or time, or a time outside
+// [earliest_time_s, latest_time_s).
 double parse_iso8601_utc(const std::string& text);
+
+// The times a track may have, in seconds since the GLAS epoch: from 1900-01-01T00:00:00Z to
+// 2200-01-01T00:00:00Z, wider than any spaceborne lidar's life and well inside what the
+// products' ISO 8601 attributes write (years 0 to 9999). A time outside is a mistake of units
+// (milliseconds for seconds), a fill value or a rate of next to nothing, not a time.
+inline constexpr double earliest_time_s = -3155716800.0;  // 1900-01-01T00:00:00Z
+inline constexpr double latest_time_s = 6311390400.0;     // 2200-01-01T00:00:00Z
+
+// Empty when `seconds` is finite and within [earliest_time_s, latest_time_s); else the reason,
+// for a message: "must be a finite time, got nan", "must be from 1900-01-01T00:00:00Z to
+// 2200-01-01T00:00:00Z, got 1e+300 s from 2000-01-01T12:00:00Z".
+std::string time_out_of_range(double seconds_since_glas_epoch);
 
 // Writes seconds since 2000-01-01T12:00:00Z as "YYYY-MM-DDTHH:MM:SS[.ffffff]Z", with the
 // fraction (to the microsecond, trailing zeros dropped) only when there is one.

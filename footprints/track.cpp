@@ -97,6 +97,8 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
       break;
   }
 
+  check_times();
+
   if (settings_.type == TrackType::orbit) {
     // Locating a shot is a few dozen height queries, against thousands of rays to simulate it,
     // so the whole orbit is screened here to know the records before anything is written.
@@ -121,6 +123,26 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
                       "the track never meets the terrain: none of its " +
                           std::to_string(sequence_length_) +
                           " shots' beams reaches ground with data");
+}
+
+// Every shot's time within the years a track may have (footprints/glas_time.hpp): the products'
+// times and coverage attributes are written from them. An ephemeris file's rows are checked as
+// they are read.
+void Track::check_times() const {
+  if (settings_.type == TrackType::granule) {
+    for (const GranuleShot& shot : granule_)
+      if (const std::string why = time_out_of_range(shot.time_s); !why.empty())
+        throw input_error(settings_.granule,
+                          "shot_number " + std::to_string(shot.shot_number) + ": its time " + why);
+    return;
+  }
+  if (settings_.type == TrackType::ephemeris || sequence_length_ < 1) return;
+  const double last_s =
+      settings_.start_time_s + static_cast<double>(sequence_length_ - 1) / settings_.rate_hz;
+  if (const std::string why = time_out_of_range(last_s); !why.empty())
+    throw setting_error(ErrorKind::config, "rate_hz",
+                        "too low: the last of the " + std::to_string(sequence_length_) +
+                            " shots from start_time comes at a time that " + why);
 }
 
 std::int64_t Track::size() const {

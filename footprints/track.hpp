@@ -88,6 +88,8 @@ class Track {
   Footprint locate_shot(std::int64_t shot_number) const;
 
  private:
+  // Refuses a shot whose time is not finite or outside the years a track may have.
+  void check_times() const;
   // The spacecraft and the beam of a shot; false when the shot is flagged before any search for
   // the ground (a target point over no data).
   bool place_spacecraft(std::int64_t shot, Footprint& f) const;
