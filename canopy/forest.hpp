@@ -34,6 +34,9 @@ class Forest {
   // stands' spatial index: thousands of stands cost about what one does).
   int kind_at(double lat_deg, double lon_deg) const;
 
+  // The crowns of the crowns file (empty without one).
+  const std::vector<Tree>& explicit_trees() const { return kinds_.front().explicit_trees; }
+
   // Trees whose stems stand within `radius_m` of a point (a few more may come back).
   std::vector<Tree> trees_near(double lat_deg, double lon_deg, double radius_m) const;
 

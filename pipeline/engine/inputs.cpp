@@ -2,6 +2,10 @@
 #include "pipeline/engine/inputs.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numbers>
 
 namespace glaswave {
 
@@ -115,6 +119,41 @@ std::optional<std::string> stands_off_track(const Config& config,
   return "/canopy/stands: none of the " + std::to_string(stands.size()) + " stands of " +
          config.canopy->stands + " lies under any of the " + std::to_string(shots.size()) +
          " shots; check where the file puts them (its CRS)";
+}
+
+std::optional<std::string> crowns_off_track(const Config& config,
+                                            const VegetationSource* vegetation,
+                                            const std::vector<std::array<double, 2>>& shots) {
+  if (!vegetation || shots.empty() || !config.canopy) return std::nullopt;
+  const std::vector<VegetationSource::Placed> trees = vegetation->placed();
+  if (trees.empty()) return std::nullopt;
+  double lat_min = 90.0, lat_max = -90.0, lon_min = 360.0, lon_max = -360.0, radius_m = 0.0;
+  for (const auto& tree : trees) {
+    lat_min = std::min(lat_min, tree.lat_deg), lat_max = std::max(lat_max, tree.lat_deg);
+    lon_min = std::min(lon_min, tree.lon_deg), lon_max = std::max(lon_max, tree.lon_deg);
+    radius_m = std::max(radius_m, tree.radius_m);
+  }
+  constexpr double margin_m = 100.0;              // a beam and its diffuse light, as for stands
+  constexpr double metres_per_degree = 111320.0;  // ample for a distance of warning
+  double nearest_m = std::numeric_limits<double>::infinity();
+  for (const auto& [lat, lon] : shots) {
+    if (!std::isfinite(lat) || !std::isfinite(lon)) continue;
+    const double east = std::cos(lat * std::numbers::pi / 180.0) * metres_per_degree;
+    const double dlat = std::max({lat_min - lat, 0.0, lat - lat_max}) * metres_per_degree;
+    // Longitudes compared on the shorter way round.
+    double dlon = std::numeric_limits<double>::infinity();
+    for (const double turn : {-360.0, 0.0, 360.0})
+      dlon = std::min(dlon, std::max({lon_min - (lon + turn), 0.0, lon + turn - lon_max}));
+    nearest_m = std::min(nearest_m, std::hypot(dlat, dlon * east) - radius_m);
+  }
+  if (!(nearest_m > margin_m)) return std::nullopt;
+  char distance[32];
+  std::snprintf(distance, sizeof distance, "%.3g km", nearest_m / 1000.0);
+  return "/canopy/crowns_file: none of the " + std::to_string(trees.size()) + " crowns of " +
+         config.canopy->crowns_file + " lies within " + std::to_string(static_cast<int>(margin_m)) +
+         " m of any of the " + std::to_string(shots.size()) + " footprints (the nearest is " +
+         distance + " away); check its coordinates (lon,lat in degrees, or x,y in metres from " +
+         "terrain.plane's origin)";
 }
 
 }  // namespace glaswave

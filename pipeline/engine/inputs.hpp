@@ -38,4 +38,13 @@ std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain);
 std::optional<std::string> stands_off_track(const Config& config,
                                             const std::vector<std::array<double, 2>>& shots);
 
+// A warning, at the crowns file's JSON path, when the vegetation has plants a file placed (a
+// crowns file's crowns) and no footprint centre (lat, lon) lies within 100 m of their bounding box
+// widened by the largest crown: crowns placed far away (x,y from another origin, latitude and
+// longitude swapped) would otherwise leave every shot over bare ground without a word. Empty
+// otherwise, and when no footprint is on the terrain.
+std::optional<std::string> crowns_off_track(const Config& config,
+                                            const VegetationSource* vegetation,
+                                            const std::vector<std::array<double, 2>>& shots);
+
 }  // namespace glaswave

@@ -279,7 +279,7 @@ CheckSummary check_inputs(const Config& config) {
   check_brf(config);  // ... and brf
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
   // The vegetation reads its crowns file and checks what the configuration cannot alone.
-  grow_vegetation(config);
+  const std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config);
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
   CheckSummary summary;
   summary.shots = track->size();
@@ -293,6 +293,8 @@ CheckSummary check_inputs(const Config& config) {
       centres.push_back({footprint.ground.lat_deg, footprint.ground.lon_deg});
   }
   if (const auto warning = stands_off_track(config, centres)) summary.warnings.push_back(*warning);
+  if (const auto warning = crowns_off_track(config, vegetation.get(), centres))
+    summary.warnings.push_back(*warning);
   // Roughness too fine to mesh under the beam is refused where a shot builds its ground: the
   // first footprint's scene is built here, so that check refuses it as run does.
   if (config.terrain.roughness.rms_m > 0.0) {
@@ -406,6 +408,9 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   try {
     if (cluster.rank() == 0) {
       if (const auto warning = stands_off_track(config, centres))
+        summary.warnings.push_back(*warning);
+      if (const auto warning =
+              crowns_off_track(config, setup->simulator->scenes().vegetation(), centres))
         summary.warnings.push_back(*warning);
       summary.wall_s =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

@@ -24,6 +24,14 @@ class ForestSource : public VegetationSource {
 
   const Forest& forest() const { return forest_; }
 
+  // The crowns file's crowns.
+  std::vector<Placed> placed() const override {
+    std::vector<Placed> crowns;
+    for (const Tree& tree : forest_.explicit_trees())
+      crowns.push_back({tree.lat_deg, tree.lon_deg, tree.crown_radius_m});
+    return crowns;
+  }
+
   // Randomly placed crowns of cover c and radius r are -ln(1 - c) / (pi r^2) a square metre (the
   // densest of the canopy's and its stands'); a layer or a crowns file has none at random.
   static double region_bytes(const VegetationSettings& settings, double side_m);

@@ -56,6 +56,14 @@ class VegetationSource {
   // a Gaussian of RMS radius sigma_m about the frame's origin). By default measured on the
   // scene's turbid volumes; a source of surfaces (leaf facets) says what its facets make.
   virtual VegetationTruth truth(const Scene& scene, double sigma_m) const;
+
+  // Plants a file placed (a crowns file's crowns): where each stands and how far it reaches,
+  // for the warning that they lie far from every footprint. Empty for vegetation that grows
+  // wherever a shot looks (random crowns, a layer).
+  struct Placed {
+    double lat_deg = 0.0, lon_deg = 0.0, radius_m = 0.0;
+  };
+  virtual std::vector<Placed> placed() const { return {}; }
 };
 
 // What a source is made from: the configuration's canopy, its seed and its plane terrain.
