@@ -32,6 +32,7 @@ MARKER = "SECRET-MARKER-7f3a"
 PRODUCTS = {"shots.nc", "footprints.geojson", "footprints.gpkg", "brf.json", "scene.tif",
             "sensitivity.csv", "sensitivity.md", "waveforms.png", "track_map.png"}
 TIMEOUT_S = 20
+MAX_LINE = 1000  # a one-line message quotes input as a bounded excerpt (issue 28)
 
 
 # WGS 84 latitude, longitude and height to Earth-fixed x, y, z (m), through PROJ.
@@ -84,8 +85,9 @@ class Trial:
 
     # ---- running ---------------------------------------------------------------------------
     def run(self, description, args, expect="error", out=None, shell_prefix="", env=None,
-            cwd=None):
-        """Runs glaswave ARGS; `out` is the output directory whose products are checked."""
+            cwd=None, says=None):
+        """Runs glaswave ARGS; `out` is the output directory whose products are checked; `says`,
+        text that stderr must hold (the cause named, a warning given)."""
         self.count += 1
         if out is not None:
             shutil.rmtree(out, ignore_errors=True)
@@ -123,6 +125,10 @@ class Trial:
             problems.append("ACCEPTED")
         if expect != "ok" and status not in (0, 124) and status < 128 and len(errors) != 1:
             problems.append(f"{len(errors)} error lines, {len(lines)} lines")
+        if len(first) > MAX_LINE:
+            problems.append(f"OVERSIZED MESSAGE ({len(first)} characters)")
+        if says is not None and says not in stderr:
+            problems.append(f"DOES NOT SAY {says!r}")
         if expect not in ("ok", "error") and status != expect and not problems:
             problems.append(f"exit {status}, expected {expect}")
         verdict = "; ".join(problems) if problems else ("works" if status == 0 else "clear error")
@@ -625,6 +631,66 @@ def granule_cases(t):
         "type": "granule", "file": str(t.path("declared-1e7.h5"))})])
 
 
+def round_three_config(t):
+    """Issue 28, the configuration's causes: each refused at its root, check and run alike."""
+    out = str(t.path("out"))
+    # One bounded-excerpt quoting rule.
+    t.run("28. a 200 000-character key", ["check", t.config("bigkey.json", canopy={"k" * 200000: 1})])
+    t.run("28. a 1 MB string (crown_shape)", ["check", t.config(
+        "bigstr.json", canopy={"crown_shape": "s" * 1000000})])
+    t.run("28. a 1 MB string as the DEM's path", ["check", t.config(
+        "bigpath.json", terrain={"dem": "d" * 1000000})])
+    t.run("28. a 100 KB --set value", ["check", t.config(), "--set",
+                                       "canopy.crown_shape=" + "v" * 100000])
+    # Stands: a zero-area polygon, a GeoJSON CRS GDAL does not know, a Shapefile's cut names.
+    square = [[[7.99, 45.99], [8.01, 45.99], [8.01, 46.01], [7.99, 46.01], [7.99, 45.99]]]
+
+    def stands(name, rings, **members):
+        document = {"type": "FeatureCollection", **members, "features": [{
+            "type": "Feature", "properties": {"pai": 1},
+            "geometry": {"type": "Polygon", "coordinates": rings}}]}
+        return t.write(name, json.dumps(document))
+
+    line = stands("line.geojson", [[[7.99, 45.99], [8.0, 46.0], [8.01, 46.01], [7.99, 45.99]]])
+    t.run("28. a stand of zero area", ["check", t.config("zero.json", canopy={"stands": line})],
+          expect=3)
+    unknown = stands("crs.geojson", square,
+                     crs={"type": "name", "properties": {"name": "EPSG:999999"}})
+    t.run("28. a GeoJSON crs GDAL does not know (EPSG:999999)", ["check", t.config(
+        "crs.json", canopy={"stands": unknown})], expect=3)
+    from osgeo import ogr, osr
+    shapefile = str(t.path("shp/stands.shp"))
+    t.path("shp").mkdir(exist_ok=True)
+    dataset = ogr.GetDriverByName("ESRI Shapefile").CreateDataSource(shapefile)
+    wgs84 = osr.SpatialReference()
+    wgs84.ImportFromEPSG(4326)
+    layer = dataset.CreateLayer("stands", wgs84, ogr.wkbPolygon)
+    layer.CreateField(ogr.FieldDefn("leaf_reflectance", ogr.OFTReal))  # cut to leaf_refle
+    feature = ogr.Feature(layer.GetLayerDefn())
+    feature.SetField(0, 0.3)
+    feature.SetGeometry(ogr.CreateGeometryFromJson(json.dumps(
+        {"type": "Polygon", "coordinates": square})))
+    layer.CreateFeature(feature)
+    dataset = None
+    t.run("28. a Shapefile stand with leaf_reflectance (cut to leaf_refle)", ["check", t.config(
+        "shp.json", canopy={"stands": shapefile})], expect=3, says="a Shapefile cuts field names")
+    # Crowns 900 km from the track: a warning, and the run goes on.
+    far = t.write("far.csv", "lon,lat,base_m,radius_m,half_height_m\n8,54.1,5,3,3\n")
+    t.run("28. crowns 900 km from the track (a warning)", ["run", t.config(
+        "far.json", canopy={"crowns_file": far}), "--quiet", "--out", out], expect="ok", out=out,
+        says="warning: /canopy/crowns_file")
+    # Times outside the years a track may have.
+    t.run("28. track.start_time 2999-01-01", ["check", t.config(
+        "t.json", track__start_time="2999-01-01T00:00:00Z")], expect=2)
+    t.run("28. track.rate_hz 1e-300 (shots 1e300 s apart)", ["check", t.config(
+        "rate.json", track__rate_hz=1e-300)], expect=2)
+    x, y, z = ecef(46.0, 8.0, 600000.0)
+    for text in ("1e300", "-1e300"):
+        ephemeris = t.write("eph.csv", f"time,x_m,y_m,z_m\n{text},{x},{y},{z}\n")
+        t.run(f"28. an ephemeris time of {text} s", ["check", t.config(
+            "eph.json", track={"type": "ephemeris", "ephemeris": ephemeris})], expect=3)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     source = pathlib.Path(__file__).resolve().parents[2]
@@ -635,7 +701,8 @@ def main():
     glaswave = os.path.abspath(arguments.glaswave)
     with tempfile.TemporaryDirectory(prefix="glaswave_inputs_") as scratch:
         t = Trial(glaswave, scratch)
-        for group in (issue_items, configuration_cases, data_cases, granule_cases):
+        for group in (issue_items, configuration_cases, data_cases, granule_cases,
+                      round_three_config):
             if arguments.only in group.__name__:
                 group(t)
         pathlib.Path(arguments.out).write_text(t.table())
