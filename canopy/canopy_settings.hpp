@@ -44,6 +44,14 @@ struct CanopySettings {
   std::string crowns_file;                 // optional CSV of explicit crowns
   std::string stands;                      // optional GeoJSON of stands
   std::vector<StandArea> stand_areas;      // the stands file's polygons, read by pipeline/config
+  // Measured vegetation (PRODUCT.md section 8): a voxel grid of plant area density
+  // (canopy.voxels.file), or an airborne lidar point cloud voxelised at start
+  // (canopy.point_cloud.file, its CRS when the file has none, the voxel size). Their leaves take
+  // lad, leaf_size_m, leaf_reflectance, leaf_transmittance and bark_fraction above.
+  std::string voxels_file;
+  std::string point_cloud_file;
+  std::string point_cloud_crs;
+  double voxel_size_m = 1.0;
 };
 
 // A stand: polygons (lon, lat rings; a point is inside when an odd number of rings hold it, so

@@ -99,6 +99,7 @@ struct VoxelGridFile::Impl {
   int ncid = -1, pad_var = -1;
   double fill = std::numeric_limits<double>::quiet_NaN();
   GDALDatasetH dataset = nullptr;
+  bool memory = false;             // shape holds the whole grid, pad included
   std::vector<int> band_of_layer;  // GDAL band (1-based) of each layer, bottom up
   mutable std::mutex mutex;
 
@@ -259,6 +260,17 @@ VoxelGridFile::VoxelGridFile(const std::filesystem::path& file) : impl_(std::mak
     impl_->open_gdal(file);
 }
 
+VoxelGridFile::VoxelGridFile(VoxelBlock grid) : impl_(std::make_unique<Impl>()) {
+  impl_->place = "the voxelised point cloud";
+  impl_->memory = true;
+  if (grid.nx <= 0 || grid.ny <= 0 || grid.nz <= 0 ||
+      grid.pad.size() != std::size_t(grid.nx) * grid.ny * grid.nz ||
+      grid.z_edges_m.size() != std::size_t(grid.nz) + 1)
+    throw run_error(impl_->place, "a voxel grid whose sizes do not agree");
+  check_layers(grid.z_edges_m, impl_->place);
+  impl_->shape = std::move(grid);
+}
+
 VoxelGridFile::~VoxelGridFile() {
   if (impl_->ncid >= 0) {
     std::lock_guard lock(netcdf_library_mutex());
@@ -291,7 +303,12 @@ VoxelBlock VoxelGridFile::window(double x_min, double x_max, double y_min, doubl
   block.x0 = s.x0 + i0 * s.dx;
   block.y0 = s.y0 + j0 * s.dy;
   block.pad.resize(voxels);
-  if (impl_->netcdf) {
+  if (impl_->memory) {
+    for (int k = 0; k < s.nz; ++k)
+      for (int j = 0; j < nj; ++j)
+        for (int i = 0; i < ni; ++i)
+          block.pad[(std::size_t(k) * nj + j) * ni + i] = s.at(i0 + i, j0 + j, k);
+  } else if (impl_->netcdf) {
     std::lock_guard lock(netcdf_library_mutex());
     const std::size_t start[3] = {0, std::size_t(j0), std::size_t(i0)};
     const std::size_t count[3] = {std::size_t(s.nz), std::size_t(nj), std::size_t(ni)};

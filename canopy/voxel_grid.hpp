@@ -47,11 +47,13 @@ class VoxelGridFile {
   // Opens a NetCDF (.nc) or GDAL raster file and checks it: dimensions, coordinates (regular),
   // layer heights (increasing, no gap), a CRS. An input error naming the file otherwise.
   explicit VoxelGridFile(const std::filesystem::path& file);
+  // A grid held in memory (a point cloud voxelised at start), served by the same windows.
+  explicit VoxelGridFile(VoxelBlock grid);
   ~VoxelGridFile();
   VoxelGridFile(const VoxelGridFile&) = delete;
   VoxelGridFile& operator=(const VoxelGridFile&) = delete;
 
-  // The whole grid's extent and layers (pad left empty).
+  // The whole grid's extent and layers (its pad is empty but for a grid held in memory).
   const VoxelBlock& shape() const;
 
   // The columns that meet the rectangle [x_min, x_max] x [y_min, y_max] (the grid's CRS), read

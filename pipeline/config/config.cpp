@@ -465,6 +465,34 @@ void read_canopy_optics(JsonReader& r, CanopySettings& c, const std::vector<Band
   c.bark_reflectance = spectral(r, "bark_reflectance", bands);
 }
 
+// canopy.voxels or canopy.point_cloud: measured vegetation, alone in the canopy.
+CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<Band>& bands) {
+  const bool voxels = canopy.has("voxels");
+  const char* name = voxels ? "voxels" : "point_cloud";
+  for (const std::string& key : canopy.given())
+    if (key != name)
+      canopy.fail(key, std::string("cannot be given beside canopy.") + name +
+                           " (the canopy holds one vegetation source)");
+  CanopySettings c;
+  c.kind = name;
+  JsonReader r = canopy.object(name);
+  r.require("file");
+  if (voxels) {
+    c.voxels_file = non_empty_path(r, "file");
+  } else {
+    c.point_cloud_file = non_empty_path(r, "file");
+    c.point_cloud_crs = r.optional_string("crs").value_or("");
+    c.voxel_size_m = r.number("voxel_size_m");
+  }
+  read_lad(r, c);
+  c.leaf_size_m = r.number("leaf_size_m");
+  c.bark_fraction = r.number("bark_fraction");
+  c.green_fraction = 1.0 - c.bark_fraction;
+  read_canopy_optics(r, c, bands);
+  r.finish();
+  return c;
+}
+
 std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Band>& bands) {
   if (!root.has("canopy")) {
     root.resolved()["canopy"] = nullptr;  // bare ground
@@ -472,6 +500,7 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
   }
   CanopySettings c;
   JsonReader r = root.object("canopy");
+  if (r.has("voxels") || r.has("point_cloud")) return read_measured_canopy(r, bands);
   c.pai = r.number("pai");
   read_lad(r, c);
   c.cover = r.number("cover");
@@ -1065,6 +1094,10 @@ Config load_config_document(json document, const std::filesystem::path& folder,
   if (c.canopy) {
     resolve_path(c.canopy->crowns_file, r["canopy"], "crowns_file", folder);
     resolve_path(c.canopy->stands, r["canopy"], "stands", folder);
+    if (!c.canopy->voxels_file.empty())
+      resolve_path(c.canopy->voxels_file, r["canopy"]["voxels"], "file", folder);
+    if (!c.canopy->point_cloud_file.empty())
+      resolve_path(c.canopy->point_cloud_file, r["canopy"]["point_cloud"], "file", folder);
   }
   resolve_path(c.track.ephemeris, r["track"], "ephemeris", folder);
   resolve_path(c.track.granule, r["track"], "file", folder);

@@ -387,6 +387,13 @@ std::vector<JsonReader> JsonReader::object_array(const std::string& key, bool re
   return readers;
 }
 
+std::vector<std::string> JsonReader::given() const {
+  std::vector<std::string> keys;
+  if (object_)
+    for (const auto& [key, value] : object_->items()) keys.push_back(key);
+  return keys;
+}
+
 void JsonReader::finish() const {
   if (!object_) return;
   for (const auto& [key, value] : object_->items()) {

@@ -99,6 +99,9 @@ class JsonReader {
     throw_not_one_of(key, name, k.choices);
   }
 
+  // The keys the object holds, as given (for keys that exclude the others).
+  std::vector<std::string> given() const;
+
   // A nested object (absent or null reads as empty, so its keys take their defaults).
   JsonReader object(const std::string& key);
 

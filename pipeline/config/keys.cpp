@@ -314,6 +314,40 @@ Key canopy_keys() {
   lad.children = {number("ellipsoidal_mean_deg", std::nullopt, open(0, 90), "deg",
                          "mean leaf inclination of the ellipsoidal distribution")
                       .with_required()};
+  // canopy.voxels and canopy.point_cloud: measured vegetation instead of crowns (PRODUCT.md
+  // section 8); their leaves' keys are the canopy's, with the defaults of a grid of leaves.
+  const auto leaves = [&] {
+    return std::vector<Key>{Key(lad),
+                            number("leaf_size_m", c.leaf_size_m, at_least(0), "m",
+                                   "the hotspot's correlation length; 0 is the point-leaf limit"),
+                            spectral("leaf_reflectance", 0.4, closed(0, 1), "", "per band"),
+                            spectral("leaf_transmittance", 0.4, closed(0, 1), "",
+                                     "per band; `leaf_reflectance` + `leaf_transmittance` ≤ 1"),
+                            number("bark_fraction", 0.0, closed(0, 1), "",
+                                   "the bark's part of the plant area (opaque, Lambertian)"),
+                            spectral("bark_reflectance", 0.3, closed(0, 1), "", "per band")};
+  };
+  std::vector<Key> voxel_keys = leaves();
+  voxel_keys.insert(voxel_keys.begin(),
+                    path("file",
+                         "plant area density (m²/m³) on a regular grid: a CF NetCDF variable "
+                         "`pad(z, y, x)` with a CRS, z the height above the ground; or a "
+                         "multi-band GeoTIFF, band i the slice between its metadata `z_bottom_m` "
+                         "and `z_top_m`")
+                        .with_required());
+  std::vector<Key> cloud_keys = leaves();
+  cloud_keys.insert(
+      cloud_keys.begin(),
+      {path("file",
+            "an airborne lidar point cloud, LAS 1.0–1.4 uncompressed (LAZ: decompress it with "
+            "`laszip` or `pdal translate`), voxelised at start by gap-fraction inversion as "
+            "`glaswave voxelize` does")
+           .with_required(),
+       string("crs", std::nullopt,
+              "the cloud's CRS when the file has no WKT or GeoTIFF-keys record (`EPSG:32633`, "
+              "WKT, PROJ)"),
+       number("voxel_size_m", c.voxel_size_m, closed(0.05, 100), "m",
+              "the voxels' width and depth")});
   Key canopy = object(
       "canopy",
       "the vegetation (names of the seed's Table 1): bare ground when null or absent; `{}` is "
@@ -360,7 +394,17 @@ Key canopy_keys() {
             "JSON); in any CRS, brought to WGS84 with PROJ: a layer without one is taken as "
             "longitude and latitude, and is an error if its coordinates are not; checked like "
             "the configuration, a bad file is exit status 3 naming the feature and key; not with "
-            "a `layer`")});
+            "a `layer`"),
+       object("voxels",
+              "a voxel grid of plant area density instead of crowns (no other canopy key "
+              "beside it): each voxel a turbid cell of these leaves, each column standing on "
+              "the terrain under its centre",
+              std::move(voxel_keys)),
+       object("point_cloud",
+              "an airborne lidar point cloud instead of crowns (no other canopy key beside it): "
+              "ground points (class 2) and the other returns voxelised by gap-fraction "
+              "inversion, each voxel a turbid cell of these leaves",
+              std::move(cloud_keys))});
   canopy.default_text = "null";
   return canopy;
 }

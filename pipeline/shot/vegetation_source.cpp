@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/shot/forest_source.hpp"
+#include "pipeline/shot/voxel_source.hpp"
 
 namespace glaswave {
 namespace {
@@ -20,7 +21,13 @@ Registry& registry() {
       {},
       {{"forest",
         {[](const VegetationSettings& s) { return std::make_unique<ForestSource>(s); },
-         &ForestSource::region_bytes}}}};
+         &ForestSource::region_bytes}},
+       {"voxels",
+        {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
+         &VoxelSource::region_bytes}},
+       {"point_cloud",
+        {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
+         &VoxelSource::region_bytes}}}};
   return sources;
 }
 

@@ -77,6 +77,12 @@ TEST(VoxelGrid, NetcdfWrittenAndReadBackByWindows) {
       for (int i = 0; i < 2; ++i) EXPECT_FLOAT_EQ(w.at(i, j, k), b.at(i + 2, j + 1, k));
   EXPECT_NEAR(w.plant_area_index(0, 0), 0.12 * 1 + 1.12 * 2 + 2.12 * 3, 1e-5);
   EXPECT_EQ(grid.window(0.0, 1.0, 0.0, 1.0).nx, 0);  // off the grid
+  // The same windows from a grid held in memory.
+  const VoxelGridFile memory(sample_block());
+  const VoxelBlock m = memory.window(500004.5, 500007.5, 4000003.0, 4000005.0);
+  EXPECT_EQ(m.pad, w.pad);
+  EXPECT_DOUBLE_EQ(m.x0, w.x0);
+  EXPECT_DOUBLE_EQ(m.y0, w.y0);
 }
 
 TEST(VoxelGrid, MultiBandGeotiffWithLayerHeights) {

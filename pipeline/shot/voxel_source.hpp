@@ -1,0 +1,41 @@
+// Measured vegetation as vegetation sources (PRODUCT.md section 8): a voxel grid of plant area
+// density ("voxels": canopy.voxels.file, NetCDF or GeoTIFF), or an airborne lidar point cloud
+// voxelised when the run starts ("point_cloud": canopy.point_cloud.file, by gap-fraction
+// inversion, canopy/gap_fraction.hpp). Each shot's region is a window of the grid carried into
+// the shot's frame, its columns standing on the terrain (pipeline/scene/voxel_field.hpp); every
+// voxel is a turbid cell of one foliage: the canopy's leaves and bark, in proportion to
+// bark_fraction.
+#pragma once
+
+#include <memory>
+
+#include "canopy/leaf_angles.hpp"
+#include "canopy/voxel_grid.hpp"
+#include "pipeline/scene/voxel_field.hpp"
+#include "pipeline/shot/vegetation_source.hpp"
+
+namespace glaswave {
+
+class VoxelSource : public VegetationSource {
+ public:
+  // Opens canopy.voxels_file, or reads and voxelises canopy.point_cloud_file: an input error
+  // naming the file when it cannot be used.
+  explicit VoxelSource(const VegetationSettings& settings);
+  ~VoxelSource() override;
+
+  RegionVegetation grow(const VegetationRegion& region) const override;
+
+  const VoxelGridFile& grid() const { return *grid_; }
+
+  // A region `side_m` across: its columns (of the grid's size, 1 m when unknown before the
+  // file is read) of 60 layers of 4 bytes, and the ground under each.
+  static double region_bytes(const VegetationSettings& settings, double side_m);
+
+ private:
+  CanopySettings canopy_;
+  LeafAngles leaf_angles_;
+  std::unique_ptr<VoxelGridFile> grid_;
+  std::unique_ptr<VoxelFieldSource> fields_;
+};
+
+}  // namespace glaswave
