@@ -606,6 +606,12 @@ OutputSettings read_output(JsonReader& root) {
   o.metrics = r.boolean("metrics");
   o.footprints_format =
       r.choice<std::string>("footprints_format", {{"GeoJSON", "GeoJSON"}, {"GPKG", "GPKG"}});
+  o.gedi_l1b = r.boolean("gedi_l1b");
+  o.gedi_l2a = r.boolean("gedi_l2a");
+  o.glah01 = r.boolean("glah01");
+  o.glah14 = r.boolean("glah14");
+  o.glas_ellipsoid =
+      r.choice<std::string>("glas_ellipsoid", {{"wgs84", "wgs84"}, {"topex", "topex"}});
   r.finish();
   return o;
 }

@@ -48,6 +48,9 @@ struct OutputSettings {
   bool per_order = false;
   bool metrics = true;                        // the waveform metrics and Gaussian decomposition
   std::string footprints_format = "GeoJSON";  // "GeoJSON" or "GPKG"
+  bool gedi_l1b = false, gedi_l2a = false;    // DIR/gedi_l1b.h5, DIR/gedi_l2a.h5
+  bool glah01 = false, glah14 = false;        // DIR/glah01.h5, DIR/glah14.h5
+  std::string glas_ellipsoid = "wgs84";       // "wgs84" or "topex": the GLAS granules' heights
 };
 
 // The detector and digitiser between the received light and the recorded waveform (`"detector"`).

@@ -485,20 +485,33 @@ Key track_keys() {
 
 Key output_keys() {
   const OutputSettings o;
-  return object("output", "which products to write; at least one of `netcdf` and `geojson`",
-                {boolean("netcdf", o.netcdf, "write `shots.nc`"),
-                 boolean("geojson", o.geojson, "write the footprints (`footprints.geojson`)"),
-                 boolean("plots", o.plots,
-                         "PNG plots (drawn from both products: needs `netcdf` and `geojson`)"),
-                 boolean("per_order", o.per_order, "per-scattering-order waveforms"),
-                 boolean("metrics", o.metrics,
-                         "the waveform metrics and Gaussian decomposition (`energy_tr` ... `rh`); "
-                         "false skips them, leaving them fill (`n_peaks` 0): shots are then not "
-                         "flagged no or low signal, a detected waveform's `reflectance` is fill, "
-                         "and `plots` is refused"),
-                 choice("footprints_format", o.footprints_format, {"GeoJSON", "GPKG"},
-                        "the footprints' format: `footprints.geojson`, or `footprints.gpkg` "
-                        "(GeoPackage)")});
+  return object(
+      "output", "which products to write; at least one of `netcdf` and `geojson`",
+      {boolean("netcdf", o.netcdf, "write `shots.nc`"),
+       boolean("geojson", o.geojson, "write the footprints (`footprints.geojson`)"),
+       boolean("plots", o.plots,
+               "PNG plots (drawn from both products: needs `netcdf` and `geojson`)"),
+       boolean("per_order", o.per_order, "per-scattering-order waveforms"),
+       boolean("metrics", o.metrics,
+               "the waveform metrics and Gaussian decomposition (`energy_tr` ... `rh`); "
+               "false skips them, leaving them fill (`n_peaks` 0): shots are then not "
+               "flagged no or low signal, a detected waveform's `reflectance` is fill, "
+               "and `plots` is refused"),
+       choice("footprints_format", o.footprints_format, {"GeoJSON", "GPKG"},
+              "the footprints' format: `footprints.geojson`, or `footprints.gpkg` "
+              "(GeoPackage)"),
+       boolean("gedi_l1b", o.gedi_l1b,
+               "write `gedi_l1b.h5`, a GEDI L1B-style granule (waveforms in counts; "
+               "docs/granules.md)"),
+       boolean("gedi_l2a", o.gedi_l2a,
+               "write `gedi_l2a.h5`, a GEDI L2A-style granule (elevations, rh); itself "
+               "a valid `granule` track"),
+       boolean("glah01", o.glah01, "write `glah01.h5`, a GLAS GLAH01-style granule (waveforms)"),
+       boolean("glah14", o.glah14,
+               "write `glah14.h5`, a GLAS GLAH14-style granule (elevations, Gaussians)"),
+       choice("glas_ellipsoid", o.glas_ellipsoid, {"wgs84", "topex"},
+              "the GLAS granules' heights: on WGS84, or on GLAS's TOPEX/Poseidon "
+              "ellipsoid (`Geophysical/d_deltaEllip` is WGS84 less T/P height)")});
 }
 
 Key detector_keys() {

@@ -85,13 +85,16 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
   info.seed = config.seed;
   info.shots = shots;
   for (const Band& band : config.sensor.bands)
-    info.bands.push_back({band.name, band.wavelength_nm});
+    info.bands.push_back({band.name, band.wavelength_nm, band.atmos_transmission_roundtrip});
   info.bin_time_ns = lidar.bin_time_ns();
   info.tx_time_ns = lidar.tx_time_ns();
   for (std::size_t band = 0; band < lidar.band_count(); ++band)
     info.tx_waveform_W.push_back(lidar.tx_waveform_W(band));
   info.orders = config.output.per_order ? config.simulation.max_order : 0;
   info.photon_events = simulator.receiver().photon_events();
+  const DetectorSettings& d = config.detector;
+  if (d.enabled && d.bits > 0 && d.saturation_W && *d.saturation_W > 0)
+    info.counts_per_W = d.gain * (std::ldexp(1.0, d.bits) - 1.0) / *d.saturation_W;
   return info;
 }
 

@@ -334,10 +334,14 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
     for (const auto& entry : fs::directory_iterator(request.out_dir, ignored))
       if (is_part(entry)) fs::remove(entry.path(), ignored);
   const Config& config = setup.used;
-  const ProductSettings settings{config.output.netcdf, config.output.geojson,
-                                 config.output.footprints_format == "GPKG"
-                                     ? FootprintsFormat::gpkg
-                                     : FootprintsFormat::geojson};
+  ProductSettings settings{config.output.netcdf, config.output.geojson,
+                           config.output.footprints_format == "GPKG" ? FootprintsFormat::gpkg
+                                                                     : FootprintsFormat::geojson};
+  settings.gedi_l1b = config.output.gedi_l1b;
+  settings.gedi_l2a = config.output.gedi_l2a;
+  settings.glah01 = config.output.glah01;
+  settings.glah14 = config.output.glah14;
+  settings.glas_topex = config.output.glas_ellipsoid == "topex";
   output->writers = make_writers(request.out_dir, settings, info);
   if (output->resumed) {
     RunOutput& out = *output;

@@ -4,6 +4,8 @@
 #include <algorithm>
 
 #include "core/error.hpp"
+#include "pipeline/products/gedi_granule.hpp"
+#include "pipeline/products/glas_granule.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
 #include "pipeline/products/ogr_writer.hpp"
 
@@ -43,6 +45,18 @@ std::vector<std::unique_ptr<ProductWriter>> make_writers(const std::filesystem::
         std::make_unique<OgrWriter>(out_dir / (gpkg ? "footprints.gpkg" : "footprints.geojson"),
                                     settings.footprints_format, info));
   }
+  if (settings.gedi_l1b)
+    writers.push_back(
+        std::make_unique<GediGranuleWriter>(out_dir / "gedi_l1b.h5", GediLevel::l1b, info));
+  if (settings.gedi_l2a)
+    writers.push_back(
+        std::make_unique<GediGranuleWriter>(out_dir / "gedi_l2a.h5", GediLevel::l2a, info));
+  if (settings.glah01)
+    writers.push_back(std::make_unique<GlasGranuleWriter>(out_dir / "glah01.h5", GlasLevel::glah01,
+                                                          settings.glas_topex, info));
+  if (settings.glah14)
+    writers.push_back(std::make_unique<GlasGranuleWriter>(out_dir / "glah14.h5", GlasLevel::glah14,
+                                                          settings.glas_topex, info));
   return writers;
 }
 

@@ -65,6 +65,12 @@ struct ProductSettings {
   bool netcdf = true;      // DIR/shots.nc
   bool footprints = true;  // DIR/footprints.geojson or DIR/footprints.gpkg
   FootprintsFormat footprints_format = FootprintsFormat::geojson;
+  // The HDF5 granules in the real products' layouts (PRODUCT.md section 10, docs/granules.md).
+  bool gedi_l1b = false;    // DIR/gedi_l1b.h5
+  bool gedi_l2a = false;    // DIR/gedi_l2a.h5
+  bool glah01 = false;      // DIR/glah01.h5
+  bool glah14 = false;      // DIR/glah14.h5
+  bool glas_topex = false;  // GLAS heights on the TOPEX/Poseidon ellipsoid, not WGS84
 };
 
 // The writers of a run, each begun under `out_dir` (which must exist). Empty when `settings`

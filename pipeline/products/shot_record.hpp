@@ -15,7 +15,11 @@ namespace glaswave {
 struct ProductBand {
   std::string name;
   double wavelength_nm = 0.0;
+  double atmos_transmission_roundtrip = 1.0;  // what GLAS's uncorrected reflectivity keeps
 };
+
+// ShotRecord::beam of a shot that no GEDI beam fired (a synthetic or a GLAH14 track).
+inline constexpr std::uint8_t kNoBeam = 255;
 
 // quality_flag values (flag_values / flag_meanings in shots.nc): GEDI L2A's convention, 1 for a
 // valid waveform, so that `quality_flag == 1` keeps the good shots.
@@ -45,6 +49,12 @@ struct ShotRecord {
   double elev_bin0_m = 0.0, elev_lastbin_m = 0.0;
   std::uint8_t quality_flag = quality_good;
   std::uint8_t quality_reason = reason_none;
+  // The granule track's GEDI beam (its number: BEAM0101 is 5; kNoBeam for other tracks) and
+  // degrade_flag; the sun at the footprint (deg, geometric; footprints/solar_position.hpp).
+  std::uint8_t beam = kNoBeam;
+  std::uint8_t degrade_flag = 0;
+  double solar_elevation_deg = std::numeric_limits<double>::quiet_NaN();
+  double solar_azimuth_deg = std::numeric_limits<double>::quiet_NaN();
 
   // [band][bin], W. Fill (NaN) when quality_flag is not good.
   std::vector<std::vector<double>> rx_waveform_W;
@@ -104,6 +114,9 @@ struct RunInfo {
   std::vector<std::vector<double>> tx_waveform_W;  // [band][tx_bin]
   int orders = 0;                                  // per-order output: orders 1..orders; 0 when off
   bool photon_events = false;  // the records carry photon events (the `photon` dimension)
+  // Digitiser counts per W of recorded power, for the granules' waveforms in counts: the
+  // detector's gain x (2^bits - 1) / saturation_W when it digitises, else 1 count per nW.
+  double counts_per_W = 1e9;
 };
 
 struct RunStats {

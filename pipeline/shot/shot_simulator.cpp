@@ -2,7 +2,10 @@
 #include "pipeline/shot/shot_simulator.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 
+#include "footprints/solar_position.hpp"
 #include "footprints/terrain_intersection.hpp"
 #include "pipeline/products/product_fields.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
@@ -31,6 +34,40 @@ ShotSimulator::~ShotSimulator() = default;
 
 void ShotSimulator::check_scene(const Footprint& footprint) const { build_scene(footprint); }
 
+namespace {
+
+// The sun at the footprint, where the shot has a position and a time ERFA can take.
+void set_sun(ShotRecord& record) {
+  if (!std::isfinite(record.lat_deg) || !std::isfinite(record.lon_deg)) return;
+  try {
+    const SolarPosition sun = solar_position(record.time_s, record.lat_deg, record.lon_deg,
+                                             std::isfinite(record.elev_m) ? record.elev_m : 0.0);
+    record.solar_elevation_deg = sun.elevation_deg;
+    record.solar_azimuth_deg = sun.azimuth_deg;
+  } catch (const std::invalid_argument&) {
+    // A time outside 1900-2100: the sun's place is not known, and stays fill.
+  }
+}
+
+// A pulse of `scale` times the sensor's energy (a GEDI coverage beam's half): every received
+// power and energy scales with it, the Monte Carlo variance with its square.
+void scale_energy(ShotWaveforms& w, double scale) {
+  if (scale == 1.0) return;
+  auto times = [](std::vector<double>& v, double k) {
+    for (double& x : v) x *= k;
+  };
+  for (auto* set : {&w.total_W, &w.canopy_W, &w.ground_W})
+    for (auto& band : *set) times(band, scale);
+  for (auto& band : w.total_variance_W2) times(band, scale * scale);
+  for (auto& band : w.order_W)
+    for (auto& order : band) times(order, scale);
+  times(w.energy_J, scale);
+  times(w.canopy_energy_J, scale);
+  times(w.ground_energy_J, scale);
+}
+
+}  // namespace
+
 ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray_queries) const {
   ShotRecord record;
   record.shot_number = footprint.shot_number;
@@ -40,17 +77,23 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   record.sc_lon_deg = footprint.spacecraft.lon_deg;
   record.sc_alt_m = footprint.spacecraft.h_m;
   record.off_nadir_deg = footprint.off_nadir_deg;
+  if (footprint.beam >= 0 && footprint.beam < kNoBeam)
+    record.beam = static_cast<std::uint8_t>(footprint.beam);
+  record.degrade_flag = footprint.degrade_flag;
   if (!beam_on_terrain_data(scenes_.terrain(), lidar_, footprint)) {
     flag_off_terrain(record, footprint);
+    set_sun(record);
     return record;
   }
   const FootprintScene shot = build_scene(footprint);
   locate(record, footprint, shot);
+  set_sun(record);
   const Scene& scene = *shot.built.scene;
   ShotReturns returns;
   returns.waveforms = simulate_shot(scene, lidar_, shot.where.geometry, shot.built.optics,
                                     settings_.transport, footprint.shot_number);
   if (ray_queries) *ray_queries += returns.waveforms.ray_queries + outline_vertices;
+  scale_energy(returns.waveforms, footprint.pulse_energy_scale);
   returns.shot_number = footprint.shot_number;
   returns.range_m = footprint.range_m;
   returns.position_at = [&shot](double time_ns) {
@@ -58,6 +101,9 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
     return shot.where.frame.to_geodetic(along_m * shot.where.geometry.axis);
   };
   receiver_->receive(std::move(returns), record);
+  // The receiver's reflectance divides by the sensor's pulse energy, not the beam's.
+  if (footprint.pulse_energy_scale != 1.0)
+    for (double& r : record.reflectance) r /= footprint.pulse_energy_scale;
   // The truth over the footprint, beside the estimates: what the beam really fell on.
   const double sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
   const VegetationTruth truth =

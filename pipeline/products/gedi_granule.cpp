@@ -1,0 +1,317 @@
+// GEDI L1B- and L2A-style granules: the dictionaries' paths, dtypes and attributes
+// (GEDI01_B and GEDI02_A data dictionaries, LP DAAC; docs/granules.md).
+#include "pipeline/products/gedi_granule.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+
+namespace glaswave {
+namespace {
+
+constexpr double kGediFill = -9999.0;
+
+double or_fill(double value) { return std::isfinite(value) ? value : kGediFill; }
+
+std::uint8_t channel_of(std::uint16_t beam) {
+  for (std::uint8_t i = 0; i < 8; ++i)
+    if (kGediBeams[i] == beam) return i;
+  return 0;
+}
+
+}  // namespace
+
+std::string gedi_beam_group(std::uint16_t beam) {
+  std::string name = "BEAM";
+  for (int bit = 3; bit >= 0; --bit) name += ((beam >> bit) & 1) ? '1' : '0';
+  return name;
+}
+
+double gedi_sensitivity(double noise_stddev, double pulse_sigma_bins, double energy_counts) {
+  if (!(energy_counts > 0) || !std::isfinite(energy_counts)) return kGediFill;
+  const double least_counts =
+      kSensitivitySigmas * noise_stddev * std::sqrt(2.0 * std::numbers::pi) * pulse_sigma_bins;
+  return std::clamp(1.0 - least_counts / energy_counts, 0.0, 1.0);
+}
+
+GediGranuleWriter::GediGranuleWriter(const std::filesystem::path& final_path, GediLevel level,
+                                     const RunInfo& info)
+    : Hdf5GranuleWriter(final_path, info), level_(level), band_(nearest_band(info, 1064.0)) {
+  shots_.resize(static_cast<std::size_t>(info.shots));
+  if (band_ < info.tx_waveform_W.size()) {
+    const std::vector<double>& tx = info.tx_waveform_W[band_];
+    tx_counts_ = to_counts(tx, info.counts_per_W);
+    // The pulse's RMS width in bins, from its samples (tx_time_ns spacing is the bin's).
+    double sum = 0, first = 0, second = 0;
+    for (std::size_t i = 0; i < tx.size(); ++i) {
+      sum += tx[i];
+      first += tx[i] * static_cast<double>(i);
+      second += tx[i] * static_cast<double>(i) * static_cast<double>(i);
+    }
+    if (sum > 0) {
+      const double mean = first / sum;
+      pulse_sigma_bins_ = std::sqrt(std::max(0.0, second / sum - mean * mean));
+      if (info.tx_time_ns.size() > 1 && info.bin_time_ns.size() > 1)
+        pulse_sigma_bins_ *=
+            (info.tx_time_ns[1] - info.tx_time_ns[0]) / (info.bin_time_ns[1] - info.bin_time_ns[0]);
+    }
+  }
+}
+
+void GediGranuleWriter::keep(std::int64_t index, const ShotRecord& r) {
+  Shot& s = shots_[static_cast<std::size_t>(index)];
+  const std::size_t b = band_;
+  s.beam = r.beam == kNoBeam ? kGediDefaultBeam : r.beam;
+  s.degrade = r.degrade_flag;
+  s.quality = r.quality_flag;
+  s.shot_number = static_cast<std::uint64_t>(std::max<std::int64_t>(0, r.source_shot_number));
+  s.delta_time = r.time_s - kGediEpochS;
+  s.dem = r.elev_m;
+  s.elev_bin0 = r.elev_bin0_m;
+  s.elev_lastbin = r.elev_lastbin_m;
+  s.bin0 = beam_point(r, r.elev_bin0_m);
+  s.lastbin = beam_point(r, r.elev_lastbin_m);
+  s.solar_elevation = r.solar_elevation_deg;
+  s.solar_azimuth = r.solar_azimuth_deg;
+  auto at = [&](const std::vector<double>& v) {
+    return b < v.size() ? v[b] : std::numeric_limits<double>::quiet_NaN();
+  };
+  s.modes = static_cast<std::uint8_t>(std::clamp(b < r.n_peaks.size() ? r.n_peaks[b] : 0, 0, 255));
+  s.elev_lowest = at(r.ground_elev_est_m);
+  s.elev_highest = at(r.sig_begin_m);
+  s.lowest = beam_point(r, s.elev_lowest);
+  s.highest = beam_point(r, s.elev_highest);
+  s.cover = r.cover_true;
+  s.pai = r.pai_true;
+  s.height = r.canopy_height_true_m;
+  s.energy_canopy_J = at(r.rx_energy_canopy_J);
+  s.energy_ground_J = at(r.rx_energy_ground_J);
+  const double per_W = info().counts_per_W;
+  if (b < r.rx_waveform_W.size()) s.rx = to_counts(r.rx_waveform_W[b], per_W);
+  if (level_ == GediLevel::l1b) {
+    if (b < r.rx_waveform_canopy_W.size())
+      s.rx_canopy = to_counts(r.rx_waveform_canopy_W[b], per_W);
+    if (b < r.rx_waveform_ground_W.size())
+      s.rx_ground = to_counts(r.rx_waveform_ground_W[b], per_W);
+  }
+  const WaveformNoise noise = waveform_noise(s.rx, s.elev_bin0, s.elev_lastbin, s.elev_highest);
+  s.noise_mean = noise.mean;
+  s.noise_stddev = noise.stddev;
+  double energy = 0;
+  for (float c : s.rx) energy += c - noise.mean;
+  s.rx_energy = energy;
+  s.sensitivity = gedi_sensitivity(noise.stddev, pulse_sigma_bins_, energy);
+  if (level_ == GediLevel::l2a) {
+    s.rh.assign(101, static_cast<float>(kGediFill));
+    if (b < r.rh_m.size())
+      for (std::size_t i = 0; i < std::min<std::size_t>(101, r.rh_m[b].size()); ++i)
+        s.rh[i] = static_cast<float>(or_fill(r.rh_m[b][i]));
+    s.rx.clear();
+  }
+}
+
+void GediGranuleWriter::write_file(Hdf5File& file) {
+  // Beam groups in the order of their numbers, each with its shots in record (shot) order.
+  std::map<std::uint16_t, std::vector<const Shot*>> beams;
+  for (const Shot& s : shots_) beams[s.beam].push_back(&s);
+  for (const auto& [beam, shots] : beams) {
+    const std::string group = gedi_beam_group(beam);
+    file.group(group, beam < 4 ? "Coverage beam" : "Full power beam");
+    if (level_ == GediLevel::l1b)
+      write_l1b_beam(file, group, shots);
+    else
+      write_l2a_beam(file, group, shots);
+  }
+}
+
+namespace {
+
+template <typename T, typename Shot, typename F>
+std::vector<T> of(const std::vector<const Shot*>& shots, F get) {
+  std::vector<T> values;
+  values.reserve(shots.size());
+  for (const Shot* s : shots) values.push_back(static_cast<T>(get(*s)));
+  return values;
+}
+
+}  // namespace
+
+void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
+                                       const std::vector<const Shot*>& shots) {
+  const std::string geo = g + "/geolocation/";
+  f.write(g + "/shot_number", of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
+          {"counter", "Unique shot ID."});
+  f.write(g + "/delta_time", of<double>(shots, [](const Shot& s) { return s.delta_time; }),
+          {"seconds since 2018-01-01", "Transmit time of the shot, since master_time_epoch"});
+  f.write(g + "/beam", of<std::uint16_t>(shots, [](const Shot& s) { return s.beam; }),
+          {"counter", "Beam number"});
+  f.write(g + "/channel", of<std::uint8_t>(shots, [](const Shot& s) { return channel_of(s.beam); }),
+          {"counter", "Channel number (the beam's place among the eight)"});
+  // The waveforms, concatenated; each shot's from its 1-based start index.
+  std::vector<float> rx, canopy, ground, tx;
+  std::vector<std::uint64_t> rx_start, tx_start;
+  std::vector<std::uint16_t> rx_count, tx_count;
+  for (const Shot* s : shots) {
+    rx_start.push_back(rx.size() + 1);
+    rx_count.push_back(static_cast<std::uint16_t>(s->rx.size()));
+    rx.insert(rx.end(), s->rx.begin(), s->rx.end());
+    auto truth = [&](std::vector<float>& all, const std::vector<float>& part) {
+      if (part.size() == s->rx.size())
+        all.insert(all.end(), part.begin(), part.end());
+      else
+        all.insert(all.end(), s->rx.size(), static_cast<float>(kGediFill));
+    };
+    truth(canopy, s->rx_canopy);
+    truth(ground, s->rx_ground);
+    tx_start.push_back(tx.size() + 1);
+    tx_count.push_back(static_cast<std::uint16_t>(tx_counts_.size()));
+    tx.insert(tx.end(), tx_counts_.begin(), tx_counts_.end());
+  }
+  f.write(g + "/rxwaveform", rx,
+          {"counts",
+           "The corrected receive (RX) waveforms, concatenated; a shot's are "
+           "rx_sample_count samples from rx_sample_start_index (1-based)"});
+  f.write(g + "/rx_sample_start_index", rx_start,
+          {"counter", "The index in rxwaveform of each RX waveform's first sample, from 1"});
+  f.write(g + "/rx_sample_count", rx_count,
+          {"counter", "The number of samples of each RX waveform"});
+  f.write(g + "/txwaveform", tx, {"counts", "The transmitted (TX) waveforms, concatenated"});
+  f.write(g + "/tx_sample_start_index", tx_start,
+          {"counter", "The index in txwaveform of each TX waveform's first sample, from 1"});
+  f.write(g + "/tx_sample_count", tx_count,
+          {"counter", "The number of samples of each TX waveform"});
+  f.write(g + "/rx_energy", of<float>(shots, [](const Shot& s) { return s.rx_energy; }),
+          {"counts", "Integrated energy in the RX waveform after subtracting the noise mean"});
+  f.write(g + "/noise_mean_corrected", of<float>(shots, [](const Shot& s) { return s.noise_mean; }),
+          {"counts", "Noise mean (the samples before the signal begins)"});
+  f.write(g + "/noise_stddev_corrected",
+          of<float>(shots, [](const Shot& s) { return s.noise_stddev; }),
+          {"counts", "Noise standard deviation (the samples before the signal begins)"});
+  f.write(g + "/ancillary/master_time_epoch", std::vector<double>{kGediMasterTimeEpoch},
+          {"seconds", "GPS seconds of 2018-01-01T00:00:00Z, the epoch of delta_time"});
+  f.write(geo + "shot_number",
+          of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
+          {"counter", "Unique shot ID."});
+  f.write(geo + "delta_time", of<double>(shots, [](const Shot& s) { return s.delta_time; }),
+          {"seconds since 2018-01-01", "Transmit time of the shot"});
+  f.write(geo + "elevation_bin0", of<double>(shots, [](const Shot& s) { return s.elev_bin0; }),
+          {"meters", "Elevation of the first RX sample above the WGS84 ellipsoid"});
+  f.write(geo + "elevation_lastbin",
+          of<double>(shots, [](const Shot& s) { return s.elev_lastbin; }),
+          {"meters", "Elevation of the last RX sample above the WGS84 ellipsoid"});
+  f.write(geo + "latitude_bin0", of<double>(shots, [](const Shot& s) { return s.bin0.lat_deg; }),
+          {"degrees", "Latitude of the first RX sample"});
+  f.write(geo + "longitude_bin0", of<double>(shots, [](const Shot& s) { return s.bin0.lon_deg; }),
+          {"degrees", "Longitude of the first RX sample"});
+  f.write(geo + "latitude_lastbin",
+          of<double>(shots, [](const Shot& s) { return s.lastbin.lat_deg; }),
+          {"degrees", "Latitude of the last RX sample"});
+  f.write(geo + "longitude_lastbin",
+          of<double>(shots, [](const Shot& s) { return s.lastbin.lon_deg; }),
+          {"degrees", "Longitude of the last RX sample"});
+  f.write(
+      geo + "digital_elevation_model",
+      of<float>(shots, [](const Shot& s) { return or_fill(s.dem); }),
+      {"meters", "The simulation's terrain under the footprint centre, above WGS84", kGediFill});
+  f.write(geo + "solar_elevation",
+          of<float>(shots, [](const Shot& s) { return s.solar_elevation; }),
+          {"degrees", "The sun's elevation at the footprint (geometric, ERFA)"});
+  f.write(geo + "solar_azimuth", of<float>(shots, [](const Shot& s) { return s.solar_azimuth; }),
+          {"degrees", "The sun's azimuth at the footprint, east of north (ERFA)"});
+  f.write(geo + "degrade_flag", of<std::uint8_t>(shots, [](const Shot& s) { return s.degrade; }),
+          {"counter", "The granule track's degrade_flag, 0 for a synthetic track"});
+  const std::string truth = g + "/glaswave_truth/";
+  f.group(g + "/glaswave_truth",
+          "The simulation's truth, not a GEDI product field: the parts of rxwaveform last "
+          "scattered by vegetation and by the ground, and the footprint's cover, PAI and height");
+  f.write(
+      truth + "rxwaveform_canopy", canopy,
+      {"counts", "The part of rxwaveform last scattered by vegetation (same indices)", kGediFill});
+  f.write(
+      truth + "rxwaveform_ground", ground,
+      {"counts", "The part of rxwaveform last scattered by the ground (same indices)", kGediFill});
+  f.write(truth + "rx_energy_canopy",
+          of<double>(shots, [](const Shot& s) { return or_fill(s.energy_canopy_J); }),
+          {"J", "Received energy last scattered by vegetation", kGediFill});
+  f.write(truth + "rx_energy_ground",
+          of<double>(shots, [](const Shot& s) { return or_fill(s.energy_ground_J); }),
+          {"J", "Received energy last scattered by the ground", kGediFill});
+  f.write(truth + "cover", of<float>(shots, [](const Shot& s) { return or_fill(s.cover); }),
+          {"1", "Crown cover over the footprint, beam-weighted", kGediFill});
+  f.write(truth + "pai", of<float>(shots, [](const Shot& s) { return or_fill(s.pai); }),
+          {"1", "Plant area index over the footprint, beam-weighted", kGediFill});
+  f.write(truth + "canopy_height",
+          of<float>(shots, [](const Shot& s) { return or_fill(s.height); }),
+          {"meters", "Canopy height over the footprint, beam-weighted", kGediFill});
+}
+
+void GediGranuleWriter::write_l2a_beam(Hdf5File& f, const std::string& g,
+                                       const std::vector<const Shot*>& shots) {
+  f.write(g + "/shot_number", of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
+          {"counter", "Unique shot ID."});
+  f.write(g + "/delta_time", of<double>(shots, [](const Shot& s) { return s.delta_time; }),
+          {"seconds since 2018-01-01", "Transmit time of the shot since 2018-01-01T00:00:00Z"});
+  f.write(g + "/beam", of<std::uint16_t>(shots, [](const Shot& s) { return s.beam; }),
+          {"counter", "Beam number"});
+  f.write(g + "/channel", of<std::uint8_t>(shots, [](const Shot& s) { return channel_of(s.beam); }),
+          {"counter", "Channel number (the beam's place among the eight)"});
+  f.write(g + "/lat_lowestmode",
+          of<double>(shots, [](const Shot& s) { return or_fill(s.lowest.lat_deg); }),
+          {"degrees", "Latitude of the center of the lowest mode", kGediFill});
+  f.write(g + "/lon_lowestmode",
+          of<double>(shots, [](const Shot& s) { return or_fill(s.lowest.lon_deg); }),
+          {"degrees", "Longitude of the center of the lowest mode", kGediFill});
+  f.write(g + "/elev_lowestmode",
+          of<float>(shots, [](const Shot& s) { return or_fill(s.elev_lowest); }),
+          {"meters", "Elevation of the center of the lowest mode above the WGS84 ellipsoid",
+           kGediFill});
+  f.write(g + "/lat_highestreturn",
+          of<double>(shots, [](const Shot& s) { return or_fill(s.highest.lat_deg); }),
+          {"degrees", "Latitude of the highest detected return", kGediFill});
+  f.write(g + "/lon_highestreturn",
+          of<double>(shots, [](const Shot& s) { return or_fill(s.highest.lon_deg); }),
+          {"degrees", "Longitude of the highest detected return", kGediFill});
+  f.write(
+      g + "/elev_highestreturn",
+      of<float>(shots, [](const Shot& s) { return or_fill(s.elev_highest); }),
+      {"meters", "Elevation of the highest detected return above the WGS84 ellipsoid", kGediFill});
+  std::vector<float> rh;
+  for (const Shot* s : shots) rh.insert(rh.end(), s->rh.begin(), s->rh.end());
+  f.write(g + "/rh", rh,
+          {"meters", "Relative height metrics rh0..rh100 above the lowest mode", kGediFill},
+          {shots.size(), 101});
+  f.write(g + "/num_detectedmodes", of<std::uint8_t>(shots, [](const Shot& s) { return s.modes; }),
+          {"counter", "Number of detected modes in the waveform"});
+  f.write(g + "/quality_flag", of<std::uint8_t>(shots, [](const Shot& s) { return s.quality; }),
+          {"counter", "1 for a valid waveform, 0 for none"});
+  f.write(g + "/degrade_flag", of<std::uint8_t>(shots, [](const Shot& s) { return s.degrade; }),
+          {"counter", "The granule track's degrade_flag, 0 for a synthetic track"});
+  f.write(g + "/sensitivity", of<float>(shots, [](const Shot& s) { return s.sensitivity; }),
+          {"1",
+           "Largest canopy cover whose ground return stays detectable (glaswave's "
+           "definition, docs/granules.md)",
+           kGediFill});
+  f.write(g + "/solar_elevation", of<float>(shots, [](const Shot& s) { return s.solar_elevation; }),
+          {"degrees", "The sun's elevation at the footprint (geometric, ERFA)"});
+  f.write(g + "/solar_azimuth", of<float>(shots, [](const Shot& s) { return s.solar_azimuth; }),
+          {"degrees", "The sun's azimuth at the footprint, east of north (ERFA)"});
+  f.write(
+      g + "/digital_elevation_model",
+      of<float>(shots, [](const Shot& s) { return or_fill(s.dem); }),
+      {"meters", "The simulation's terrain under the footprint centre, above WGS84", kGediFill});
+  const std::string truth = g + "/glaswave_truth/";
+  f.group(g + "/glaswave_truth",
+          "The simulation's truth, not a GEDI product field: the footprint's cover, PAI and "
+          "canopy height, beam-weighted");
+  f.write(truth + "cover", of<float>(shots, [](const Shot& s) { return or_fill(s.cover); }),
+          {"1", "Crown cover over the footprint, beam-weighted", kGediFill});
+  f.write(truth + "pai", of<float>(shots, [](const Shot& s) { return or_fill(s.pai); }),
+          {"1", "Plant area index over the footprint, beam-weighted", kGediFill});
+  f.write(truth + "canopy_height",
+          of<float>(shots, [](const Shot& s) { return or_fill(s.height); }),
+          {"meters", "Canopy height over the footprint, beam-weighted", kGediFill});
+}
+
+}  // namespace glaswave
