@@ -219,7 +219,7 @@ TEST_F(OgrWriterTest, OgrReadsItWithoutWarnings) {
   // No unsuffixed per-band value: a reader cannot mistake one band's for another's.
   for (const char* name : {"reflectance", "energy_tr", "rh98", "n_peaks"})
     EXPECT_LT(definition->GetFieldIndex(name), 0) << name;
-  EXPECT_EQ(definition->GetFieldCount(), 18 + 2 * 19);
+  EXPECT_EQ(definition->GetFieldCount(), 22 + 2 * 19);
 
   // Features come in record order although they were written 2, 1, 0.
   ASSERT_EQ(features.size(), 3u);
@@ -306,7 +306,7 @@ TEST_F(OgrWriterTest, PropertiesAreThoseOfTheFieldTable) {
     for (const GeojsonPropertyName& property : geojson_properties(field, {"532", "1064"}))
       expected.push_back(property.name);
   }
-  EXPECT_EQ(expected.size(), 18u + 2 * 19u);
+  EXPECT_EQ(expected.size(), 22u + 2 * 19u);
   for (const auto& feature : document.at("features")) {
     std::vector<std::string> names;
     for (const auto& [name, value] : feature.at("properties").items()) names.push_back(name);
