@@ -1,6 +1,8 @@
 // Fuzzes the granule reader (footprints/granule): GEDI L2A and GLAH14 HDF5 files, whole, cut
 // and malformed. An input Error is a refusal; anything else (a crash, a hang, an allocation
-// beyond libFuzzer's limit from a declared size) is a finding.
+// beyond libFuzzer's limit from a declared size, an HDF5 object left open) is a finding.
+#include <hdf5.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -18,5 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const glaswave::Error& e) {
     glaswave::fuzz::refused(e);
   }
+  // Every handle the reader opened is closed, on refusal too (HDF5's own leaks are suppressed).
+  if (H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL) != 0) __builtin_trap();
   return 0;
 }
