@@ -208,31 +208,40 @@ Key sensor_keys() {
   return object(
       "sensor", "the lidar (the seed's Table 2)",
       {std::move(preset),
-       number("pulse_sigma_ns", s.pulse_sigma_ns, above(0), "ns",
+       // 1 ps to 1 us: shorter would put the whole pulse energy into an infinite power; longer is
+       // no longer a ranging pulse.
+       number("pulse_sigma_ns", s.pulse_sigma_ns, closed(0.001, 1000), "ns",
               "RMS width of the Gaussian pulse"),
        number("divergence_sigma_rad", s.divergence_sigma_rad, open_closed(0, run_limits::angle_rad),
               "rad", "beam angular RMS width per axis (intensity ∝ exp(−θ²/2σ²))"),
        number("ifov_rad", s.ifov_rad, open_closed(0, run_limits::angle_rad), "rad",
               "detector full field of view (top-hat cone); the scene a shot builds grows with "
               "it (see Limits)"),
-       number("telescope_area_m2", s.telescope_area_m2, above(0), "m²", "receiver aperture"),
-       number("bin_ns", s.bin_ns, above(0), "ns", "width of a recording bin"),
+       // The largest telescopes built are about 80 m²; far beyond, received powers overflow.
+       number("telescope_area_m2", s.telescope_area_m2, open_closed(0, 100), "m²",
+              "receiver aperture"),
+       // 1 ps to 1 ms a bin: a window of bins beyond either end is no waveform.
+       number("bin_ns", s.bin_ns, closed(0.001, 1e6), "ns", "width of a recording bin"),
        integer("bins", s.bins, 1, run_limits::waveform_bins, "",
                "recording bins; the return from the footprint centre falls two thirds into the "
                "window"),
-       object_array(
-           "bands", json::parse(sensor_presets().at(default_sensor_preset))["bands"],
-           "the laser's bands: 532 and 1064 nm by default, with pulse energies of 32 and "
-           "72 mJ and round-trip transmissions of 0.8 and 0.9",
-           {string("name", std::nullopt,
-                   "the band's name: the key of per-band values; unique, not empty")
-                .with_required(),
-            number("wavelength_nm", std::nullopt, above(0), "nm", "wavelength").with_required(),
-            number("pulse_energy_mJ", std::nullopt, above(0), "mJ", "energy of a transmitted pulse")
-                .with_required(),
-            number("atmos_transmission_roundtrip", std::nullopt, open_closed(0, 1), "",
-                   "two-way transmission of the atmosphere")
-                .with_required()})
+       object_array("bands", json::parse(sensor_presets().at(default_sensor_preset))["bands"],
+                    "the laser's bands: 532 and 1064 nm by default, with pulse energies of 32 and "
+                    "72 mJ and round-trip transmissions of 0.8 and 0.9",
+                    {string("name", std::nullopt,
+                            "the band's name: the key of per-band values; unique, not empty")
+                         .with_required(),
+                     // Ultraviolet to far infrared: what a lidar through the atmosphere uses, and
+                     // photon energies that stay finite.
+                     number("wavelength_nm", std::nullopt, closed(100, 100000), "nm", "wavelength")
+                         .with_required(),
+                     // Spaceborne lasers fire tens of mJ, the largest research lasers a few kJ.
+                     number("pulse_energy_mJ", std::nullopt, open_closed(0, 1e7), "mJ",
+                            "energy of a transmitted pulse")
+                         .with_required(),
+                     number("atmos_transmission_roundtrip", std::nullopt, open_closed(0, 1), "",
+                            "two-way transmission of the atmosphere")
+                         .with_required()})
            .with_items(1, run_limits::bands)
            .with_default_text("the preset's")});
 }
@@ -368,8 +377,11 @@ Key canopy_keys() {
               "`ellipsoid`, `cone`, or `layer`: a homogeneous slab over the whole scene, "
               "`crown_base_m[0]` to `crown_base_m[0] + 2 crown_half_height_m` above the ground "
               "(`pai` is its total)"),
-       number("crown_radius_m", c.crown_radius_m, above(0), "m", "crown radius"),
-       number("crown_half_height_m", c.crown_half_height_m, above(0), "m", "crown half height"),
+       // No tree is wider or taller than 100 m; a crown of 1e6 m made the stand lookup run for
+       // minutes.
+       number("crown_radius_m", c.crown_radius_m, open_closed(0, 100), "m", "crown radius"),
+       number("crown_half_height_m", c.crown_half_height_m, open_closed(0, 100), "m",
+              "crown half height"),
        number_pair(
            "crown_base_m", c.crown_base_m, at_least(0), "m",
            "[min, max]: crown bases uniform in this range above the terrain under the stem"),
@@ -523,17 +535,20 @@ Key detector_keys() {
       "stays in W; its noise is keyed by (seed, shot, band, bin), the same for any threads or "
       "split. The truth parts `rx_waveform_canopy`/`_ground` stay noise-free",
       {boolean("enabled", d.enabled, "whether the detector applies"),
-       number("background_W", d.background_W, at_least(0), "W",
+       // Levels at the detector: returns are microwatts; a watt of light or noise is already far
+       // beyond any detector, and larger levels overflow the products.
+       number("background_W", d.background_W, closed(0, 1), "W",
               "mean background light (a sunlit scene)"),
        boolean("photon_noise", d.photon_noise,
                "Poisson statistics of signal and background photons, hν from each band's "
                "wavelength"),
        number("quantum_efficiency", d.quantum_efficiency, open_closed(0, 1), "",
               "photoelectrons per photon, for `photon_noise`"),
-       number("noise_rms_W", d.noise_rms_W, at_least(0), "W", "Gaussian detector noise, RMS"),
-       number("gain", d.gain, above(0), "", "amplification before the digitiser"),
+       number("noise_rms_W", d.noise_rms_W, closed(0, 1), "W", "Gaussian detector noise, RMS"),
+       // Photomultipliers reach 1e8; 1e12 leaves the products finite.
+       number("gain", d.gain, open_closed(0, 1e12), "", "amplification before the digitiser"),
        integer("bits", d.bits, 0, 32, "", "digitiser resolution; 0: not digitised"),
-       number("saturation_W", std::nullopt, above(0), "W",
+       number("saturation_W", std::nullopt, open_closed(0, 1e12), "W",
               "the digitiser's full scale after the gain; required with `bits`; output above it "
               "clips, below 0 reads 0")
            .with_default_text("none")});

@@ -5,9 +5,11 @@
 // footprint are a warning.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
+#include <netcdf.h>
 #include <ogrsf_frmts.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -191,6 +193,56 @@ TEST_F(Refused, CrownsFarFromEveryFootprintAreAWarning) {
       run_glaswave("check " + write_config({{"canopy", {{"crowns_file", near}}}}));
   EXPECT_EQ(quiet.status, 0) << quiet.output;
   EXPECT_EQ(quiet.output.find("warning"), std::string::npos) << quiet.output;
+}
+
+// check accepted telescope_area_m2 1e308, pulse_energy_mJ 1e308, pulse_sigma_ns 1e-300, a
+// detector gain or noise of 1e300 and crown_radius_m 1e6, and run then failed after simulating
+// (exit 4 naming a NetCDF variable) or ran for minutes. Each key has a physical bound, refused by
+// both; the bounds' extremes together run one shot to finite waveforms.
+TEST_F(Refused, PhysicalKeysHaveBoundsAndTheirExtremesGiveFiniteProducts) {
+  const std::string config = write_config(json::object());
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"sensor.telescope_area_m2=1e308", "/sensor/telescope_area_m2: must be in (0, 100]"},
+      {"'sensor.bands=[{\"name\": \"a\", \"wavelength_nm\": 532, \"pulse_energy_mJ\": 1e308, "
+       "\"atmos_transmission_roundtrip\": 0.8}]'",
+       "/sensor/bands/0/pulse_energy_mJ: must be in (0, 10000000]"},
+      {"sensor.pulse_sigma_ns=1e-300", "/sensor/pulse_sigma_ns: must be in [0.001, 1000]"},
+      {"detector.gain=1e300", "/detector/gain: must be in (0, 1e+12]"},
+      {"detector.noise_rms_W=1e300", "/detector/noise_rms_W: must be in [0, 1]"},
+      {"canopy.crown_radius_m=1e6", "/canopy/crown_radius_m: must be in (0, 100]"}};
+  for (const auto& [assignment, message] : cases)
+    expect_refused(config, " --set " + assignment, 2, message);
+  const std::string extremes = write_config(
+      {{"sensor",
+        {{"telescope_area_m2", 100},
+         {"pulse_sigma_ns", 0.001},
+         {"bands",
+          {{{"name", "a"},
+            {"wavelength_nm", 100000},
+            {"pulse_energy_mJ", 1e7},
+            {"atmos_transmission_roundtrip", 1}}}}}},
+       {"canopy", {{"crown_radius_m", 100}, {"crown_half_height_m", 100}}},
+       {"detector", {{"enabled", true}, {"gain", 1e12}, {"noise_rms_W", 1}, {"background_W", 1}}}},
+      "extremes.json");
+  const fs::path out = dir_ / "extremes";
+  const CommandOutcome run = run_glaswave("run " + extremes + " --quiet --out " + out.string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  int nc = 0, variable = 0;
+  ASSERT_EQ(nc_open((out / "shots.nc").c_str(), NC_NOWRITE, &nc), NC_NOERR);
+  ASSERT_EQ(nc_inq_varid(nc, "rx_waveform", &variable), NC_NOERR);
+  int dims[NC_MAX_VAR_DIMS], rank = 0;
+  nc_inq_varndims(nc, variable, &rank);
+  nc_inq_vardimid(nc, variable, dims);
+  std::size_t count = 1;
+  for (int d = 0; d < rank; ++d) {
+    std::size_t length = 0;
+    nc_inq_dimlen(nc, dims[d], &length);
+    count *= length;
+  }
+  std::vector<float> values(count);
+  ASSERT_EQ(nc_get_var_float(nc, variable, values.data()), NC_NOERR);
+  nc_close(nc);
+  EXPECT_TRUE(std::all_of(values.begin(), values.end(), [](float v) { return std::isfinite(v); }));
 }
 
 }  // namespace

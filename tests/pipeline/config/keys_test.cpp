@@ -117,9 +117,8 @@ TEST(Schema, IsWellFormedJsonOfDraft202012) {
   EXPECT_EQ(
       schema.at(json::json_pointer("/properties/track/properties/off_nadir_deg/exclusiveMaximum")),
       45);
-  EXPECT_EQ(schema.at(json::json_pointer(
-                "/properties/sensor/properties/pulse_sigma_ns/exclusiveMinimum")),
-            0);
+  EXPECT_EQ(schema.at(json::json_pointer("/properties/sensor/properties/pulse_sigma_ns/minimum")),
+            0.001);
   EXPECT_EQ(schema.at(json::json_pointer("/properties/track/properties/type/enum")),
             json::array({"pass", "points", "orbit", "ephemeris", "granule"}));
   EXPECT_EQ(
