@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "core/error.hpp"
+#include "core/input_file.hpp"
 
 namespace glaswave {
 
@@ -110,8 +111,7 @@ int las_point_record_min_length(int format) {
 
 LasFile::LasFile(const std::filesystem::path& file) : path_(file) {
   std::error_code error;
-  if (!std::filesystem::is_regular_file(file, error))
-    refuse(file, "no such point cloud (or not a regular file)");
+  require_input_file(file.native(), "the point cloud");  // a FIFO or device is refused unopened
   file_size_ = std::filesystem::file_size(file, error);
   if (error) refuse(file, "cannot read the point cloud's size");
   if (file.extension() == ".laz" || file.extension() == ".LAZ") refuse(file, laz_advice);

@@ -16,6 +16,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/netcdf_lock.hpp"
+#include "terrain/gdal_source.hpp"
 
 namespace glaswave {
 
@@ -246,9 +247,8 @@ void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
 
 VoxelGridFile::VoxelGridFile(const std::filesystem::path& file) : impl_(std::make_unique<Impl>()) {
   impl_->place = file.string();
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(file, error))
-    throw input_error(impl_->place, "no such voxel grid (or not a regular file)");
+  // A FIFO or a device (or a VRT naming one) is refused before it is opened.
+  require_gdal_source(file.native(), "the voxel grid");
   std::ifstream in(file, std::ios::binary);
   char magic[4] = {};
   in.read(magic, 4);

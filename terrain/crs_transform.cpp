@@ -185,6 +185,30 @@ PjPtr source_crs(PJ_CONTEXT* context, CrsParts& parts, const std::string& vertic
   return source;
 }
 
+// The user's terrain.vertical_datum against the raster's own heights (a vertical CRS, or a 3-D
+// CRS's ellipsoidal heights): the same datum is fine, another one a configuration error.
+void refuse_conflicting_datum(PJ_CONTEXT* context, const CrsParts& parts,
+                              const std::string& vertical_datum, const std::string& place) {
+  if (!parts.compound && !parts.three_d) return;
+  std::string own;
+  if (parts.compound) {
+    const PJ* vertical = parts.vertical.get();
+    if (vertical_datum != "ellipsoid") {
+      const std::string definition = vertical_datum == "egm96" ? "EPSG:5773" : vertical_datum;
+      const PjPtr given(proj_create(context, definition.c_str()));
+      if (given && proj_is_equivalent_to(given.get(), vertical, PJ_COMP_EQUIVALENT)) return;
+    }
+    own = "its own vertical CRS, " + name_of(vertical) + " (" + identifier(vertical) + ")";
+  } else {
+    if (vertical_datum == "ellipsoid") return;
+    own = "a 3-D CRS, whose heights are above its ellipsoid";
+  }
+  throw setting_error(ErrorKind::config, "vertical_datum",
+                      "is \"" + vertical_datum + "\", but the DEM " + place + " has " + own +
+                          ": remove terrain.vertical_datum to use the DEM's, or give the DEM's "
+                          "(glaswave does not override a DEM's own datum)");
+}
+
 // The operation from the source CRS to WGS84 longitude, latitude and ellipsoidal height, axes in
 // that order.
 PjPtr operation_to_wgs84(PJ_CONTEXT* context, const PJ* source, const CrsParts& parts,
@@ -215,11 +239,12 @@ PjPtr operation_to_wgs84(PJ_CONTEXT* context, const PJ* source, const CrsParts& 
 }  // namespace
 
 CrsTransform::CrsTransform(const std::string& crs_wkt, const std::string& vertical_datum,
-                           const std::string& place)
+                           const std::string& place, bool vertical_datum_given)
     : impl_(std::make_unique<Impl>()) {
   impl_->context = quiet_context();
   PJ_CONTEXT* context = impl_->context.get();
   CrsParts parts = read_crs(context, crs_wkt, place);
+  if (vertical_datum_given) refuse_conflicting_datum(context, parts, vertical_datum, place);
   impl_->geographic = parts.geographic;
   const PjPtr source = source_crs(context, parts, vertical_datum, place, impl_->datum);
   impl_->prototype = operation_to_wgs84(context, source.get(), parts, place);

@@ -18,9 +18,11 @@ class CrsTransform {
   // `crs_wkt`: the raster's CRS (WKT). `vertical_datum`: "ellipsoid", "egm96" or a vertical CRS
   // ("EPSG:3855"), used only when the CRS has no vertical part. `place` names the raster in
   // errors: an unusable CRS or a missing geoid grid is an input error there; a vertical datum
-  // PROJ does not know is a configuration error at /terrain/vertical_datum.
+  // PROJ does not know is a configuration error at /terrain/vertical_datum. When
+  // `vertical_datum_given` (the user set it) and the CRS has a vertical part of its own that is
+  // another datum, the conflict is a configuration error there too: neither wins silently.
   CrsTransform(const std::string& crs_wkt, const std::string& vertical_datum,
-               const std::string& place);
+               const std::string& place, bool vertical_datum_given = false);
   ~CrsTransform();
   CrsTransform(const CrsTransform&) = delete;
   CrsTransform& operator=(const CrsTransform&) = delete;

@@ -9,9 +9,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <future>
+#include <initializer_list>
 #include <limits>
 #include <list>
 #include <mutex>
@@ -30,6 +33,13 @@ namespace glaswave {
 namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+// A number for a message, as %g writes it.
+std::string format_value(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
 // Beyond this many nodes a side a mesh takes every k-th node (memory), and no longer matches
 // height_m exactly; a shot's patch is a few hundred nodes of a 1 m DEM.
 constexpr int max_mesh_nodes_per_side = 2048;
@@ -78,13 +88,35 @@ void prepare_gdal() {
   });
 }
 
-// Heights of a band in feet when its CRS does not say (no vertical CRS): metres per unit.
-double metres_per_unit(const char* unit) {
-  const std::string u = unit ? unit : "";
-  if (u == "ft" || u == "foot" || u == "feet" || u == "international foot") return 0.3048;
-  if (u == "US survey foot" || u == "ft-us" || u == "us-ft") return 1200.0 / 3937.0;
-  return 1.0;
+// Metres per unit of a band's heights, for the units DEMs are written in (GDAL's unit type is
+// free text: "m", "metre", "cm", "ft", "US survey foot"...); empty for a unit not known here.
+// No unit at all is metres.
+std::optional<double> metres_per_unit(const char* unit) {
+  std::string u;
+  for (const char* c = unit ? unit : ""; *c; ++c)
+    u += static_cast<char>(std::tolower(static_cast<unsigned char>(*c)));
+  u.erase(0, u.find_first_not_of(" \t"));
+  u.erase(u.find_last_not_of(" \t") + 1);
+  const auto any = [&](std::initializer_list<const char*> names) {
+    return std::find(names.begin(), names.end(), u) != names.end();
+  };
+  if (any({"", "m", "metre", "metres", "meter", "meters"})) return 1.0;
+  if (any({"dm", "decimetre", "decimetres", "decimeter", "decimeters"})) return 0.1;
+  if (any({"cm", "centimetre", "centimetres", "centimeter", "centimeters"})) return 0.01;
+  if (any({"mm", "millimetre", "millimetres", "millimeter", "millimeters"})) return 0.001;
+  if (any({"km", "kilometre", "kilometres", "kilometer", "kilometers"})) return 1000.0;
+  if (any({"ft", "foot", "feet", "international foot", "international feet", "ft_i"}))
+    return 0.3048;
+  if (any({"us survey foot", "us survey feet", "ft-us", "us-ft", "ft_us", "us_ft", "foot_us",
+           "survey foot", "us foot"}))
+    return 1200.0 / 3937.0;
+  return std::nullopt;
 }
+
+// Beyond these a DEM's scale (metres per stored unit, after its unit) or offset gives no height on
+// the Earth: refused as such, before PROJ is handed infinities.
+constexpr double max_scale_m = 1e4;
+constexpr double max_offset_m = 1e5;
 
 // One tile of the raster's nodes, in WGS84: longitude, latitude (deg) and ellipsoidal height
 // (m; NaN where there is no data).
@@ -132,7 +164,8 @@ struct DemTerrain::Impl {
   void open(const TerrainSettings& settings);
   void open_dataset();
   void choose_band(int dem_band);
-  void read_georeferencing(const std::string& vertical_datum);
+  void read_georeferencing(const std::string& vertical_datum, bool vertical_datum_given);
+  void require_readable_corners();
   void read_encoding();
   void measure_spacing();
   TilePtr load(int tx, int ty);
@@ -189,7 +222,7 @@ void DemTerrain::Impl::open(const TerrainSettings& settings) {
   const GdalErrorTrap quiet;  // GDAL's warnings about the file stay off the terminal too
   open_dataset();
   choose_band(settings.dem_band);
-  read_georeferencing(settings.vertical_datum);
+  read_georeferencing(settings.vertical_datum, settings.vertical_datum_given);
   read_encoding();
   tiles_x = (width + options.tile_pixels - 1) / options.tile_pixels;
   tiles_y = (height + options.tile_pixels - 1) / options.tile_pixels;
@@ -232,6 +265,14 @@ void DemTerrain::Impl::choose_band(int dem_band) {
                                 std::to_string(band_number));
   }
   band = dataset->GetRasterBand(band_number);
+  // Colour indices and complex numbers are no heights, whatever the numbers they hold.
+  const std::string which = "band " + std::to_string(band_number) + " of the DEM";
+  if (band->GetColorInterpretation() == GCI_PaletteIndex || band->GetColorTable() != nullptr)
+    throw input_error(path, which + " is paletted (colour indices, not heights)" +
+                                (bands > 1 ? ": choose another with terrain.dem_band" : ""));
+  if (GDALDataTypeIsComplex(band->GetRasterDataType()))
+    throw input_error(path, which + " holds complex numbers (" +
+                                GDALGetDataTypeName(band->GetRasterDataType()) + "), not heights");
   width = dataset->GetRasterXSize();
   height = dataset->GetRasterYSize();
   if (width < 2 || height < 2)
@@ -239,9 +280,13 @@ void DemTerrain::Impl::choose_band(int dem_band) {
 }
 
 // Where the raster lies: its CRS and geotransform, and the transform of its nodes to WGS84.
-void DemTerrain::Impl::read_georeferencing(const std::string& vertical_datum) {
+void DemTerrain::Impl::read_georeferencing(const std::string& vertical_datum,
+                                           bool vertical_datum_given) {
   const OGRSpatialReference* srs = dataset->GetSpatialRef();
   if (!srs || srs->IsEmpty()) {
+    // A file cut short loses the CRS it held past the cut (a BigTIFF's GeoKeys): if its data
+    // cannot be read either, that is what to say.
+    require_readable_corners();
     throw input_error(path,
                       "the DEM has no coordinate reference system, so where it lies is unknown "
                       "(assign one with gdal_edit.py -a_srs)");
@@ -267,7 +312,19 @@ void DemTerrain::Impl::read_georeferencing(const std::string& vertical_datum) {
   }
   const std::string crs_wkt = wkt;
   CPLFree(wkt);
-  crs = std::make_unique<CrsTransform>(crs_wkt, vertical_datum, path);
+  crs = std::make_unique<CrsTransform>(crs_wkt, vertical_datum, path, vertical_datum_given);
+}
+
+// Throws an input error naming the file truncated or corrupt unless the raster's first and last
+// pixels can be read.
+void DemTerrain::Impl::require_readable_corners() {
+  const GdalErrorTrap trap;
+  const std::lock_guard lock(netcdf_library_mutex());
+  double value = 0.0;
+  for (const auto& [x, y] : {std::array<int, 2>{0, 0}, {width - 1, height - 1}})
+    if (band->RasterIO(GF_Read, x, y, 1, 1, &value, 1, 1, GDT_Float64, 0, 0, nullptr) != CE_None)
+      throw input_error(path, "the DEM is truncated or corrupt: its data cannot be read (" +
+                                  trap.cause("GDAL gave no reason") + ")");
 }
 
 // How heights are stored: nodata value or mask, scale and offset, and their unit.
@@ -284,10 +341,23 @@ void DemTerrain::Impl::read_encoding() {
   if (!has_offset) offset = 0.0;
   // A vertical CRS carries the unit of its heights; without one, the band's unit says.
   if (!dataset->GetSpatialRef()->IsCompound()) {
-    const double metres = metres_per_unit(band->GetUnitType());
-    scale *= metres;
-    offset *= metres;
+    const char* unit = band->GetUnitType();
+    const std::optional<double> metres = metres_per_unit(unit);
+    if (!metres)
+      throw input_error(path, "the DEM's heights are in \"" + std::string(unit).substr(0, 40) +
+                                  "\", a unit glaswave does not know (it converts m, dm, cm, mm, "
+                                  "km, ft and US survey ft); set the band's unit with "
+                                  "gdal_edit.py -units");
+    scale *= *metres;
+    offset *= *metres;
   }
+  if (!std::isfinite(scale) || scale == 0.0 || std::abs(scale) > max_scale_m)
+    throw input_error(path, "the DEM's scale gives " + format_value(scale) +
+                                " m per stored unit, outside (0, " + format_value(max_scale_m) +
+                                "] m: no height on the Earth");
+  if (!std::isfinite(offset) || std::abs(offset) > max_offset_m)
+    throw input_error(path, "the DEM's offset is " + format_value(offset) + " m, beyond +-" +
+                                format_value(max_offset_m) + " m: no height on the Earth");
 }
 
 void DemTerrain::Impl::measure_spacing() {

@@ -29,8 +29,10 @@ struct TerrainSettings {
   int dem_band = 0;  // 1-based band of the DEM; 0: not given (a one-band raster)
   // What the DEM's heights are measured from when its CRS has no vertical part: "ellipsoid"
   // (its own ellipsoid), "egm96" (the EGM96 geoid, EPSG:5773) or a vertical CRS PROJ knows
-  // ("EPSG:3855"). A vertical CRS of the DEM's own always wins.
+  // ("EPSG:3855"). A vertical CRS of the DEM's own is used unless the user gave another datum,
+  // which is then refused (vertical_datum_given).
   std::string vertical_datum = "ellipsoid";
+  bool vertical_datum_given = false;   // set by the user: a DEM's own other datum is then refused
   std::optional<PlaneSettings> plane;  // exactly one of dem and plane
   RoughnessSettings roughness;
   std::vector<double> soil_reflectance;  // Lambertian, one value per sensor band

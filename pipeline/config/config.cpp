@@ -338,6 +338,7 @@ TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
     t.dem_band = static_cast<int>(*r.optional_integer("dem_band"));
   }
   const Key& datum = r.declared("vertical_datum", KeyType::string);
+  t.vertical_datum_given = r.has("vertical_datum");
   t.vertical_datum = r.string("vertical_datum");
   if (std::find(datum.choices.begin(), datum.choices.end(), t.vertical_datum) ==
           datum.choices.end() &&

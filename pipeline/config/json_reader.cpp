@@ -13,6 +13,7 @@
 
 #include "core/error.hpp"
 #include "core/excerpt.hpp"
+#include "core/input_file.hpp"
 #include "core/names.hpp"
 
 namespace glaswave {
@@ -316,15 +317,19 @@ std::string JsonReader::string(const std::string& key, const std::string& fallba
   const json* value = find_required(key, k);
   if (value && !value->is_string()) fail(key, "must be a string, got " + describe(*value));
   std::string s = value ? value->get<std::string>() : fallback;
+  // A file's path is cut at a NUL byte by every C library below: the file before it would be read.
+  if (k.format == "path") require_no_nul(s, place(key), ErrorKind::config);
   resolved_[key] = s;
   return s;
 }
 
 std::optional<std::string> JsonReader::optional_string(const std::string& key) {
-  declared(key, KeyType::string);
+  const Key& k = declared(key, KeyType::string);
   const json* value = find(key);
   if (!value || value->is_null()) return std::nullopt;
   if (!value->is_string()) fail(key, "must be a string, got " + describe(*value));
+  if (k.format == "path")
+    require_no_nul(value->get_ref<const std::string&>(), place(key), ErrorKind::config);
   resolved_[key] = *value;
   return value->get<std::string>();
 }

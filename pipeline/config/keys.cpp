@@ -278,8 +278,9 @@ Key terrain_keys() {
       "vertical_datum", t.vertical_datum, {"ellipsoid", "egm96"},
       "`dem` only: what the DEM's heights are measured from when its CRS has no vertical part: "
       "`ellipsoid` (its own), `egm96` (the EGM96 geoid, through PROJ's `egm96_15.gtx`), or a "
-      "vertical CRS PROJ knows (`EPSG:3855` when its grid is installed). A vertical CRS of the "
-      "DEM's own wins; the choice made is in the run summary and in the products' `config`");
+      "vertical CRS PROJ knows (`EPSG:3855` when its grid is installed). A DEM with a vertical "
+      "CRS of its own uses it when this key is not set; set to another datum, it is refused. The "
+      "choice made is in the run summary and in the products' `config`");
   datum.open_choices = true;
   datum.what_else = "a vertical CRS as AUTHORITY:CODE";
   datum.pattern = ":";

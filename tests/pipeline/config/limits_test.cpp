@@ -211,5 +211,28 @@ TEST(BrfMemory, ATileThatCannotBePhysicalOrFitIsRefusedAtItsKey) {
               StartsWith("/brf/image_resolution_m: brf's scene would hold about 256 GiB"));
 }
 
+// Found by tests/reliability/inputs_tried.py: a NUL byte inside a path cut it where the C
+// library read it, and the file before it was read instead. Refused where paths come from JSON.
+TEST(PathKeys, ANulByteIsRefusedNotCut) {
+  const std::string nul("dem.tif\0.ignored", 16);
+  nlohmann::json dem = doc("{}");
+  dem["terrain"] = {{"dem", nul}};
+  EXPECT_EQ(error_of(dem),
+            "/terrain/dem: a path must not hold a NUL byte (at byte 7 of \"dem.tif\\0.ignored\"): "
+            "the file before it would be read instead");
+  for (const char* key : {"crowns_file", "stands"}) {
+    nlohmann::json canopy = doc("{}");
+    canopy["canopy"] = {{key, nul}};
+    EXPECT_THAT(error_of(canopy),
+                StartsWith("/canopy/" + std::string(key) + ": a path must not hold a NUL byte"));
+  }
+  nlohmann::json ephemeris = doc("{}");
+  ephemeris["track"] = {{"type", "ephemeris"}, {"ephemeris", nul}};
+  EXPECT_THAT(error_of(ephemeris), StartsWith("/track/ephemeris: a path must not hold a NUL"));
+  nlohmann::json granule = doc("{}");
+  granule["track"] = {{"type", "granule"}, {"file", nul}};
+  EXPECT_THAT(error_of(granule), StartsWith("/track/file: a path must not hold a NUL"));
+}
+
 }  // namespace
 }  // namespace glaswave
