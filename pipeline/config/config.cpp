@@ -294,6 +294,25 @@ SensorSettings read_sensor(JsonReader& root) {
     b.finish();
     s.bands.push_back(band);
   }
+  s.receiver = r.choice<std::string>(
+      "receiver", {{"waveform", "waveform"}, {"photon_counting", "photon_counting"}});
+  s.beams = r.string_array("beams");
+  if (s.beams.empty()) s.beams = SensorSettings{}.beams;
+  r.resolved()["beams"] = s.beams;
+  if (s.receiver == "photon_counting") {
+    static const std::vector<std::string> known = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};
+    for (const std::string& beam : s.beams)
+      if (std::find(known.begin(), known.end(), beam) == known.end())
+        r.fail("beams", "no beam \"" + beam + "\"; the beams are gt1l gt1r gt2l gt2r gt3l gt3r" +
+                            did_you_mean(beam, known));
+    if (s.beams.size() != 1)
+      r.fail("beams",
+             "one beam a run for now (run each beam with --set "
+             "'sensor.beams=[\"gt1r\"]')");
+  }
+  s.photon_efficiency = r.number("photon_efficiency");
+  s.filter_bandwidth_nm = r.number("filter_bandwidth_nm");
+  s.dead_time_ns = r.number("dead_time_ns");
   r.finish();
   return s;
 }
@@ -304,6 +323,20 @@ SimulationSettings read_simulation(JsonReader& root) {
   s.rays_per_shot = r.integer("rays_per_shot");
   s.max_order = static_cast<int>(r.integer("max_order"));
   s.quasi_random = r.choice<bool>("sampling", {{"random", false}, {"sobol", true}});
+  const json& background = r.raw("background");
+  if (background.is_object()) {
+    JsonReader b(background, r.place("background"), r.resolved()["background"],
+                 r.declared("background", KeyType::choice_or_object));
+    s.background = "rate";
+    s.background_rate_MHz = b.number("rate_MHz");
+    b.finish();
+  } else if (background.is_null() || background == "sun" || background == "none") {
+    s.background = background.is_null() ? "sun" : background.get<std::string>();
+    r.resolved()["background"] = s.background;
+  } else {
+    r.fail("background",
+           "must be \"sun\", \"none\" or {\"rate_MHz\": R}, got " + describe(background));
+  }
   r.finish();
   return s;
 }
@@ -613,6 +646,8 @@ OutputSettings read_output(JsonReader& root) {
   o.glah14 = r.boolean("glah14");
   o.glas_ellipsoid =
       r.choice<std::string>("glas_ellipsoid", {{"wgs84", "wgs84"}, {"topex", "topex"}});
+  if (r.has("atl03")) o.atl03 = r.boolean("atl03");
+  if (r.has("atl08")) o.atl08 = r.boolean("atl08");
   r.finish();
   return o;
 }

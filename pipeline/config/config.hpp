@@ -33,12 +33,24 @@ struct SensorSettings {
   double bin_ns = 1.0;
   int bins = 544;
   std::vector<Band> bands;
+  // What makes the record: "waveform" (the received waveform and its processing) or
+  // "photon_counting" (ICESat-2's photon events; docs/icesat2.md), with the photon-counting
+  // receiver's own settings (ATLAS's by default) and its beams.
+  std::string receiver = "waveform";
+  std::vector<std::string> beams = {"gt2l"};
+  double photon_efficiency = 0.45 * 0.15;
+  double filter_bandwidth_nm = 0.038;
+  double dead_time_ns = 3.2;
 };
 
 struct SimulationSettings {
   std::int64_t rays_per_shot = 10000;
   int max_order = 8;
   bool quasi_random = false;  // "sampling": "sobol" (true) or "random"
+  // Photon counting's background light: "sun" (the sun at each shot's time and place over the
+  // scene's reflectance), "none", or "rate" (background_rate_MHz).
+  std::string background = "sun";
+  double background_rate_MHz = 0.0;
 };
 
 struct OutputSettings {
@@ -51,6 +63,8 @@ struct OutputSettings {
   bool gedi_l1b = false, gedi_l2a = false;    // DIR/gedi_l1b.h5, DIR/gedi_l2a.h5
   bool glah01 = false, glah14 = false;        // DIR/glah01.h5, DIR/glah14.h5
   std::string glas_ellipsoid = "wgs84";       // "wgs84" or "topex": the GLAS granules' heights
+  // The ICESat-2 granules (atl03.h5, atl08.h5); absent: on with the photon-counting receiver.
+  std::optional<bool> atl03, atl08;
 };
 
 // The detector and digitiser between the received light and the recorded waveform (`"detector"`).

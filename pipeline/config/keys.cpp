@@ -195,6 +195,16 @@ std::vector<std::string> preset_names() {
   return names;
 }
 
+Key beams_key(const SensorSettings& s) {
+  Key beams = string_array("beams",
+                           "photon counting: which of ATLAS's beams `gt1l gt1r gt2l gt2r gt3l "
+                           "gt3r` to simulate (strong: the `l` beams, weak: the `r` ones at 45/175 "
+                           "of the energy), each on its own ground track about the `pass`'s "
+                           "reference track; one a run for now");
+  beams.default_value = s.beams;
+  return beams;
+}
+
 Key sensor_keys() {
   const SensorSettings s;
   Key preset = choice("preset", std::nullopt, preset_names(),
@@ -243,7 +253,36 @@ Key sensor_keys() {
                             "two-way transmission of the atmosphere")
                          .with_required()})
            .with_items(1, run_limits::bands)
-           .with_default_text("the preset's")});
+           .with_default_text("the preset's"),
+       choice("receiver", s.receiver, {"waveform", "photon_counting"},
+              "what the record is made of: `waveform` (the received waveform and its "
+              "processing) or `photon_counting` (ICESat-2's photon events, written to "
+              "`atl03.h5` and `atl08.h5`; docs/icesat2.md); the `atlas` preset's is "
+              "`photon_counting`"),
+       beams_key(s),
+       number("photon_efficiency", s.photon_efficiency, open_closed(0, 1), "",
+              "photon counting: the receiver's optical throughput times its detectors' photon "
+              "detection efficiency (ATLAS: 0.45 × 0.15)"),
+       number("filter_bandwidth_nm", s.filter_bandwidth_nm, above(0), "nm",
+              "photon counting: the receiver filter's equivalent width (the solar background "
+              "grows with it)"),
+       number("dead_time_ns", s.dead_time_ns, at_least(0), "ns",
+              "photon counting: each detector channel's non-paralysable dead time (16 channels "
+              "a strong beam, 4 a weak one)")});
+}
+
+Key background_key() {
+  Key background = make("background", KeyType::choice_or_object, "",
+                        "photon counting's background light: `sun` (the sun at each shot's time "
+                        "and place over a Lambertian scene of the shot's reflectance), `none`, or "
+                        "`{\"rate_MHz\": R}` detected photons a microsecond");
+  background.default_value = "sun";
+  background.choices = {"sun", "none"};
+  background.children = {number("rate_MHz", std::nullopt, at_least(0), "MHz",
+                                "background photons detected a "
+                                "microsecond")
+                             .with_required()};
+  return background;
 }
 
 Key simulation_keys() {
@@ -258,7 +297,8 @@ Key simulation_keys() {
               "(plain Monte Carlo) or `sobol` (the shot's scrambled Sobol' points: "
               "unbiased; on the seed's base case the mean waveform's error at 10^4 "
               "rays is that of 1.9× the rays at the same cost; the noise the processing "
-              "weighs its fits with, computed for independent rays, is then overstated)")});
+              "weighs its fits with, computed for independent rays, is then overstated)"),
+       background_key()});
 }
 
 Key terrain_keys() {
@@ -496,6 +536,12 @@ Key track_keys() {
            .with_default_text("all")});
 }
 
+Key granule_switch(const char* name, const char* description) {
+  Key k = make(name, KeyType::boolean, "", description);
+  k.default_text = "true with `sensor.receiver: photon_counting`, else false";
+  return k;
+}
+
 Key output_keys() {
   const OutputSettings o;
   return object(
@@ -524,7 +570,9 @@ Key output_keys() {
                "write `glah14.h5`, a GLAS GLAH14-style granule (elevations, Gaussians)"),
        choice("glas_ellipsoid", o.glas_ellipsoid, {"wgs84", "topex"},
               "the GLAS granules' heights: on WGS84, or on GLAS's TOPEX/Poseidon "
-              "ellipsoid (`Geophysical/d_deltaEllip` is WGS84 less T/P height)")});
+              "ellipsoid (`Geophysical/d_deltaEllip` is WGS84 less T/P height)"),
+       granule_switch("atl03", "the ATL03-like photons `atl03.h5` (photon counting)"),
+       granule_switch("atl08", "the ATL08-like land segments `atl08.h5` (photon counting)")});
 }
 
 Key detector_keys() {

@@ -7,6 +7,8 @@
 #include <limits>
 #include <numbers>
 
+#include "footprints/atlas_beams.hpp"
+
 namespace glaswave {
 
 std::unique_ptr<Terrain> open_terrain(const Config& config) {
@@ -33,16 +35,37 @@ ShotSettings shot_settings(const Config& config) {
   settings.transport.rays = config.simulation.rays_per_shot;
   settings.transport.max_order = config.simulation.max_order;
   settings.transport.quasi_random = config.simulation.quasi_random;
-  settings.transport.per_order = config.output.per_order;
+  // The photon-counting receiver gives each photon its scattering order: it needs them all.
+  settings.transport.per_order =
+      config.output.per_order || config.sensor.receiver == "photon_counting";
   settings.transport.seed = config.seed;
   settings.soil_reflectance = config.terrain.soil_reflectance;
   settings.roughness = config.terrain.roughness;
   return settings;
 }
 
+// The photon-counting receiver's settings: the configuration's, for its one beam.
+PhotonCountingSettings photon_settings(const Config& config) {
+  const AtlasBeam beam = select_atlas_beams(config.sensor.beams).front();
+  PhotonCountingSettings p;
+  p.efficiency = config.sensor.photon_efficiency;
+  p.filter_bandwidth_nm = config.sensor.filter_bandwidth_nm;
+  p.dead_time_ns = config.sensor.dead_time_ns;
+  p.channels = beam.strong ? 16 : 4;
+  p.energy_ratio = beam.energy_ratio;
+  p.beam = static_cast<std::uint32_t>(beam.spot_number);
+  p.background = config.simulation.background == "sun"    ? BackgroundSource::sun
+                 : config.simulation.background == "none" ? BackgroundSource::none
+                                                          : BackgroundSource::rate;
+  p.background_rate_Hz = config.simulation.background_rate_MHz * 1e6;
+  p.keep_orders = config.output.per_order;
+  return p;
+}
+
 ReceiverSettings receiver_settings(const Config& config) {
   ReceiverSettings settings;
-  settings.kind = config.detector.kind;
+  settings.kind = config.sensor.receiver;
+  if (settings.kind == "photon_counting") settings.photons = photon_settings(config);
   settings.lidar = lidar_settings(config.sensor);
   settings.metrics = config.output.metrics;
   settings.seed = config.seed;
@@ -99,7 +122,13 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
 }
 
 std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain) {
-  return at_section("/track", [&] { return std::make_unique<Track>(config.track, terrain); });
+  // A photon-counting pass flies its beam's own ground track about the reference one.
+  const bool beam_track =
+      config.sensor.receiver == "photon_counting" && config.track.type == TrackType::pass;
+  const TrackSettings track =
+      beam_track ? beam_pass(config.track, select_atlas_beams(config.sensor.beams).front())
+                 : config.track;
+  return at_section("/track", [&] { return std::make_unique<Track>(track, terrain); });
 }
 
 std::optional<std::string> stands_off_track(const Config& config,

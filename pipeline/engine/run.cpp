@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "footprints/atlas_beams.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/engine/cluster.hpp"
 #include "pipeline/engine/inputs.hpp"
@@ -310,6 +311,20 @@ CheckSummary check_inputs(const Config& config) {
 
 namespace {
 
+// The ICESat-2 granules of a photon-counting run (on unless output.atl03/atl08 say otherwise),
+// for its beam.
+Icesat2ProductSettings icesat2_product_settings(const Config& config) {
+  Icesat2ProductSettings s;
+  if (config.sensor.receiver != "photon_counting") return s;
+  s.atl03 = config.output.atl03.value_or(true);
+  s.atl08 = config.output.atl08.value_or(true);
+  const AtlasBeam beam = select_atlas_beams(config.sensor.beams).front();
+  s.beam = beam.name;
+  s.strong = beam.strong;
+  s.spot_number = beam.spot_number;
+  return s;
+}
+
 // The identity a journal is checked against: what decides the records (the resolved
 // configuration, the records selected) and how they are stored (the version).
 std::string run_identity(const RunInfo& info, std::int64_t first, std::int64_t last) {
@@ -342,7 +357,7 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
   settings.glah01 = config.output.glah01;
   settings.glah14 = config.output.glah14;
   settings.glas_topex = config.output.glas_ellipsoid == "topex";
-  output->writers = make_writers(request.out_dir, settings, info);
+  output->writers = make_writers(request.out_dir, settings, info, icesat2_product_settings(config));
   if (output->resumed) {
     RunOutput& out = *output;
     out.journal = RunJournal::resume(

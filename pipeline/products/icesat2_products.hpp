@@ -50,6 +50,15 @@ struct BeamTrack {
   std::vector<BeamPhoton> photons;
 };
 
+// Which ICESat-2 granules a run writes, and for which beam.
+struct Icesat2ProductSettings {
+  bool atl03 = false;
+  bool atl08 = false;
+  std::string beam = "gt2l";
+  bool strong = true;
+  int spot_number = 3;
+};
+
 struct GranuleInfo {
   std::string history;  // the command line
   std::string config_json;

@@ -445,7 +445,17 @@ const ProductField kProductFields[] = {
      .field = &R::photon_class,
      .source = F::simulation,
      .units = "1",
-     .long_name = "what the detected photon came from: 0 noise, 1 ground, 2 canopy (truth)",
+     .long_name =
+         "what the detected photon came from: 0 noise, 1 ground, 2 canopy, 3 top of canopy "
+         "(truth)",
+     .inner_dims = {"photon", nullptr},
+     .geojson = GeojsonProperty::none},
+    {.name = "photon_order",
+     .type = S::uint8,
+     .field = &R::photon_order,
+     .source = F::simulation,
+     .units = "1",
+     .long_name = "scattering order of the detected photon's light, 0 for noise (truth)",
      .inner_dims = {"photon", nullptr},
      .geojson = GeojsonProperty::none},
 };

@@ -6,6 +6,7 @@
 #include "core/error.hpp"
 #include "pipeline/products/gedi_granule.hpp"
 #include "pipeline/products/glas_granule.hpp"
+#include "pipeline/products/icesat2_writer.hpp"
 #include "pipeline/products/netcdf_writer.hpp"
 #include "pipeline/products/ogr_writer.hpp"
 
@@ -35,7 +36,8 @@ void RecordLedger::check_finish() const {
 
 std::vector<std::unique_ptr<ProductWriter>> make_writers(const std::filesystem::path& out_dir,
                                                          const ProductSettings& settings,
-                                                         const RunInfo& info) {
+                                                         const RunInfo& info,
+                                                         const Icesat2ProductSettings& icesat2) {
   std::vector<std::unique_ptr<ProductWriter>> writers;
   if (settings.netcdf)
     writers.push_back(std::make_unique<NetcdfWriter>(out_dir / "shots.nc", info));
@@ -57,6 +59,8 @@ std::vector<std::unique_ptr<ProductWriter>> make_writers(const std::filesystem::
   if (settings.glah14)
     writers.push_back(std::make_unique<GlasGranuleWriter>(out_dir / "glah14.h5", GlasLevel::glah14,
                                                           settings.glas_topex, info));
+  if (icesat2.atl03 || icesat2.atl08)
+    writers.push_back(std::make_unique<Icesat2Writer>(out_dir, icesat2, info));
   return writers;
 }
 

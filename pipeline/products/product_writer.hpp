@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/products/icesat2_products.hpp"
 #include "pipeline/products/shot_record.hpp"
 
 namespace glaswave {
@@ -73,10 +74,11 @@ struct ProductSettings {
   bool glas_topex = false;  // GLAS heights on the TOPEX/Poseidon ellipsoid, not WGS84
 };
 
-// The writers of a run, each begun under `out_dir` (which must exist). Empty when `settings`
+// The writers of a run, each begun under `out_dir` (which must exist), with the ICESat-2
+// granules (DIR/atl03.h5, DIR/atl08.h5) of a photon-counting run. Empty when `settings`
 // asks for nothing. Throws Error (run) when a product cannot be created.
-std::vector<std::unique_ptr<ProductWriter>> make_writers(const std::filesystem::path& out_dir,
-                                                         const ProductSettings& settings,
-                                                         const RunInfo& info);
+std::vector<std::unique_ptr<ProductWriter>> make_writers(
+    const std::filesystem::path& out_dir, const ProductSettings& settings, const RunInfo& info,
+    const Icesat2ProductSettings& icesat2 = {});
 
 }  // namespace glaswave

@@ -92,13 +92,15 @@ struct ShotRecord {
   std::vector<double> photon_time_ns;  // two-way time after the return from range_m (bin clock)
   std::vector<double> photon_lat_deg, photon_lon_deg, photon_h_m;  // where it was scattered
   std::vector<std::int32_t> photon_class;  // PhotonClass: what it came from (simulation truth)
+  std::vector<std::int32_t> photon_order;  // its scattering order (truth); 0 for noise
 };
 
 // photon_class values: what a detected photon was last scattered by, or noise.
 enum PhotonClass : std::int32_t {
-  photon_noise = 0,   // background light or detector noise
-  photon_ground = 1,  // last scattered by the ground
-  photon_canopy = 2,  // last scattered by vegetation
+  photon_noise = 0,          // background light or detector noise
+  photon_ground = 1,         // last scattered by the ground
+  photon_canopy = 2,         // last scattered by vegetation
+  photon_top_of_canopy = 3,  // vegetation, in the top tenth of the canopy's return
 };
 
 // What every shot of a run shares.

@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include "core/error.hpp"
+#include "pipeline/shot/photon_receiver.hpp"
 #include "pipeline/shot/waveform_receiver.hpp"
 
 namespace glaswave {
@@ -16,9 +17,12 @@ struct Registry {
 };
 
 Registry& registry() {
-  static Registry receivers{{}, {{"waveform", [](const ReceiverSettings& s) {
-                                    return std::make_unique<WaveformReceiver>(s);
-                                  }}}};
+  static Registry receivers{
+      {},
+      {{"waveform",
+        [](const ReceiverSettings& s) { return std::make_unique<WaveformReceiver>(s); }},
+       {"photon_counting",
+        [](const ReceiverSettings& s) { return std::make_unique<PhotonCountingReceiver>(s); }}}};
   return receivers;
 }
 

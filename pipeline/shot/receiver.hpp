@@ -20,6 +20,7 @@
 #include "pipeline/products/shot_record.hpp"
 #include "pipeline/transport/detector.hpp"
 #include "pipeline/transport/lidar_model.hpp"
+#include "pipeline/transport/photon_counting.hpp"
 #include "pipeline/transport/shot_transport.hpp"
 #include "terrain/local_frame.hpp"
 
@@ -58,7 +59,8 @@ struct ReceiverSettings {
   LidarSettings lidar;                         // bands, bins, pulse, telescope
   std::optional<Detector::Settings> detector;  // none: the noise-free received power
   bool metrics = true;                         // the waveform processing (decomposition, metrics)
-  std::uint64_t seed = 1;  // the detector's noise is keyed by (seed, shot, band, bin)
+  std::uint64_t seed = 1;          // the detector's noise is keyed by (seed, shot, band, bin)
+  PhotonCountingSettings photons;  // "photon_counting": ATLAS's strong beam by default
 };
 
 using ReceiverFactory = std::function<std::unique_ptr<Receiver>(const ReceiverSettings&)>;

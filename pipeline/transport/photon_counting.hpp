@@ -47,6 +47,23 @@ struct SolarBackground {
 // the horizon.
 double background_rate_Hz(const SolarBackground& background);
 
+// Where the background light comes from: the sun at each shot's time and place over the scene's
+// reflectance, nowhere, or a fixed rate.
+enum class BackgroundSource : std::uint8_t { sun, none, rate };
+
+// A photon-counting receiver's own settings (ATLAS's strong beam by default: docs/icesat2.md).
+struct PhotonCountingSettings {
+  double efficiency = 0.45 * 0.15;  // optical throughput times photon detection efficiency
+  double filter_bandwidth_nm = 0.038;
+  double dead_time_ns = 3.2;
+  int channels = 16;          // 16 a strong beam, 4 a weak one
+  double energy_ratio = 1.0;  // the beam's pulse energy over the band's (45/175 weak)
+  std::uint32_t beam = 0;     // the beam's key in the draws
+  BackgroundSource background = BackgroundSource::sun;
+  double background_rate_Hz = 0.0;  // BackgroundSource::rate
+  bool keep_orders = false;  // the run writes per-order waveforms (the receiver always has them)
+};
+
 // Truth classes of photon events, the coding of ATL08's classed_pc_flag.
 enum class PhotonTruth : std::uint8_t { background = 0, ground = 1, canopy = 2, top_of_canopy = 3 };
 

@@ -147,6 +147,41 @@ TEST(SensorPreset, AtlasMatchesThePublishedInstrument) {
   EXPECT_NEAR(c.sensor.bands[0].atmos_transmission_roundtrip, 0.8 * 0.8, 1e-12);
 }
 
+// Photon counting's keys: the receiver, its beam, the background's three forms, the granules'
+// switches (absent: decided by the receiver), and what each refuses.
+TEST(PhotonCountingKeys, ReceiverBeamsBackgroundAndGranules) {
+  const Config plain = parse_config(doc("{}"));
+  EXPECT_EQ(plain.sensor.receiver, "waveform");
+  EXPECT_EQ(plain.sensor.beams, std::vector<std::string>{"gt2l"});
+  EXPECT_EQ(plain.simulation.background, "sun");
+  EXPECT_FALSE(plain.output.atl03.has_value());
+  EXPECT_NEAR(plain.sensor.photon_efficiency, 0.0675, 1e-12);
+  EXPECT_EQ(plain.sensor.dead_time_ns, 3.2);
+  const Config c = parse_config(doc(R"({"sensor": {"receiver": "photon_counting",
+      "beams": ["gt1r"], "dead_time_ns": 2.5}, "simulation": {"background": {"rate_MHz": 2.5}},
+      "output": {"atl08": false}})"));
+  EXPECT_EQ(c.sensor.receiver, "photon_counting");
+  EXPECT_EQ(c.sensor.beams, std::vector<std::string>{"gt1r"});
+  EXPECT_EQ(c.sensor.dead_time_ns, 2.5);
+  EXPECT_EQ(c.simulation.background, "rate");
+  EXPECT_EQ(c.simulation.background_rate_MHz, 2.5);
+  EXPECT_FALSE(c.output.atl03.has_value());
+  EXPECT_EQ(c.output.atl08, std::optional<bool>(false));
+  EXPECT_EQ(parse_config(doc(R"({"simulation": {"background": "none"}})")).simulation.background,
+            "none");
+  EXPECT_THAT(error_of(doc(R"({"sensor": {"receiver": "photon_counting", "beams": ["gt4l"]}})")),
+              HasSubstr("/sensor/beams: no beam \"gt4l\""));
+  EXPECT_THAT(
+      error_of(doc(R"({"sensor": {"receiver": "photon_counting", "beams": ["gt1l", "gt1r"]}})")),
+      HasSubstr("/sensor/beams: one beam a run"));
+  EXPECT_THAT(error_of(doc(R"({"simulation": {"background": "moon"}})")),
+              HasSubstr("/simulation/background: must be"));
+  EXPECT_THAT(error_of(doc(R"({"simulation": {"background": {"rate_MHz": -1}}})")),
+              HasSubstr("/simulation/background/rate_MHz"));
+  EXPECT_THAT(error_of(doc(R"({"sensor": {"receiver": "counting"}})")),
+              HasSubstr("/sensor/receiver"));
+}
+
 TEST(SensorPreset, KeysBesidePresetOverrideIt) {
   const Config c = parse_config(doc(R"({"sensor": {"preset": "glas", "pulse_sigma_ns": 3.5,
       "bins": 200, "bands": [{"name": "1064", "wavelength_nm": 1064, "pulse_energy_mJ": 75,
@@ -431,8 +466,8 @@ TEST(Errors, UnknownKeySuggestsTheNearest) {
             "/brf/views/1/zenith: unknown key \"zenith\"; did you mean \"zenith_deg\"?");
   // Nothing close: the known keys are listed instead of a guess.
   EXPECT_EQ(error_of(doc(R"({"output": {"xyz": true}})")),
-            "/output/xyz: unknown key \"xyz\"; known keys: footprints_format, geojson, metrics, "
-            "netcdf, per_order, plots");
+            "/output/xyz: unknown key \"xyz\"; known keys: atl03, atl08, footprints_format, "
+            "geojson, metrics, netcdf, per_order, plots");
 }
 
 TEST(Errors, WrongTypes) {

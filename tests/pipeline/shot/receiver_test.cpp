@@ -40,6 +40,7 @@ class HalfPeakPhotons : public Receiver {
       record.photon_class.push_back(
           returns.waveforms.ground_W[0][bin] >= returns.waveforms.canopy_W[0][bin] ? photon_ground
                                                                                    : photon_canopy);
+      record.photon_order.push_back(1);
     }
   }
   bool photon_events() const override { return true; }
@@ -93,6 +94,7 @@ TEST(Receiver, NetcdfStoresPhotonsAsContiguousRaggedArrays) {
     records[i].photon_time_ns = records[i].photon_lat_deg = records[i].photon_lon_deg =
         records[i].photon_h_m = times[i];
     records[i].photon_class.assign(times[i].size(), photon_canopy);
+    records[i].photon_order.assign(times[i].size(), 1);
   }
   const std::filesystem::path path = dir.path() / "shots.nc";
   {

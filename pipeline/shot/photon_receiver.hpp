@@ -1,0 +1,35 @@
+// The photon-counting receiver (ICESat-2's ATLAS), the Receiver interface's second
+// implementation, registered as "photon_counting": the shot's received power becomes photon
+// events (pipeline/transport/photon_counting.hpp) with the sun's background at the shot's time
+// and place and the detector's dead time; each event is geolocated on the beam's axis and
+// carries its truth. The record keeps the waveform receiver's fields too (the expected return).
+#pragma once
+
+#include "pipeline/shot/receiver.hpp"
+#include "pipeline/shot/waveform_receiver.hpp"
+
+namespace glaswave {
+
+class PhotonCountingReceiver : public Receiver {
+ public:
+  explicit PhotonCountingReceiver(const ReceiverSettings& settings);
+
+  // Band 0's returns: the canopy's and the ground's expected photons, each split by scattering
+  // order in proportion to the bin's per-order power when the transport tallies it; the
+  // background's rate from the sun (SolarBackground) over a Lambertian scene of the shot's
+  // eq. (1) reflectance, or the settings' fixed rate, or none; the events drawn by (seed, shot,
+  // beam, bin), the dead time applied. Canopy photons earlier than the time by which a tenth of
+  // the canopy's expected return has arrived are top of canopy.
+  void receive(ShotReturns returns, ShotRecord& record) const override;
+  bool photon_events() const override { return true; }
+
+ private:
+  double background_rate_Hz(const ShotRecord& record, const ShotWaveforms& waveforms,
+                            double range_m) const;
+
+  ReceiverSettings settings_;
+  WaveformReceiver waveform_;
+  LidarModel lidar_;
+};
+
+}  // namespace glaswave
