@@ -239,7 +239,7 @@ TEST(Sensor, BandErrors) {
       "/sensor/bands/0/colour: unknown key \"colour\"; known keys: atmos_transmission_roundtrip, "
       "name, pulse_energy_mJ, wavelength_nm");
   EXPECT_EQ(error_of(doc(R"({"sensor": {"pulse_sigma_ns": 0}})")),
-            "/sensor/pulse_sigma_ns: must be > 0, got 0");
+            "/sensor/pulse_sigma_ns: must be in [0.001, 1000], got 0");
   EXPECT_EQ(error_of(doc(R"({"sensor": {"bins": 0}})")), "/sensor/bins: must be >= 1, got 0");
 }
 
@@ -467,7 +467,8 @@ TEST(Errors, UnknownKeySuggestsTheNearest) {
   // Nothing close: the known keys are listed instead of a guess.
   EXPECT_EQ(error_of(doc(R"({"output": {"xyz": true}})")),
             "/output/xyz: unknown key \"xyz\"; known keys: atl03, atl08, footprints_format, "
-            "geojson, metrics, netcdf, per_order, plots");
+            "gedi_l1b, gedi_l2a, geojson, glah01, glah14, glas_ellipsoid, metrics, netcdf, "
+            "per_order, plots");
 }
 
 TEST(Errors, WrongTypes) {
@@ -684,7 +685,7 @@ TEST(Canopy, CrownsAndPaths) {
             "/canopy/crown_shape: must be one of ellipsoid, cone, layer, got \"ellipse\"; did you "
             "mean \"ellipsoid\"?");
   EXPECT_EQ(error_of(doc(R"({"canopy": {"crown_radius_m": 0}})")),
-            "/canopy/crown_radius_m: must be > 0, got 0");
+            "/canopy/crown_radius_m: must be in (0, 100], got 0");
 }
 
 // ---- track ----------------------------------------------------------------------------------
@@ -929,8 +930,9 @@ TEST(Detector, Errors) {
   EXPECT_EQ(error_of(doc(R"({"detector": {"bits": 8}})")),
             "/detector/saturation_W: is required when bits > 0: the digitiser's full scale");
   EXPECT_EQ(error_of(doc(R"({"detector": {"noise_rms_W": -1}})")),
-            "/detector/noise_rms_W: must be >= 0, got -1");
-  EXPECT_EQ(error_of(doc(R"({"detector": {"gain": 0}})")), "/detector/gain: must be > 0, got 0");
+            "/detector/noise_rms_W: must be in [0, 1], got -1");
+  EXPECT_EQ(error_of(doc(R"({"detector": {"gain": 0}})")),
+            "/detector/gain: must be in (0, 1e+12], got 0");
   EXPECT_EQ(place_of(doc(R"({"detector": {"bits": 33, "saturation_W": 1}})")), "/detector/bits");
   EXPECT_EQ(place_of(doc(R"({"detector": {"quantum_efficiency": 0}})")),
             "/detector/quantum_efficiency");

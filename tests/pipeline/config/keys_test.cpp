@@ -357,8 +357,8 @@ TEST(RunSize, TheLimitIsInTheMessage) {
   EXPECT_EQ(error_of(doc(R"({"sensor": {"bins": 300000}})")),
             "/sensor/bins: a shot's waveforms would take 13.7 MiB (2 bands x 300000 bins + 60 bins "
             "of pulse margin x 3 waveforms x 8 bytes), more than the limit of 4 MiB a shot");
-  // A pulse far wider than the bins: its margin is what does not fit (and would overflow an int).
-  EXPECT_THAT(error_of(doc(R"({"sensor": {"pulse_sigma_ns": 1e6, "bin_ns": 1e-3}})")),
+  // A pulse far wider than the bins (both at their bounds): its margin is what does not fit.
+  EXPECT_THAT(error_of(doc(R"({"sensor": {"pulse_sigma_ns": 1000, "bin_ns": 1e-3}})")),
               StartsWith("/sensor/pulse_sigma_ns: a shot's waveforms would take"));
   // Per-order waveforms multiply it.
   EXPECT_THAT(error_of(doc(R"({"sensor": {"bins": 20000}, "simulation": {"max_order": 100},
