@@ -7,6 +7,7 @@
 #include "footprints/track.hpp"        // Track, Footprint: where each shot meets the terrain
 #include "pipeline/config/config.hpp"  // parse_config, load_config, Config
 #include "pipeline/engine/inputs.hpp"  // open_terrain, plan_track, make_shot_simulator: the inputs, errors at JSON paths
+#include "pipeline/engine/machine.hpp"         // check_run, check_brf: the memory a run will hold
 #include "pipeline/engine/run.hpp"             // run_simulation, check_inputs: the engine
 #include "pipeline/products/shot_record.hpp"   // ShotRecord: a shot's waveforms and metrics
 #include "pipeline/shot/shot_simulator.hpp"    // ShotSimulator: one footprint, one record

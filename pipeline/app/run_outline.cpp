@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/engine/machine.hpp"
+
 namespace glaswave {
 namespace {
 

@@ -2,29 +2,18 @@
 // range next to the member it sets (PDAL style), presets expanded, every error at its JSON path.
 #include "pipeline/config/config.hpp"
 
-#include <sched.h>
-#include <sys/resource.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <charconv>
 #include <cmath>
-#include <fstream>
-#include <limits>
-#include <numbers>
 #include <sstream>
 #include <stdexcept>
-#include <string_view>
-#include <system_error>
-#include <thread>
 #include <vector>
 
 #include "core/error.hpp"
-#include "core/input_file.hpp"
 #include "core/names.hpp"
-#include "footprints/ephemeris.hpp"
 #include "footprints/glas_time.hpp"
+#include "pipeline/config/canopy_section.hpp"
 #include "pipeline/config/json_reader.hpp"
+#include "pipeline/config/json_text.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/config/presets.hpp"
 #include "pipeline/config/stands_file.hpp"
@@ -36,134 +25,6 @@ using nlohmann::json;
 namespace {
 
 constexpr double wgs84_equatorial_radius_m = 6378137.0;
-// A configuration of a million `points` takes about 50 MB; nlohmann-json holds about ten times
-// the text's size.
-constexpr std::uintmax_t max_config_bytes = std::uintmax_t{256} << 20;
-
-// ---- numbers nlohmann-json refuses ---------------------------------------------------------
-
-// Where a number token sits in JSON text: line, column and the JSON pointer of its value.
-struct TokenPlace {
-  bool found = false;
-  std::size_t line = 0;
-  std::size_t column = 0;
-  std::string pointer;
-};
-
-// Where a scan of JSON text stands in the nesting of objects and arrays, and on which line.
-struct JsonScan {
-  struct Frame {
-    bool object;
-    std::string key;
-    std::size_t index;
-  };
-  std::vector<Frame> stack;
-  bool expect_key = false;
-  std::size_t line = 1, line_start = 0;
-
-  // The JSON pointer of the value being scanned.
-  std::string pointer() const {
-    std::string p;
-    for (const Frame& f : stack)
-      p = f.object ? json_pointer_child(p, f.key) : p + "/" + std::to_string(f.index);
-    return p;
-  }
-
-  // Skips the string that opens at text[i], taking it as the key of its object when a key is
-  // expected; returns where the scan goes on.
-  std::size_t skip_string(const std::string& text, std::size_t i) {
-    std::size_t j = i + 1;
-    while (j < text.size() && text[j] != '"') j += text[j] == '\\' ? 2 : 1;
-    if (!stack.empty() && stack.back().object && expect_key) {
-      try {
-        stack.back().key = json::parse(text.substr(i, j - i + 1)).get<std::string>();
-      } catch (const json::exception&) {
-        stack.back().key = text.substr(i + 1, j - i - 1);
-      }
-    }
-    return j + 1;
-  }
-
-  // Follows one byte of structure at text[i]: brackets, separators and newlines.
-  void structure(char c, std::size_t i) {
-    switch (c) {
-      case '{':
-        stack.push_back({true, "", 0});
-        expect_key = true;
-        break;
-      case '[':
-        stack.push_back({false, "", 0});
-        break;
-      case '}':
-      case ']':
-        if (!stack.empty()) stack.pop_back();
-        break;
-      case ',':
-        if (!stack.empty()) {
-          if (stack.back().object)
-            expect_key = true;
-          else
-            ++stack.back().index;
-        }
-        break;
-      case ':':
-        expect_key = false;
-        break;
-      case '\n':
-        ++line;
-        line_start = i + 1;
-        break;
-      default:
-        break;
-    }
-  }
-};
-
-// The end of the number token that begins at text[i].
-std::size_t number_end(const std::string& text, std::size_t i) {
-  while (i < text.size() &&
-         std::string_view("0123456789+-.eE").find(text[i]) != std::string_view::npos)
-    ++i;
-  return i;
-}
-
-// nlohmann-json stops at a number that overflows a double (1e999) with an error that names the
-// token but not where it is. The text before that token is valid JSON, so a small scan that
-// follows objects and arrays finds the token's line, column and key path.
-TokenPlace locate_number(const std::string& text, const std::string& token) {
-  JsonScan scan;
-  for (std::size_t i = 0; i < text.size();) {
-    const char c = text[i];
-    if (c == '"') {
-      i = scan.skip_string(text, i);
-    } else if (c == '-' || (c >= '0' && c <= '9')) {
-      const std::size_t end = number_end(text, i);
-      if (text.compare(i, end - i, token) == 0)
-        return {true, scan.line, i - scan.line_start + 1, scan.pointer()};
-      i = end;
-    } else {
-      scan.structure(c, i);
-      ++i;
-    }
-  }
-  return {};
-}
-
-// The token of nlohmann-json's "number overflow parsing '1e999'" message.
-std::string overflow_token(const std::string& what) {
-  const std::string marker = "number overflow parsing '";
-  const auto begin = what.find(marker);
-  if (begin == std::string::npos) return "";
-  const auto end = what.find('\'', begin + marker.size());
-  return what.substr(begin + marker.size(), end - begin - marker.size());
-}
-
-// The dotted key of an override as a JSON pointer ("canopy.pai" -> "/canopy/pai").
-std::string dotted_to_pointer(const std::vector<std::string>& parts) {
-  std::string p;
-  for (const std::string& part : parts) p = json_pointer_child(p, part);
-  return p;
-}
 
 // ---- spectral properties --------------------------------------------------------------------
 
@@ -527,6 +388,8 @@ CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<Band>&
   return c;
 }
 
+}  // namespace
+
 std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Band>& bands) {
   if (!root.has("canopy")) {
     root.resolved()["canopy"] = nullptr;  // bare ground
@@ -548,6 +411,8 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
   r.finish();
   return c;
 }
+
+namespace {
 
 // The ground points of a "points" track, one shot each.
 void read_points(JsonReader& r, TrackSettings& t, bool shots_given) {
@@ -701,12 +566,7 @@ BrfSettings read_brf(JsonReader& root) {
   return b;
 }
 
-// The bytes of one shot's waveforms: bands x tally bins (the window and the pulse's margin on
-// each side, as pipeline/transport/lidar_model.hpp sizes them) x waveforms (total, canopy,
-// ground, and one per order) x 8. Computed in double, so that no size overflows on the way.
-struct ShotSize {
-  double bands, window_bins, margin_bins, waveforms, bytes;
-};
+}  // namespace
 
 ShotSize shot_size(const Config& c) {
   ShotSize size;
@@ -721,6 +581,8 @@ ShotSize shot_size(const Config& c) {
 std::string mebibytes(double bytes) {
   return format_number(std::round(bytes / 1048576.0 * 10) / 10) + " MiB";
 }
+
+namespace {
 
 // A run holds a shot's waveforms many times over (the transport tallies each shot's rays in 65
 // copies, and every thread simulates a shot): one shot's must stay small. Refused beyond the
@@ -753,127 +615,6 @@ void resolve_path(std::string& path, json& resolved_section, const char* key,
 
 }  // namespace
 
-json read_json_file(const std::filesystem::path& file) {
-  std::error_code ec;
-  // A device or a pipe (/dev/zero) would be read for ever, and opening a pipe nobody writes
-  // waits for ever: a configuration is a file, and a small one, which is seen before opening.
-  require_input_file(file.native(), "the configuration", ErrorKind::config);
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    throw config_error(file.string(),
-                       "cannot read: " + std::generic_category().message(errno ? errno : ENOENT));
-  }
-  if (std::filesystem::file_size(file, ec) > max_config_bytes)
-    throw config_error(file.string(), "is larger than the limit of " +
-                                          std::to_string(max_config_bytes >> 20) +
-                                          " MiB for a configuration");
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) throw config_error(file.string(), "cannot read: input/output error");
-  const std::string text = buffer.str();
-  try {
-    return parse_json_checked(text);
-  } catch (const Error& e) {
-    throw config_error(e.place(), e.message() + " (" + file.string() + ")");
-  } catch (const json::parse_error& e) {
-    // nlohmann-json's own "line 3, column 0" goes astray when the bad token ends a line, so the
-    // place is counted here from the byte offset, which is exact: the last byte it read.
-    const std::size_t offset = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
-    const std::size_t newline = offset == 0 ? std::string::npos : text.rfind('\n', offset - 1);
-    const std::size_t line_start = newline == std::string::npos ? 0 : newline + 1;
-    const auto line = 1 + std::count(text.begin(), text.begin() + offset, '\n');
-    const std::size_t column = offset - line_start + 1;
-    // The cause, without "[json.exception.parse_error.101] parse error at line 3, column 0: ".
-    std::string cause = e.what();
-    const auto at = cause.find("parse error");
-    const auto colon = cause.find(": ", at == std::string::npos ? 0 : at);
-    if (colon != std::string::npos) cause = cause.substr(colon + 2);
-    // nlohmann-json quotes what it last read, which may be a whole line of a file of another
-    // kind: a few characters are enough to find the place.
-    const auto last_read = cause.find("; last read: '");
-    if (last_read != std::string::npos) {
-      const std::size_t begin = last_read + 14;
-      const std::size_t end = cause.rfind('\'');
-      std::string excerpt = cause.substr(begin, end > begin ? end - begin : 0);
-      if (excerpt.size() > 12) excerpt = "..." + excerpt.substr(excerpt.size() - 12);
-      cause = cause.substr(0, begin) + excerpt + "'";
-    }
-    for (char& c : cause)
-      if (c == '\n' || c == '\r') c = ' ';
-    throw config_error(file.string(), "malformed JSON at line " + std::to_string(line) +
-                                          ", column " + std::to_string(column) + ": " + cause);
-  } catch (const json::out_of_range& e) {
-    const std::string token = overflow_token(e.what());
-    const TokenPlace place = locate_number(text, token);
-    if (token.empty() || !place.found) throw config_error(file.string(), e.what());
-    throw config_error(place.pointer.empty() ? file.string() : place.pointer,
-                       "must be a finite number, got " + token + " (" + file.string() + ", line " +
-                           std::to_string(place.line) + ", column " + std::to_string(place.column) +
-                           ")");
-  }
-}
-
-void apply_override(json& document, const std::string& assignment) {
-  const auto eq = assignment.find('=');
-  if (eq == std::string::npos)
-    throw config_error("--set", "expected KEY=VALUE, got \"" + assignment + "\"");
-  const std::string key = assignment.substr(0, eq);
-  const std::string text = assignment.substr(eq + 1);
-  if (key.empty()) throw config_error("--set", "empty key in \"" + assignment + "\"");
-  std::vector<std::string> parts;
-  for (std::size_t begin = 0;;) {
-    const auto dot = key.find('.', begin);
-    parts.push_back(key.substr(begin, dot - begin));
-    if (parts.back().empty())
-      throw config_error("--set",
-                         "empty part in the key \"" + key + "\" of \"" + assignment + "\"");
-    if (dot == std::string::npos) break;
-    begin = dot + 1;
-  }
-
-  json value;
-  try {
-    value = parse_json_checked(text, dotted_to_pointer(parts));
-  } catch (const Error& e) {
-    throw config_error(e.place(), e.message() + " (from --set " + key + ")");
-  } catch (const json::parse_error&) {
-    value = text;  // not JSON: a bare string such as a path or a name
-  } catch (const json::out_of_range&) {
-    throw config_error(dotted_to_pointer(parts),
-                       "must be a finite number, got " + text + " (from --set " + assignment + ")");
-  }
-
-  if (document.is_null()) document = json::object();
-  json* node = &document;
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    const std::string& part = parts[i];
-    const bool last = i + 1 == parts.size();
-    if (node->is_array()) {
-      // Array elements by index, as in "sensor.bands.1.pulse_energy_mJ".
-      std::size_t index = 0;
-      bool numeric = !part.empty();
-      for (char c : part) numeric = numeric && c >= '0' && c <= '9';
-      if (numeric) index = std::stoul(part);
-      if (!numeric || index >= node->size()) {
-        throw config_error("--set", "cannot set \"" + key + "\": \"" + part +
-                                        "\" is not an index of an array of " +
-                                        std::to_string(node->size()));
-      }
-      node = &(*node)[index];
-    } else if (node->is_object()) {
-      node = &(*node)[part];
-    } else {
-      throw config_error("--set", "cannot set \"" + key + "\": the value above \"" + part +
-                                      "\" is " + describe(*node) + ", not an object");
-    }
-    if (last) {
-      *node = value;
-    } else if (node->is_null()) {
-      *node = json::object();  // create intermediate objects, also in place of a null
-    }
-  }
-}
-
 Config parse_config(const json& document) {
   if (!document.is_object())
     throw config_error("", "the configuration must be a JSON object, got " + describe(document));
@@ -902,114 +643,7 @@ Config parse_config(const json& document) {
   return c;
 }
 
-namespace {
-
-// The highest the spacecraft flies: the track's altitude, an orbit's apogee, an ephemeris's
-// highest row. An ephemeris that cannot be read is left to the track, which names its fault.
-double highest_spacecraft_m(const Config& c) {
-  const TrackSettings& t = c.track;
-  if (t.type == TrackType::orbit)
-    return t.orbit.semi_major_axis_m * (1.0 + t.orbit.eccentricity) - wgs84_equatorial_radius_m;
-  if (t.type != TrackType::ephemeris || t.ephemeris.empty()) return t.altitude_m;
-  double height_m = 0.0;
-  try {
-    for (const EphemerisRow& row : read_ephemeris(t.ephemeris))
-      height_m = std::max(height_m, geodetic_from_ecef(row.spacecraft_ecef).h_m);
-  } catch (const Error&) {
-    return t.altitude_m;
-  }
-  return height_m;
-}
-
-// Trees a square metre: randomly placed crowns of cover c and radius r are -ln(1 - c) / (pi r^2)
-// a square metre; a layer or a crowns file has none at random.
-double tree_density_m2(const CanopySettings& canopy) {
-  if (canopy.crown_shape == CrownShape::layer || !canopy.crowns_file.empty()) return 0.0;
-  return -std::log1p(-canopy.cover) /
-         (std::numbers::pi * canopy.crown_radius_m * canopy.crown_radius_m);
-}
-
-// The cores this process may run on: a run's threads unless --threads says fewer.
-int usable_cores() {
-  cpu_set_t set;
-  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
-  return std::max(1u, std::thread::hardware_concurrency());
-}
-
-// The memory this process may have: the machine's, or less under a cgroup's limit or ulimit -v.
-double available_memory_bytes() {
-  double bytes = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-  std::ifstream cgroup("/sys/fs/cgroup/memory.max");
-  std::string limit;
-  if (cgroup >> limit && limit != "max") {
-    double value = 0.0;
-    const auto [end, error] = std::from_chars(limit.data(), limit.data() + limit.size(), value);
-    if (error == std::errc() && value > 0.0) bytes = std::min(bytes, value);
-  }
-  rlimit address_space{};
-  if (getrlimit(RLIMIT_AS, &address_space) == 0 && address_space.rlim_cur != RLIM_INFINITY)
-    bytes = std::min(bytes, static_cast<double>(address_space.rlim_cur));
-  return bytes;
-}
-
-std::string gibibytes(double bytes) {
-  return format_number(std::round(bytes / 1073741824.0 * 10) / 10) + " GiB";
-}
-
-}  // namespace
-
-RunMemory estimate_run_memory(const Config& c) {
-  RunMemory m;
-  // The patch a shot's rays reach (pipeline/engine/shot_simulation.cpp): 1.2 times the reach of
-  // the field of view's edge at the range, longer along a sloped plane, with 100 m for the
-  // light that wanders through vegetation.
-  const double pi = std::numbers::pi;
-  const double range_m = highest_spacecraft_m(c) / std::cos(c.track.off_nadir_deg * pi / 180.0);
-  const double slope_deg = c.terrain.plane ? std::min(c.terrain.plane->slope_deg, 85.0) : 0.0;
-  m.scene_half_size_m =
-      1.2 * range_m * std::tan(0.5 * c.sensor.ifov_rad) / std::cos(slope_deg * pi / 180.0) + 2.0 +
-      (c.canopy ? 100.0 : 0.0);
-  double density = 0.0;
-  if (c.canopy) {
-    density = tree_density_m2(*c.canopy);
-    for (const StandArea& stand : c.canopy->stand_areas)
-      density = std::max(density, tree_density_m2(stand.canopy));
-  }
-  const double side_m = 2.0 * m.scene_half_size_m;
-  m.trees = density * side_m * side_m;
-  m.scene_bytes = m.trees * run_limits::tree_bytes;
-  m.waveform_bytes = shot_size(c).bytes * run_limits::waveform_copies;
-  m.threads = usable_cores();
-  m.bytes = m.threads * (m.scene_bytes + m.waveform_bytes);
-  m.available_bytes = available_memory_bytes();
-  // The key to change: the crowns when they are many on a scene of a usual size, the waveforms
-  // when they weigh most, else what makes the scene wide.
-  if (m.waveform_bytes > m.scene_bytes)
-    m.place = "/sensor/bins";
-  else if (m.scene_half_size_m < 1000.0)
-    m.place = "/canopy/crown_radius_m";
-  else if (range_m > 2.0e6)
-    m.place = c.track.type == TrackType::orbit       ? "/track/semi_major_axis_m"
-              : c.track.type == TrackType::ephemeris ? "/track/ephemeris"
-                                                     : "/track/altitude_m";
-  else
-    m.place = "/sensor/ifov_rad";
-  return m;
-}
-
-void check_run(const Config& config) {
-  const RunMemory memory = estimate_run_memory(config);
-  if (memory.bytes > memory.available_bytes) {
-    std::ostringstream why;
-    why << "a run would hold about " << gibibytes(memory.bytes) << " (" << memory.threads
-        << " threads x a shot's scene of " << format_number(std::round(memory.trees))
-        << " trees over " << format_number(std::round(2.0 * memory.scene_half_size_m))
-        << " m across, at " << format_number(run_limits::tree_bytes / 1024.0)
-        << " KiB a tree, and its waveforms' " << mebibytes(memory.waveform_bytes)
-        << "), more than the " << gibibytes(memory.available_bytes)
-        << " of memory this process may have";
-    throw config_error(memory.place, why.str());
-  }
+void check_outputs(const Config& config) {
   const OutputSettings& o = config.output;
   if (!o.netcdf && !o.geojson)
     throw config_error("/output",
@@ -1029,99 +663,6 @@ void check_run(const Config& config) {
                        "footprints_format \"GeoJSON\", got \"" +
                            o.footprints_format + "\"");
 }
-
-BrfMemory estimate_brf_memory(const Config& c) {
-  BrfMemory m;
-  m.pixels = std::ceil(c.brf.scene_size_m / c.brf.image_resolution_m);
-  const double tile_m = m.pixels * c.brf.image_resolution_m;
-  m.scene_side_m = tile_m + 2.0 * (c.terrain.plane ? 5.0 : 100.0);  // as run_brf builds it
-  double density = 0.0;
-  if (c.canopy) {
-    density = tree_density_m2(*c.canopy);
-    for (const StandArea& stand : c.canopy->stand_areas)
-      density = std::max(density, tree_density_m2(stand.canopy));
-  }
-  m.trees = density * m.scene_side_m * m.scene_side_m;
-  m.scene_bytes = m.trees * run_limits::tree_bytes;
-  m.image_bytes = static_cast<double>(c.sensor.bands.size()) * m.pixels * m.pixels * 8.0 *
-                  run_limits::brf_image_copies;
-  m.bytes = m.scene_bytes + m.image_bytes;
-  m.available_bytes = available_memory_bytes();
-  // The key to change: the pixels when the image weighs most, else the tile when it is wide,
-  // else the crowns that crowd it.
-  m.place = m.image_bytes > m.scene_bytes ? "/brf/image_resolution_m"
-            : tile_m > 1000.0             ? "/brf/scene_size_m"
-                                          : "/canopy/crown_radius_m";
-  return m;
-}
-
-void check_brf(const Config& config) {
-  const BrfSettings& b = config.brf;
-  const double pixels = std::ceil(b.scene_size_m / b.image_resolution_m);
-  if (pixels > run_limits::brf_image_pixels)
-    throw config_error("/brf/image_resolution_m",
-                       "scene.tif would be " + format_number(pixels) + " pixels across (" +
-                           format_number(b.scene_size_m) + " m at " +
-                           format_number(b.image_resolution_m) + " m a pixel); at most " +
-                           format_number(run_limits::brf_image_pixels));
-  const BrfMemory memory = estimate_brf_memory(config);
-  if (memory.bytes <= memory.available_bytes) return;
-  std::ostringstream why;
-  why << "brf's scene would hold about " << gibibytes(memory.bytes) << " ("
-      << format_number(std::round(memory.trees)) << " trees over "
-      << format_number(std::round(memory.scene_side_m)) << " m across, at "
-      << format_number(run_limits::tree_bytes / 1024.0) << " KiB a tree, and scene.tif's "
-      << config.sensor.bands.size() << " bands of " << format_number(memory.pixels) << " x "
-      << format_number(memory.pixels) << " pixels, " << mebibytes(memory.image_bytes)
-      << "), more than the " << gibibytes(memory.available_bytes)
-      << " of memory this process may have";
-  throw config_error(memory.place, why.str());
-}
-
-namespace {
-
-// A stands file: polygons in any vector format and CRS OGR reads (read_stand_features), whose
-// attribute fields override canopy keys inside them. Each feature's canopy is the scene's with
-// its fields applied, checked as the configuration is; a fault is the file's (exit status 3),
-// named by its feature and key.
-std::vector<StandArea> read_stands(const std::string& path, const json& scene_canopy,
-                                   const std::vector<Band>& bands) {
-  std::vector<StandArea> areas;
-  for (StandFeature& feature : read_stand_features(path)) {
-    const std::string& where = feature.name;
-    StandArea area;
-    area.rings = std::move(feature.rings);
-    // A stand overrides the scene's canopy inside it: its own stands or crowns would be
-    // silently ignored.
-    for (const char* key : {"stands", "crowns_file"})
-      if (feature.properties.contains(key))
-        throw input_error(path, where + ": property " + key +
-                                    " cannot be set by a stand (the scene's canopy has one " + key +
-                                    " for all of it)");
-    json canopy = scene_canopy;
-    canopy.erase("stands");
-    canopy.erase("crowns_file");
-    for (const auto& [key, value] : feature.properties.items()) canopy[key] = value;
-    const json document_of_stand = {{"canopy", canopy}};  // the reader keeps a pointer to it
-    json resolved = json::object();
-    JsonReader root(document_of_stand, "", resolved, configuration_keys());
-    try {
-      area.canopy = *read_canopy(root, bands);
-    } catch (const Error& e) {
-      // "/canopy/pai: must be >= 0" becomes "feature 2: pai: must be >= 0".
-      const std::string key = e.place().size() > 8 ? e.place().substr(8) : e.place();
-      throw input_error(path, where + ": property " + key + ": " + e.message());
-    }
-    if (area.canopy.crown_shape == CrownShape::layer ||
-        scene_canopy.value("crown_shape", "") == "layer")
-      throw input_error(
-          path, where + ": a layer covers the whole scene: it cannot be a stand, nor have stands");
-    areas.push_back(std::move(area));
-  }
-  return areas;
-}
-
-}  // namespace
 
 Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
   return load_config_document(read_json_file(file), file.parent_path(), overrides);

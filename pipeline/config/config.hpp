@@ -12,6 +12,7 @@
 #include "canopy/canopy_settings.hpp"
 #include "core/error.hpp"
 #include "footprints/track_settings.hpp"
+#include "pipeline/config/json_text.hpp"  // read_json_file and apply_override, as load_config
 #include "terrain/terrain_settings.hpp"
 
 namespace glaswave {
@@ -164,57 +165,28 @@ auto at_section(const std::string& section, Open&& open) -> decltype(open()) {
   }
 }
 
-// Reads a JSON file; malformed JSON is an error naming the file, line and column.
-nlohmann::json read_json_file(const std::filesystem::path& file);
-
-// Applies one `--set KEY=VALUE` override: KEY is a dotted path ("canopy.pai"); VALUE is parsed
-// as JSON when it parses, else taken as a string.
-void apply_override(nlohmann::json& document, const std::string& assignment);
-
 // Turns a configuration document into settings: presets expanded, defaults filled in, every
 // value checked. Unknown keys are errors that suggest the nearest known key.
 Config parse_config(const nlohmann::json& document);
 
-// What a run will hold in memory, estimated from the configuration before anything is
-// allocated: each thread simulates a shot, holding its scene (the trees and ground under the
-// field of view) and its waveforms' tallies.
-struct RunMemory {
-  double scene_half_size_m = 0.0;  // half the side of the ground patch a shot's rays can reach
-  double trees = 0.0;              // trees on it (the densest stand's density)
-  double scene_bytes = 0.0;        // the trees' (a DEM's mesh is capped: ground_mesh.cpp)
-  double waveform_bytes = 0.0;     // the tallies of a shot's waveforms
-  int threads = 1;                 // the cores this process may use: a run's default
-  double bytes = 0.0;              // threads x (scene + waveforms)
-  double available_bytes = 0.0;    // the machine's memory (or the cgroup's limit when lower)
-  std::string place;               // the key that makes it large, when it is too large
+// What `run` needs of its outputs beyond a configuration that simulates: something to write,
+// both products for the plots, a footprints format the writers have. `check_run` (the engine's,
+// with the memory a run will hold) asks it, and `check` with it, so that the two accept exactly
+// the same configurations.
+void check_outputs(const Config& config);
+
+// The bytes of one shot's waveforms: bands x tally bins (the window and the pulse's margin on
+// each side, as pipeline/transport/lidar_model.hpp sizes them) x waveforms (total, canopy,
+// ground, and one per order) x 8. Computed in double, so that no size overflows on the way.
+// parse_config refuses a shot beyond run_limits::shot_waveform_bytes; the engine's memory
+// estimate counts it for every thread.
+struct ShotSize {
+  double bands, window_bins, margin_bins, waveforms, bytes;
 };
-RunMemory estimate_run_memory(const Config& config);
+ShotSize shot_size(const Config& config);
 
-// What `run` needs beyond a configuration that simulates: something to write, both products for
-// the plots, a footprints format the writers have, and no more memory than the machine has
-// (estimate_run_memory). `check` asks the same, so that the two accept exactly the same
-// configurations.
-void check_run(const Config& config);
-
-// What `glaswave brf` will hold in memory, estimated as for a run: one scene (shared by the
-// threads), the trees on its tile and beyond its sides (5 m over a periodic plane, 100 m over a
-// DEM), and scene.tif's bands of doubles.
-struct BrfMemory {
-  double pixels = 0.0;        // scene.tif's side: brf.scene_size_m in whole pixels
-  double scene_side_m = 0.0;  // the ground the scene is built over
-  double trees = 0.0;         // on it, at the densest stand's density
-  double scene_bytes = 0.0;   // the trees'
-  double image_bytes = 0.0;   // scene.tif's bands, brf_image_copies times
-  double bytes = 0.0;         // scene + image
-  double available_bytes = 0.0;
-  std::string place;  // the key that makes it large, when it is too large
-};
-BrfMemory estimate_brf_memory(const Config& config);
-
-// What `brf` refuses before tracing anything: scene.tif wider than brf_image_pixels, or more
-// memory than this process may have (estimate_brf_memory), at the key that makes it large.
-// `check` asks the same.
-void check_brf(const Config& config);
+// A size for an error message, in MiB to one decimal ("13.7 MiB").
+std::string mebibytes(double bytes);
 
 // read_json_file + apply_override for each + parse_config.
 Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides);

@@ -1,3 +1,4 @@
+// A stands file read through GDAL/OGR, and its features turned into the canopies of the stands.
 #include "pipeline/config/stands_file.hpp"
 
 #include <cpl_error.h>
@@ -15,6 +16,7 @@
 
 #include "core/error.hpp"
 #include "core/excerpt.hpp"
+#include "pipeline/config/canopy_section.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/keys.hpp"
 #include "terrain/gdal_source.hpp"
@@ -295,6 +297,47 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
   // An empty file would change nothing, without a word.
   if (features.empty()) throw input_error(path, "holds no feature: no stand to place");
   return features;
+}
+
+// A stands file: polygons in any vector format and CRS OGR reads (read_stand_features), whose
+// attribute fields override canopy keys inside them. Each feature's canopy is the scene's with
+// its fields applied, checked as the configuration is; a fault is the file's (exit status 3),
+// named by its feature and key.
+std::vector<StandArea> read_stands(const std::string& path, const json& scene_canopy,
+                                   const std::vector<Band>& bands) {
+  std::vector<StandArea> areas;
+  for (StandFeature& feature : read_stand_features(path)) {
+    const std::string& where = feature.name;
+    StandArea area;
+    area.rings = std::move(feature.rings);
+    // A stand overrides the scene's canopy inside it: its own stands or crowns would be
+    // silently ignored.
+    for (const char* key : {"stands", "crowns_file"})
+      if (feature.properties.contains(key))
+        throw input_error(path, where + ": property " + key +
+                                    " cannot be set by a stand (the scene's canopy has one " + key +
+                                    " for all of it)");
+    json canopy = scene_canopy;
+    canopy.erase("stands");
+    canopy.erase("crowns_file");
+    for (const auto& [key, value] : feature.properties.items()) canopy[key] = value;
+    const json document_of_stand = {{"canopy", canopy}};  // the reader keeps a pointer to it
+    json resolved = json::object();
+    JsonReader root(document_of_stand, "", resolved, configuration_keys());
+    try {
+      area.canopy = *read_canopy(root, bands);
+    } catch (const Error& e) {
+      // "/canopy/pai: must be >= 0" becomes "feature 2: pai: must be >= 0".
+      const std::string key = e.place().size() > 8 ? e.place().substr(8) : e.place();
+      throw input_error(path, where + ": property " + key + ": " + e.message());
+    }
+    if (area.canopy.crown_shape == CrownShape::layer ||
+        scene_canopy.value("crown_shape", "") == "layer")
+      throw input_error(
+          path, where + ": a layer covers the whole scene: it cannot be a stand, nor have stands");
+    areas.push_back(std::move(area));
+  }
+  return areas;
 }
 
 }  // namespace glaswave

@@ -14,6 +14,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "pipeline/engine/inputs.hpp"
+#include "pipeline/engine/machine.hpp"
 #include "pipeline/products/raster_writer.hpp"
 #include "pipeline/shot/brf_shot.hpp"
 

@@ -22,6 +22,7 @@
 #include "pipeline/engine/cluster.hpp"
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/journal.hpp"
+#include "pipeline/engine/machine.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/record_codec.hpp"
 
@@ -50,14 +51,6 @@ std::vector<ShotRecord> simulate_range(const ShotSimulator& simulator, const Tra
   });
   queries += ray_queries;
   return records;
-}
-
-// Threads of this process: `threads` (0: its share of the machine's cores, the cores divided
-// among the run's processes on this machine), never more than the cores.
-int threads_of_process(int threads, int processes_here) {
-  // More threads than cores would only wait for each other (and TBB would warn on stderr).
-  const int cores = tbb::this_task_arena::max_concurrency();
-  return threads > 0 ? std::min(threads, cores) : std::max(1, cores / std::max(1, processes_here));
 }
 
 // The cores a process may run on are its affinity's (TBB counts those), which can be fewer than

@@ -1,8 +1,9 @@
 // Fuzzes the configuration: JSON text -> typed Config, through what `check` and `run` call
-// (read_json_file, load_config_document, check_run). A glaswave::Error is a refusal, the right
-// end for a bad input; anything else (a crash, another exception, undefined behaviour, a leak)
-// is a finding. A stands file named by the input is kept inside the scratch folder (the stands
-// reader has its own target) so that no input reads files elsewhere.
+// (read_json_file, load_config_document, check_outputs; the engine's memory estimate reads no
+// input of its own beyond the ephemeris, which has its own target). A glaswave::Error is a refusal,
+// the right end for a bad input; anything else (a crash, another exception, undefined behaviour, a
+// leak) is a finding. A stands file named by the input is kept inside the scratch folder (the
+// stands reader has its own target) so that no input reads files elsewhere.
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -44,7 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     nlohmann::json document = read_json_file(file);
     keep_stands_inside(document);
     const Config config = load_config_document(std::move(document), file.parent_path(), {});
-    check_run(config);
+    check_outputs(config);
   } catch (const Error& e) {
     fuzz::refused(e);
   }

@@ -1,7 +1,7 @@
 // Tests of the one declaration of keys: the JSON Schema generated from it names exactly the keys
 // the parser accepts, with their ranges; the manual's table is the one generated from it; the
 // parser cannot read a key that is not declared; the sizes a run cannot hold are refused, the
-// limit in the message; and the rules of `run` that `check` shares.
+// limit in the message; and the rules of `run`'s outputs that `check` shares.
 #include "pipeline/config/keys.hpp"
 
 #include <gmock/gmock.h>
@@ -31,7 +31,7 @@ using ::testing::StartsWith;
 
 std::string run_error_of(const json& document) {
   try {
-    check_run(parse_config(document));
+    check_outputs(parse_config(document));
   } catch (const Error& e) {
     EXPECT_EQ(e.exit_status(), 2);
     return e.what();

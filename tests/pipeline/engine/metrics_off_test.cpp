@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "pipeline/engine/machine.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 
 namespace glaswave {

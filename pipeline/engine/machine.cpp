@@ -1,0 +1,199 @@
+// What the machine gives a run (its cores, its memory) and what a run or `brf` will take of it,
+// estimated from the configuration before anything is allocated.
+#include "pipeline/engine/machine.hpp"
+
+#include <sched.h>
+#include <sys/resource.h>
+#include <tbb/task_arena.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <system_error>
+#include <thread>
+
+#include "core/error.hpp"
+#include "footprints/ephemeris.hpp"
+#include "pipeline/config/json_reader.hpp"
+
+namespace glaswave {
+namespace {
+
+constexpr double wgs84_equatorial_radius_m = 6378137.0;
+
+// The highest the spacecraft flies: the track's altitude, an orbit's apogee, an ephemeris's
+// highest row. An ephemeris that cannot be read is left to the track, which names its fault.
+double highest_spacecraft_m(const Config& c) {
+  const TrackSettings& t = c.track;
+  if (t.type == TrackType::orbit)
+    return t.orbit.semi_major_axis_m * (1.0 + t.orbit.eccentricity) - wgs84_equatorial_radius_m;
+  if (t.type != TrackType::ephemeris || t.ephemeris.empty()) return t.altitude_m;
+  double height_m = 0.0;
+  try {
+    for (const EphemerisRow& row : read_ephemeris(t.ephemeris))
+      height_m = std::max(height_m, geodetic_from_ecef(row.spacecraft_ecef).h_m);
+  } catch (const Error&) {
+    return t.altitude_m;
+  }
+  return height_m;
+}
+
+// Trees a square metre: randomly placed crowns of cover c and radius r are -ln(1 - c) / (pi r^2)
+// a square metre; a layer or a crowns file has none at random.
+double tree_density_m2(const CanopySettings& canopy) {
+  if (canopy.crown_shape == CrownShape::layer || !canopy.crowns_file.empty()) return 0.0;
+  return -std::log1p(-canopy.cover) /
+         (std::numbers::pi * canopy.crown_radius_m * canopy.crown_radius_m);
+}
+
+// The patch a shot's rays reach, estimated before any terrain is opened: 1.2 times the reach of
+// the field of view's edge at the range, longer along a sloped plane, + 2 m, with 100 m for the
+// light that wanders through vegetation.
+// SEAM (issue 23): these constants copy patch_half_size_m and the vegetation margin of
+// pipeline/engine/shot_simulation.cpp; call the shot layer's patch size (pipeline/shot/) once it
+// exposes one, so that the estimate cannot drift from the scene a shot builds.
+double estimated_patch_half_size_m(const Config& c, double range_m) {
+  const double pi = std::numbers::pi;
+  const double slope_deg = c.terrain.plane ? std::min(c.terrain.plane->slope_deg, 85.0) : 0.0;
+  return 1.2 * range_m * std::tan(0.5 * c.sensor.ifov_rad) / std::cos(slope_deg * pi / 180.0) +
+         2.0 + (c.canopy ? 100.0 : 0.0);
+}
+
+// The cores this process may run on: a run's threads unless --threads says fewer.
+int usable_cores() {
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
+// The memory this process may have: the machine's, or less under a cgroup's limit or ulimit -v.
+double available_memory_bytes() {
+  double bytes = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+  std::ifstream cgroup("/sys/fs/cgroup/memory.max");
+  std::string limit;
+  if (cgroup >> limit && limit != "max") {
+    double value = 0.0;
+    const auto [end, error] = std::from_chars(limit.data(), limit.data() + limit.size(), value);
+    if (error == std::errc() && value > 0.0) bytes = std::min(bytes, value);
+  }
+  rlimit address_space{};
+  if (getrlimit(RLIMIT_AS, &address_space) == 0 && address_space.rlim_cur != RLIM_INFINITY)
+    bytes = std::min(bytes, static_cast<double>(address_space.rlim_cur));
+  return bytes;
+}
+
+std::string gibibytes(double bytes) {
+  return format_number(std::round(bytes / 1073741824.0 * 10) / 10) + " GiB";
+}
+
+}  // namespace
+
+int threads_of_process(int threads, int processes_here) {
+  // More threads than cores would only wait for each other (and TBB would warn on stderr).
+  const int cores = tbb::this_task_arena::max_concurrency();
+  return threads > 0 ? std::min(threads, cores) : std::max(1, cores / std::max(1, processes_here));
+}
+
+RunMemory estimate_run_memory(const Config& c) {
+  RunMemory m;
+  const double range_m =
+      highest_spacecraft_m(c) / std::cos(c.track.off_nadir_deg * std::numbers::pi / 180.0);
+  m.scene_half_size_m = estimated_patch_half_size_m(c, range_m);
+  double density = 0.0;
+  if (c.canopy) {
+    density = tree_density_m2(*c.canopy);
+    for (const StandArea& stand : c.canopy->stand_areas)
+      density = std::max(density, tree_density_m2(stand.canopy));
+  }
+  const double side_m = 2.0 * m.scene_half_size_m;
+  m.trees = density * side_m * side_m;
+  m.scene_bytes = m.trees * run_limits::tree_bytes;
+  m.waveform_bytes = shot_size(c).bytes * run_limits::waveform_copies;
+  m.threads = usable_cores();
+  m.bytes = m.threads * (m.scene_bytes + m.waveform_bytes);
+  m.available_bytes = available_memory_bytes();
+  // The key to change: the crowns when they are many on a scene of a usual size, the waveforms
+  // when they weigh most, else what makes the scene wide.
+  if (m.waveform_bytes > m.scene_bytes)
+    m.place = "/sensor/bins";
+  else if (m.scene_half_size_m < 1000.0)
+    m.place = "/canopy/crown_radius_m";
+  else if (range_m > 2.0e6)
+    m.place = c.track.type == TrackType::orbit       ? "/track/semi_major_axis_m"
+              : c.track.type == TrackType::ephemeris ? "/track/ephemeris"
+                                                     : "/track/altitude_m";
+  else
+    m.place = "/sensor/ifov_rad";
+  return m;
+}
+
+void check_run(const Config& config) {
+  const RunMemory memory = estimate_run_memory(config);
+  if (memory.bytes > memory.available_bytes) {
+    std::ostringstream why;
+    why << "a run would hold about " << gibibytes(memory.bytes) << " (" << memory.threads
+        << " threads x a shot's scene of " << format_number(std::round(memory.trees))
+        << " trees over " << format_number(std::round(2.0 * memory.scene_half_size_m))
+        << " m across, at " << format_number(run_limits::tree_bytes / 1024.0)
+        << " KiB a tree, and its waveforms' " << mebibytes(memory.waveform_bytes)
+        << "), more than the " << gibibytes(memory.available_bytes)
+        << " of memory this process may have";
+    throw config_error(memory.place, why.str());
+  }
+  check_outputs(config);
+}
+
+BrfMemory estimate_brf_memory(const Config& c) {
+  BrfMemory m;
+  m.pixels = std::ceil(c.brf.scene_size_m / c.brf.image_resolution_m);
+  const double tile_m = m.pixels * c.brf.image_resolution_m;
+  m.scene_side_m = tile_m + 2.0 * (c.terrain.plane ? 5.0 : 100.0);  // as run_brf builds it
+  double density = 0.0;
+  if (c.canopy) {
+    density = tree_density_m2(*c.canopy);
+    for (const StandArea& stand : c.canopy->stand_areas)
+      density = std::max(density, tree_density_m2(stand.canopy));
+  }
+  m.trees = density * m.scene_side_m * m.scene_side_m;
+  m.scene_bytes = m.trees * run_limits::tree_bytes;
+  m.image_bytes = static_cast<double>(c.sensor.bands.size()) * m.pixels * m.pixels * 8.0 *
+                  run_limits::brf_image_copies;
+  m.bytes = m.scene_bytes + m.image_bytes;
+  m.available_bytes = available_memory_bytes();
+  // The key to change: the pixels when the image weighs most, else the tile when it is wide,
+  // else the crowns that crowd it.
+  m.place = m.image_bytes > m.scene_bytes ? "/brf/image_resolution_m"
+            : tile_m > 1000.0             ? "/brf/scene_size_m"
+                                          : "/canopy/crown_radius_m";
+  return m;
+}
+
+void check_brf(const Config& config) {
+  const BrfSettings& b = config.brf;
+  const double pixels = std::ceil(b.scene_size_m / b.image_resolution_m);
+  if (pixels > run_limits::brf_image_pixels)
+    throw config_error("/brf/image_resolution_m",
+                       "scene.tif would be " + format_number(pixels) + " pixels across (" +
+                           format_number(b.scene_size_m) + " m at " +
+                           format_number(b.image_resolution_m) + " m a pixel); at most " +
+                           format_number(run_limits::brf_image_pixels));
+  const BrfMemory memory = estimate_brf_memory(config);
+  if (memory.bytes <= memory.available_bytes) return;
+  std::ostringstream why;
+  why << "brf's scene would hold about " << gibibytes(memory.bytes) << " ("
+      << format_number(std::round(memory.trees)) << " trees over "
+      << format_number(std::round(memory.scene_side_m)) << " m across, at "
+      << format_number(run_limits::tree_bytes / 1024.0) << " KiB a tree, and scene.tif's "
+      << config.sensor.bands.size() << " bands of " << format_number(memory.pixels) << " x "
+      << format_number(memory.pixels) << " pixels, " << mebibytes(memory.image_bytes)
+      << "), more than the " << gibibytes(memory.available_bytes)
+      << " of memory this process may have";
+  throw config_error(memory.place, why.str());
+}
+
+}  // namespace glaswave

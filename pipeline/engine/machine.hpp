@@ -1,0 +1,57 @@
+// What the machine gives a run, and what a run will take of it: the threads of a process, and
+// the memory a run or `brf` will hold, estimated from the configuration before anything is
+// allocated and refused when the machine (or the cgroup, or ulimit -v) has less, at the key that
+// makes it large.
+#pragma once
+
+#include <string>
+
+#include "pipeline/config/config.hpp"
+
+namespace glaswave {
+
+// Threads of this process: `threads` (0: its share of the machine's cores, the cores divided
+// among the run's processes on this machine), never more than the cores.
+int threads_of_process(int threads, int processes_here);
+
+// What a run will hold in memory, estimated from the configuration before anything is
+// allocated: each thread simulates a shot, holding its scene (the trees and ground under the
+// field of view) and its waveforms' tallies.
+struct RunMemory {
+  double scene_half_size_m = 0.0;  // half the side of the ground patch a shot's rays can reach
+  double trees = 0.0;              // trees on it (the densest stand's density)
+  double scene_bytes = 0.0;        // the trees' (a DEM's mesh is capped: ground_mesh.cpp)
+  double waveform_bytes = 0.0;     // the tallies of a shot's waveforms
+  int threads = 1;                 // the cores this process may use: a run's default
+  double bytes = 0.0;              // threads x (scene + waveforms)
+  double available_bytes = 0.0;    // the machine's memory (or the cgroup's limit when lower)
+  std::string place;               // the key that makes it large, when it is too large
+};
+RunMemory estimate_run_memory(const Config& config);
+
+// What `run` needs beyond a configuration that simulates: no more memory than the machine has
+// (estimate_run_memory), then what it needs of its outputs (check_outputs). `check` asks the
+// same, so that the two accept exactly the same configurations.
+void check_run(const Config& config);
+
+// What `glaswave brf` will hold in memory, estimated as for a run: one scene (shared by the
+// threads), the trees on its tile and beyond its sides (5 m over a periodic plane, 100 m over a
+// DEM), and scene.tif's bands of doubles.
+struct BrfMemory {
+  double pixels = 0.0;        // scene.tif's side: brf.scene_size_m in whole pixels
+  double scene_side_m = 0.0;  // the ground the scene is built over
+  double trees = 0.0;         // on it, at the densest stand's density
+  double scene_bytes = 0.0;   // the trees'
+  double image_bytes = 0.0;   // scene.tif's bands, brf_image_copies times
+  double bytes = 0.0;         // scene + image
+  double available_bytes = 0.0;
+  std::string place;  // the key that makes it large, when it is too large
+};
+BrfMemory estimate_brf_memory(const Config& config);
+
+// What `brf` refuses before tracing anything: scene.tif wider than brf_image_pixels, or more
+// memory than this process may have (estimate_brf_memory), at the key that makes it large.
+// `check` asks the same.
+void check_brf(const Config& config);
+
+}  // namespace glaswave
