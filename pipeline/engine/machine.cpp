@@ -20,6 +20,7 @@
 #include "core/error.hpp"
 #include "footprints/ephemeris.hpp"
 #include "pipeline/config/json_reader.hpp"
+#include "pipeline/shot/footprint_geometry.hpp"
 
 namespace glaswave {
 namespace {
@@ -51,17 +52,11 @@ double tree_density_m2(const CanopySettings& canopy) {
          (std::numbers::pi * canopy.crown_radius_m * canopy.crown_radius_m);
 }
 
-// The patch a shot's rays reach, estimated before any terrain is opened: 1.2 times the reach of
-// the field of view's edge at the range, longer along a sloped plane, + 2 m, with 100 m for the
-// light that wanders through vegetation.
-// SEAM (issue 23): these constants copy patch_half_size_m and the vegetation margin of
-// pipeline/engine/shot_simulation.cpp; call the shot layer's patch size (pipeline/shot/) once it
-// exposes one, so that the estimate cannot drift from the scene a shot builds.
-double estimated_patch_half_size_m(const Config& c, double range_m) {
-  const double pi = std::numbers::pi;
+// The patch a shot's rays reach, as the shot layer sizes it before any terrain is opened: over a
+// plane's slope (capped at 85 deg, where the patch is already 11 times as long) or level ground.
+double shot_patch_half_size_m(const Config& c, double range_m) {
   const double slope_deg = c.terrain.plane ? std::min(c.terrain.plane->slope_deg, 85.0) : 0.0;
-  return 1.2 * range_m * std::tan(0.5 * c.sensor.ifov_rad) / std::cos(slope_deg * pi / 180.0) +
-         2.0 + (c.canopy ? 100.0 : 0.0);
+  return estimated_patch_half_size_m(range_m, c.sensor.ifov_rad, slope_deg, c.canopy.has_value());
 }
 
 // The cores this process may run on: a run's threads unless --threads says fewer.
@@ -103,7 +98,7 @@ RunMemory estimate_run_memory(const Config& c) {
   RunMemory m;
   const double range_m =
       highest_spacecraft_m(c) / std::cos(c.track.off_nadir_deg * std::numbers::pi / 180.0);
-  m.scene_half_size_m = estimated_patch_half_size_m(c, range_m);
+  m.scene_half_size_m = shot_patch_half_size_m(c, range_m);
   double density = 0.0;
   if (c.canopy) {
     density = tree_density_m2(*c.canopy);
@@ -152,7 +147,7 @@ BrfMemory estimate_brf_memory(const Config& c) {
   BrfMemory m;
   m.pixels = std::ceil(c.brf.scene_size_m / c.brf.image_resolution_m);
   const double tile_m = m.pixels * c.brf.image_resolution_m;
-  m.scene_side_m = tile_m + 2.0 * (c.terrain.plane ? 5.0 : 100.0);  // as run_brf builds it
+  m.scene_side_m = 2.0 * brf_scene_half_size_m(0.5 * tile_m, c.terrain.plane.has_value());
   double density = 0.0;
   if (c.canopy) {
     density = tree_density_m2(*c.canopy);
