@@ -16,11 +16,18 @@ std::size_t characters(std::string_view text) {
 
 // The first `count` characters of `text`, control characters escaped.
 std::string head(std::string_view text, std::size_t count) {
+  std::size_t seen = 0, end = 0;
+  for (; end < text.size(); ++end)
+    if (!continuation_byte(static_cast<unsigned char>(text[end])) && seen++ == count) break;
+  return escape_controls(text.substr(0, end));
+}
+
+}  // namespace
+
+std::string escape_controls(std::string_view text) {
   std::string out;
-  std::size_t seen = 0;
   for (char c : text) {
     const auto byte = static_cast<unsigned char>(c);
-    if (!continuation_byte(byte) && seen++ == count) break;
     if (byte < 0x20 || byte == 0x7f) {
       char escaped[8];
       std::snprintf(escaped, sizeof escaped, "\\x%02x", byte);
@@ -31,8 +38,6 @@ std::string head(std::string_view text, std::size_t count) {
   }
   return out;
 }
-
-}  // namespace
 
 std::string excerpt(std::string_view text) {
   const std::size_t length = characters(text);

@@ -17,6 +17,10 @@ inline constexpr std::size_t excerpt_max_chars = 60;
 // (escape codes, newlines) are written \xNN, so that nothing reaches a terminal raw.
 std::string excerpt(std::string_view text);
 
+// `text` whole, its control characters (escape codes, newlines) written \xNN: a one-line message
+// on a terminal.
+std::string escape_controls(std::string_view text);
+
 // The excerpt in double quotes: `"pai"`, `"aaaa..." (200000 characters)`.
 std::string quoted_excerpt(std::string_view text);
 

@@ -54,23 +54,6 @@ struct Arguments {
   std::string crs;                   // voxelize --crs
 };
 
-// Text from the command line or a file for a one-line message on stderr: control characters
-// (escape codes, newlines) written as \xNN, so that nothing reaches the terminal raw.
-std::string one_line(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte < 0x20 || byte == 0x7f) {
-      char escaped[8];
-      std::snprintf(escaped, sizeof escaped, "\\x%02x", byte);
-      out += escaped;
-    } else {
-      out += c;
-    }
-  }
-  return out;
-}
-
 // A decimal integer of an option, in [0, max]: digits only (CLI11 would take "0x10" as 16, an
 // empty text as the default, and saturate beyond 2^64 - 1).
 std::uint64_t decimal_option(const std::string& text, const char* option, std::uint64_t max) {
@@ -200,7 +183,7 @@ std::string element_word(const RayEvent& event) {
 // Warnings go to stderr, one line each, as errors do.
 void print_warnings(const std::vector<std::string>& warnings) {
   for (const std::string& warning : warnings)
-    std::fprintf(stderr, "glaswave: warning: %s\n", one_line(warning).c_str());
+    std::fprintf(stderr, "glaswave: warning: %s\n", escape_controls(warning).c_str());
 }
 
 // --debug-ray SHOT:RAY: one line per event on stdout, columns as docs/guide/command-line.md
@@ -629,7 +612,7 @@ int run_command_line(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     if (Cluster::world().rank() == 0)                // every process of mpirun has the same line
       std::fprintf(stderr, "glaswave: error: %s (see glaswave --help)\n",
-                   one_line(e.what()).c_str());
+                   escape_controls(e.what()).c_str());
     return 2;
   }
   // Under mpirun rank 0 alone reports an error every process met; one that this process met
@@ -644,14 +627,14 @@ int run_command_line(int argc, char** argv) {
   try {
     return commands.dispatch(joined(argc, argv));
   } catch (const Error& e) {
-    return report(one_line(e.what()).c_str(), e.exit_status());
+    return report(escape_controls(e.what()).c_str(), e.exit_status());
   } catch (const std::bad_alloc&) {
     return report(
         "out of memory; the configuration's limits (the manual's docs/guide/limits.md) assume the "
         "machine's memory is free",
         static_cast<int>(ErrorKind::run));
   } catch (const std::exception& e) {
-    return report(one_line(e.what()).c_str(), static_cast<int>(ErrorKind::run));
+    return report(escape_controls(e.what()).c_str(), static_cast<int>(ErrorKind::run));
   }
 }
 
