@@ -248,8 +248,11 @@ int run(const Arguments& arguments, const std::string& command_line) {
   }
   if (cluster.rank() != 0) return 0;  // rank 0 reports
   print_warnings(summary.warnings);
-  // Plots are drawn from the finished products; a failure there leaves the products whole.
-  if (config.output.plots) write_plots(request.out_dir);
+  // Plots are drawn from the finished products; a failure there leaves them whole, a warning.
+  if (config.output.plots) {
+    if (const std::string warning = plots_after_products(request.out_dir); !warning.empty())
+      print_warnings({warning});
+  }
   const double wall_s = std::max(summary.wall_s, 1e-9);
   if (arguments.json) {
     const nlohmann::json object = {

@@ -173,4 +173,13 @@ void write_plots(const fs::path& out_dir) {
                                (last.empty() ? "" : ": " + last) + log_note);
 }
 
+std::string plots_after_products(const fs::path& out_dir) {
+  try {
+    write_plots(out_dir);
+    return "";
+  } catch (const Error& error) {
+    return std::string(error.what()) + " (the products are complete, the plots not drawn)";
+  }
+}
+
 }  // namespace glaswave

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
 namespace glaswave {
 
@@ -15,5 +16,9 @@ namespace glaswave {
 // when the script cannot be started or fails: one line, the last of the script's stderr, the
 // whole of it in out_dir/plots.log.
 void write_plots(const std::filesystem::path& out_dir);
+
+// write_plots after a run's products are complete: a plot that fails does not fail the run
+// (issue 28), so its Error comes back as the warning to print (empty when the plots are drawn).
+std::string plots_after_products(const std::filesystem::path& out_dir);
 
 }  // namespace glaswave

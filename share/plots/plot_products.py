@@ -45,6 +45,7 @@ SIGNAL_FRACTION = 0.01  # signal extent: where the waveform exceeds 1% of its pe
 NOISE_FRACTION = 0.15  # bins at each end for the noise level (waveform_metrics.hpp)
 SUN_AZIMUTH_DEG, SUN_ALTITUDE_DEG = 315.0, 45.0  # hillshade light, the cartographers' default
 MAX_HILLSHADE_CELLS = 1500  # along either side of the map; a bigger window is read decimated
+MAX_LABEL_CHARS = 40  # a name from the user's data (a band, a CRS) is cut to this in plot text
 
 
 def read_shots(path):
@@ -72,8 +73,18 @@ def bin_elevations(shots, i):
                        shots["rx_waveform"].shape[2])
 
 
+def plain(text, limit=MAX_LABEL_CHARS):
+    """Text from the user's data as matplotlib draws it literally: cut to `limit` characters
+    (a 5,000-character band name made the figure fail) and every $ escaped, so that no
+    mathtext is parsed ($\\frac{1}{$ made it fail)."""
+    text = " ".join(str(text).split())
+    if len(text) > limit:
+        text = text[:limit - 1] + "\u2026"
+    return text.replace("$", r"\$")
+
+
 def band_label(name):
-    return name + (" nm" if name.isdigit() else "")
+    return plain(name) + (" nm" if name.isdigit() else "")
 
 
 def band_labels(shots):
@@ -367,7 +378,7 @@ def crs_labels(srs):
     if srs.IsGeographic():
         return "longitude (°E)", "latitude (°N)", name
     unit = srs.GetLinearUnitsName()
-    unit = "m" if unit in ("metre", "meter", "metres", "meters") else unit
+    unit = "m" if unit in ("metre", "meter", "metres", "meters") else plain(unit)
     return f"easting ({unit})", f"northing ({unit})", name
 
 
@@ -411,7 +422,7 @@ def plot_footprints_map(geojson, shots, path):
     if background is not None:
         xlabel, ylabel, crs = crs_labels(background["srs"])
         title += (f",\nover a hillshade of the DEM (sun from {SUN_AZIMUTH_DEG:g}° at "
-                  f"{SUN_ALTITUDE_DEG:g}°) in its CRS, {crs}")
+                  f"{SUN_ALTITUDE_DEG:g}°) in its CRS, {plain(crs, 80)}")
         description = f"glaswave footprints over a hillshade of the DEM; CRS {crs}"
     else:
         xlabel, ylabel = "longitude (°E)", "latitude (°N)"

@@ -36,13 +36,13 @@ constexpr int kBins = 120;
 constexpr double kBinNs = 1.0;
 constexpr double kBinM = 0.15;  // c * 1 ns / 2
 
-RunInfo make_info(const std::string& config_json) {
+RunInfo make_info(const std::string& config_json, std::vector<ProductBand> bands) {
   RunInfo info;
   info.command_line = "plots_test";
   info.config_json = config_json;
   info.seed = 1;
   info.shots = kShots;
-  info.bands = {ProductBand{"532", 532.0}, ProductBand{"1064", 1064.0}};
+  info.bands = std::move(bands);
   for (int b = 0; b < kBins; ++b) info.bin_time_ns.push_back(kBinNs * (b - kBins / 2));
   info.tx_time_ns = {-1.0, 0.0, 1.0};
   info.tx_waveform_W = {{1.0e6, 2.0e6, 1.0e6}, {3.0e6, 4.0e6, 3.0e6}};
@@ -109,8 +109,11 @@ ShotRecord make_flagged_shot(int record) {
   return shot;
 }
 
-void write_products(const fs::path& dir, bool all_flagged, const std::string& config_json = "{}") {
-  const RunInfo info = make_info(config_json);
+const std::vector<ProductBand> kBands = {{"532", 532.0}, {"1064", 1064.0}};
+
+void write_products(const fs::path& dir, bool all_flagged, const std::string& config_json = "{}",
+                    const std::vector<ProductBand>& bands = kBands) {
+  const RunInfo info = make_info(config_json, bands);
   NetcdfWriter netcdf(dir / "shots.nc", info);
   OgrWriter geojson(dir / "footprints.geojson", FootprintsFormat::geojson, info);
   for (int i = 0; i < kShots; ++i) {
@@ -152,6 +155,15 @@ TEST_F(PlotsTest, WritesThreePngsOfATinyProduct) {
 
 TEST_F(PlotsTest, DrawsAProductWhoseShotsAreAllFlagged) {
   write_products(dir_.path(), true);
+  ASSERT_NO_THROW(write_plots(dir_.path()));
+  expect_plots();
+}
+
+// Band names are the user's text: matplotlib's mathtext in one ($\frac{1}{$, which its parser
+// refused) and 5,000 characters in the other (which failed the figure) are drawn as plain text.
+TEST_F(PlotsTest, DrawsBandNamesAsPlainTextWhateverTheyHold) {
+  write_products(dir_.path(), false, "{}",
+                 {ProductBand{"$\\frac{1}{$", 532.0}, ProductBand{std::string(5000, 'b'), 1064.0}});
   ASSERT_NO_THROW(write_plots(dir_.path()));
   expect_plots();
 }
