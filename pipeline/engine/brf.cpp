@@ -81,7 +81,7 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
   for (const BrfView& view : config.brf.views)
     options.views.push_back(toward(view.zenith_deg, view.azimuth_deg));
   options.photons = config.brf.photons;
-  options.max_order = config.simulation.max_order;
+  // Every order (BrfOptions' default): simulation.max_order is the lidar's.
   options.seed = config.seed;
   options.image_pixels = pixels;
 

@@ -250,9 +250,10 @@ void SunTracer::trace_photon(std::int64_t batch, std::int64_t photon, BatchTally
   Photon path;
   path.direction = options_.sun_direction;
   path.position = {x, y, top_m_ + tile_.ground_slope_x * x + tile_.ground_slope_y * y};
-  // Scored up to max_order; the light scattered there is followed once more to see whether it
-  // leaves, so that the albedo counts the same orders as the BRF.
-  for (int order = 1; order <= options_.max_order + 1; ++order) {
+  // Scored up to max_order (every order by default); the light scattered there is followed once
+  // more to see whether it leaves, so that the albedo counts the same orders as the BRF.
+  const std::int64_t last_order = std::int64_t{options_.max_order} + 1;
+  for (std::int64_t order = 1; order <= last_order; ++order) {
     const Event event = next_event(path, random, tally);
     if (event.element == RayElement::none) {
       if (event.escaped_up)
