@@ -62,8 +62,10 @@ std::uint64_t decimal_option(const std::string& text, const char* option, std::u
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
   const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
   if (!digits) throw config_error(option, range + ", got " + quoted_excerpt(text));
+  // Digits alone are an integer: beyond the range it is too large.
   if (error != std::errc() || end != text.data() + text.size() || value > max)
-    throw config_error(option, range + ", got " + excerpt(text));
+    throw config_error(
+        option, "is too large: must be <= " + std::to_string(max) + ", got " + excerpt(text));
   return value;
 }
 

@@ -12,6 +12,7 @@
 #include "core/names.hpp"
 #include "footprints/glas_time.hpp"
 #include "pipeline/config/canopy_section.hpp"
+#include "pipeline/config/cross_checks.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/json_text.hpp"
 #include "pipeline/config/keys.hpp"
@@ -639,6 +640,7 @@ Config parse_config(const json& document) {
   root.finish();
   if (!terrain_given) root.fail("terrain", "is required: give \"dem\" or \"plane\"");
   c.resolved.erase("$schema");
+  check_across_keys(document, c);
   check_shot_size(c);
   return c;
 }

@@ -167,8 +167,15 @@ std::int64_t read_integer(const std::string& place, const json& value, std::int6
     const double x = value.get<double>();
     if (!std::isfinite(x))
       throw config_error(place, "must be a finite number, got " + describe(value));
-    if (x != std::floor(x) || std::fabs(x) > 9.0e15)
-      throw config_error(place, "must be an integer, got " + describe(value));
+    if (x != std::floor(x)) throw config_error(place, "must be an integer, got " + describe(value));
+    // Beyond the range it is an integer out of range, not "not an integer" (2^64 read as a
+    // double is one).
+    if (x > static_cast<double>(max))
+      throw config_error(place, "must be <= " + std::to_string(max) + ", got " + describe(value));
+    if (x < static_cast<double>(min))
+      throw config_error(place, "must be >= " + std::to_string(min) + ", got " + describe(value));
+    if (std::fabs(x) > 9.0e15)  // within the range, but a double's digits may not be its own
+      throw config_error(place, "must be an integer written in digits, got " + describe(value));
     n = static_cast<std::int64_t>(x);
   } else {
     throw config_error(place, "must be an integer, got " + describe(value));
@@ -287,7 +294,14 @@ std::uint64_t JsonReader::unsigned_integer(const std::string& key) {
     resolved_[key] = fallback;
     return fallback;
   }
-  // Unsigned values beyond the signed range are legal here (a 64-bit seed).
+  // Unsigned values beyond the signed range are legal here (a 64-bit seed); beyond 2^64 - 1 JSON
+  // holds the integer as a double, which is too large, not "not an integer".
+  constexpr double two_to_64 = 18446744073709551616.0;
+  if (value->is_number_float() && value->get<double>() >= two_to_64 &&
+      value->get<double>() == std::floor(value->get<double>()))
+    fail(key,
+         "is too large: must be <= " + std::to_string(std::numeric_limits<std::uint64_t>::max()) +
+             ", got " + describe(*value));
   const std::uint64_t n =
       value->is_number_unsigned()
           ? value->get<std::uint64_t>()

@@ -212,17 +212,17 @@ json read_json_file(const std::filesystem::path& file) {
 void apply_override(json& document, const std::string& assignment) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos)
-    throw config_error("--set", "expected KEY=VALUE, got \"" + assignment + "\"");
+    throw config_error("--set", "expected KEY=VALUE, got " + quoted_excerpt(assignment));
   const std::string key = assignment.substr(0, eq);
   const std::string text = assignment.substr(eq + 1);
-  if (key.empty()) throw config_error("--set", "empty key in \"" + assignment + "\"");
+  if (key.empty()) throw config_error("--set", "empty key in " + quoted_excerpt(assignment));
   std::vector<std::string> parts;
   for (std::size_t begin = 0;;) {
     const auto dot = key.find('.', begin);
     parts.push_back(key.substr(begin, dot - begin));
     if (parts.back().empty())
-      throw config_error("--set",
-                         "empty part in the key \"" + key + "\" of \"" + assignment + "\"");
+      throw config_error("--set", "empty part in the key " + quoted_excerpt(key) + " of " +
+                                      quoted_excerpt(assignment));
     if (dot == std::string::npos) break;
     begin = dot + 1;
   }
@@ -231,12 +231,12 @@ void apply_override(json& document, const std::string& assignment) {
   try {
     value = parse_json_checked(text, dotted_to_pointer(parts));
   } catch (const Error& e) {
-    throw config_error(e.place(), e.message() + " (from --set " + key + ")");
+    throw config_error(e.place(), e.message() + " (from --set " + excerpt(key) + ")");
   } catch (const json::parse_error&) {
     value = text;  // not JSON: a bare string such as a path or a name
   } catch (const json::out_of_range&) {
-    throw config_error(dotted_to_pointer(parts),
-                       "must be a finite number, got " + text + " (from --set " + assignment + ")");
+    throw config_error(dotted_to_pointer(parts), "must be a finite number, got " + excerpt(text) +
+                                                     " (from --set " + excerpt(key) + ")");
   }
 
   if (document.is_null()) document = json::object();
@@ -251,16 +251,17 @@ void apply_override(json& document, const std::string& assignment) {
       for (char c : part) numeric = numeric && c >= '0' && c <= '9';
       if (numeric) index = std::stoul(part);
       if (!numeric || index >= node->size()) {
-        throw config_error("--set", "cannot set \"" + key + "\": \"" + part +
-                                        "\" is not an index of an array of " +
+        throw config_error("--set", "cannot set " + quoted_excerpt(key) + ": " +
+                                        quoted_excerpt(part) + " is not an index of an array of " +
                                         std::to_string(node->size()));
       }
       node = &(*node)[index];
     } else if (node->is_object()) {
       node = &(*node)[part];
     } else {
-      throw config_error("--set", "cannot set \"" + key + "\": the value above \"" + part +
-                                      "\" is " + describe(*node) + ", not an object");
+      throw config_error("--set", "cannot set " + quoted_excerpt(key) + ": the value above " +
+                                      quoted_excerpt(part) + " is " + describe(*node) +
+                                      ", not an object");
     }
     if (last) {
       *node = value;

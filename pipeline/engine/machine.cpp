@@ -20,6 +20,7 @@
 #include "core/error.hpp"
 #include "footprints/ephemeris.hpp"
 #include "pipeline/config/json_reader.hpp"
+#include "pipeline/products/ogr_writer.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
 
 namespace glaswave {
@@ -141,6 +142,13 @@ void check_run(const Config& config) {
     throw config_error(memory.place, why.str());
   }
   check_outputs(config);
+  if (config.output.geojson) {
+    std::vector<std::string> band_names;
+    for (const Band& band : config.sensor.bands) band_names.push_back(band.name);
+    check_footprint_properties(band_names, config.output.footprints_format == "GPKG"
+                                               ? FootprintsFormat::gpkg
+                                               : FootprintsFormat::geojson);
+  }
 }
 
 BrfMemory estimate_brf_memory(const Config& c) {

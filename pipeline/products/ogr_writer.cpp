@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <map>
@@ -297,6 +298,33 @@ struct OgrWriter::Impl {
     ++next;
   }
 };
+
+void check_footprint_properties(const std::vector<std::string>& band_names,
+                                FootprintsFormat format) {
+  if (format != FootprintsFormat::gpkg) return;
+  struct Seen {
+    std::string name;
+    int band;  // -1 for a field of the shot
+  };
+  std::map<std::string, Seen> seen;  // by the name in lower case
+  for (const ProductField& field : product_fields()) {
+    for (const GeojsonPropertyName& property : geojson_properties(field, band_names)) {
+      std::string folded = property.name;
+      std::transform(folded.begin(), folded.end(), folded.begin(),
+                     [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      const int band = field.per_band() ? static_cast<int>(property.band) : -1;
+      const auto [it, inserted] = seen.emplace(folded, Seen{property.name, band});
+      if (inserted) continue;
+      const int later = std::max(band, it->second.band);
+      throw config_error(
+          later >= 0 ? "/sensor/bands/" + std::to_string(later) + "/name" : "/sensor/bands",
+          "the footprint properties " + quoted_excerpt(it->second.name) + " and " +
+              quoted_excerpt(property.name) +
+              " differ only in case, which a GeoPackage's columns do not tell apart: rename "
+              "the band or write GeoJSON (output.footprints_format)");
+    }
+  }
+}
 
 OgrWriter::OgrWriter(std::filesystem::path final_path, FootprintsFormat format, const RunInfo& info)
     : final_path_(std::move(final_path)), impl_(std::make_unique<Impl>(final_path_, info.shots)) {

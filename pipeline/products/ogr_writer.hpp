@@ -8,11 +8,20 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/shot_record.hpp"
 
 namespace glaswave {
+
+// The footprints' properties, checked before anything is created: in a GeoPackage (SQLite) two
+// whose names differ only in case (the bands "x" and "X": reflectance_x, reflectance_X) are one
+// column, which failed inside SQLite with the whole CREATE TABLE as its message (issue 28).
+// Throws Error (config) at "/sensor/bands/N/name" of the later band. GeoJSON keeps them apart.
+void check_footprint_properties(const std::vector<std::string>& band_names,
+                                FootprintsFormat format);
 
 class OgrWriter final : public ProductWriter {
  public:

@@ -221,8 +221,11 @@ TEST_F(HostileInput, FifosAndEmptyStandsAreRefusedAndSpreadsheetCsvIsRead) {
 TEST_F(HostileInput, AFileOfAnotherKindIsNeverEchoed) {
   const std::string secret = "root:$6$Zm9vYmFyYmF6$c2VjcmV0aGFzaHZhbHVl:19000:0:99999:7:::";
   const std::string shadow = write("shadow", secret + "\n");
-  const std::string config =
-      write_config({{"track", {{"type", "ephemeris"}, {"ephemeris", shadow}}}});
+  const std::string config = write_config({{"track",
+                                            {{"type", "ephemeris"},
+                                             {"ephemeris", shadow},
+                                             {"start_lat_deg", nullptr},
+                                             {"start_lon_deg", nullptr}}}});
   expect_refused(config, "", 3, shadow + ":1: column 1 is not a column name");
   const CommandOutcome check = run_glaswave("check " + config);
   EXPECT_EQ(check.output.find("Zm9v"), std::string::npos) << check.output;
@@ -241,7 +244,7 @@ TEST_F(HostileInput, CommandLineValuesAreCheckedNotDefaulted) {
   };
   const std::vector<Case> cases = {
       {"--seed 18446744073709551616",
-       "--seed: must be an integer in [0, 18446744073709551615], got 18446744073709551616"},
+       "--seed: is too large: must be <= 18446744073709551615, got 18446744073709551616"},
       {"--seed 0x10", "--seed: must be an integer in [0, 18446744073709551615], got \"0x10\""},
       {"--seed -1", "--seed: must be an integer in [0, 18446744073709551615], got \"-1\""},
       {"--threads 0x10", "--threads: must be an integer in [0, 65536], got \"0x10\""},

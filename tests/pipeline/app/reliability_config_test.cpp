@@ -104,6 +104,71 @@ TEST_F(Refused, QuotedInputIsABoundedExcerpt) {
   EXPECT_LT(line.size(), 300u);
 }
 
+// --set's own messages quoted the whole assignment: 100 KB without '=', in a key's part, as an
+// array index, as a number beyond a double.
+TEST_F(Refused, SetQuotesItsAssignmentAsABoundedExcerpt) {
+  const std::string value(100000, 'v');
+  const std::string config = write_config(json::object());
+  const std::string cut = "\"" + std::string(60, 'v') + "...\" (";
+  std::string line =
+      expect_refused(config, " --set " + value, 2, "--set: expected KEY=VALUE, got " + cut);
+  EXPECT_LT(line.size(), 300u);
+  line = expect_refused(config, " --set canopy." + value + "..pai=1", 2,
+                        "--set: empty part in the key \"canopy.vvv");
+  EXPECT_LT(line.size(), 300u);
+  const json band = {{"name", "1064"},
+                     {"wavelength_nm", 1064},
+                     {"pulse_energy_mJ", 70},
+                     {"atmos_transmission_roundtrip", 0.9}};
+  line = expect_refused(write_config({{"sensor", {{"bands", {band}}}}}, "bands.json"),
+                        " --set sensor.bands." + value + "=1", 2,
+                        "--set: cannot set \"sensor.bands.vvv");
+  EXPECT_NE(line.find("is not an index of an array of 1"), std::string::npos) << line;
+  EXPECT_LT(line.size(), 300u);
+  line = expect_refused(config, " --set canopy.pai=1" + std::string(100000, '0'), 2,
+                        "/canopy/pai: must be a finite number, got 1" + std::string(59, '0') +
+                            "... (100001 characters) (from --set canopy.pai)");
+  EXPECT_LT(line.size(), 300u);
+}
+
+// A seed of 2^64 is an integer, too large; keys of another type of track, which it ignored, two
+// bands of one wavelength (a band coordinate not unique) and GeoPackage properties differing only
+// in case (which failed inside SQLite with its CREATE TABLE) are refused before anything runs.
+TEST_F(Refused, MessagesSayWhatIsWrong) {
+  expect_refused(
+      write_config({{"seed", 18446744073709551615.0 * 2.0}}), "", 2,
+      "/seed: is too large: must be <= 18446744073709551615, got 3.6893488147419103e+19");
+  expect_refused(write_config(json::object()), " --set seed=18446744073709551616", 2,
+                 "/seed: is too large: must be <= 18446744073709551615, got ");
+  expect_refused(write_config({{"track", {{"points", {{{"lat_deg", 46}, {"lon_deg", 8}}}}}}}), "",
+                 2,
+                 "/track/points: is a key of a track of type \"points\", which this track (type "
+                 "\"pass\") would ignore");
+  for (const char* type : {"orbit", "granule"}) {
+    expect_refused(write_config({{"track", {{"type", type}, {"file", "g.h5"}}}}), "", 2,
+                   "/track/start_lat_deg: is a key of a track of type \"pass\", which this "
+                   "track (type \"" +
+                       std::string(type) + "\") would ignore");
+  }
+  const json band = {
+      {"wavelength_nm", 1064}, {"pulse_energy_mJ", 70}, {"atmos_transmission_roundtrip", 0.9}};
+  json a = band, b = band;
+  a["name"] = "x";
+  b["name"] = "X";
+  expect_refused(write_config({{"sensor", {{"bands", {a, b}}}}}), "", 2,
+                 "/sensor/bands/1/wavelength_nm: is also that of band \"x\" (1064 nm)");
+  b["wavelength_nm"] = 532;
+  const std::string gpkg =
+      write_config({{"sensor", {{"bands", {a, b}}}}, {"output", {{"footprints_format", "GPKG"}}}});
+  const std::string line =
+      expect_refused(gpkg, "", 2, "/sensor/bands/1/name: the footprint properties \"");
+  EXPECT_EQ(line.find("CREATE"), std::string::npos) << line;
+  // GeoJSON keeps them apart.
+  const CommandOutcome geojson =
+      run_glaswave("check " + write_config({{"sensor", {{"bands", {a, b}}}}}, "geojson.json"));
+  EXPECT_EQ(geojson.status, 0) << geojson.output;
+}
+
 TEST_F(Refused, AStandWithoutAreaIsRefusedNamingTheFeature) {
   const std::string file =
       stands("line.geojson", {{7.99, 45.99}, {8.0, 46.0}, {8.01, 46.01}, {7.99, 45.99}});
@@ -168,8 +233,12 @@ TEST_F(Refused, TimesOutsideTheYearsOfATrack) {
                  "time that must be from 1900-01-01T00:00:00Z to 2200-01-01T00:00:00Z");
   const std::string ephemeris =
       write("eph.csv", "time,x_m,y_m,z_m\n1e300,4436000,623000,5170000\n");
-  expect_refused(write_config({{"track", {{"type", "ephemeris"}, {"ephemeris", ephemeris}}}}), "",
-                 3, ephemeris + ":2: time must be from 1900-01-01T00:00:00Z");
+  expect_refused(write_config({{"track",
+                                {{"type", "ephemeris"},
+                                 {"ephemeris", ephemeris},
+                                 {"start_lat_deg", nullptr},
+                                 {"start_lon_deg", nullptr}}}}),
+                 "", 3, ephemeris + ":2: time must be from 1900-01-01T00:00:00Z");
 }
 
 // Crowns 900 km from the track were simulated as bare ground without a word.

@@ -47,7 +47,7 @@ std::vector<json> rich_documents() {
           "terrain": {"plane": {"slope_deg": 10}, "roughness": {"rms_m": 0.5},
                       "soil_reflectance": {"532": 0.1, "1064": 0.3}},
           "canopy": {"lad": {"ellipsoidal_mean_deg": 30}, "crowns_file": "c.csv"},
-          "track": {"type": "points", "points": [{"lat_deg": 1, "lon_deg": 2}], "spacing_m": 100},
+          "track": {"type": "points", "points": [{"lat_deg": 1, "lon_deg": 2}]},
           "output": {"per_order": true, "footprints_format": "GeoJSON"},
           "detector": {"enabled": true, "bits": 8, "saturation_W": 1e-3},
           "brf": {"views": [{"zenith_deg": 10, "azimuth_deg": 20}]}})"),
@@ -55,6 +55,7 @@ std::vector<json> rich_documents() {
           "canopy": {"stands": "/s.geojson"},
           "track": {"type": "orbit", "epoch": "2001-01-01T00:00:00Z"}})"),
       doc(R"({"track": {"type": "ephemeris", "ephemeris": "/e.csv"}})"),
+      doc(R"({"track": {"spacing_m": 100}})"),
   };
 }
 
