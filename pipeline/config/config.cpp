@@ -499,21 +499,7 @@ TrackSettings read_track(JsonReader& root) {
 OutputSettings read_output(JsonReader& root) {
   OutputSettings o;
   JsonReader r = root.object("output");
-  o.netcdf = r.boolean("netcdf");
-  o.geojson = r.boolean("geojson");
-  o.plots = r.boolean("plots");
-  o.per_order = r.boolean("per_order");
-  o.metrics = r.boolean("metrics");
-  o.footprints_format =
-      r.choice<std::string>("footprints_format", {{"GeoJSON", "GeoJSON"}, {"GPKG", "GPKG"}});
-  o.gedi_l1b = r.boolean("gedi_l1b");
-  o.gedi_l2a = r.boolean("gedi_l2a");
-  o.glah01 = r.boolean("glah01");
-  o.glah14 = r.boolean("glah14");
-  o.glas_ellipsoid =
-      r.choice<std::string>("glas_ellipsoid", {{"wgs84", "wgs84"}, {"topex", "topex"}});
-  if (r.has("atl03")) o.atl03 = r.boolean("atl03");
-  if (r.has("atl08")) o.atl08 = r.boolean("atl08");
+  read_fields(r, {}, o);
   r.finish();
   return o;
 }

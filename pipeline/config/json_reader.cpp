@@ -421,6 +421,22 @@ void JsonReader::finish() const {
   }
 }
 
+void read_declared(JsonReader& reader, const KeyHooks& hooks,
+                   std::initializer_list<SettingsTarget> targets) {
+  const Key& declaration = reader.declaration();
+  for (const auto& [name, hook] : hooks)
+    if (!declaration.child(name))
+      throw std::logic_error("the configuration parser reads " + reader.place(name) +
+                             " as it is not declared in pipeline/config/keys.cpp");
+  for (const Key& key : declaration.children) {
+    if (key.read)
+      for (const SettingsTarget& target : targets)
+        if (*target.type == *key.owner) key.read(reader, target.object);
+    for (const auto& [name, hook] : hooks)
+      if (name == key.name) hook();
+  }
+}
+
 void JsonReader::fail(const std::string& key, const std::string& message) const {
   throw config_error(place(key), message);
 }

@@ -5,10 +5,13 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <typeinfo>
 #include <utility>
 #include <vector>
 
@@ -53,6 +56,7 @@ class JsonReader {
              const Key& declaration);
 
   const std::string& path() const { return path_; }
+  const Key& declaration() const { return *declaration_; }
   std::string place(const std::string& key) const { return json_pointer_child(path_, key); }
 
   // The declaration of a key of this object. Reading a key that is not declared, or as another
@@ -133,6 +137,30 @@ class JsonReader {
   const Key* declaration_;
   std::vector<std::string> known_;
 };
+
+// A section's own reading of a key whose value needs more than its member (other keys, a check
+// across keys, a shape of its own), by the key's name.
+using KeyHooks = std::vector<std::pair<std::string, std::function<void()>>>;
+
+// One settings struct a section's keys are read into.
+struct SettingsTarget {
+  const std::type_info* type;
+  void* object;
+};
+
+// Reads the keys of the reader's object in the order of their declaration, so that the first
+// fault named is the first in the file's order: a key declared with a member of one of `targets`
+// is read into it (keys.cpp's Fields), then the hook of its name runs; a key with no member is
+// read by its hook, or left to the caller. The caller calls finish(). A hook for a key that is
+// not declared is a bug of the parser: std::logic_error.
+void read_declared(JsonReader& reader, const KeyHooks& hooks,
+                   std::initializer_list<SettingsTarget> targets);
+
+// The same for the settings structs `settings`.
+template <typename... S>
+void read_fields(JsonReader& reader, const KeyHooks& hooks, S&... settings) {
+  read_declared(reader, hooks, {SettingsTarget{&typeid(S), &settings}...});
+}
 
 // Checks a number found at `place`: a finite JSON number within `range`.
 double read_number(const std::string& place, const nlohmann::json& value, const Range& range);

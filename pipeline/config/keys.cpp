@@ -4,6 +4,8 @@
 #include "pipeline/config/keys.hpp"
 
 #include <sstream>
+#include <type_traits>
+#include <typeinfo>
 
 #include "canopy/canopy_settings.hpp"
 #include "footprints/track_settings.hpp"
@@ -75,6 +77,10 @@ Key&& Key::with_default_text(std::string text) && {
 Key&& Key::with_items(std::size_t least, std::size_t most) && {
   min_items = least;
   max_items = most;
+  return std::move(*this);
+}
+Key&& Key::with_default(json value) && {
+  default_value = std::move(value);
   return std::move(*this);
 }
 
@@ -179,6 +185,155 @@ Key object_array(std::string name, json fallback, std::string description,
 }
 
 }  // namespace declare
+
+// ---- keys declared with the member they set --------------------------------------------------
+
+namespace {
+
+// The keys of a settings struct S, each declared beside the member it sets (PDAL's args.add):
+// its default is the member's initial value, and its reader sets the member. A member of a base
+// of S is one of S.
+template <typename S>
+class Fields {
+ public:
+  // `key`, reading into `member` what read(reader, name) returns.
+  template <typename M, typename C, typename Read>
+  Key bind(Key key, M C::*member, Read read) const {
+    static_assert(std::is_base_of_v<C, S>);
+    M S::*target = member;
+    key.owner = &typeid(S);
+    key.read = [target, read, name = key.name](JsonReader& r, void* settings) {
+      static_cast<S*>(settings)->*target = read(r, name);
+    };
+    return key;
+  }
+
+  Key number(std::string name, double S::*member, Range range, std::string unit,
+             std::string description) const {
+    return bind(declare::number(std::move(name), initial_.*member, range, std::move(unit),
+                                std::move(description)),
+                member, [](JsonReader& r, const std::string& key) { return r.number(key); });
+  }
+  // A number without a default: unset when absent or null.
+  Key number(std::string name, std::optional<double> S::*member, Range range, std::string unit,
+             std::string description) const {
+    return bind(declare::number(std::move(name), std::nullopt, range, std::move(unit),
+                                std::move(description)),
+                member,
+                [](JsonReader& r, const std::string& key) { return r.optional_number(key); });
+  }
+  Key integer(std::string name, int S::*member, std::int64_t min, std::uint64_t max,
+              std::string unit, std::string description) const {
+    return bind(declare::integer(std::move(name), initial_.*member, min, max, std::move(unit),
+                                 std::move(description)),
+                member, [](JsonReader& r, const std::string& key) {
+                  return static_cast<int>(r.integer(key));
+                });
+  }
+  Key integer(std::string name, std::int64_t S::*member, std::int64_t min, std::uint64_t max,
+              std::string unit, std::string description) const {
+    return bind(declare::integer(std::move(name), initial_.*member, min, max, std::move(unit),
+                                 std::move(description)),
+                member, [](JsonReader& r, const std::string& key) { return r.integer(key); });
+  }
+  Key boolean(std::string name, bool S::*member, std::string description) const {
+    return bind(declare::boolean(std::move(name), initial_.*member, std::move(description)), member,
+                [](JsonReader& r, const std::string& key) { return r.boolean(key); });
+  }
+  // A switch whose default depends on other keys (`default_text` says how): unset when absent.
+  Key boolean(std::string name, std::optional<bool> S::*member, std::string description,
+              std::string default_text) const {
+    Key k = make(std::move(name), KeyType::boolean, "", std::move(description));
+    k.default_text = std::move(default_text);
+    return bind(std::move(k), member, [](JsonReader& r, const std::string& key) {
+      return r.has(key) ? std::optional<bool>(r.boolean(key)) : std::nullopt;
+    });
+  }
+  // One of `names`, the member holding the name.
+  Key choice(std::string name, std::string S::*member, std::vector<std::string> names,
+             std::string description) const {
+    std::vector<std::pair<std::string, std::string>> values;
+    for (const std::string& n : names) values.emplace_back(n, n);
+    return choice_of(std::move(name), member, std::move(values), std::move(description));
+  }
+  // One of the names of `values`, the member holding the value of the name.
+  template <typename T>
+  Key choice_of(std::string name, T S::*member, std::vector<std::pair<std::string, T>> values,
+                std::string description) const {
+    std::vector<std::string> names;
+    std::optional<std::string> fallback;
+    for (const auto& [n, value] : values) {
+      names.push_back(n);
+      if (!fallback && value == initial_.*member) fallback = n;
+    }
+    return bind(
+        declare::choice(std::move(name), fallback, std::move(names), std::move(description)),
+        member,
+        [values](JsonReader& r, const std::string& key) { return r.choice<T>(key, values); });
+  }
+  // A file's path: empty when absent, refused when given empty.
+  Key path(std::string name, std::string S::*member, std::string description) const {
+    return bind(declare::path(std::move(name), std::move(description)), member,
+                [](JsonReader& r, const std::string& key) {
+                  const std::optional<std::string> path = r.optional_string(key);
+                  if (path && path->empty()) r.fail(key, "must not be empty");
+                  return path.value_or("");
+                });
+  }
+  // An object read into a struct of its own, with the keys `children` declare for it.
+  template <typename M>
+  Key object(std::string name, M S::*member, std::string description,
+             std::vector<Key> children) const {
+    return bind(declare::object(std::move(name), std::move(description), std::move(children)),
+                member, [](JsonReader& r, const std::string& key) {
+                  M settings;
+                  JsonReader o = r.object(key);
+                  read_fields(o, {}, settings);
+                  o.finish();
+                  return settings;
+                });
+  }
+  // The same, unset unless given.
+  template <typename M>
+  Key object(std::string name, std::optional<M> S::*member, std::string description,
+             std::vector<Key> children) const {
+    return bind(declare::object(std::move(name), std::move(description), std::move(children)),
+                member, [](JsonReader& r, const std::string& key) -> std::optional<M> {
+                  if (!r.has(key)) return std::nullopt;
+                  M settings;
+                  JsonReader o = r.object(key);
+                  read_fields(o, {}, settings);
+                  o.finish();
+                  return settings;
+                });
+  }
+  // An array of objects, each read into an M; absent: the member's initial value, which
+  // `fallback` writes as JSON.
+  template <typename M>
+  Key object_array(std::string name, std::vector<M> S::*member, json fallback,
+                   std::string description, std::vector<Key> item_keys) const {
+    return bind(declare::object_array(std::move(name), std::move(fallback), std::move(description),
+                                      std::move(item_keys)),
+                member, [initial = initial_.*member](JsonReader& r, const std::string& key) {
+                  std::vector<JsonReader> items = r.object_array(key);
+                  if (items.empty()) {
+                    r.resolved()[key] = r.declared(key, KeyType::object_array).default_value;
+                    return initial;
+                  }
+                  std::vector<M> values(items.size());
+                  for (std::size_t i = 0; i < items.size(); ++i) {
+                    read_fields(items[i], {}, values[i]);
+                    items[i].finish();
+                  }
+                  return values;
+                });
+  }
+
+ private:
+  const S initial_{};
+};
+
+}  // namespace
 
 // ---- the declaration ------------------------------------------------------------------------
 
@@ -536,43 +691,42 @@ Key track_keys() {
            .with_default_text("all")});
 }
 
-Key granule_switch(const char* name, const char* description) {
-  Key k = make(name, KeyType::boolean, "", description);
-  k.default_text = "true with `sensor.receiver: photon_counting`, else false";
-  return k;
-}
-
 Key output_keys() {
-  const OutputSettings o;
+  const Fields<OutputSettings> o;
+  using S = OutputSettings;
+  const std::string photon_counting = "true with `sensor.receiver: photon_counting`, else false";
   return object(
       "output", "which products to write; at least one of `netcdf` and `geojson`",
-      {boolean("netcdf", o.netcdf, "write `shots.nc`"),
-       boolean("geojson", o.geojson, "write the footprints (`footprints.geojson`)"),
-       boolean("plots", o.plots,
-               "PNG plots (drawn from both products: needs `netcdf` and `geojson`)"),
-       boolean("per_order", o.per_order, "per-scattering-order waveforms"),
-       boolean("metrics", o.metrics,
-               "the waveform metrics and Gaussian decomposition (`energy_tr` ... `rh`); "
-               "false skips them, leaving them fill (`n_peaks` 0): shots are then not "
-               "flagged no or low signal, a detected waveform's `reflectance` is fill, "
-               "and `plots` is refused"),
-       choice("footprints_format", o.footprints_format, {"GeoJSON", "GPKG"},
-              "the footprints' format: `footprints.geojson`, or `footprints.gpkg` "
-              "(GeoPackage)"),
-       boolean("gedi_l1b", o.gedi_l1b,
-               "write `gedi_l1b.h5`, a GEDI L1B-style granule (waveforms in counts; "
-               "docs/granules.md)"),
-       boolean("gedi_l2a", o.gedi_l2a,
-               "write `gedi_l2a.h5`, a GEDI L2A-style granule (elevations, rh); itself "
-               "a valid `granule` track"),
-       boolean("glah01", o.glah01, "write `glah01.h5`, a GLAS GLAH01-style granule (waveforms)"),
-       boolean("glah14", o.glah14,
-               "write `glah14.h5`, a GLAS GLAH14-style granule (elevations, Gaussians)"),
-       choice("glas_ellipsoid", o.glas_ellipsoid, {"wgs84", "topex"},
-              "the GLAS granules' heights: on WGS84, or on GLAS's TOPEX/Poseidon "
-              "ellipsoid (`Geophysical/d_deltaEllip` is WGS84 less T/P height)"),
-       granule_switch("atl03", "the ATL03-like photons `atl03.h5` (photon counting)"),
-       granule_switch("atl08", "the ATL08-like land segments `atl08.h5` (photon counting)")});
+      {o.boolean("netcdf", &S::netcdf, "write `shots.nc`"),
+       o.boolean("geojson", &S::geojson, "write the footprints (`footprints.geojson`)"),
+       o.boolean("plots", &S::plots,
+                 "PNG plots (drawn from both products: needs `netcdf` and `geojson`)"),
+       o.boolean("per_order", &S::per_order, "per-scattering-order waveforms"),
+       o.boolean("metrics", &S::metrics,
+                 "the waveform metrics and Gaussian decomposition (`energy_tr` ... `rh`); "
+                 "false skips them, leaving them fill (`n_peaks` 0): shots are then not "
+                 "flagged no or low signal, a detected waveform's `reflectance` is fill, "
+                 "and `plots` is refused"),
+       o.choice("footprints_format", &S::footprints_format, {"GeoJSON", "GPKG"},
+                "the footprints' format: `footprints.geojson`, or `footprints.gpkg` "
+                "(GeoPackage)"),
+       o.boolean("gedi_l1b", &S::gedi_l1b,
+                 "write `gedi_l1b.h5`, a GEDI L1B-style granule (waveforms in counts; "
+                 "docs/granules.md)"),
+       o.boolean("gedi_l2a", &S::gedi_l2a,
+                 "write `gedi_l2a.h5`, a GEDI L2A-style granule (elevations, rh); itself "
+                 "a valid `granule` track"),
+       o.boolean("glah01", &S::glah01,
+                 "write `glah01.h5`, a GLAS GLAH01-style granule (waveforms)"),
+       o.boolean("glah14", &S::glah14,
+                 "write `glah14.h5`, a GLAS GLAH14-style granule (elevations, Gaussians)"),
+       o.choice("glas_ellipsoid", &S::glas_ellipsoid, {"wgs84", "topex"},
+                "the GLAS granules' heights: on WGS84, or on GLAS's TOPEX/Poseidon "
+                "ellipsoid (`Geophysical/d_deltaEllip` is WGS84 less T/P height)"),
+       o.boolean("atl03", &S::atl03, "the ATL03-like photons `atl03.h5` (photon counting)",
+                 photon_counting),
+       o.boolean("atl08", &S::atl08, "the ATL08-like land segments `atl08.h5` (photon counting)",
+                 photon_counting)});
 }
 
 Key detector_keys() {

@@ -6,13 +6,17 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <typeinfo>
 #include <vector>
 
 namespace glaswave {
+
+class JsonReader;
 
 // The allowed interval of a number; open or closed at each end, either end optional.
 struct Range {
@@ -68,6 +72,11 @@ struct Key {
   bool nullable = false;  // null reads as absent
   std::size_t min_items = 0, max_items = std::numeric_limits<std::size_t>::max();  // arrays
   std::vector<Key> children;  // object, object_array, choice_or_object
+  // The member the key sets, for keys declared with one (keys.cpp's Fields): `read` reads the
+  // key through the reader into that member of a settings struct of type `owner`. Keys whose
+  // value needs other keys have none: their section reads them (read_fields' hooks).
+  const std::type_info* owner = nullptr;
+  std::function<void(JsonReader&, void* settings)> read;
 
   // The declared key `name` among the children, or null.
   const Key* child(const std::string& name) const;
@@ -77,6 +86,7 @@ struct Key {
   Key&& with_nullable() &&;
   Key&& with_default_text(std::string text) &&;
   Key&& with_items(std::size_t least, std::size_t most) &&;
+  Key&& with_default(nlohmann::json value) &&;
 };
 
 // Builders of declarations: each gives the name, the default, the range and unit, and what the
