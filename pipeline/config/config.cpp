@@ -78,13 +78,6 @@ std::vector<double> spectral(JsonReader& reader, const std::string& key,
   return values;
 }
 
-// A path that must name something when given.
-std::string non_empty_path(JsonReader& reader, const std::string& key) {
-  const std::optional<std::string> path = reader.optional_string(key);
-  if (path && path->empty()) reader.fail(key, "must not be empty");
-  return path.value_or("");
-}
-
 // An ISO 8601 time of the configuration, as seconds since the GLAS epoch.
 double time_s(JsonReader& reader, const std::string& key, const std::string& text) {
   try {
@@ -118,6 +111,41 @@ std::string sensor_preset(const json& given) {
                          (suggestion.empty() ? "; the presets are " + known : suggestion));
 }
 
+// The laser's bands, their names unique.
+void read_bands(JsonReader& r, SensorSettings& s) {
+  for (JsonReader& b : r.object_array("bands", true)) {
+    Band band;
+    for (const char* key :
+         {"name", "wavelength_nm", "pulse_energy_mJ", "atmos_transmission_roundtrip"})
+      b.require(key);
+    band.name = b.string("name", "");
+    if (band.name.empty()) b.fail("name", "must not be empty");
+    for (const Band& other : s.bands)
+      if (other.name == band.name) b.fail("name", "duplicate band name \"" + band.name + "\"");
+    band.wavelength_nm = b.number("wavelength_nm");
+    band.pulse_energy_mJ = b.number("pulse_energy_mJ");
+    band.atmos_transmission_roundtrip = b.number("atmos_transmission_roundtrip");
+    b.finish();
+    s.bands.push_back(band);
+  }
+}
+
+// The beams of the photon-counting receiver: ATLAS's, one a run for now.
+void check_beams(JsonReader& r, SensorSettings& s) {
+  if (s.beams.empty()) s.beams = SensorSettings{}.beams;
+  r.resolved()["beams"] = s.beams;
+  if (s.receiver != "photon_counting") return;
+  static const std::vector<std::string> known = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};
+  for (const std::string& beam : s.beams)
+    if (std::find(known.begin(), known.end(), beam) == known.end())
+      r.fail("beams", "no beam \"" + beam + "\"; the beams are gt1l gt1r gt2l gt2r gt3l gt3r" +
+                          did_you_mean(beam, known));
+  if (s.beams.size() != 1)
+    r.fail("beams",
+           "one beam a run for now (run each beam with --set "
+           "'sensor.beams=[\"gt1r\"]')");
+}
+
 SensorSettings read_sensor(JsonReader& root) {
   const json& given = root.raw("sensor");
   if (!given.is_null() && !given.is_object())
@@ -134,57 +162,13 @@ SensorSettings read_sensor(JsonReader& root) {
 
   JsonReader r(merged, "/sensor", root.resolved()["sensor"],
                root.declared("sensor", KeyType::object));
-  s.preset = r.optional_string("preset").value_or("");
-  s.pulse_sigma_ns = r.number("pulse_sigma_ns");
-  s.divergence_sigma_rad = r.number("divergence_sigma_rad");
-  s.ifov_rad = r.number("ifov_rad");
-  s.telescope_area_m2 = r.number("telescope_area_m2");
-  s.bin_ns = r.number("bin_ns");
-  s.bins = static_cast<int>(r.integer("bins"));
-  for (JsonReader& b : r.object_array("bands", true)) {
-    Band band;
-    for (const char* key :
-         {"name", "wavelength_nm", "pulse_energy_mJ", "atmos_transmission_roundtrip"})
-      b.require(key);
-    band.name = b.string("name", "");
-    if (band.name.empty()) b.fail("name", "must not be empty");
-    for (const Band& other : s.bands)
-      if (other.name == band.name) b.fail("name", "duplicate band name \"" + band.name + "\"");
-    band.wavelength_nm = b.number("wavelength_nm");
-    band.pulse_energy_mJ = b.number("pulse_energy_mJ");
-    band.atmos_transmission_roundtrip = b.number("atmos_transmission_roundtrip");
-    b.finish();
-    s.bands.push_back(band);
-  }
-  s.receiver = r.choice<std::string>(
-      "receiver", {{"waveform", "waveform"}, {"photon_counting", "photon_counting"}});
-  s.beams = r.string_array("beams");
-  if (s.beams.empty()) s.beams = SensorSettings{}.beams;
-  r.resolved()["beams"] = s.beams;
-  if (s.receiver == "photon_counting") {
-    static const std::vector<std::string> known = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};
-    for (const std::string& beam : s.beams)
-      if (std::find(known.begin(), known.end(), beam) == known.end())
-        r.fail("beams", "no beam \"" + beam + "\"; the beams are gt1l gt1r gt2l gt2r gt3l gt3r" +
-                            did_you_mean(beam, known));
-    if (s.beams.size() != 1)
-      r.fail("beams",
-             "one beam a run for now (run each beam with --set "
-             "'sensor.beams=[\"gt1r\"]')");
-  }
-  s.photon_efficiency = r.number("photon_efficiency");
-  s.filter_bandwidth_nm = r.number("filter_bandwidth_nm");
-  s.dead_time_ns = r.number("dead_time_ns");
+  read_fields(r, {{"bands", [&] { read_bands(r, s); }}, {"beams", [&] { check_beams(r, s); }}}, s);
   r.finish();
   return s;
 }
 
-SimulationSettings read_simulation(JsonReader& root) {
-  SimulationSettings s;
-  JsonReader r = root.object("simulation");
-  s.rays_per_shot = r.integer("rays_per_shot");
-  s.max_order = static_cast<int>(r.integer("max_order"));
-  s.quasi_random = r.choice<bool>("sampling", {{"random", false}, {"sobol", true}});
+// Photon counting's background light: "sun", "none" or {"rate_MHz": R}.
+void read_background(JsonReader& r, SimulationSettings& s) {
   const json& background = r.raw("background");
   if (background.is_object()) {
     JsonReader b(background, r.place("background"), r.resolved()["background"],
@@ -199,39 +183,37 @@ SimulationSettings read_simulation(JsonReader& root) {
     r.fail("background",
            "must be \"sun\", \"none\" or {\"rate_MHz\": R}, got " + describe(background));
   }
+}
+
+SimulationSettings read_simulation(JsonReader& root) {
+  SimulationSettings s;
+  JsonReader r = root.object("simulation");
+  read_fields(r, {{"background", [&] { read_background(r, s); }}}, s);
   r.finish();
   return s;
 }
 
-// The terrain, which the caller has seen to be given.
-TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
-  TerrainSettings t;
-  JsonReader r = root.object("terrain");
+// Exactly one of "dem" and "plane"; the plane is read as its key comes.
+void read_dem(JsonReader& r, TerrainSettings& t) {
   const std::optional<std::string> dem = r.optional_string("dem");
   const bool has_plane = r.has("plane");
   if (dem && has_plane)
     throw config_error(r.path(), "give exactly one of \"dem\" and \"plane\", not both");
   if (!dem && !has_plane) throw config_error(r.path(), "give exactly one of \"dem\" and \"plane\"");
-  if (dem) {
-    if (dem->empty()) r.fail("dem", "must not be empty");
-    t.dem = *dem;
-  } else {
-    PlaneSettings plane;
-    JsonReader p = r.object("plane");
-    plane.origin_lat_deg = p.number("origin_lat_deg");
-    plane.origin_lon_deg = p.number("origin_lon_deg");
-    plane.elevation_m = p.number("elevation_m");
-    plane.slope_deg = p.number("slope_deg");
-    plane.aspect_deg = p.number("aspect_deg");
-    p.finish();
-    t.plane = plane;
-  }
-  // The DEM's band of heights (required by the terrain when it has several) and what its heights
-  // are measured from when its CRS does not say; a plane's heights are above the ellipsoid.
-  if (r.has("dem_band")) {
-    if (!dem) r.fail("dem_band", "applies to terrain.dem only");
-    t.dem_band = static_cast<int>(*r.optional_integer("dem_band"));
-  }
+  if (dem && dem->empty()) r.fail("dem", "must not be empty");
+  t.dem = dem.value_or("");
+}
+
+// The DEM's band of heights, required by the terrain when it has several.
+void read_dem_band(JsonReader& r, TerrainSettings& t) {
+  if (!r.has("dem_band")) return;
+  if (t.dem.empty()) r.fail("dem_band", "applies to terrain.dem only");
+  t.dem_band = static_cast<int>(*r.optional_integer("dem_band"));
+}
+
+// What the DEM's heights are measured from when its CRS does not say; a plane's heights are
+// above the ellipsoid.
+void read_vertical_datum(JsonReader& r, TerrainSettings& t) {
   const Key& datum = r.declared("vertical_datum", KeyType::string);
   t.vertical_datum_given = r.has("vertical_datum");
   t.vertical_datum = r.string("vertical_datum");
@@ -244,14 +226,22 @@ TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
     message += " or a vertical CRS such as \"EPSG:3855\", got \"" + t.vertical_datum + "\"";
     r.fail("vertical_datum", message + did_you_mean(t.vertical_datum, datum.choices));
   }
-  if (!dem && t.vertical_datum != datum.default_value.get<std::string>())
+  if (t.dem.empty() && t.vertical_datum != datum.default_value.get<std::string>())
     r.fail("vertical_datum",
            "applies to terrain.dem only: a plane's elevation_m is above the WGS84 ellipsoid");
-  JsonReader g = r.object("roughness");
-  t.roughness.rms_m = g.number("rms_m");
-  t.roughness.correlation_m = g.number("correlation_m");
-  g.finish();
-  t.soil_reflectance = spectral(r, "soil_reflectance", bands);
+}
+
+// The terrain, which the caller has seen to be given.
+TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
+  TerrainSettings t;
+  JsonReader r = root.object("terrain");
+  read_fields(
+      r,
+      {{"dem", [&] { read_dem(r, t); }},
+       {"dem_band", [&] { read_dem_band(r, t); }},
+       {"vertical_datum", [&] { read_vertical_datum(r, t); }},
+       {"soil_reflectance", [&] { t.soil_reflectance = spectral(r, "soil_reflectance", bands); }}},
+      t);
   r.finish();
   return t;
 }
@@ -331,26 +321,16 @@ void read_crown_base(JsonReader& r, CanopySettings& c) {
   r.resolved()["crown_base_m"] = base.is_null() ? json(c.crown_base_m) : base;
 }
 
-// The crowns: their shape, size and where they begin.
-void read_crowns(JsonReader& r, CanopySettings& c) {
-  c.crown_shape = r.choice<CrownShape>("crown_shape", {{"ellipsoid", CrownShape::ellipsoid},
-                                                       {"cone", CrownShape::cone},
-                                                       {"layer", CrownShape::layer}});
-  // Crowns placed at random overlap: their cover 1 - exp(-n pi r^2) never reaches 1.
+// Crowns placed at random overlap: their cover 1 - exp(-n pi r^2) never reaches 1.
+void check_crown_cover(JsonReader& r, const CanopySettings& c) {
   if (c.crown_shape != CrownShape::layer && c.cover >= 1.0)
     r.fail(
         "cover",
         "must be < 1 for randomly placed crowns, got 1; a closed canopy is crown_shape \"layer\"");
-  c.crown_radius_m = r.number("crown_radius_m");
-  c.crown_half_height_m = r.number("crown_half_height_m");
-  read_crown_base(r, c);
 }
 
-// The optical properties of leaves and bark, per band.
-void read_canopy_optics(JsonReader& r, CanopySettings& c, const std::vector<Band>& bands) {
-  c.leaf_reflectance = spectral(r, "leaf_reflectance", bands);
-  c.leaf_transmittance = spectral(r, "leaf_transmittance", bands);
-  // Energy conservation of a bi-Lambertian leaf: what is not reflected or transmitted is absorbed.
+// Energy conservation of a bi-Lambertian leaf: what is not reflected or transmitted is absorbed.
+void check_leaf_optics(JsonReader& r, const CanopySettings& c, const std::vector<Band>& bands) {
   for (std::size_t i = 0; i < bands.size(); ++i) {
     const double sum = c.leaf_reflectance[i] + c.leaf_transmittance[i];
     if (sum > 1.0 + 1e-12) {
@@ -358,7 +338,20 @@ void read_canopy_optics(JsonReader& r, CanopySettings& c, const std::vector<Band
                                        bands[i].name + ", got " + format_number(sum));
     }
   }
-  c.bark_reflectance = spectral(r, "bark_reflectance", bands);
+}
+
+// The keys every canopy's leaves have (crowns, voxels, point clouds): the leaf angle
+// distribution and the optical properties of leaves and bark, per band.
+KeyHooks leaf_hooks(JsonReader& r, CanopySettings& c, const std::vector<Band>& bands) {
+  return {
+      {"lad", [&] { read_lad(r, c); }},
+      {"leaf_reflectance", [&] { c.leaf_reflectance = spectral(r, "leaf_reflectance", bands); }},
+      {"leaf_transmittance",
+       [&] {
+         c.leaf_transmittance = spectral(r, "leaf_transmittance", bands);
+         check_leaf_optics(r, c, bands);
+       }},
+      {"bark_reflectance", [&] { c.bark_reflectance = spectral(r, "bark_reflectance", bands); }}};
 }
 
 // canopy.voxels or canopy.point_cloud: measured vegetation, alone in the canopy.
@@ -372,19 +365,9 @@ CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<Band>&
   CanopySettings c;
   c.kind = name;
   JsonReader r = canopy.object(name);
-  r.require("file");
-  if (voxels) {
-    c.voxels_file = non_empty_path(r, "file");
-  } else {
-    c.point_cloud_file = non_empty_path(r, "file");
-    c.point_cloud_crs = r.optional_string("crs").value_or("");
-    c.voxel_size_m = r.number("voxel_size_m");
-  }
-  read_lad(r, c);
-  c.leaf_size_m = r.number("leaf_size_m");
-  c.bark_fraction = r.number("bark_fraction");
-  c.green_fraction = 1.0 - c.bark_fraction;
-  read_canopy_optics(r, c, bands);
+  KeyHooks hooks = leaf_hooks(r, c, bands);
+  hooks.emplace_back("bark_fraction", [&] { c.green_fraction = 1.0 - c.bark_fraction; });
+  read_fields(r, hooks, c);
   r.finish();
   return c;
 }
@@ -396,19 +379,14 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
     root.resolved()["canopy"] = nullptr;  // bare ground
     return std::nullopt;
   }
-  CanopySettings c;
   JsonReader r = root.object("canopy");
   if (r.has("voxels") || r.has("point_cloud")) return read_measured_canopy(r, bands);
-  c.pai = r.number("pai");
-  read_lad(r, c);
-  c.cover = r.number("cover");
-  read_fractions(r, c);
-  read_crowns(r, c);
-  c.leaf_size_m = r.number("leaf_size_m");
-  c.dbh_m = r.number("dbh_m");
-  read_canopy_optics(r, c, bands);
-  c.crowns_file = non_empty_path(r, "crowns_file");
-  c.stands = non_empty_path(r, "stands");
+  CanopySettings c;
+  KeyHooks hooks = leaf_hooks(r, c, bands);
+  hooks.insert(hooks.end(), {{"green_fraction", [&] { read_fractions(r, c); }},
+                             {"crown_shape", [&] { check_crown_cover(r, c); }},
+                             {"crown_base_m", [&] { read_crown_base(r, c); }}});
+  read_fields(r, hooks, c);
   r.finish();
   return c;
 }
@@ -438,60 +416,47 @@ void read_points(JsonReader& r, TrackSettings& t, bool shots_given) {
 
 // Keplerian elements sit flat in `track`, as the product contract lists them. Elements without
 // an epoch are taken to hold at the first shot.
-void read_orbit(JsonReader& r, TrackSettings& t, const std::string& start_time) {
+void read_epoch(JsonReader& r, TrackSettings& t, const std::string& start_time) {
   OrbitElements& o = t.orbit;
-  o.semi_major_axis_m = r.number("semi_major_axis_m");
-  o.eccentricity = r.number("eccentricity");
-  o.inclination_deg = r.number("inclination_deg");
-  o.raan_deg = r.number("raan_deg");
-  o.arg_perigee_deg = r.number("arg_perigee_deg");
-  o.mean_anomaly_deg = r.number("mean_anomaly_deg");
   const std::string epoch = r.string("epoch", start_time);
   o.epoch_s = time_s(r, "epoch", epoch);
-  if (t.type == TrackType::orbit) {
-    const double perigee_m = o.semi_major_axis_m * (1.0 - o.eccentricity);
-    if (perigee_m <= wgs84_equatorial_radius_m) {
-      r.fail("eccentricity", "puts the perigee (" + format_number(perigee_m) +
-                                 " m from the Earth's centre) inside the Earth");
-    }
-    const double apogee_height_m =
-        o.semi_major_axis_m * (1.0 + o.eccentricity) - wgs84_equatorial_radius_m;
-    if (apogee_height_m > run_limits::altitude_m)
-      r.fail("eccentricity", "puts the apogee " + format_number(apogee_height_m) +
-                                 " m high, above the limit of " +
-                                 format_number(run_limits::altitude_m) + " m");
+  if (t.type != TrackType::orbit) return;
+  const double perigee_m = o.semi_major_axis_m * (1.0 - o.eccentricity);
+  if (perigee_m <= wgs84_equatorial_radius_m) {
+    r.fail("eccentricity", "puts the perigee (" + format_number(perigee_m) +
+                               " m from the Earth's centre) inside the Earth");
   }
+  const double apogee_height_m =
+      o.semi_major_axis_m * (1.0 + o.eccentricity) - wgs84_equatorial_radius_m;
+  if (apogee_height_m > run_limits::altitude_m)
+    r.fail("eccentricity", "puts the apogee " + format_number(apogee_height_m) +
+                               " m high, above the limit of " +
+                               format_number(run_limits::altitude_m) + " m");
 }
 
 TrackSettings read_track(JsonReader& root) {
   TrackSettings t;
   JsonReader r = root.object("track");
-  t.type = r.choice<TrackType>("type", {{"pass", TrackType::pass},
-                                        {"points", TrackType::points},
-                                        {"orbit", TrackType::orbit},
-                                        {"ephemeris", TrackType::ephemeris},
-                                        {"granule", TrackType::granule}});
-  t.start_lat_deg = r.number("start_lat_deg");
-  t.start_lon_deg = r.number("start_lon_deg");
-  t.heading_deg = r.number("heading_deg");
-  const bool shots_given = r.has("shots");
-  t.shots = r.integer("shots");
-  t.rate_hz = r.number("rate_hz");
-  t.spacing_m = r.optional_number("spacing_m");
-  t.altitude_m = r.number("altitude_m");
-  const std::string start_time = r.string("start_time");
-  t.start_time_s = time_s(r, "start_time", start_time);
-  t.off_nadir_deg = r.number("off_nadir_deg");
-  t.pointing_azimuth_deg = r.number("pointing_azimuth_deg");
-  read_points(r, t, shots_given);
-  read_orbit(r, t, start_time);
-  t.ephemeris = non_empty_path(r, "ephemeris");
-  if (t.type == TrackType::ephemeris && t.ephemeris.empty())
-    r.fail("ephemeris", "is required when type is \"ephemeris\"");
-  t.granule = non_empty_path(r, "file");
-  t.beams = r.string_array("beams");
-  if (t.type == TrackType::granule && t.granule.empty())
-    r.fail("file", "is required when type is \"granule\"");
+  std::string start_time;
+  const auto read_start_time = [&] {
+    start_time = r.string("start_time");
+    t.start_time_s = time_s(r, "start_time", start_time);
+  };
+  const auto ephemeris_given = [&] {
+    if (t.type == TrackType::ephemeris && t.ephemeris.empty())
+      r.fail("ephemeris", "is required when type is \"ephemeris\"");
+  };
+  const auto granule_given = [&] {
+    if (t.type == TrackType::granule && t.granule.empty())
+      r.fail("file", "is required when type is \"granule\"");
+  };
+  read_fields(r,
+              {{"start_time", read_start_time},
+               {"points", [&] { read_points(r, t, r.has("shots")); }},
+               {"epoch", [&] { read_epoch(r, t, start_time); }},
+               {"ephemeris", ephemeris_given},
+               {"beams", granule_given}},
+              t, t.orbit);
   r.finish();
   return t;
 }
@@ -511,17 +476,12 @@ OutputSettings read_output(JsonReader& root) {
 DetectorSettings read_detector(JsonReader& root) {
   DetectorSettings d;
   JsonReader r = root.object("detector");
-  d.enabled = r.boolean("enabled");
-  d.background_W = r.number("background_W");
-  d.photon_noise = r.boolean("photon_noise");
-  d.quantum_efficiency = r.number("quantum_efficiency");
-  d.noise_rms_W = r.number("noise_rms_W");
-  d.gain = r.number("gain");
-  d.bits = static_cast<int>(r.integer("bits"));
-  d.saturation_W = r.optional_number("saturation_W");
-  if (!d.saturation_W) r.resolved()["saturation_W"] = nullptr;
-  if (d.bits > 0 && !d.saturation_W)
-    r.fail("saturation_W", "is required when bits > 0: the digitiser's full scale");
+  const auto check_saturation = [&] {
+    if (!d.saturation_W) r.resolved()["saturation_W"] = nullptr;
+    if (d.bits > 0 && !d.saturation_W)
+      r.fail("saturation_W", "is required when bits > 0: the digitiser's full scale");
+  };
+  read_fields(r, {{"saturation_W", check_saturation}}, d);
   r.finish();
   return d;
 }
@@ -529,26 +489,7 @@ DetectorSettings read_detector(JsonReader& root) {
 BrfSettings read_brf(JsonReader& root) {
   BrfSettings b;
   JsonReader r = root.object("brf");
-  b.sun_zenith_deg = r.number("sun_zenith_deg");
-  b.sun_azimuth_deg = r.number("sun_azimuth_deg");
-  std::vector<JsonReader> views = r.object_array("views");
-  if (views.empty()) {
-    json& out = r.resolved()["views"] = json::array();
-    for (const BrfView& view : b.views)
-      out.push_back({{"zenith_deg", view.zenith_deg}, {"azimuth_deg", view.azimuth_deg}});
-  } else {
-    b.views.clear();
-    for (JsonReader& v : views) {
-      BrfView view;
-      view.zenith_deg = v.number("zenith_deg");
-      view.azimuth_deg = v.number("azimuth_deg");
-      v.finish();
-      b.views.push_back(view);
-    }
-  }
-  b.photons = r.integer("photons");
-  b.image_resolution_m = r.number("image_resolution_m");
-  b.scene_size_m = r.number("scene_size_m");
+  read_fields(r, {}, b);
   r.finish();
   return b;
 }

@@ -276,9 +276,25 @@ class Fields {
     return bind(declare::path(std::move(name), std::move(description)), member,
                 [](JsonReader& r, const std::string& key) {
                   const std::optional<std::string> path = r.optional_string(key);
+                  if (!path && r.declared(key, KeyType::string).required)
+                    r.fail(key, "is required");
                   if (path && path->empty()) r.fail(key, "must not be empty");
                   return path.value_or("");
                 });
+  }
+  // A string without a default: empty when absent or null.
+  Key string(std::string name, std::string S::*member, std::string description) const {
+    return bind(
+        declare::string(std::move(name), std::nullopt, std::move(description)), member,
+        [](JsonReader& r, const std::string& key) { return r.optional_string(key).value_or(""); });
+  }
+  // Non-empty strings; the member's initial value is the default when it holds any.
+  Key string_array(std::string name, std::vector<std::string> S::*member,
+                   std::string description) const {
+    Key k = declare::string_array(std::move(name), std::move(description));
+    if (!(initial_.*member).empty()) k.default_value = initial_.*member;
+    return bind(std::move(k), member,
+                [](JsonReader& r, const std::string& key) { return r.string_array(key); });
   }
   // An object read into a struct of its own, with the keys `children` declare for it.
   template <typename M>
@@ -350,18 +366,9 @@ std::vector<std::string> preset_names() {
   return names;
 }
 
-Key beams_key(const SensorSettings& s) {
-  Key beams = string_array("beams",
-                           "photon counting: which of ATLAS's beams `gt1l gt1r gt2l gt2r gt3l "
-                           "gt3r` to simulate (strong: the `l` beams, weak: the `r` ones at 45/175 "
-                           "of the energy), each on its own ground track about the `pass`'s "
-                           "reference track; one a run for now");
-  beams.default_value = s.beams;
-  return beams;
-}
-
 Key sensor_keys() {
-  const SensorSettings s;
+  const Fields<SensorSettings> s;
+  using S = SensorSettings;
   Key preset = choice("preset", std::nullopt, preset_names(),
                       "`north2010` (the seed's Table 2, exactly), `glas` (the same with "
                       "GLAS's ~70 m beam), `gedi` (GEDI's power beam: 1064 nm, 15.6 ns FWHM, "
@@ -372,24 +379,28 @@ Key sensor_keys() {
   preset.default_text = "none";
   return object(
       "sensor", "the lidar (the seed's Table 2)",
-      {std::move(preset),
+      {s.bind(std::move(preset), &S::preset,
+              [](JsonReader& r, const std::string& key) {
+                return r.optional_string(key).value_or("");
+              }),
        // 1 ps to 1 us: shorter would put the whole pulse energy into an infinite power; longer is
        // no longer a ranging pulse.
-       number("pulse_sigma_ns", s.pulse_sigma_ns, closed(0.001, 1000), "ns",
-              "RMS width of the Gaussian pulse"),
-       number("divergence_sigma_rad", s.divergence_sigma_rad, open_closed(0, run_limits::angle_rad),
-              "rad", "beam angular RMS width per axis (intensity ∝ exp(−θ²/2σ²))"),
-       number("ifov_rad", s.ifov_rad, open_closed(0, run_limits::angle_rad), "rad",
-              "detector full field of view (top-hat cone); the scene a shot builds grows with "
-              "it (see Limits)"),
+       s.number("pulse_sigma_ns", &S::pulse_sigma_ns, closed(0.001, 1000), "ns",
+                "RMS width of the Gaussian pulse"),
+       s.number("divergence_sigma_rad", &S::divergence_sigma_rad,
+                open_closed(0, run_limits::angle_rad), "rad",
+                "beam angular RMS width per axis (intensity ∝ exp(−θ²/2σ²))"),
+       s.number("ifov_rad", &S::ifov_rad, open_closed(0, run_limits::angle_rad), "rad",
+                "detector full field of view (top-hat cone); the scene a shot builds grows with "
+                "it (see Limits)"),
        // The largest telescopes built are about 80 m²; far beyond, received powers overflow.
-       number("telescope_area_m2", s.telescope_area_m2, open_closed(0, 100), "m²",
-              "receiver aperture"),
+       s.number("telescope_area_m2", &S::telescope_area_m2, open_closed(0, 100), "m²",
+                "receiver aperture"),
        // 1 ps to 1 ms a bin: a window of bins beyond either end is no waveform.
-       number("bin_ns", s.bin_ns, closed(0.001, 1e6), "ns", "width of a recording bin"),
-       integer("bins", s.bins, 1, run_limits::waveform_bins, "",
-               "recording bins; the return from the footprint centre falls two thirds into the "
-               "window"),
+       s.number("bin_ns", &S::bin_ns, closed(0.001, 1e6), "ns", "width of a recording bin"),
+       s.integer("bins", &S::bins, 1, run_limits::waveform_bins, "",
+                 "recording bins; the return from the footprint centre falls two thirds into the "
+                 "window"),
        object_array("bands", json::parse(sensor_presets().at(default_sensor_preset))["bands"],
                     "the laser's bands: 532 and 1064 nm by default, with pulse energies of 32 and "
                     "72 mJ and round-trip transmissions of 0.8 and 0.9",
@@ -409,21 +420,25 @@ Key sensor_keys() {
                          .with_required()})
            .with_items(1, run_limits::bands)
            .with_default_text("the preset's"),
-       choice("receiver", s.receiver, {"waveform", "photon_counting"},
-              "what the record is made of: `waveform` (the received waveform and its "
-              "processing) or `photon_counting` (ICESat-2's photon events, written to "
-              "`atl03.h5` and `atl08.h5`; docs/icesat2.md); the `atlas` preset's is "
-              "`photon_counting`"),
-       beams_key(s),
-       number("photon_efficiency", s.photon_efficiency, open_closed(0, 1), "",
-              "photon counting: the receiver's optical throughput times its detectors' photon "
-              "detection efficiency (ATLAS: 0.45 × 0.15)"),
-       number("filter_bandwidth_nm", s.filter_bandwidth_nm, above(0), "nm",
-              "photon counting: the receiver filter's equivalent width (the solar background "
-              "grows with it)"),
-       number("dead_time_ns", s.dead_time_ns, at_least(0), "ns",
-              "photon counting: each detector channel's non-paralysable dead time (16 channels "
-              "a strong beam, 4 a weak one)")});
+       s.choice("receiver", &S::receiver, {"waveform", "photon_counting"},
+                "what the record is made of: `waveform` (the received waveform and its "
+                "processing) or `photon_counting` (ICESat-2's photon events, written to "
+                "`atl03.h5` and `atl08.h5`; docs/icesat2.md); the `atlas` preset's is "
+                "`photon_counting`"),
+       s.string_array("beams", &S::beams,
+                      "photon counting: which of ATLAS's beams `gt1l gt1r gt2l gt2r gt3l gt3r` to "
+                      "simulate (strong: the `l` beams, weak: the `r` ones at 45/175 of the "
+                      "energy), each on its own ground track about the `pass`'s reference track; "
+                      "one a run for now"),
+       s.number("photon_efficiency", &S::photon_efficiency, open_closed(0, 1), "",
+                "photon counting: the receiver's optical throughput times its detectors' photon "
+                "detection efficiency (ATLAS: 0.45 × 0.15)"),
+       s.number("filter_bandwidth_nm", &S::filter_bandwidth_nm, above(0), "nm",
+                "photon counting: the receiver filter's equivalent width (the solar background "
+                "grows with it)"),
+       s.number("dead_time_ns", &S::dead_time_ns, at_least(0), "ns",
+                "photon counting: each detector channel's non-paralysable dead time (16 channels "
+                "a strong beam, 4 a weak one)")});
 }
 
 Key background_key() {
@@ -441,25 +456,28 @@ Key background_key() {
 }
 
 Key simulation_keys() {
-  const SimulationSettings s;
+  const Fields<SimulationSettings> s;
+  using S = SimulationSettings;
   return object(
       "simulation", "the Monte Carlo transport",
-      {integer("rays_per_shot", s.rays_per_shot, 1, run_limits::rays_per_shot, "",
-               "Monte Carlo rays a shot (error falls as n^−1/2)"),
-       integer("max_order", s.max_order, 1, run_limits::max_order, "", "highest scattering order"),
-       choice("sampling", s.quasi_random ? "sobol" : "random", {"random", "sobol"},
-              "how rays draw their beam direction and first free path: `random` "
-              "(plain Monte Carlo) or `sobol` (the shot's scrambled Sobol' points: "
-              "unbiased; on the seed's base case the mean waveform's error at 10^4 "
-              "rays is that of 1.9× the rays at the same cost; the noise the processing "
-              "weighs its fits with, computed for independent rays, is then overstated)"),
+      {s.integer("rays_per_shot", &S::rays_per_shot, 1, run_limits::rays_per_shot, "",
+                 "Monte Carlo rays a shot (error falls as n^−1/2)"),
+       s.integer("max_order", &S::max_order, 1, run_limits::max_order, "",
+                 "highest scattering order"),
+       s.choice_of("sampling", &S::quasi_random, {{"random", false}, {"sobol", true}},
+                   "how rays draw their beam direction and first free path: `random` "
+                   "(plain Monte Carlo) or `sobol` (the shot's scrambled Sobol' points: "
+                   "unbiased; on the seed's base case the mean waveform's error at 10^4 "
+                   "rays is that of 1.9× the rays at the same cost; the noise the processing "
+                   "weighs its fits with, computed for independent rays, is then overstated)"),
        background_key()});
 }
 
 Key terrain_keys() {
   const TerrainSettings t;
-  const PlaneSettings p;
-  const RoughnessSettings g;
+  const Fields<TerrainSettings> f;
+  const Fields<PlaneSettings> p;
+  const Fields<RoughnessSettings> g;
   Key dem =
       path("dem",
            "a raster GDAL reads, with a CRS (geographic or projected; nodata honoured); "
@@ -483,26 +501,29 @@ Key terrain_keys() {
       object(
           "terrain", "the ground: exactly one of `dem` and `plane`",
           {std::move(dem),
-           object("plane",
-                  "a synthetic plane, anchored at the origin's latitude and longitude, for slope "
-                  "studies; exactly one of `dem` and `plane`",
-                  {number("origin_lat_deg", p.origin_lat_deg, closed(-90, 90), "deg",
-                          "latitude of the origin"),
-                   number("origin_lon_deg", p.origin_lon_deg, closed(-180, 360), "deg",
-                          "longitude of the origin"),
-                   number("elevation_m", p.elevation_m, any_finite(), "m",
-                          "height of the origin above WGS84"),
-                   number("slope_deg", p.slope_deg, closed(0, 89), "deg", "slope of the plane"),
-                   number("aspect_deg", p.aspect_deg, any_finite(), "deg",
-                          "the azimuth the slope faces (clockwise from north)")}),
+           f.object("plane", &TerrainSettings::plane,
+                    "a synthetic plane, anchored at the origin's latitude and longitude, for slope "
+                    "studies; exactly one of `dem` and `plane`",
+                    {p.number("origin_lat_deg", &PlaneSettings::origin_lat_deg, closed(-90, 90),
+                              "deg", "latitude of the origin"),
+                     p.number("origin_lon_deg", &PlaneSettings::origin_lon_deg, closed(-180, 360),
+                              "deg", "longitude of the origin"),
+                     p.number("elevation_m", &PlaneSettings::elevation_m, any_finite(), "m",
+                              "height of the origin above WGS84"),
+                     p.number("slope_deg", &PlaneSettings::slope_deg, closed(0, 89), "deg",
+                              "slope of the plane"),
+                     p.number("aspect_deg", &PlaneSettings::aspect_deg, any_finite(), "deg",
+                              "the azimuth the slope faces (clockwise from north)")}),
            std::move(dem_band), std::move(datum),
-           object(
-               "roughness",
+           f.object(
+               "roughness", &TerrainSettings::roughness,
                "random relief added under the beam (a Gaussian random field with covariance "
                "exp(−r²/L²), fixed by position and `seed`, meshed every L/3, or L/2 or L where the "
                "field of view needs more than 1024 nodes a side, else refused)",
-               {number("rms_m", g.rms_m, at_least(0), "m", "RMS height of the relief"),
-                number("correlation_m", g.correlation_m, above(0), "m", "correlation length L")}),
+               {g.number("rms_m", &RoughnessSettings::rms_m, at_least(0), "m",
+                         "RMS height of the relief"),
+                g.number("correlation_m", &RoughnessSettings::correlation_m, above(0), "m",
+                         "correlation length L")}),
            spectral("soil_reflectance", 0.15, closed(0, 1), "", "Lambertian soil, per band")})
           .with_required();
   return terrain;
@@ -510,6 +531,8 @@ Key terrain_keys() {
 
 Key canopy_keys() {
   const CanopySettings c;
+  const Fields<CanopySettings> f;
+  using S = CanopySettings;
   Key lad = make("lad", KeyType::choice_or_object, "",
                  "leaf angle distribution: a name, or `{\"ellipsoidal_mean_deg\": X}` for "
                  "Campbell's ellipsoidal distribution");
@@ -523,86 +546,91 @@ Key canopy_keys() {
   // section 8); their leaves' keys are the canopy's, with the defaults of a grid of leaves.
   const auto leaves = [&] {
     return std::vector<Key>{Key(lad),
-                            number("leaf_size_m", c.leaf_size_m, at_least(0), "m",
-                                   "the hotspot's correlation length; 0 is the point-leaf limit"),
+                            f.number("leaf_size_m", &S::leaf_size_m, at_least(0), "m",
+                                     "the hotspot's correlation length; 0 is the point-leaf limit"),
                             spectral("leaf_reflectance", 0.4, closed(0, 1), "", "per band"),
                             spectral("leaf_transmittance", 0.4, closed(0, 1), "",
                                      "per band; `leaf_reflectance` + `leaf_transmittance` ≤ 1"),
-                            number("bark_fraction", 0.0, closed(0, 1), "",
-                                   "the bark's part of the plant area (opaque, Lambertian)"),
+                            f.number("bark_fraction", &S::bark_fraction, closed(0, 1), "",
+                                     "the bark's part of the plant area (opaque, Lambertian)")
+                                .with_default(0.0),
                             spectral("bark_reflectance", 0.3, closed(0, 1), "", "per band")};
   };
   std::vector<Key> voxel_keys = leaves();
   voxel_keys.insert(voxel_keys.begin(),
-                    path("file",
-                         "plant area density (m²/m³) on a regular grid: a CF NetCDF variable "
-                         "`pad(z, y, x)` with a CRS, z the height above the ground; or a "
-                         "multi-band GeoTIFF, band i the slice between its metadata `z_bottom_m` "
-                         "and `z_top_m`")
+                    f.path("file", &S::voxels_file,
+                           "plant area density (m²/m³) on a regular grid: a CF NetCDF variable "
+                           "`pad(z, y, x)` with a CRS, z the height above the ground; or a "
+                           "multi-band GeoTIFF, band i the slice between its metadata `z_bottom_m` "
+                           "and `z_top_m`")
                         .with_required());
   std::vector<Key> cloud_keys = leaves();
   cloud_keys.insert(
       cloud_keys.begin(),
-      {path("file",
-            "an airborne lidar point cloud, LAS 1.0–1.4 uncompressed (LAZ: decompress it with "
-            "`laszip` or `pdal translate`), voxelised at start by gap-fraction inversion as "
-            "`glaswave voxelize` does")
+      {f.path("file", &S::point_cloud_file,
+              "an airborne lidar point cloud, LAS 1.0–1.4 uncompressed (LAZ: decompress it with "
+              "`laszip` or `pdal translate`), voxelised at start by gap-fraction inversion as "
+              "`glaswave voxelize` does")
            .with_required(),
-       string("crs", std::nullopt,
-              "the cloud's CRS when the file has no WKT or GeoTIFF-keys record (`EPSG:32633`, "
-              "WKT, PROJ)"),
-       number("voxel_size_m", c.voxel_size_m, closed(0.05, 100), "m",
-              "the voxels' width and depth")});
+       f.string("crs", &S::point_cloud_crs,
+                "the cloud's CRS when the file has no WKT or GeoTIFF-keys record (`EPSG:32633`, "
+                "WKT, PROJ)"),
+       f.number("voxel_size_m", &S::voxel_size_m, closed(0.05, 100), "m",
+                "the voxels' width and depth")});
   Key canopy = object(
       "canopy",
       "the vegetation (names of the seed's Table 1): bare ground when null or absent; `{}` is "
       "Table 1. Leaves are bi-Lambertian, bark and soil Lambertian. Trees stand on the local "
       "ground; the same tree is in the same place for every shot that sees it",
-      {number("pai", c.pai, at_least(0), "m²/m²",
-              "one-sided plant area of leaves and bark per unit ground area of the scene (with "
-              "`crowns_file`: of the crowns' bounding box)"),
+      {f.number("pai", &S::pai, at_least(0), "m²/m²",
+                "one-sided plant area of leaves and bark per unit ground area of the scene (with "
+                "`crowns_file`: of the crowns' bounding box)"),
        std::move(lad),
-       number("cover", c.cover, closed(0, 1), "",
-              "crown cover, crowns placed at random (below 1 unless `crown_shape` is `layer`)"),
+       f.number("cover", &S::cover, closed(0, 1), "",
+                "crown cover, crowns placed at random (below 1 unless `crown_shape` is `layer`)"),
        number("green_fraction", c.green_fraction, closed(0, 1), "",
               "the leaves' part of the plant area; 1 − `bark_fraction` when only that is given"),
        number("bark_fraction", c.bark_fraction, closed(0, 1), "",
               "the bark's part of the plant area; 1 − `green_fraction` when only that is given; "
               "the two add up to 1"),
-       choice("crown_shape", "ellipsoid", {"ellipsoid", "cone", "layer"},
-              "`ellipsoid`, `cone`, or `layer`: a homogeneous slab over the whole scene, "
-              "`crown_base_m[0]` to `crown_base_m[0] + 2 crown_half_height_m` above the ground "
-              "(`pai` is its total)"),
+       f.choice_of(
+           "crown_shape", &S::crown_shape,
+           {{"ellipsoid", CrownShape::ellipsoid},
+            {"cone", CrownShape::cone},
+            {"layer", CrownShape::layer}},
+           "`ellipsoid`, `cone`, or `layer`: a homogeneous slab over the whole scene, "
+           "`crown_base_m[0]` to `crown_base_m[0] + 2 crown_half_height_m` above the ground "
+           "(`pai` is its total)"),
        // No tree is wider or taller than 100 m; a crown of 1e6 m made the stand lookup run for
        // minutes.
-       number("crown_radius_m", c.crown_radius_m, open_closed(0, 100), "m", "crown radius"),
-       number("crown_half_height_m", c.crown_half_height_m, open_closed(0, 100), "m",
-              "crown half height"),
+       f.number("crown_radius_m", &S::crown_radius_m, open_closed(0, 100), "m", "crown radius"),
+       f.number("crown_half_height_m", &S::crown_half_height_m, open_closed(0, 100), "m",
+                "crown half height"),
        number_pair(
            "crown_base_m", c.crown_base_m, at_least(0), "m",
            "[min, max]: crown bases uniform in this range above the terrain under the stem"),
-       number("leaf_size_m", c.leaf_size_m, at_least(0), "m",
-              "the hotspot's correlation length; 0 is the point-leaf limit"),
-       number("dbh_m", c.dbh_m, at_least(0), "m",
-              "trunk diameter; trunks from the ground to the crown"),
+       f.number("leaf_size_m", &S::leaf_size_m, at_least(0), "m",
+                "the hotspot's correlation length; 0 is the point-leaf limit"),
+       f.number("dbh_m", &S::dbh_m, at_least(0), "m",
+                "trunk diameter; trunks from the ground to the crown"),
        spectral("leaf_reflectance", 0.4, closed(0, 1), "", "per band"),
        spectral("leaf_transmittance", 0.4, closed(0, 1), "",
                 "per band; `leaf_reflectance` + `leaf_transmittance` ≤ 1"),
        spectral("bark_reflectance", 0.3, closed(0, 1), "", "per band"),
-       path("crowns_file",
-            "a CSV of explicit crowns instead of random ones: header "
-            "`lon,lat,base_m,radius_m,half_height_m` (degrees) or "
-            "`x,y,base_m,radius_m,half_height_m` (metres east and north of `terrain.plane`'s "
-            "origin); `pai` is then per unit area of the crowns' bounding box"),
-       path("stands",
-            "a vector file GDAL/OGR reads (GeoJSON, GeoPackage, Shapefile, FlatGeobuf...) of "
-            "Polygons or MultiPolygons, every layer's features, whose attribute fields (GeoJSON "
-            "`properties`) override canopy keys inside them (`{\"pai\": 1.5, \"lad\": "
-            "\"erectophile\"}`; a text field holding a JSON object or array is read as that "
-            "JSON); in any CRS, brought to WGS84 with PROJ: a layer without one is taken as "
-            "longitude and latitude, and is an error if its coordinates are not; checked like "
-            "the configuration, a bad file is exit status 3 naming the feature and key; not with "
-            "a `layer`"),
+       f.path("crowns_file", &S::crowns_file,
+              "a CSV of explicit crowns instead of random ones: header "
+              "`lon,lat,base_m,radius_m,half_height_m` (degrees) or "
+              "`x,y,base_m,radius_m,half_height_m` (metres east and north of `terrain.plane`'s "
+              "origin); `pai` is then per unit area of the crowns' bounding box"),
+       f.path("stands", &S::stands,
+              "a vector file GDAL/OGR reads (GeoJSON, GeoPackage, Shapefile, FlatGeobuf...) of "
+              "Polygons or MultiPolygons, every layer's features, whose attribute fields (GeoJSON "
+              "`properties`) override canopy keys inside them (`{\"pai\": 1.5, \"lad\": "
+              "\"erectophile\"}`; a text field holding a JSON object or array is read as that "
+              "JSON); in any CRS, brought to WGS84 with PROJ: a layer without one is taken as "
+              "longitude and latitude, and is an error if its coordinates are not; checked like "
+              "the configuration, a bad file is exit status 3 naming the feature and key; not with "
+              "a `layer`"),
        object("voxels",
               "a voxel grid of plant area density instead of crowns (no other canopy key "
               "beside it): each voxel a turbid cell of these leaves, each column standing on "
@@ -618,76 +646,83 @@ Key canopy_keys() {
 }
 
 Key track_keys() {
-  const TrackSettings t;
-  const OrbitElements o;
+  const Fields<TrackSettings> t;
+  const Fields<OrbitElements> o;
+  using S = TrackSettings;
+  using O = OrbitElements;
   return object(
       "track", "the shots: where they are and how the beam points",
-      {choice("type", "pass", {"pass", "points", "orbit", "ephemeris", "granule"},
-              "how shots are placed: `pass`, `points`, `orbit`, `ephemeris` or `granule`"),
-       number("start_lat_deg", t.start_lat_deg, closed(-90, 90), "deg",
-              "`pass`: the spacecraft flies the geodesic from here along the heading"),
-       number("start_lon_deg", t.start_lon_deg, closed(-180, 360), "deg",
-              "`pass`: see `start_lat_deg`"),
-       number("heading_deg", t.heading_deg, any_finite(), "deg",
-              "`pass`: the heading, clockwise from north"),
-       integer("shots", t.shots, 1, run_limits::track_shots, "",
-               "shots of a pass. `orbit`: shots at `rate_hz` from `start_time`, numbered by "
-               "their place in that sequence; only those whose footprint falls on the terrain "
-               "are simulated and written, the others skipped (`check` says how many). "
-               "`points`: the number of points"),
-       number("rate_hz", t.rate_hz, above(0), "Hz", "shot rate (times)"),
-       number("spacing_m", std::nullopt, above(0), "m",
-              "spacing of shots along track; from the orbital ground speed and `rate_hz` when "
-              "not given")
+      {t.choice_of("type", &S::type,
+                   {{"pass", TrackType::pass},
+                    {"points", TrackType::points},
+                    {"orbit", TrackType::orbit},
+                    {"ephemeris", TrackType::ephemeris},
+                    {"granule", TrackType::granule}},
+                   "how shots are placed: `pass`, `points`, `orbit`, `ephemeris` or `granule`"),
+       t.number("start_lat_deg", &S::start_lat_deg, closed(-90, 90), "deg",
+                "`pass`: the spacecraft flies the geodesic from here along the heading"),
+       t.number("start_lon_deg", &S::start_lon_deg, closed(-180, 360), "deg",
+                "`pass`: see `start_lat_deg`"),
+       t.number("heading_deg", &S::heading_deg, any_finite(), "deg",
+                "`pass`: the heading, clockwise from north"),
+       t.integer("shots", &S::shots, 1, run_limits::track_shots, "",
+                 "shots of a pass. `orbit`: shots at `rate_hz` from `start_time`, numbered by "
+                 "their place in that sequence; only those whose footprint falls on the terrain "
+                 "are simulated and written, the others skipped (`check` says how many). "
+                 "`points`: the number of points"),
+       t.number("rate_hz", &S::rate_hz, above(0), "Hz", "shot rate (times)"),
+       t.number("spacing_m", &S::spacing_m, above(0), "m",
+                "spacing of shots along track; from the orbital ground speed and `rate_hz` when "
+                "not given")
            .with_default_text("from speed"),
-       number("altitude_m", t.altitude_m, open_closed(0, run_limits::altitude_m), "m",
-              "spacecraft height above WGS84 (`pass`, `points`, `granule`)"),
+       t.number("altitude_m", &S::altitude_m, open_closed(0, run_limits::altitude_m), "m",
+                "spacecraft height above WGS84 (`pass`, `points`, `granule`)"),
        time("start_time", "2000-01-01T12:00:00Z", "ISO 8601 UTC time of shot 0"),
-       number("off_nadir_deg", t.off_nadir_deg, half_open(0, 45), "deg",
-              "beam tilted from geodetic nadir, for every type; a track none of whose shots "
-              "meets the terrain is an error (exit status 3)"),
-       number("pointing_azimuth_deg", t.pointing_azimuth_deg, any_finite(), "deg",
-              "the azimuth the beam is tilted toward (clockwise from north)"),
+       t.number("off_nadir_deg", &S::off_nadir_deg, half_open(0, 45), "deg",
+                "beam tilted from geodetic nadir, for every type; a track none of whose shots "
+                "meets the terrain is an error (exit status 3)"),
+       t.number("pointing_azimuth_deg", &S::pointing_azimuth_deg, any_finite(), "deg",
+                "the azimuth the beam is tilted toward (clockwise from north)"),
        object_array(
            "points", json(), "`points`: targets on the ground, one shot each",
            {number("lat_deg", std::nullopt, closed(-90, 90), "deg", "latitude").with_required(),
             number("lon_deg", std::nullopt, closed(-180, 360), "deg", "longitude").with_required()})
            .with_items(1, run_limits::track_shots),
-       number("semi_major_axis_m", o.semi_major_axis_m,
-              open_closed(wgs84_equatorial_radius_m,
-                          wgs84_equatorial_radius_m + run_limits::altitude_m),
-              "m",
-              "`orbit`: mean elements at `epoch` in the true-equator mean-equinox frame (as "
-              "two-line elements), propagated with the J2 secular drift of node, perigee and "
-              "mean anomaly, turned Earth-fixed with GMST (UT1 taken as UTC)"),
-       number("eccentricity", o.eccentricity, half_open(0, 1), "",
-              "`orbit`: the perigee must be above the Earth"),
-       number("inclination_deg", o.inclination_deg, closed(0, 180), "deg", "`orbit`"),
-       number("raan_deg", o.raan_deg, any_finite(), "deg",
-              "`orbit`: right ascension of the ascending node"),
-       number("arg_perigee_deg", o.arg_perigee_deg, any_finite(), "deg",
-              "`orbit`: argument of perigee"),
-       number("mean_anomaly_deg", o.mean_anomaly_deg, any_finite(), "deg", "`orbit`"),
+       o.number("semi_major_axis_m", &O::semi_major_axis_m,
+                open_closed(wgs84_equatorial_radius_m,
+                            wgs84_equatorial_radius_m + run_limits::altitude_m),
+                "m",
+                "`orbit`: mean elements at `epoch` in the true-equator mean-equinox frame (as "
+                "two-line elements), propagated with the J2 secular drift of node, perigee and "
+                "mean anomaly, turned Earth-fixed with GMST (UT1 taken as UTC)"),
+       o.number("eccentricity", &O::eccentricity, half_open(0, 1), "",
+                "`orbit`: the perigee must be above the Earth"),
+       o.number("inclination_deg", &O::inclination_deg, closed(0, 180), "deg", "`orbit`"),
+       o.number("raan_deg", &O::raan_deg, any_finite(), "deg",
+                "`orbit`: right ascension of the ascending node"),
+       o.number("arg_perigee_deg", &O::arg_perigee_deg, any_finite(), "deg",
+                "`orbit`: argument of perigee"),
+       o.number("mean_anomaly_deg", &O::mean_anomaly_deg, any_finite(), "deg", "`orbit`"),
        time("epoch", std::nullopt, "`orbit`: ISO 8601 UTC time of the elements")
            .with_default_text("`start_time`"),
-       path("ephemeris",
-            "`ephemeris`: a CSV file, one shot a row, with a header row "
-            "`time,x_m,y_m,z_m[,pointing_x,pointing_y,pointing_z]` (any order): time as ISO "
-            "8601 UTC or seconds since 2000-01-01T12:00:00Z, the spacecraft's WGS84 Earth-fixed "
-            "position (m), and optionally the beam direction (Earth-fixed, any length); without "
-            "it the beam points by `off_nadir_deg` and `pointing_azimuth_deg`. Lines starting "
-            "with `#` are skipped; errors name `file:line`"),
-       path("file",
-            "`granule`: a GEDI L2A granule (groups `BEAMxxxx` with `shot_number`, "
-            "`lat_lowestmode`, `lon_lowestmode`, `delta_time`) or a GLAS GLAH14 granule "
-            "(`Data_40HZ` with `Geolocation/d_lat`, `d_lon`, `Time/d_UTCTime_40`, `i_rec_ndx`), "
-            "HDF5: one shot per footprint, aimed at its latitude and longitude from `altitude_m` "
-            "as a point is, at its time, its `shot_number` the granule's (GLAH14: `i_rec_ndx` * "
-            "40 + the shot in its record); footprints whose position is a fill value are "
-            "skipped"),
-       string_array("beams",
-                    "`granule`: the beams to take, by group name (`[\"BEAM0101\"]`; GLAH14's one "
-                    "is `Data_40HZ`); a beam not in the file is exit status 3")
+       t.path("ephemeris", &S::ephemeris,
+              "`ephemeris`: a CSV file, one shot a row, with a header row "
+              "`time,x_m,y_m,z_m[,pointing_x,pointing_y,pointing_z]` (any order): time as ISO "
+              "8601 UTC or seconds since 2000-01-01T12:00:00Z, the spacecraft's WGS84 Earth-fixed "
+              "position (m), and optionally the beam direction (Earth-fixed, any length); without "
+              "it the beam points by `off_nadir_deg` and `pointing_azimuth_deg`. Lines starting "
+              "with `#` are skipped; errors name `file:line`"),
+       t.path("file", &S::granule,
+              "`granule`: a GEDI L2A granule (groups `BEAMxxxx` with `shot_number`, "
+              "`lat_lowestmode`, `lon_lowestmode`, `delta_time`) or a GLAS GLAH14 granule "
+              "(`Data_40HZ` with `Geolocation/d_lat`, `d_lon`, `Time/d_UTCTime_40`, `i_rec_ndx`), "
+              "HDF5: one shot per footprint, aimed at its latitude and longitude from `altitude_m` "
+              "as a point is, at its time, its `shot_number` the granule's (GLAH14: `i_rec_ndx` * "
+              "40 + the shot in its record); footprints whose position is a fill value are "
+              "skipped"),
+       t.string_array("beams", &S::beams,
+                      "`granule`: the beams to take, by group name (`[\"BEAM0101\"]`; GLAH14's one "
+                      "is `Data_40HZ`); a beam not in the file is exit status 3")
            .with_default_text("all")});
 }
 
@@ -730,54 +765,59 @@ Key output_keys() {
 }
 
 Key detector_keys() {
-  const DetectorSettings d;
+  const Fields<DetectorSettings> d;
+  using S = DetectorSettings;
   return object(
       "detector",
       "the receiver between the light and the recorded waveform, to make waveforms that look "
       "like GLAS's; off by default. Levels are in W at the detector's input and `rx_waveform` "
       "stays in W; its noise is keyed by (seed, shot, band, bin), the same for any threads or "
       "split. The truth parts `rx_waveform_canopy`/`_ground` stay noise-free",
-      {boolean("enabled", d.enabled, "whether the detector applies"),
+      {d.boolean("enabled", &S::enabled, "whether the detector applies"),
        // Levels at the detector: returns are microwatts; a watt of light or noise is already far
        // beyond any detector, and larger levels overflow the products.
-       number("background_W", d.background_W, closed(0, 1), "W",
-              "mean background light (a sunlit scene)"),
-       boolean("photon_noise", d.photon_noise,
-               "Poisson statistics of signal and background photons, hν from each band's "
-               "wavelength"),
-       number("quantum_efficiency", d.quantum_efficiency, open_closed(0, 1), "",
-              "photoelectrons per photon, for `photon_noise`"),
-       number("noise_rms_W", d.noise_rms_W, closed(0, 1), "W", "Gaussian detector noise, RMS"),
+       d.number("background_W", &S::background_W, closed(0, 1), "W",
+                "mean background light (a sunlit scene)"),
+       d.boolean("photon_noise", &S::photon_noise,
+                 "Poisson statistics of signal and background photons, hν from each band's "
+                 "wavelength"),
+       d.number("quantum_efficiency", &S::quantum_efficiency, open_closed(0, 1), "",
+                "photoelectrons per photon, for `photon_noise`"),
+       d.number("noise_rms_W", &S::noise_rms_W, closed(0, 1), "W", "Gaussian detector noise, RMS"),
        // Photomultipliers reach 1e8; 1e12 leaves the products finite.
-       number("gain", d.gain, open_closed(0, 1e12), "", "amplification before the digitiser"),
-       integer("bits", d.bits, 0, 32, "", "digitiser resolution; 0: not digitised"),
-       number("saturation_W", std::nullopt, open_closed(0, 1e12), "W",
-              "the digitiser's full scale after the gain; required with `bits`; output above it "
-              "clips, below 0 reads 0")
+       d.number("gain", &S::gain, open_closed(0, 1e12), "", "amplification before the digitiser"),
+       d.integer("bits", &S::bits, 0, 32, "", "digitiser resolution; 0: not digitised"),
+       d.number("saturation_W", &S::saturation_W, open_closed(0, 1e12), "W",
+                "the digitiser's full scale after the gain; required with `bits`; output above it "
+                "clips, below 0 reads 0")
            .with_default_text("none")});
 }
 
 Key brf_keys() {
-  const BrfSettings b;
-  const BrfView v;
+  const Fields<BrfSettings> b;
+  const Fields<BrfView> v;
+  const BrfView view;
+  using S = BrfSettings;
   return object(
       "brf", "`glaswave brf` (FLIGHT's solar mode)",
-      {number("sun_zenith_deg", b.sun_zenith_deg, half_open(0, 90), "deg", "sun zenith angle"),
-       number("sun_azimuth_deg", b.sun_azimuth_deg, any_finite(), "deg", "sun azimuth"),
-       object_array(
-           "views", json::array({{{"zenith_deg", v.zenith_deg}, {"azimuth_deg", v.azimuth_deg}}}),
-           "the view directions of the reflectance",
-           {number("zenith_deg", v.zenith_deg, half_open(0, 90), "deg", "view zenith angle"),
-            number("azimuth_deg", v.azimuth_deg, any_finite(), "deg", "view azimuth")})
+      {b.number("sun_zenith_deg", &S::sun_zenith_deg, half_open(0, 90), "deg", "sun zenith angle"),
+       b.number("sun_azimuth_deg", &S::sun_azimuth_deg, any_finite(), "deg", "sun azimuth"),
+       b.object_array(
+            "views", &S::views,
+            json::array({{{"zenith_deg", view.zenith_deg}, {"azimuth_deg", view.azimuth_deg}}}),
+            "the view directions of the reflectance",
+            {v.number("zenith_deg", &BrfView::zenith_deg, half_open(0, 90), "deg",
+                      "view zenith angle"),
+             v.number("azimuth_deg", &BrfView::azimuth_deg, any_finite(), "deg", "view azimuth")})
            .with_items(1, std::numeric_limits<std::size_t>::max()),
-       integer("photons", b.photons, 1, run_limits::rays_per_shot, "",
-               "photons traced from the sun"),
-       number("image_resolution_m", b.image_resolution_m, above(0), "m",
-              "pixel size of `scene.tif`"),
-       number("scene_size_m", b.scene_size_m, open_closed(0, run_limits::brf_scene_m), "m",
-              "side of the square scene around the track's first footprint that the sun "
-              "lights (periodic over a synthetic plane); rounded up to whole pixels, at most "
-              "8192 of them (see Limits)")});
+       b.integer("photons", &S::photons, 1, run_limits::rays_per_shot, "",
+                 "photons traced from the sun"),
+       b.number("image_resolution_m", &S::image_resolution_m, above(0), "m",
+                "pixel size of `scene.tif`"),
+       b.number("scene_size_m", &S::scene_size_m, open_closed(0, run_limits::brf_scene_m), "m",
+                "side of the square scene around the track's first footprint that the sun "
+                "lights (periodic over a synthetic plane); rounded up to whole pixels, at most "
+                "8192 of them (see Limits)")});
 }
 
 }  // namespace
