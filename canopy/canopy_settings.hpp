@@ -4,6 +4,7 @@
 
 #include <array>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace glaswave {
@@ -21,6 +22,15 @@ enum class LeafAngleDistribution {
 enum class CrownShape { ellipsoid, cone, layer };
 
 struct StandArea;
+
+// A material of facet trees (canopy.facets.materials), per band: a leaf (its transmittance
+// given) is two-sided bi-Lambertian, anything else opaque and Lambertian.
+struct FacetMaterialSettings {
+  std::string name;
+  std::vector<double> reflectance;
+  std::vector<double> transmittance;  // zeros for an opaque material
+  bool leaf = false;
+};
 
 struct CanopySettings {
   // Which vegetation source grows it (pipeline/shot/vegetation_source.hpp): "forest", the
@@ -52,6 +62,11 @@ struct CanopySettings {
   std::string point_cloud_file;
   std::string point_cloud_crs;
   double voxel_size_m = 1.0;
+  // Facet trees (canopy.facets): the trees file, each model's name and mesh file, the
+  // materials the meshes' material names map to.
+  std::string facet_trees_file;
+  std::vector<std::pair<std::string, std::string>> facet_models;
+  std::vector<FacetMaterialSettings> facet_materials;
 };
 
 // A stand: polygons (lon, lat rings; a point is inside when an odd number of rings hold it, so

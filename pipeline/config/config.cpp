@@ -372,6 +372,39 @@ CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<Band>&
   return c;
 }
 
+// canopy.facets: facet trees, alone in the canopy.
+CanopySettings read_facet_canopy(JsonReader& canopy, const std::vector<Band>& bands) {
+  for (const std::string& key : canopy.given())
+    if (key != "facets")
+      canopy.fail(key,
+                  "cannot be given beside canopy.facets (the canopy holds one vegetation "
+                  "source)");
+  CanopySettings c;
+  c.kind = "facets";
+  JsonReader r = canopy.object("facets");
+  c.facet_trees_file = non_empty_path(r, "trees_file");
+  if (c.facet_trees_file.empty()) r.fail("trees_file", "is required");
+  c.facet_models = r.path_map("models");
+  for (auto& [name, entry] : r.object_map("materials")) {
+    FacetMaterialSettings m;
+    m.name = name;
+    entry.require("reflectance");
+    m.reflectance = spectral(entry, "reflectance", bands);
+    m.leaf = entry.has("transmittance");
+    m.transmittance =
+        m.leaf ? spectral(entry, "transmittance", bands) : std::vector<double>(bands.size(), 0.0);
+    for (std::size_t i = 0; i < bands.size(); ++i)
+      if (m.reflectance[i] + m.transmittance[i] > 1.0 + 1e-12)
+        entry.fail("transmittance", "reflectance + transmittance must be <= 1 in band " +
+                                        bands[i].name + ", got " +
+                                        format_number(m.reflectance[i] + m.transmittance[i]));
+    entry.finish();
+    c.facet_materials.push_back(std::move(m));
+  }
+  r.finish();
+  return c;
+}
+
 }  // namespace
 
 std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Band>& bands) {
@@ -381,6 +414,7 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Ba
   }
   JsonReader r = root.object("canopy");
   if (r.has("voxels") || r.has("point_cloud")) return read_measured_canopy(r, bands);
+  if (r.has("facets")) return read_facet_canopy(r, bands);
   CanopySettings c;
   KeyHooks hooks = leaf_hooks(r, c, bands);
   hooks.insert(hooks.end(), {{"green_fraction", [&] { read_fractions(r, c); }},
@@ -610,6 +644,12 @@ Config load_config_document(json document, const std::filesystem::path& folder,
       resolve_path(c.canopy->voxels_file, r["canopy"]["voxels"], "file", folder);
     if (!c.canopy->point_cloud_file.empty())
       resolve_path(c.canopy->point_cloud_file, r["canopy"]["point_cloud"], "file", folder);
+    if (!c.canopy->facet_trees_file.empty()) {
+      json& facets = r["canopy"]["facets"];
+      resolve_path(c.canopy->facet_trees_file, facets, "trees_file", folder);
+      for (auto& [name, file] : c.canopy->facet_models)
+        resolve_path(file, facets["models"], name.c_str(), folder);
+    }
   }
   resolve_path(c.track.ephemeris, r["track"], "ephemeris", folder);
   resolve_path(c.track.granule, r["track"], "file", folder);

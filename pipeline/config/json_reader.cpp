@@ -406,6 +406,59 @@ std::vector<JsonReader> JsonReader::object_array(const std::string& key, bool re
   return readers;
 }
 
+namespace {
+
+// The map's object, checked: an object of at least one entry, or null when absent.
+const json* map_object(JsonReader& reader, const std::string& key, const Key& k) {
+  const json& value = reader.raw(key);
+  if (value.is_null()) {
+    if (k.required) reader.fail(key, "is required");
+    return nullptr;
+  }
+  if (!value.is_object())
+    reader.fail(key, "must be an object of named entries, got " + describe(value));
+  if (value.empty()) reader.fail(key, "must name at least one entry");
+  return &value;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> JsonReader::path_map(const std::string& key) {
+  const Key& k = declared(key, KeyType::map);
+  std::vector<std::pair<std::string, std::string>> entries;
+  const json* value = map_object(*this, key, k);
+  if (!value) return entries;
+  json& out = resolved_[key];
+  out = json::object();
+  for (const auto& [name, entry] : value->items()) {
+    const std::string entry_place = json_pointer_child(place(key), name);
+    if (!entry.is_string() || entry.get<std::string>().empty())
+      throw config_error(entry_place, "must be a file path, got " + describe(entry));
+    require_no_nul(entry.get_ref<const std::string&>(), entry_place, ErrorKind::config);
+    entries.emplace_back(name, entry.get<std::string>());
+    out[name] = entry;
+  }
+  return entries;
+}
+
+std::vector<std::pair<std::string, JsonReader>> JsonReader::object_map(const std::string& key) {
+  const Key& k = declared(key, KeyType::map);
+  std::vector<std::pair<std::string, JsonReader>> entries;
+  const json* value = map_object(*this, key, k);
+  if (!value) return entries;
+  // Size the resolved object first: readers keep references to its members.
+  json& out = resolved_[key];
+  out = json::object();
+  for (const auto& [name, entry] : value->items()) out[name] = json::object();
+  for (const auto& [name, entry] : value->items()) {
+    const std::string entry_place = json_pointer_child(place(key), name);
+    if (!entry.is_object())
+      throw config_error(entry_place, "must be an object, got " + describe(entry));
+    entries.emplace_back(name, JsonReader(entry, entry_place, out[name], k.children[0]));
+  }
+  return entries;
+}
+
 std::vector<std::string> JsonReader::given() const {
   std::vector<std::string> keys;
   if (object_)

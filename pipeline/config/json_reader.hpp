@@ -115,6 +115,12 @@ class JsonReader {
   std::vector<JsonReader> object_array(const std::string& key);
   std::vector<JsonReader> object_array(const std::string& key, bool required);
 
+  // A map (KeyType::map) of named entries, in the order given; empty when absent (an error when
+  // required). path_map: each value a file path; object_map: each value an object, given its
+  // own reader, whose finish() the caller calls.
+  std::vector<std::pair<std::string, std::string>> path_map(const std::string& key);
+  std::vector<std::pair<std::string, JsonReader>> object_map(const std::string& key);
+
   // Values as used at this level.
   nlohmann::json& resolved() { return resolved_; }
 

@@ -184,6 +184,12 @@ Key object_array(std::string name, json fallback, std::string description,
   return k;
 }
 
+Key map(std::string name, std::string description, Key value) {
+  Key k = make(std::move(name), KeyType::map, "", std::move(description));
+  k.children = {std::move(value)};
+  return k;
+}
+
 }  // namespace declare
 
 // ---- keys declared with the member they set --------------------------------------------------
@@ -640,7 +646,36 @@ Key canopy_keys() {
               "an airborne lidar point cloud instead of crowns (no other canopy key beside it): "
               "ground points (class 2) and the other returns voxelised by gap-fraction "
               "inversion, each voxel a turbid cell of these leaves",
-              std::move(cloud_keys))});
+              std::move(cloud_keys)),
+       object(
+           "facets",
+           "facet trees instead of crowns (no other canopy key beside it): triangle meshes, one "
+           "shared model each, placed by `trees_file`, each tree standing on the terrain under "
+           "its stem",
+           {path("trees_file",
+                 "the trees: a `.csv` with header `lon,lat,model,rotation_deg,scale` (degrees) or "
+                 "`x,y,model,rotation_deg,scale` (metres east and north of `terrain.plane`'s "
+                 "origin), or any vector file OGR reads of points (in any CRS) with the "
+                 "attributes `model`, `rotation_deg` and `scale`; `rotation_deg` turns the "
+                 "model's +y axis to that azimuth (clockwise from north)")
+                .with_required(),
+            map("models",
+                "each model's name and its mesh file (any format Assimp reads: OBJ, PLY, glTF, "
+                "...; metres, z up, the stem's foot at the origin)",
+                path("NAME", "the mesh file"))
+                .with_required(),
+            map("materials",
+                "the optics of each material name the meshes use (a mesh material without an "
+                "entry is an error)",
+                object("NAME",
+                       "a leaf when `transmittance` is given (two-sided bi-Lambertian), else "
+                       "opaque and Lambertian (wood)",
+                       {spectral("reflectance", 0.0, closed(0, 1), "", "per band").with_required(),
+                        spectral("transmittance", 0.0, closed(0, 1), "",
+                                 "per band; given: a two-sided leaf, `reflectance` + "
+                                 "`transmittance` ≤ 1")
+                            .with_default_text("none: opaque")}))
+                .with_required()})});
   canopy.default_text = "null";
   return canopy;
 }
@@ -914,6 +949,11 @@ json key_schema(const Key& k) {
     case KeyType::choice_or_object:
       s["anyOf"] = json::array({{{"type", "string"}, {"enum", k.choices}}, object_schema(k)});
       break;
+    case KeyType::map:
+      s = {{"type", "object"},
+           {"minProperties", 1},
+           {"additionalProperties", key_schema(k.children[0])}};
+      break;
   }
   if (k.nullable && k.type != KeyType::choice_or_object && k.type != KeyType::spectral &&
       s.contains("type"))
@@ -958,7 +998,7 @@ namespace {
 std::string code(const std::string& text) { return "`" + text + "`"; }
 
 std::string default_cell(const Key& k) {
-  if (k.type == KeyType::object || k.type == KeyType::object_array) {
+  if (k.type == KeyType::object || k.type == KeyType::object_array || k.type == KeyType::map) {
     if (!k.default_text.empty()) return k.default_text;
     return "—";
   }
@@ -1015,6 +1055,8 @@ std::string allowed_cell(const Key& k) {
       return choices + ", or an object";
     case KeyType::string_array:
       return "array of strings";
+    case KeyType::map:
+      return "object of `" + k.children[0].name + "`: " + allowed_cell(k.children[0]);
   }
   return "";
 }
@@ -1031,6 +1073,8 @@ void add_rows(const Key& k, const std::string& prefix, std::ostringstream& out) 
     if (c.type == KeyType::object || c.type == KeyType::choice_or_object)
       add_rows(c, name + ".", out);
     if (c.type == KeyType::object_array) add_rows(c, name + "[].", out);
+    if (c.type == KeyType::map && c.children[0].type == KeyType::object)
+      add_rows(c.children[0], name + "." + c.children[0].name + ".", out);
   }
 }
 

@@ -51,6 +51,7 @@ enum class KeyType {
   object_array,      // an array of objects whose keys are `children`
   choice_or_object,  // one of `choices`, or an object whose keys are `children`
   string_array,      // an array of non-empty strings
+  map,               // an object of entries the user names, each value as `children[0]` says
 };
 
 struct Key {
@@ -110,6 +111,9 @@ Key number_pair(std::string name, std::array<double, 2> fallback, Range range, s
 Key object(std::string name, std::string description, std::vector<Key> children);
 Key object_array(std::string name, nlohmann::json fallback, std::string description,
                  std::vector<Key> item_keys);
+// An object of named entries (`{"oak": "oak.obj"}`), at least one; `value` declares each entry's
+// value, its name (`NAME`) standing for the entry's in tables.
+Key map(std::string name, std::string description, Key value);
 }  // namespace declare
 
 // The declaration of the whole configuration: the root object.

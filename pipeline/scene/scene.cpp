@@ -15,6 +15,8 @@ namespace glaswave {
 namespace {
 
 constexpr unsigned ground_geometry = 0;
+// Trunks are geometry 1; facet tree k is instance geometry first_facet + k.
+constexpr unsigned first_facet = 2;
 
 void check_device(RTCDevice device, const char* what) {
   const RTCError code = rtcGetDeviceError(device);
@@ -33,6 +35,31 @@ void attach_mesh(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsig
   check_device(device, "allocating a mesh");
   std::memcpy(vertices, mesh.vertices_m.data(), mesh.vertices_m.size() * sizeof(float));
   std::memcpy(triangles, mesh.triangles.data(), mesh.triangles.size() * sizeof(unsigned));
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometryByID(scene, geometry, id);
+  rtcReleaseGeometry(geometry);
+}
+
+// A facet tree as an instance of its model's scene: x' = foot + scale R(rotation) x, the
+// model's +y turned to the azimuth (clockwise from north).
+void attach_facet(const RayDevice& device, RTCScene scene, const FacetInstance& tree,
+                  const std::array<double, 2>& turn, unsigned id) {
+  RTCGeometry geometry = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_INSTANCE);
+  rtcSetGeometryInstancedScene(geometry, tree.model->scene_on(device));
+  const double c = tree.scale * turn[0], s = tree.scale * turn[1];
+  const float transform[12] = {static_cast<float>(c),
+                               static_cast<float>(-s),
+                               0.0f,
+                               static_cast<float>(s),
+                               static_cast<float>(c),
+                               0.0f,
+                               0.0f,
+                               0.0f,
+                               static_cast<float>(tree.scale),
+                               static_cast<float>(tree.foot_m[0]),
+                               static_cast<float>(tree.foot_m[1]),
+                               static_cast<float>(tree.foot_m[2])};
+  rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
   rtcCommitGeometry(geometry);
   rtcAttachGeometryByID(scene, geometry, id);
   rtcReleaseGeometry(geometry);
@@ -122,12 +149,21 @@ Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation
       trunk_materials_(vegetation.trunk_materials),
       layer_(vegetation.layer),
       voxels_(vegetation.voxels && vegetation.voxels->nx > 0 ? vegetation.voxels : nullptr),
+      facets_(vegetation.facets),
+      leaf_materials_(vegetation.leaf_materials),
       top_m_(ground.max_height_m) {
   check_device(device.handle(), "creating a scene");
   if (!ground.triangles.empty()) attach_mesh(device.handle(), surfaces_, ground, ground_geometry);
   if (!vegetation.trunks.triangles.empty()) {
     attach_mesh(device.handle(), surfaces_, vegetation.trunks, ground_geometry + 1);
     top_m_ = std::max(top_m_, vegetation.trunks.max_height_m);
+  }
+  for (std::size_t k = 0; k < facets_.size(); ++k) {
+    const FacetInstance& tree = facets_[k];
+    facet_turns_.push_back({std::cos(tree.rotation_rad), std::sin(tree.rotation_rad)});
+    attach_facet(device, surfaces_, tree, facet_turns_.back(),
+                 first_facet + static_cast<unsigned>(k));
+    top_m_ = std::max(top_m_, tree.foot_m[2] + tree.scale * tree.model->top_m());
   }
   rtcSetSceneFlags(surfaces_, RTC_SCENE_FLAG_ROBUST);
   rtcCommitScene(surfaces_);
@@ -196,11 +232,22 @@ SurfaceHit Scene::intersect(const Vec3& origin, const Vec3& direction, double ma
 
   SurfaceHit hit;
   if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
-  hit.kind = query.hit.geomID == ground_geometry ? SurfaceKind::ground : SurfaceKind::trunk;
-  if (hit.kind == SurfaceKind::trunk && query.hit.primID < trunk_materials_.size())
-    hit.material = trunk_materials_[query.hit.primID];
+  Vec3 normal{query.hit.Ng_x, query.hit.Ng_y, query.hit.Ng_z};
+  if (query.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
+    // A facet: its material's kind, and its normal turned from the model's frame (Embree gives
+    // it there) into the scene's; a uniform scale leaves its direction.
+    const std::size_t tree = query.hit.instID[0] - first_facet;
+    hit.material = facets_[tree].model->material(query.hit.primID);
+    hit.kind = leaf_materials_[hit.material] ? SurfaceKind::leaf : SurfaceKind::trunk;
+    const auto& [c, s] = facet_turns_[tree];
+    normal = {c * normal[0] + s * normal[1], -s * normal[0] + c * normal[1], normal[2]};
+  } else {
+    hit.kind = query.hit.geomID == ground_geometry ? SurfaceKind::ground : SurfaceKind::trunk;
+    if (hit.kind == SurfaceKind::trunk && query.hit.primID < trunk_materials_.size())
+      hit.material = trunk_materials_[query.hit.primID];
+  }
   hit.distance_m = query.ray.tfar;
-  Vec3 normal = normalized(Vec3{query.hit.Ng_x, query.hit.Ng_y, query.hit.Ng_z});
+  normal = normalized(normal);
   if (dot(normal, direction) > 0.0) normal = -1.0 * normal;
   hit.normal = normal;
   return hit;

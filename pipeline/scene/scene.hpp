@@ -1,14 +1,17 @@
-// The scene of one shot, in its local east-north-up frame: the ground and tree trunks as
-// surfaces, crowns and a homogeneous layer as turbid volumes. Embree holds the geometry in
+// The scene of one shot, in its local east-north-up frame: the ground, tree trunks and facet
+// trees (instances of shared models) as surfaces, crowns and a homogeneous layer as turbid
+// volumes. Embree holds the geometry in
 // single precision; ray origins are placed just above the scene so that float coordinates stay
 // small (PHYSICS.md section 0).
 #pragma once
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <vector>
 
 #include "canopy/crown.hpp"
+#include "pipeline/scene/facet_model.hpp"
 #include "pipeline/scene/voxel_field.hpp"
 #include "terrain/ground_mesh.hpp"
 
@@ -39,6 +42,15 @@ struct TurbidLayer {
   int material = 0;
 };
 
+// A facet tree: a shared model standing with its origin at `foot_m`, its +y axis turned to the
+// azimuth `rotation_rad` (clockwise from north) and scaled by `scale`.
+struct FacetInstance {
+  std::shared_ptr<const FacetModel> model;
+  Vec3 foot_m{};
+  double rotation_rad = 0.0;
+  double scale = 1.0;
+};
+
 // What grows on the ground of one shot.
 struct Vegetation {
   std::vector<Crown> crowns;
@@ -46,15 +58,21 @@ struct Vegetation {
   std::vector<int> trunk_materials;  // the material of each trunk triangle
   std::optional<TurbidLayer> layer;
   std::shared_ptr<const VoxelField> voxels;  // a voxel grid of plant area density, when given
+  std::vector<FacetInstance> facets;
+  // Per material number: whether a facet of it is a two-sided bi-Lambertian leaf (a hit of kind
+  // `leaf`); the others are opaque and Lambertian, as bark (kind `trunk`).
+  std::vector<char> leaf_materials;
 };
 
-enum class SurfaceKind { none, ground, trunk };
+// What a ray meets on a surface: the ground; bark (a trunk, or a wood facet), Lambertian; a leaf
+// facet, two-sided bi-Lambertian.
+enum class SurfaceKind { none, ground, trunk, leaf };
 
 struct SurfaceHit {
   SurfaceKind kind = SurfaceKind::none;
   double distance_m = 0.0;  // along the ray from its origin
   Vec3 normal{};            // unit, on the side the ray came from
-  int material = 0;         // of a trunk
+  int material = 0;         // of a trunk or a facet
 };
 
 // A stretch [start_m, end_m] of a ray inside turbid foliage of the given plant area density.
@@ -95,6 +113,7 @@ class Scene {
 
   double top_m() const { return top_m_; }  // highest point of anything, local frame
   bool has_volumes() const { return !crowns_.empty() || layer_.has_value() || voxels_; }
+  const std::vector<FacetInstance>& facets() const { return facets_; }
 
  private:
   void collect_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
@@ -108,6 +127,9 @@ class Scene {
   std::vector<int> trunk_materials_;
   std::optional<TurbidLayer> layer_;
   std::shared_ptr<const VoxelField> voxels_;
+  std::vector<FacetInstance> facets_;
+  std::vector<std::array<double, 2>> facet_turns_;  // each instance's (cos, sin) of its rotation
+  std::vector<char> leaf_materials_;
   double top_m_;
 };
 

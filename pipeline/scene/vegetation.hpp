@@ -17,4 +17,10 @@ struct VegetationTruth {
 
 VegetationTruth measure_vegetation(const Scene& scene, double sigma_m);
 
+// The same for facet trees: cover and height along the vertical lines (a line covered where the
+// first surface it meets is a facet), and the plant area as the facets' one-sided area under
+// the beam's weight, over the weight's integral 2 pi sigma^2 (each model's area gathered on its
+// area cells).
+VegetationTruth measure_facets(const Scene& scene, double sigma_m);
+
 }  // namespace glaswave

@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include "core/error.hpp"
+#include "pipeline/shot/facet_source.hpp"
 #include "pipeline/shot/forest_source.hpp"
 #include "pipeline/shot/voxel_source.hpp"
 
@@ -27,7 +28,10 @@ Registry& registry() {
          &VoxelSource::region_bytes}},
        {"point_cloud",
         {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
-         &VoxelSource::region_bytes}}}};
+         &VoxelSource::region_bytes}},
+       {"facets",
+        {[](const VegetationSettings& s) { return std::make_unique<FacetSource>(s); },
+         &FacetSource::region_bytes}}}};
   return sources;
 }
 

@@ -149,8 +149,8 @@ Event SunTracer::next_event(Photon& photon, RandomStream& random, BatchTally& ta
       return event;
     }
     if (hit.kind != SurfaceKind::none) {
-      event.element = hit.kind == SurfaceKind::ground ? RayElement::ground : RayElement::trunk;
-      if (event.element == RayElement::trunk) event.material = &optics_.foliage[hit.material];
+      event.element = surface_element(hit.kind);
+      if (event.element != RayElement::ground) event.material = &optics_.foliage[hit.material];
       event.point = origin + hit.distance_m * d;
       event.segment_m += hit.distance_m;
       event.normal = hit.normal;

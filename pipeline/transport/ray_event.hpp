@@ -24,7 +24,9 @@ enum class RayEventKind {
   end,          // the path ends: the single-scattering path's first element, or max_order
 };
 
-enum class RayElement { none, ground, leaf, trunk };
+// leaf: a leaf of turbid foliage (met by free-path sampling); facet: a leaf facet of a facet
+// tree, a surface, two-sided bi-Lambertian; trunk: bark, Lambertian (a trunk or a wood facet).
+enum class RayElement { none, ground, leaf, trunk, facet };
 
 struct RayEvent {
   RayEventKind kind = RayEventKind::enter;

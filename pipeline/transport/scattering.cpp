@@ -70,7 +70,7 @@ bool sample_scattering(RayElement element, const Foliage* material, const SceneO
                        const Vec3& normal, RayRandom& random, Vec3& direction,
                        std::span<double> throughput) {
   const std::size_t bands = throughput.size();
-  if (element == RayElement::leaf) {
+  if (element == RayElement::leaf || element == RayElement::facet) {
     // Reflection sends the path back to the side it came from, transmission through.
     double reflected = 0.0, transmitted = 0.0;
     for (std::size_t band = 0; band < bands; ++band) {
@@ -100,7 +100,7 @@ bool sample_scattering(RayElement element, const Foliage* material, const SceneO
 double element_response(RayElement element, const Foliage* material, const SceneOptics& optics,
                         std::size_t band, const Vec3& normal, const Vec3& incoming,
                         const Vec3& outgoing) {
-  if (element == RayElement::leaf)
+  if (element == RayElement::leaf || element == RayElement::facet)
     return bilambertian_response(normal, incoming, outgoing, material->reflectance[band],
                                  material->transmittance[band]);
   const double reflectance = element == RayElement::ground ? optics.soil_reflectance[band]

@@ -122,6 +122,13 @@ double connection_depth(const std::vector<VolumeSpan>& spans, const std::vector<
                         const std::vector<Foliage>& foliage, double shared_m,
                         double separation_rad);
 
+// The element a surface hit is: ground, bark (trunks and wood facets) or a leaf facet.
+inline RayElement surface_element(SurfaceKind kind) {
+  return kind == SurfaceKind::ground ? RayElement::ground
+         : kind == SurfaceKind::leaf ? RayElement::facet
+                                     : RayElement::trunk;
+}
+
 // A direction about `normal`, cosine-weighted.
 Vec3 cosine_direction(const Vec3& normal, double u1, double u2);
 
@@ -129,7 +136,9 @@ Vec3 cosine_direction(const Vec3& normal, double u1, double u2);
 // `normal`, drawn by the element's scattering (a leaf reflects or transmits by the bands'
 // throughput-weighted reflectance and transmittance, then cosine-weighted; soil and bark are
 // Lambertian), and the per-band `throughput` updated to carry the rest; false (nothing
-// changed) when the element scatters nothing. `material` is the leaf's or trunk's foliage.
+// changed) when the element scatters nothing. `material` is the leaf's or trunk's foliage. A
+// leaf facet scatters as a leaf, about its own normal: reflected to the side the path came
+// from, transmitted to the other.
 bool sample_scattering(RayElement element, const Foliage* material, const SceneOptics& optics,
                        const Vec3& normal, RayRandom& random, Vec3& direction,
                        std::span<double> throughput);

@@ -297,8 +297,8 @@ std::optional<Vertex> PathTracer::find_vertex(const Path& path, RayRandom& rando
     vertex.crown = leaf->crown;
     vertex.segment_m = leaf->distance_m;
   } else {
-    vertex.element = hit.kind == SurfaceKind::ground ? RayElement::ground : RayElement::trunk;
-    vertex.foliage = vertex.element == RayElement::trunk ? hit.material : -1;
+    vertex.element = surface_element(hit.kind);
+    vertex.foliage = vertex.element == RayElement::ground ? -1 : hit.material;
     vertex.segment_m = hit.distance_m;
   }
   if (vertex.foliage >= 0) vertex.material = &optics_.foliage[vertex.foliage];
@@ -551,6 +551,8 @@ const char* to_string(RayElement element) {
       return "leaf";
     case RayElement::trunk:
       return "trunk";
+    case RayElement::facet:
+      return "facet";
   }
   return "?";
 }

@@ -1,0 +1,239 @@
+// Facet tree models through Assimp, and the trees file through the CSV reader or OGR.
+#include "canopy/facet_trees.hpp"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <gdal_priv.h>
+#include <ogrsf_frmts.h>
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <algorithm>
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include "core/csv.hpp"
+#include "core/error.hpp"
+#include "core/input_file.hpp"
+
+namespace glaswave {
+namespace {
+
+// No tree reaches beyond this from its foot: a vertex farther is a model in other units.
+constexpr double max_model_reach_m = 1000.0;
+constexpr double max_scale = 100.0;
+constexpr double max_offset_m = 1.0e6;
+
+void add_mesh(const aiMesh& mesh, const std::string& material, FacetMesh& out,
+              std::map<std::string, std::uint16_t>& material_numbers, const std::string& place) {
+  const auto first = static_cast<std::uint32_t>(out.vertices_m.size() / 3);
+  for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+    const aiVector3D& p = mesh.mVertices[v];
+    for (double c : {double{p.x}, double{p.y}, double{p.z}})
+      if (!std::isfinite(c) || std::abs(c) > max_model_reach_m)
+        throw input_error(place,
+                          "a vertex lies beyond 1 km of the model's origin or is not "
+                          "finite (model units are metres, the stem's foot at 0, 0, 0)");
+    out.vertices_m.insert(out.vertices_m.end(), {p.x, p.y, p.z});
+  }
+  const auto [entry, added] =
+      material_numbers.emplace(material, static_cast<std::uint16_t>(out.material_names.size()));
+  if (added) out.material_names.push_back(material);
+  for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+    const aiFace& face = mesh.mFaces[f];
+    if (face.mNumIndices != 3) continue;  // points and lines are no facets
+    const unsigned* i = face.mIndices;
+    const aiVector3D e1 = mesh.mVertices[i[1]] - mesh.mVertices[i[0]];
+    const aiVector3D e2 = mesh.mVertices[i[2]] - mesh.mVertices[i[0]];
+    if ((e1 ^ e2).SquareLength() <= 0.0f) continue;  // no area, no normal
+    out.triangles.insert(out.triangles.end(), {first + i[0], first + i[1], first + i[2]});
+    out.materials.push_back(entry->second);
+  }
+  if (out.triangles.size() / 3 > max_facet_triangles)
+    throw input_error(place,
+                      "holds more than " + std::to_string(max_facet_triangles) + " triangles");
+}
+
+}  // namespace
+
+FacetMesh read_facet_mesh(const std::filesystem::path& file, const std::string& model) {
+  const std::string place = file.string();
+  require_input_file(place, "the mesh of model \"" + model + "\"");
+  Assimp::Importer importer;
+  // Node transforms applied, polygons cut into triangles, shared vertices merged.
+  const aiScene* scene =
+      importer.ReadFile(place, aiProcess_Triangulate | aiProcess_PreTransformVertices |
+                                   aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode) {
+    std::string why = importer.GetErrorString();
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    throw input_error(place, "cannot read the mesh of model \"" + model +
+                                 "\" (Assimp: " + (why.empty() ? "no scene" : why) + ")");
+  }
+  FacetMesh mesh;
+  std::map<std::string, std::uint16_t> material_numbers;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh& part = *scene->mMeshes[m];
+    std::string material = "DefaultMaterial";
+    if (part.mMaterialIndex < scene->mNumMaterials) {
+      aiString name;
+      if (scene->mMaterials[part.mMaterialIndex]->Get(AI_MATKEY_NAME, name) == AI_SUCCESS)
+        material = name.C_Str();
+    }
+    add_mesh(part, material, mesh, material_numbers, place);
+  }
+  if (mesh.triangles.empty())
+    throw input_error(place, "the mesh of model \"" + model + "\" holds no triangle of any area");
+  return mesh;
+}
+
+namespace {
+
+const std::vector<std::string_view> geographic_header{"lon", "lat", "model", "rotation_deg",
+                                                      "scale"};
+const std::vector<std::string_view> metric_header{"x", "y", "model", "rotation_deg", "scale"};
+
+int model_number(std::string_view name, const std::vector<std::string>& models,
+                 const std::string& place) {
+  const auto found = std::find(models.begin(), models.end(), name);
+  if (found != models.end()) return static_cast<int>(found - models.begin());
+  std::string known;
+  for (const std::string& m : models) known += (known.empty() ? "" : ", ") + m;
+  throw input_error(place, "model " + field_excerpt(name) +
+                               " is not in canopy.facets.models (there are: " + known + ")");
+}
+
+void check_tree(const FacetTree& tree, const std::string& place) {
+  if (!(tree.scale > 0.0 && tree.scale <= max_scale))
+    throw input_error(place, "scale must be in (0, 100]");
+  if (!std::isfinite(tree.rotation_deg)) throw input_error(place, "rotation_deg must be finite");
+  if (!(tree.lon_deg >= -180.0 && tree.lon_deg <= 360.0))
+    throw input_error(place, "lon must be in [-180, 360]");
+  if (!(tree.lat_deg >= -90.0 && tree.lat_deg <= 90.0))
+    throw input_error(place, "lat must be in [-90, 90]");
+}
+
+std::vector<FacetTree> read_csv_trees(const std::filesystem::path& file,
+                                      const std::vector<std::string>& models,
+                                      const std::optional<PlaneSettings>& plane) {
+  CsvReader csv(file, "the trees file");
+  std::vector<std::string_view> fields;
+  std::optional<GeographicLib::LocalCartesian> origin;
+  if (csv.next_row(fields) && fields != geographic_header) {
+    if (fields != metric_header)
+      throw input_error(csv.place(),
+                        "expected the header lon,lat,model,rotation_deg,scale or "
+                        "x,y,model,rotation_deg,scale");
+    if (!plane)
+      throw input_error(
+          csv.place(), "x,y trees are metres from terrain.plane's origin; with a DEM give lon,lat");
+    origin.emplace(plane->origin_lat_deg, plane->origin_lon_deg, 0.0);
+  }
+  std::vector<FacetTree> trees;
+  while (csv.next_row(fields)) {
+    const std::string place = csv.place();
+    if (fields.size() != 5)
+      throw input_error(place, "expected 5 values, got " + std::to_string(fields.size()));
+    FacetTree tree;
+    const double a = csv.number(fields[0], origin ? "x" : "lon");
+    const double b = csv.number(fields[1], origin ? "y" : "lat");
+    tree.model = model_number(fields[2], models, place);
+    tree.rotation_deg = csv.number(fields[3], "rotation_deg");
+    tree.scale = csv.number(fields[4], "scale");
+    if (origin) {
+      if (std::abs(a) > max_offset_m || std::abs(b) > max_offset_m)
+        throw input_error(place, "x and y must be within 1000000 m of the plane's origin");
+      double h = 0.0;
+      origin->Reverse(a, b, 0.0, tree.lat_deg, tree.lon_deg, h);
+    } else {
+      tree.lon_deg = a;
+      tree.lat_deg = b;
+    }
+    check_tree(tree, place);
+    trees.push_back(tree);
+  }
+  return trees;
+}
+
+struct DatasetCloser {
+  void operator()(GDALDataset* dataset) const { GDALClose(dataset); }
+};
+
+std::vector<FacetTree> read_ogr_trees(const std::filesystem::path& file,
+                                      const std::vector<std::string>& models) {
+  static std::once_flag registered;
+  std::call_once(registered, [] { GDALAllRegister(); });
+  const std::string path = file.string();
+  std::unique_ptr<GDALDataset, DatasetCloser> dataset(GDALDataset::FromHandle(
+      GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
+  if (!dataset)
+    throw input_error(path, "the trees file is neither a .csv nor a vector file OGR reads");
+  OGRSpatialReference wgs84;
+  wgs84.SetWellKnownGeogCS("WGS84");
+  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  std::vector<FacetTree> trees;
+  for (int l = 0; l < dataset->GetLayerCount(); ++l) {
+    OGRLayer* layer = dataset->GetLayer(l);
+    std::unique_ptr<OGRCoordinateTransformation> to_wgs84;
+    if (const OGRSpatialReference* crs = layer->GetSpatialRef()) {
+      OGRSpatialReference source(*crs);
+      source.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+      to_wgs84.reset(OGRCreateCoordinateTransformation(&source, &wgs84));
+      if (!to_wgs84)
+        throw input_error(path,
+                          "layer " + std::to_string(l) + ": its CRS cannot be brought to WGS84");
+    }
+    const OGRFeatureDefn* definition = layer->GetLayerDefn();
+    int fields[3];
+    const char* names[3] = {"model", "rotation_deg", "scale"};
+    for (int i = 0; i < 3; ++i) {
+      fields[i] = definition->GetFieldIndex(names[i]);
+      if (fields[i] < 0)
+        throw input_error(path, "layer " + std::to_string(l) + " has no attribute " + names[i] +
+                                    " (trees need model, rotation_deg and scale)");
+    }
+    layer->ResetReading();
+    for (std::unique_ptr<OGRFeature> feature(layer->GetNextFeature()); feature;
+         feature.reset(layer->GetNextFeature())) {
+      const std::string place = path + ": feature " + std::to_string(feature->GetFID());
+      OGRGeometry* geometry = feature->GetGeometryRef();
+      if (!geometry || wkbFlatten(geometry->getGeometryType()) != wkbPoint)
+        throw input_error(place, "a tree is a point");
+      if (to_wgs84 && geometry->transform(to_wgs84.get()) != OGRERR_NONE)
+        throw input_error(place, "its point cannot be brought to WGS84");
+      const OGRPoint& point = *geometry->toPoint();
+      FacetTree tree;
+      tree.lon_deg = point.getX();
+      tree.lat_deg = point.getY();
+      tree.model = model_number(feature->GetFieldAsString(fields[0]), models, place);
+      tree.rotation_deg = feature->GetFieldAsDouble(fields[1]);
+      tree.scale = feature->GetFieldAsDouble(fields[2]);
+      check_tree(tree, place);
+      trees.push_back(tree);
+    }
+  }
+  return trees;
+}
+
+}  // namespace
+
+std::vector<FacetTree> read_facet_trees(const std::filesystem::path& file,
+                                        const std::vector<std::string>& models,
+                                        const std::optional<PlaneSettings>& plane) {
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::vector<FacetTree> trees;
+  if (extension == ".csv") {
+    trees = read_csv_trees(file, models, plane);
+  } else {
+    require_input_file(file.string(), "the trees file");
+    trees = read_ogr_trees(file, models);
+  }
+  if (trees.empty()) throw input_error(file.string(), "the trees file lists no trees");
+  return trees;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,111 @@
+// A facet model's triangles, area cells and Embree scenes.
+#include "pipeline/scene/facet_model.hpp"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <unordered_map>
+
+#include "core/error.hpp"
+#include "pipeline/scene/scene.hpp"
+
+namespace glaswave {
+
+FacetModel::FacetModel(FacetMesh mesh, std::vector<int> triangle_materials)
+    : vertices_m_(std::move(mesh.vertices_m)),
+      triangles_(std::move(mesh.triangles)),
+      materials_(std::move(triangle_materials)) {
+  top_m_ = -std::numeric_limits<double>::infinity();
+  bottom_m_ = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 2 < vertices_m_.size(); i += 3) {
+    reach_m_ = std::max(reach_m_, std::hypot(double{vertices_m_[i]}, double{vertices_m_[i + 1]}));
+    bottom_m_ = std::min(bottom_m_, double{vertices_m_[i + 2]});
+    top_m_ = std::max(top_m_, double{vertices_m_[i + 2]});
+  }
+  // Cells no smaller than 1/512 of the model's width, so that a large model keeps few.
+  double low[2] = {std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::infinity()};
+  double high[2] = {-low[0], -low[1]};
+  for (std::size_t i = 0; i + 2 < vertices_m_.size(); i += 3)
+    for (int axis = 0; axis < 2; ++axis) {
+      low[axis] = std::min(low[axis], double{vertices_m_[i + axis]});
+      high[axis] = std::max(high[axis], double{vertices_m_[i + axis]});
+    }
+  cell_m_ = std::max({min_area_cell_m, (high[0] - low[0]) / 512.0, (high[1] - low[1]) / 512.0});
+  // Cells keyed by their indices, in the order first met: the same cells for the same mesh.
+  std::unordered_map<std::int64_t, std::size_t> cells;
+  auto add = [&](const Vec3& point, double area) {
+    const auto i = static_cast<std::int64_t>(std::floor(point[0] / cell_m_));
+    const auto j = static_cast<std::int64_t>(std::floor(point[1] / cell_m_));
+    const auto [entry, added] = cells.emplace((i << 32) ^ (j & 0xffffffff), area_cells_.size());
+    if (added)
+      area_cells_.push_back(
+          {static_cast<float>((i + 0.5) * cell_m_), static_cast<float>((j + 0.5) * cell_m_), 0.0f});
+    area_cells_[entry->second].area_m2 += static_cast<float>(area);
+  };
+  for (std::size_t t = 0; t + 2 < triangles_.size(); t += 3) {
+    Vec3 p[3];
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t v = 3 * std::size_t{triangles_[t + k]};
+      p[k] = {vertices_m_[v], vertices_m_[v + 1], vertices_m_[v + 2]};
+    }
+    const Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0];
+    const double area = 0.5 * norm(cross(e1, e2));
+    area_m2_ += area;
+    // A triangle wider than a cell is cut into n^2 equal ones (n along each edge), each
+    // gathered at its centroid.
+    const double longest = std::max({norm(e1), norm(e2), norm(p[2] - p[1])});
+    const int n = std::max(1, static_cast<int>(std::ceil(longest / cell_m_)));
+    const double part = area / (double(n) * n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j) {
+        add(p[0] + ((i + 1.0 / 3.0) / n) * e1 + ((j + 1.0 / 3.0) / n) * e2, part);
+        if (i + j + 1 < n)
+          add(p[0] + ((i + 2.0 / 3.0) / n) * e1 + ((j + 2.0 / 3.0) / n) * e2, part);
+      }
+  }
+  vertices_m_.push_back(0.0f);  // Embree reads a vertex's three floats with one 16-byte load
+}
+
+FacetModel::~FacetModel() {
+  for (const auto& [device, scene] : scenes_) {
+    rtcReleaseScene(scene);
+    rtcReleaseDevice(device);
+  }
+}
+
+RTCSceneTy* FacetModel::scene_on(const RayDevice& device) const {
+  const std::lock_guard lock(mutex_);
+  RTCDevice handle = device.handle();
+  if (const auto found = scenes_.find(handle); found != scenes_.end()) return found->second;
+  RTCScene scene = rtcNewScene(handle);
+  RTCGeometry geometry = rtcNewGeometry(handle, RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                             vertices_m_.data(), 0, 3 * sizeof(float), vertices_m_.size() / 3);
+  rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                             triangles_.data(), 0, 3 * sizeof(std::uint32_t),
+                             triangles_.size() / 3);
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometryByID(scene, geometry, 0);
+  rtcReleaseGeometry(geometry);
+  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+  rtcCommitScene(scene);
+  if (const RTCError code = rtcGetDeviceError(handle); code != RTC_ERROR_NONE) {
+    rtcReleaseScene(scene);
+    throw run_error("Embree", "building a facet model failed (error " + std::to_string(code) + ")");
+  }
+  rtcRetainDevice(handle);  // the key stays this device while the scene lives
+  scenes_.emplace(handle, scene);
+  return scene;
+}
+
+double FacetModel::bytes() const {
+  // Embree's BVH of triangles takes about 100 bytes a triangle at medium quality.
+  return vertices_m_.size() * sizeof(float) + triangles_.size() * sizeof(std::uint32_t) +
+         materials_.size() * (sizeof(int) + 100.0) + area_cells_.size() * sizeof(AreaCell);
+}
+
+}  // namespace glaswave

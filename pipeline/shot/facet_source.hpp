@@ -1,0 +1,46 @@
+// Facet trees as a vegetation source (PRODUCT.md section 8, canopy.facets): triangle meshes
+// read with Assimp, one shared model each (pipeline/scene/facet_model.hpp), placed by a trees
+// file, each tree standing on the terrain under its stem as an Embree instance of its model.
+// The meshes' material names map to the configuration's materials: leaves (a transmittance
+// given) two-sided bi-Lambertian, the others (wood) Lambertian. The hotspot comes out of the
+// geometry: the way back to the sensor runs through the same facets.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "canopy/facet_trees.hpp"
+#include "canopy/leaf_angles.hpp"
+#include "pipeline/scene/facet_model.hpp"
+#include "pipeline/shot/vegetation_source.hpp"
+
+namespace glaswave {
+
+class FacetSource : public VegetationSource {
+ public:
+  // Reads every model's mesh and the trees file: an input error naming the file when one cannot
+  // be used, or when a mesh's material has no entry in canopy.facets.materials.
+  explicit FacetSource(const VegetationSettings& settings);
+
+  RegionVegetation grow(const VegetationRegion& region) const override;
+
+  // Cover and height along vertical lines, the plant area from the facets' own area.
+  VegetationTruth truth(const Scene& scene, double sigma_m) const override;
+
+  std::vector<Placed> placed() const override;
+
+  const std::vector<std::shared_ptr<const FacetModel>>& models() const { return models_; }
+  const std::vector<FacetTree>& trees() const { return trees_; }
+
+  // A region's instances, at a tree every 20 m² (a dense plot) and 256 bytes a tree (the models
+  // themselves are shared by every shot).
+  static double region_bytes(const VegetationSettings& settings, double side_m);
+
+ private:
+  std::vector<std::shared_ptr<const FacetModel>> models_;
+  std::vector<FacetTree> trees_;
+  std::vector<FacetMaterialSettings> materials_;
+  LeafAngles leaf_angles_{LeafAngleDistribution::spherical, 57.3};  // unused by facets
+};
+
+}  // namespace glaswave
