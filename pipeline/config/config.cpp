@@ -372,19 +372,8 @@ CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<Band>&
   return c;
 }
 
-// canopy.facets: facet trees, alone in the canopy.
-CanopySettings read_facet_canopy(JsonReader& canopy, const std::vector<Band>& bands) {
-  for (const std::string& key : canopy.given())
-    if (key != "facets")
-      canopy.fail(key,
-                  "cannot be given beside canopy.facets (the canopy holds one vegetation "
-                  "source)");
-  CanopySettings c;
-  c.kind = "facets";
-  JsonReader r = canopy.object("facets");
-  c.facet_trees_file = non_empty_path(r, "trees_file");
-  if (c.facet_trees_file.empty()) r.fail("trees_file", "is required");
-  c.facet_models = r.path_map("models");
+// canopy.facets.materials: each material's optics per band, a leaf where a transmittance is given.
+void read_facet_materials(JsonReader& r, CanopySettings& c, const std::vector<Band>& bands) {
   for (auto& [name, entry] : r.object_map("materials")) {
     FacetMaterialSettings m;
     m.name = name;
@@ -401,6 +390,22 @@ CanopySettings read_facet_canopy(JsonReader& canopy, const std::vector<Band>& ba
     entry.finish();
     c.facet_materials.push_back(std::move(m));
   }
+}
+
+// canopy.facets: facet trees, alone in the canopy.
+CanopySettings read_facet_canopy(JsonReader& canopy, const std::vector<Band>& bands) {
+  for (const std::string& key : canopy.given())
+    if (key != "facets")
+      canopy.fail(key,
+                  "cannot be given beside canopy.facets (the canopy holds one vegetation "
+                  "source)");
+  CanopySettings c;
+  c.kind = "facets";
+  JsonReader r = canopy.object("facets");
+  read_fields(r,
+              {{"models", [&] { c.facet_models = r.path_map("models"); }},
+               {"materials", [&] { read_facet_materials(r, c, bands); }}},
+              c);
   r.finish();
   return c;
 }

@@ -652,7 +652,8 @@ Key canopy_keys() {
            "facet trees instead of crowns (no other canopy key beside it): triangle meshes, one "
            "shared model each, placed by `trees_file`, each tree standing on the terrain under "
            "its stem",
-           {path("trees_file",
+           {f.path(
+                 "trees_file", &S::facet_trees_file,
                  "the trees: a `.csv` with header `lon,lat,model,rotation_deg,scale` (degrees) or "
                  "`x,y,model,rotation_deg,scale` (metres east and north of `terrain.plane`'s "
                  "origin), or any vector file OGR reads of points (in any CRS) with the "
