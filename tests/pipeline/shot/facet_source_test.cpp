@@ -107,6 +107,48 @@ TEST(FacetSource, LeafFacetsReflectToTheirSideAndTransmitToTheOther) {
   EXPECT_EQ(record.rx_energy_ground_J[0], 0.0);
 }
 
+// The trees file in its three forms puts a tree in the same place: x,y metres on the plane,
+// lon,lat degrees, and a GeoJSON point in UTM zone 32N (the footprint at 45 N 7 E is at
+// x 342 369.36, y 4 984 896.17 there, by gdaltransform), each turned and scaled as given, its
+// foot on the terrain (a plane at 0 m: the frame's origin is the footprint's ground).
+TEST(FacetSource, TreesFromCsvAndAnyOgrLayerStandWhereTheySay) {
+  test_support::ScratchDir dir;
+  write_plate(dir.path(), "wood");
+  VegetationSettings settings = plate_settings(dir.path());
+  const std::unique_ptr<Terrain> terrain = plane_terrain(0.3);
+  const LocalFrame frame({kLat0, kLon0, 0.0});
+  auto one_tree = [&](const std::string& file) {
+    settings.canopy.facet_trees_file = (dir.path() / file).string();
+    const RegionVegetation grown =
+        make_vegetation_source(settings)->grow({*terrain, frame, 50.0, {}, 1});
+    EXPECT_EQ(grown.geometry.facets.size(), 1u) << file;
+    EXPECT_EQ(grown.geometry.leaf_materials, (std::vector<char>{0, 1})) << file;
+    return grown.geometry.facets.at(0);
+  };
+  write(dir.path() / "metres.csv", "x,y,model,rotation_deg,scale\n3,-4,plate,90,2\n");
+  const FacetInstance metres = one_tree("metres.csv");
+  EXPECT_NEAR(metres.foot_m[0], 3.0, 1e-3);
+  EXPECT_NEAR(metres.foot_m[1], -4.0, 1e-3);
+  EXPECT_NEAR(metres.foot_m[2], 0.0, 1e-3);
+  EXPECT_NEAR(metres.rotation_rad, std::numbers::pi / 2, 1e-12);
+  EXPECT_EQ(metres.scale, 2.0);
+  write(dir.path() / "degrees.csv", "lon,lat,model,rotation_deg,scale\n7.0,45.0,plate,0,1\n");
+  const FacetInstance degrees = one_tree("degrees.csv");
+  EXPECT_NEAR(std::hypot(degrees.foot_m[0], degrees.foot_m[1]), 0.0, 1e-3);
+  // UTM 32N of (45 N, 7 E) by gdaltransform: 342369.36, 4984896.17.
+  write(dir.path() / "utm.geojson",
+        R"({"type": "FeatureCollection",
+            "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}},
+            "features": [{"type": "Feature",
+                          "properties": {"model": "plate", "rotation_deg": 45.0, "scale": 1.5},
+                          "geometry": {"type": "Point", "coordinates": [342369.36, 4984896.17]}}]})");
+  const FacetInstance utm = one_tree("utm.geojson");
+  EXPECT_NEAR(utm.foot_m[0], 0.0, 0.01);
+  EXPECT_NEAR(utm.foot_m[1], 0.0, 0.01);
+  EXPECT_NEAR(utm.rotation_rad, std::numbers::pi / 4, 1e-12);
+  EXPECT_EQ(utm.scale, 1.5);
+}
+
 std::string refusal(const VegetationSettings& settings) {
   try {
     make_vegetation_source(settings);
