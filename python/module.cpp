@@ -15,6 +15,7 @@
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/engine/brf.hpp"
 #include "pipeline/engine/run.hpp"
+#include "pipeline/products/netcdf_writer.hpp"
 
 namespace py = pybind11;
 
@@ -122,6 +123,7 @@ class NetcdfLock {
   void enter() {
     py::gil_scoped_release release;
     lock_ = std::unique_lock(netcdf_library_mutex());
+    quiet_hdf5_in_this_thread();  // netCDF4-python's reads print HDF5's probes otherwise
   }
   void exit(const py::args&) {
     if (lock_.owns_lock()) lock_.unlock();

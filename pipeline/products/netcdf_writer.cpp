@@ -4,6 +4,7 @@
 // times, the transmitted pulse) are defined here.
 #include "pipeline/products/netcdf_writer.hpp"
 
+#include <hdf5.h>
 #include <netcdf.h>
 #include <sys/resource.h>
 #include <sys/statvfs.h>
@@ -196,6 +197,16 @@ bool flush_may_fail(const std::filesystem::path& file) {
   return limited ||
          static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize) < kRoomNeeded_B;
 }
+
+// libnetcdf's lock, with HDF5's error printing off in the calling thread (see
+// quiet_hdf5_in_this_thread).
+class LibraryLock {
+ public:
+  LibraryLock() : lock_(netcdf_library_mutex()) { quiet_hdf5_in_this_thread(); }
+
+ private:
+  std::lock_guard<std::mutex> lock_;
+};
 
 }  // namespace
 
@@ -828,7 +839,7 @@ NetcdfWriter::NetcdfWriter(std::filesystem::path final_path, const RunInfo& info
   const std::string part = impl.file.part_path().string();
   // libnetcdf is called under its lock only: another run in this process (two Python threads)
   // may be writing, or reading a netCDF DEM, meanwhile.
-  const std::lock_guard lock(netcdf_library_mutex());
+  const LibraryLock lock;
   try {
     impl.check(nc_create(part.c_str(), NC_NETCDF4 | NC_CLOBBER, impl.nc.out()),
                "cannot create " + part);
@@ -841,7 +852,7 @@ NetcdfWriter::NetcdfWriter(std::filesystem::path final_path, const RunInfo& info
 
 NetcdfWriter::~NetcdfWriter() {
   // An unfinished product's id is aborted as Impl goes: under the library's lock too.
-  const std::lock_guard lock(netcdf_library_mutex());
+  const LibraryLock lock;
   impl_.reset();
 }
 
@@ -851,7 +862,7 @@ NetcdfWriter::Impl& NetcdfWriter::impl() {
 }
 
 void NetcdfWriter::write(std::int64_t index, const ShotRecord& shot) {
-  const std::lock_guard lock(netcdf_library_mutex());  // a DEM may be read meanwhile
+  const LibraryLock lock;  // a DEM may be read meanwhile
   Impl& impl = this->impl();
   impl.ledger.check_write(index);
   if (impl.broken) impl.fail("a write failed before: the product lacks records");
@@ -860,7 +871,7 @@ void NetcdfWriter::write(std::int64_t index, const ShotRecord& shot) {
 }
 
 void NetcdfWriter::finish(const RunStats& stats) {
-  const std::lock_guard lock(netcdf_library_mutex());
+  const LibraryLock lock;
   Impl& impl = this->impl();
   if (impl.broken && !impl.ledger.finished())
     impl.fail("a write failed before: the product lacks records");
@@ -887,8 +898,15 @@ void NetcdfWriter::finish(const RunStats& stats) {
 
 void NetcdfWriter::abort() noexcept {
   // A finished product stays: only an unfinished one has a .part to give up.
-  const std::lock_guard lock(netcdf_library_mutex());
+  const LibraryLock lock;
   if (impl_ && !impl_->ledger.finished()) impl_.reset();
+}
+
+void quiet_hdf5_in_this_thread() {
+  thread_local bool quiet = false;
+  if (quiet) return;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  quiet = true;
 }
 
 }  // namespace glaswave

@@ -37,6 +37,17 @@ def test_two_threads_run_together_and_give_the_products_of_one_call():
     assert failures == []
 
 
+def test_a_run_in_another_thread_keeps_hdf5s_probes_off_stderr(capfd):
+    # HDF5 keeps its error printing per thread and libnetcdf turns it off in the first thread
+    # only: shots.nc read back in any other printed a dozen HDF5-DIAG lines a run.
+    config = small_config(shots=1, rays=20)
+    glaswave.run(config, threads=1)  # libnetcdf starts in this thread
+    thread = threading.Thread(target=lambda: glaswave.run(config, threads=1))
+    thread.start()
+    thread.join()
+    assert "HDF5-DIAG" not in capfd.readouterr().err
+
+
 def test_numpy_integers_select_shots_and_too_large_a_shot_is_a_value_error():
     config = small_config(shots=3, rays=20)
     part = glaswave.run(config, shots=(np.int64(1), np.int64(3)))

@@ -17,6 +17,7 @@
 #include "core/netcdf_lock.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/engine/run.hpp"
+#include "pipeline/products/netcdf_writer.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/terrain/dem_fixture.hpp"
 
@@ -57,6 +58,7 @@ Config small_run(const fs::path& dem) {
 // shots.nc's received waveforms, read back as a user does (under the library's lock).
 std::vector<double> waveforms(const fs::path& file) {
   std::lock_guard<std::mutex> lock(netcdf_library_mutex());
+  quiet_hdf5_in_this_thread();
   int id = -1, variable = -1, dims[3] = {0, 0, 0};
   EXPECT_EQ(nc_open(file.c_str(), NC_NOWRITE, &id), NC_NOERR) << file;
   EXPECT_EQ(nc_inq_varid(id, "rx_waveform", &variable), NC_NOERR);
