@@ -3,18 +3,24 @@
 // does ("II*\0", "MM\0*") is the file itself, byte for byte (corrupt and truncated files); any
 // other input describes a raster that the target writes with GDAL (size, data type, bands,
 // geotransform, CRS, nodata, scale, unit, pixels), which reaches the reader's checks far more
-// often than mutated TIFF bytes do. GDAL keeps only its GTiff driver. An Error is a refusal;
-// anything else is a finding.
+// often than mutated TIFF bytes do. An input that starts "<VRTDataset" is a VRT, written as a
+// file beside a GeoTIFF (dem.tif), a FIFO nobody writes (fifo) and a VRT whose source is that
+// FIFO (inner.vrt), which its sources may name: the regular-file rule (terrain/gdal_source) must
+// refuse every source that is no regular file before GDAL opens it, or the target hangs (issue
+// 28). GDAL keeps only its GTiff and VRT drivers. An Error is a refusal; anything else is a
+// finding.
 #include <cpl_vsi.h>
 #include <fuzzer/FuzzedDataProvider.h>
 #include <gdal.h>
 #include <ogr_srs_api.h>
+#include <sys/stat.h>
 
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -115,11 +121,40 @@ bool geodetic_of_pixel(double u, double v, double& lat_deg, double& lon_deg) {
   return found;
 }
 
+bool is_vrt(const std::uint8_t* data, std::size_t size) {
+  constexpr std::string_view start = "<VRTDataset";
+  return size >= start.size() && std::memcmp(data, start.data(), start.size()) == 0;
+}
+
+// What a fuzzed VRT's sources may name, beside it in the scratch folder: a GeoTIFF, a FIFO, and
+// a VRT whose source is the FIFO.
+void write_vrt_neighbours() {
+  namespace fs = std::filesystem;
+  const fs::path dir = glaswave::fuzz::scratch_dir();
+  GDALDatasetH dataset = GDALCreate(GDALGetDriverByName("GTiff"), (dir / "dem.tif").c_str(), 4, 4,
+                                    1, GDT_Float32, nullptr);
+  std::array<double, 6> transform = {7.0, 0.001, 0.0, 45.0, 0.0, -0.001};
+  GDALSetGeoTransform(dataset, transform.data());
+  OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+  OSRSetFromUserInput(srs, "EPSG:4326");
+  GDALSetSpatialRef(dataset, srs);
+  OSRDestroySpatialReference(srs);
+  GDALClose(dataset);
+  ::mkfifo((dir / "fifo").c_str(), 0600);
+  std::ofstream(dir / "inner.vrt")
+      << "<VRTDataset rasterXSize=\"4\" rasterYSize=\"4\"><SRS>EPSG:4326</SRS>"
+         "<GeoTransform>7, 0.001, 0, 45, 0, -0.001</GeoTransform>"
+         "<VRTRasterBand dataType=\"Float32\" band=\"1\"><SimpleSource>"
+         "<SourceFilename relativeToVRT=\"1\">fifo</SourceFilename><SourceBand>1</SourceBand>"
+         "</SimpleSource></VRTRasterBand></VRTDataset>";
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  glaswave::fuzz::keep_only_gdal_drivers({"GTiff"});
+  glaswave::fuzz::keep_only_gdal_drivers({"GTiff", "VRT"});
   CPLPushErrorHandler(CPLQuietErrorHandler);  // the fuzzer's own GDAL calls stay quiet
+  write_vrt_neighbours();
   return 0;
 }
 
@@ -128,7 +163,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   FuzzedDataProvider in(data, size);
   TerrainSettings settings;
   settings.dem = dem_path;
-  if (is_tiff(data, size)) {
+  if (is_vrt(data, size)) {
+    // A file of its own, so that the rule sees it and its relative sources as GDAL would.
+    settings.dem = fuzz::write_input("input.vrt", data, size).string();
+  } else if (is_tiff(data, size)) {
     VSILFILE* file = VSIFileFromMemBuffer(dem_path, const_cast<GByte*>(data), size, FALSE);
     if (!file) return 0;
     VSIFCloseL(file);
@@ -156,6 +194,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const Error& e) {
     fuzz::refused(e);
   }
-  VSIUnlink(dem_path);
+  if (!is_vrt(data, size)) VSIUnlink(dem_path);
   return 0;
 }

@@ -147,6 +147,18 @@ def dem_corpus():
     make("two-bands.tif", "EPSG:3857", (0, 10, 0, 0, 0, -10), bands=2)
     make("broken-no-crs.tif", None, (0, 1, 0, 0, 0, -1))
     write("dem", "broken-truncated.tif", made[0][: len(made[0]) // 2])
+    # VRTs, read beside the target's dem.tif, fifo (a FIFO nobody writes) and inner.vrt (whose
+    # source is the FIFO): each source that is no regular file is refused before GDAL opens it.
+    def vrt(source, relative=1):
+        return ('<VRTDataset rasterXSize="4" rasterYSize="4"><SRS>EPSG:4326</SRS>'
+                '<GeoTransform>7, 0.001, 0, 45, 0, -0.001</GeoTransform>'
+                '<VRTRasterBand dataType="Float32" band="1"><SimpleSource>'
+                f'<SourceFilename relativeToVRT="{relative}">{source}</SourceFilename>'
+                '<SourceBand>1</SourceBand></SimpleSource></VRTRasterBand></VRTDataset>')
+    write("dem", "vrt-of-tiff.vrt", vrt("dem.tif"))
+    write("dem", "broken-vrt-of-fifo.vrt", vrt("fifo"))
+    write("dem", "broken-vrt-of-vrt-of-fifo.vrt", vrt("inner.vrt"))
+    write("dem", "broken-vrt-of-vsistdin.vrt", vrt("/vsistdin/", 0))
     # Inputs that are not TIFFs describe a raster to the target (FuzzedDataProvider).
     rng = random.Random(13)
     for i in range(4):
@@ -264,6 +276,16 @@ def las_corpus():
     write("las", "broken-count.las", good[:247] + (1000).to_bytes(8, "little") + good[255:])
 
 
+def journal_corpus():
+    """The journal target builds its journals from the input (frames of records, then a frame
+    repeated, dropped, a cut or a flipped byte): random bytes reach each; "GWJRNL" + bytes is
+    what follows the header as it is."""
+    rng = random.Random(28)
+    for i in range(6):
+        write("journal", "described-%d" % i, bytes(rng.randrange(256) for _ in range(64)))
+    write("journal", "raw-marker-only", b"GWJRNL" + (0x454d415246574721).to_bytes(8, "little"))
+
+
 if __name__ == "__main__":
     config_corpus()
     csv_corpus()
@@ -272,3 +294,4 @@ if __name__ == "__main__":
     dem_corpus()
     las_corpus()
     granule_corpus()
+    journal_corpus()

@@ -85,13 +85,14 @@ class Trial:
 
     # ---- running ---------------------------------------------------------------------------
     def run(self, description, args, expect="error", out=None, shell_prefix="", env=None,
-            cwd=None, says=None):
-        """Runs glaswave ARGS; `out` is the output directory whose products are checked; `says`,
-        text that stderr must hold (the cause named, a warning given)."""
+            cwd=None, says=None, command=None):
+        """Runs glaswave ARGS (or `command`, a program of its own); `out` is the output directory
+        whose products are checked; `says`, text that stderr must hold (the cause named, a
+        warning given)."""
         self.count += 1
         if out is not None:
             shutil.rmtree(out, ignore_errors=True)
-        command = ["timeout", "-s", "KILL", str(TIMEOUT_S), self.glaswave, *args]
+        command = ["timeout", "-s", "KILL", str(TIMEOUT_S), *(command or [self.glaswave, *args])]
         started = time.monotonic()
         cpu_before = _children_cpu_s()
         if shell_prefix:
@@ -692,6 +693,246 @@ def round_three_config(t):
             "eph.json", track={"type": "ephemeris", "ephemeris": ephemeris})], expect=3)
 
 
+def round_three_inputs(t):
+    """Issue 28's other causes, one case (or more) each: 1 threads, 2 a journal's frames twice,
+    3 hangs, 4 silent reinterpretation, 5 check accepting what run fails on, 6 unclear messages,
+    7 two runs on one --out, 8 plots, 9 brf's orders."""
+    from osgeo import gdal
+    gdal.UseExceptions()
+    out = str(t.path("out"))
+    python_dir = pathlib.Path(t.glaswave).resolve().parents[1] / "python"
+
+    # 1. Two Python threads calling glaswave.run at once, 20 rounds (tests/python: 100).
+    script = t.write("threads.py", f"""
+import json, sys, threading
+sys.path.insert(0, {str(python_dir)!r})
+import glaswave
+config = json.load(open({t.config("threads.json", track__shots=1,
+                                  simulation__rays_per_shot=20)!r}))
+reference = glaswave.run(config, threads=1)["rx_waveform"].values
+failures = []
+def runs():
+    for _ in range(20):
+        if (glaswave.run(config, threads=1)["rx_waveform"].values != reference).any():
+            failures.append("other products")
+threads = [threading.Thread(target=runs) for _ in range(2)]
+[thread.start() for thread in threads]
+[thread.join() for thread in threads]
+sys.exit(f"glaswave: error: {{failures[0]}}" if failures else 0)
+""")
+    t.run("28/1. two Python threads run glaswave.run together, 20 rounds", [], expect="ok",
+          command=["/usr/bin/python3", script])
+
+    # 2 and 3. A killed run's journal: a frame written twice; a FIFO in its place.
+    long = t.config("long.json", track__shots=20000, simulation__rays_per_shot=500)
+
+    def killed_run():
+        shutil.rmtree(out, ignore_errors=True)
+        process = subprocess.Popen([t.glaswave, "run", long, "--quiet", "--threads", "1",
+                                    "--out", out], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL)
+        journal = pathlib.Path(out) / "glaswave.journal"
+        deadline = time.monotonic() + TIMEOUT_S
+        while time.monotonic() < deadline and process.poll() is None and len(
+                journal_frames(journal)) < 3:
+            time.sleep(0.05)
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        return journal
+
+    journal = killed_run()
+    frames = journal_frames(journal)
+    data = journal.read_bytes() if journal.exists() else b""
+    if len(frames) >= 2:
+        first, second = frames[0], frames[1]
+        journal.write_bytes(data[:second[1]] + data[first[0]:first[1]] + data[second[0]:])
+    t.run("28/2. a journal whose first frame appears twice (valid checksums)", [
+        "run", long, "--quiet", "--threads", "1", "--out", out, "--resume"],
+        says="frames repeated, missing or out of order")
+    journal = killed_run()
+    journal.parent.mkdir(parents=True, exist_ok=True)
+    if journal.exists():
+        journal.unlink()
+    os.mkfifo(journal)
+    t.run("28/3. the journal replaced by a FIFO", [
+        "run", long, "--quiet", "--out", out, "--resume"])
+    fifo = t.path("source.fifo")
+    if fifo.exists():
+        fifo.unlink()
+    os.mkfifo(fifo)
+    vrt = t.write("fifo.vrt", f"""<VRTDataset rasterXSize="10" rasterYSize="10">
+  <SRS>EPSG:4326</SRS><GeoTransform>7.99, 0.002, 0, 46.01, 0, -0.002</GeoTransform>
+  <VRTRasterBand dataType="Float32" band="1"><SimpleSource>
+    <SourceFilename relativeToVRT="0">{fifo}</SourceFilename><SourceBand>1</SourceBand>
+  </SimpleSource></VRTRasterBand></VRTDataset>""")
+
+    def dem_config(path, **terrain):
+        return t.config("dem.json", terrain={"dem": path, **terrain})
+
+    t.run("28/3. a VRT DEM whose source is a FIFO", ["check", dem_config(vrt)])
+    t.run('28/3. "dem": "/vsistdin/"', ["check", dem_config("/vsistdin/")])
+    t.run("28/3. canopy.crown_radius_m 1e6", ["check", t.config(
+        canopy={"crown_radius_m": 1e6})], expect=2)
+
+    # 4. Silent truncation and reinterpretation.
+    def dem(name, dtype=gdal.GDT_Float32, crs="EPSG:4326", unit=None, scale=None,
+            palette=False, value=500.0):
+        path = str(t.path(name))
+        dataset = gdal.GetDriverByName("GTiff").Create(path, 60, 60, 1, dtype)
+        dataset.SetGeoTransform([7.97, 0.001, 0, 46.03, 0, -0.001])
+        srs = osr.SpatialReference()
+        srs.SetFromUserInput(crs)
+        dataset.SetSpatialRef(srs)
+        band = dataset.GetRasterBand(1)
+        band.Fill(value)
+        if unit:
+            band.SetUnitType(unit)
+        if scale:
+            band.SetScale(scale)
+        if palette:
+            table = gdal.ColorTable()
+            table.SetColorEntry(0, (0, 0, 0, 255))
+            band.SetColorTable(table)
+            band.SetColorInterpretation(gdal.GCI_PaletteIndex)
+        dataset = None
+        return path
+
+    good = dem("good.tif")
+    t.run("28/4. a NUL inside the DEM's path", ["check", dem_config(good + "\0.ignored")],
+          expect=2, says="NUL byte")
+    t.run("28/4. a DEM band whose unit is cm", ["check", dem_config(dem("cm.tif", unit="cm",
+                                                                        value=50000.0))],
+          expect="ok")
+    t.run("28/4. a DEM band whose unit is furlong", ["check", dem_config(
+        dem("furlong.tif", unit="furlong"))], expect=3, says="furlong")
+    t.run("28/4. terrain.vertical_datum ellipsoid, the DEM's own EGM96", ["check", dem_config(
+        dem("egm.tif", crs="EPSG:4326+5773"), vertical_datum="ellipsoid")], expect=2)
+    t.run("28/4. a complex DEM band", ["check", dem_config(dem("complex.tif", gdal.GDT_CFloat32))],
+          expect=3)
+    t.run("28/4. a paletted DEM band", ["check", dem_config(dem("palette.tif", gdal.GDT_Byte,
+                                                                palette=True, value=0))],
+          expect=3)
+    points = [{"lat_deg": 46.0, "lon_deg": 8.0}]
+    t.run("28/4. track.points with a pass", ["check", t.config(track__points=points)], expect=2,
+          says="/track/points")
+    t.run("28/4. start_lat_deg with an orbit", ["check", t.config(track__type="orbit")], expect=2,
+          says="/track/start_lat_deg")
+    t.run("28/4. start_lat_deg with a granule", ["check", t.config(
+        track__type="granule", track__file=good)], expect=2, says="/track/start_lat_deg")
+    band = {"wavelength_nm": 1064, "pulse_energy_mJ": 70, "atmos_transmission_roundtrip": 0.9}
+    t.run("28/4. two bands with one wavelength", ["check", t.config(sensor={"bands": [
+        dict(band, name="a"), dict(band, name="b")]})], expect=2, says="wavelength_nm")
+
+    # 5. check accepted and run failed after simulating, with a NetCDF variable's name.
+    for description, changes in [
+            ("sensor.telescope_area_m2 1e308", {"sensor__telescope_area_m2": 1e308}),
+            ("sensor.bands[0].pulse_energy_mJ 1e308", {"sensor": {"preset": "glas", "bands": [
+                dict(band, name="1064", pulse_energy_mJ=1e308)]}}),
+            ("sensor.pulse_sigma_ns 1e-300", {"sensor__pulse_sigma_ns": 1e-300}),
+            ("detector.gain 1e300", {"detector": {"enabled": True, "gain": 1e300}}),
+            ("detector.noise_rms_W 1e300", {"detector": {"enabled": True, "noise_rms_W": 1e300}})]:
+        t.run(f"28/5. {description} (run)", ["run", t.config("bound.json", **changes), "--quiet",
+                                             "--out", out], out=out, expect=2)
+
+    # 6. Unclear messages.
+    t.run("28/6. seed 2^64 in the configuration", ["check", t.write(
+        "seed.json", json.dumps(t.base()).replace('"seed": 1', '"seed": 18446744073709551616'))],
+        expect=2, says="too large")
+    t.run("28/6. --set seed=2^64", ["check", t.config(), "--set", "seed=18446744073709551616"],
+          expect=2, says="too large")
+    t.run("28/6. /proc/self/mem as the DEM", ["check", dem_config("/proc/self/mem")], expect=3)
+    big = str(t.path("big.tif"))
+    dataset = gdal.GetDriverByName("GTiff").Create(big, 200, 200, 1, gdal.GDT_Float32,
+                                                   options=["BIGTIFF=YES"])
+    dataset.SetGeoTransform([7.9, 0.001, 0, 46.1, 0, -0.001])
+    srs = osr.SpatialReference()
+    srs.ImportFromEPSG(4326)
+    dataset.SetSpatialRef(srs)
+    dataset.GetRasterBand(1).Fill(900.0)
+    dataset = None
+    cut = t.write("cut.tif", pathlib.Path(big).read_bytes()[:360], mode="wb")
+    t.run("28/6. a BigTIFF DEM cut at 360 bytes", ["check", dem_config(cut)], expect=3,
+          says="truncated or corrupt")
+    t.run("28/6. a DEM scale of 1e308", ["check", dem_config(dem("scale.tif", scale=1e308))],
+          expect=3)
+    t.run("28/6. GPKG footprints with bands x and X", ["check", t.config(
+        sensor={"bands": [dict(band, name="x"), dict(band, name="X", wavelength_nm=532)]},
+        output={"footprints_format": "GPKG"})], expect=2, says="differ only in case")
+    script = t.write("shots.py", f"""
+import sys
+sys.path.insert(0, {str(python_dir)!r})
+import glaswave
+try:
+    glaswave.run({t.config("py.json")!r}, shots=(0, 2**64))
+except ValueError as error:
+    sys.exit(f"glaswave: error: {{error}}")
+""")
+    t.run("28/6. Python shots=(0, 2**64)", [], command=["/usr/bin/python3", script],
+          says="too large")
+
+    # 7. Two runs on one --out, started together.
+    shutil.rmtree(out, ignore_errors=True)
+    first = subprocess.Popen([t.glaswave, "run", long, "--quiet", "--threads", "1", "--out", out],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    lock = pathlib.Path(out) / ".glaswave.lock"
+    deadline = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < deadline and not (lock.exists() and lock.read_text().strip()):
+        time.sleep(0.01)
+    t.run("28/7. a second run on the --out of a running one", [
+        "run", long, "--quiet", "--threads", "1", "--out", out], expect=2,
+        says="another glaswave run is writing into this output directory")
+    first.kill()
+    first.wait()
+
+    # 8. Plot text from the user's data: mathtext and 5,000 characters in band names.
+    for description, name in [("$\\frac{1}{$", "$\\frac{1}{$"), ("of 5,000 characters", "b" * 5000)]:
+        t.run(f"28/8. plots with a band named {description}", ["run", t.config(
+            "plot.json", sensor={"preset": "glas", "bands": [dict(band, name=name)]},
+            output={"plots": True}), "--quiet", "--out", out], expect="ok", out=out)
+        row = list(t.rows[-1])
+        if "warning" in row[3]:
+            row[4] = "PLOT FAILED: " + row[3]
+        t.rows[-1] = tuple(row)
+
+    # 9. brf over a conservative scene: albedo 1 (0.709 when cut at 8 orders).
+    done = t.run("28/9. brf over leaves and soil that absorb nothing", ["brf", t.config(
+        "white.json", canopy={"crown_shape": "layer", "pai": 5, "leaf_reflectance": 0.6,
+                              "leaf_transmittance": 0.4, "crown_base_m": [0, 0],
+                              "crown_half_height_m": 5, "green_fraction": 1.0,
+                              "bark_fraction": 0.0, "dbh_m": 0.0},
+        terrain={"plane": {"origin_lat_deg": 46.0, "origin_lon_deg": 8.0},
+                 "soil_reflectance": 1.0},
+        brf={"photons": 4000, "scene_size_m": 40.0, "image_resolution_m": 4.0}),
+        "--quiet", "--out", out], expect="ok", out=out)
+    if done.returncode == 0:
+        albedos = [b["albedo"] for b in json.loads(
+            (pathlib.Path(out) / "brf.json").read_text())["bands"]]
+        row = list(t.rows[-1])
+        row[4] += "; albedo " + ", ".join(f"{a:.4f}" for a in albedos)
+        if any(abs(a - 1.0) > 0.005 for a in albedos):
+            row[4] = "ENERGY LOST; " + row[4]
+        t.rows[-1] = tuple(row)
+
+
+def journal_frames(journal):
+    """The (start, end) byte offsets of a run journal's whole frames (pipeline/engine/journal.cpp:
+    a 16-byte header, then frames of six 64-bit words, the payload and a checksum)."""
+    import struct
+    try:
+        data = journal.read_bytes()
+    except OSError:
+        return []
+    frames, at = [], 16
+    while at + 48 <= len(data):
+        words = struct.unpack_from("<6Q", data, at)
+        end = at + 48 + words[4] + 8
+        if end > len(data):
+            break
+        frames.append((at, end))
+        at = end
+    return frames
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     source = pathlib.Path(__file__).resolve().parents[2]
@@ -703,7 +944,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="glaswave_inputs_") as scratch:
         t = Trial(glaswave, scratch)
         for group in (issue_items, configuration_cases, data_cases, granule_cases,
-                      round_three_config):
+                      round_three_config, round_three_inputs):
             if arguments.only in group.__name__:
                 group(t)
         pathlib.Path(arguments.out).write_text(t.table())
