@@ -77,6 +77,21 @@ class Bytes {
   std::uint64_t size_;
 };
 
+// The header of a variable length record at `at` (54 bytes, its data's length in 16 bits) or of
+// an extended one (60 bytes, 64 bits): its user and record ids; `length` receives its data's
+// length and `at` moves past the header.
+LasRecord record_header(Bytes& bytes, std::uint64_t& at, bool extended, std::uint64_t& length) {
+  std::array<std::uint8_t, evlr_header_bytes> r{};
+  const std::uint64_t size = extended ? evlr_header_bytes : vlr_header_bytes;
+  bytes.read(at, size, r.data());
+  LasRecord record;
+  record.user_id = text_field(r.data() + 2, 16);
+  record.record_id = u16(r.data() + 18);
+  length = extended ? u64(r.data() + 20) : u16(r.data() + 20);
+  at += size;
+  return record;
+}
+
 [[noreturn]] void refuse(const std::filesystem::path& file, const std::string& message) {
   throw input_error(file.string(), message);
 }
@@ -196,13 +211,8 @@ LasFile::LasFile(const std::filesystem::path& file) : path_(file) {
   for (std::uint32_t i = 0; i < H.vlr_count; ++i) {
     if (H.point_offset - at < vlr_header_bytes)
       refuse(file, "variable length record " + std::to_string(i) + " runs into the points");
-    std::array<std::uint8_t, vlr_header_bytes> r{};
-    bytes.read(at, vlr_header_bytes, r.data());
-    LasRecord record;
-    record.user_id = text_field(r.data() + 2, 16);
-    record.record_id = u16(r.data() + 18);
-    const std::uint64_t length = u16(r.data() + 20);
-    at += vlr_header_bytes;
+    std::uint64_t length = 0;
+    LasRecord record = record_header(bytes, at, false, length);
     if (H.point_offset - at < length)
       refuse(file, "variable length record " + std::to_string(i) + " (" + std::to_string(length) +
                        " bytes) runs into the points");
@@ -223,13 +233,8 @@ LasFile::LasFile(const std::filesystem::path& file) : path_(file) {
       if (file_size_ - at < evlr_header_bytes)
         refuse(file,
                "truncated LAS file: extended record " + std::to_string(i) + " lies beyond its end");
-      std::array<std::uint8_t, evlr_header_bytes> r{};
-      bytes.read(at, evlr_header_bytes, r.data());
-      LasRecord record;
-      record.user_id = text_field(r.data() + 2, 16);
-      record.record_id = u16(r.data() + 18);
-      const std::uint64_t length = u64(r.data() + 20);
-      at += evlr_header_bytes;
+      std::uint64_t length = 0;
+      LasRecord record = record_header(bytes, at, true, length);
       if (length > file_size_ - at)
         refuse(file, "truncated LAS file: extended record " + std::to_string(i) + " (" +
                          std::to_string(length) + " bytes) lies beyond its end");

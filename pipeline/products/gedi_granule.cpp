@@ -138,17 +138,23 @@ std::vector<T> of(const std::vector<const Shot*>& shots, F get) {
 
 }  // namespace
 
-void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
-                                       const std::vector<const Shot*>& shots) {
-  const std::string geo = g + "/geolocation/";
+void GediGranuleWriter::write_shot_ids(Hdf5File& f, const std::string& g,
+                                       const std::vector<const Shot*>& shots,
+                                       const char* delta_time_meaning) {
   f.write(g + "/shot_number", of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
           {"counter", "Unique shot ID."});
   f.write(g + "/delta_time", of<double>(shots, [](const Shot& s) { return s.delta_time; }),
-          {"seconds since 2018-01-01", "Transmit time of the shot, since master_time_epoch"});
+          {"seconds since 2018-01-01", delta_time_meaning});
   f.write(g + "/beam", of<std::uint16_t>(shots, [](const Shot& s) { return s.beam; }),
           {"counter", "Beam number"});
   f.write(g + "/channel", of<std::uint8_t>(shots, [](const Shot& s) { return channel_of(s.beam); }),
           {"counter", "Channel number (the beam's place among the eight)"});
+}
+
+void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
+                                       const std::vector<const Shot*>& shots) {
+  const std::string geo = g + "/geolocation/";
+  write_shot_ids(f, g, shots, "Transmit time of the shot, since master_time_epoch");
   // The waveforms, concatenated; each shot's from its 1-based start index.
   std::vector<float> rx, canopy, ground, tx;
   std::vector<std::uint64_t> rx_start, tx_start;
@@ -249,14 +255,7 @@ void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
 
 void GediGranuleWriter::write_l2a_beam(Hdf5File& f, const std::string& g,
                                        const std::vector<const Shot*>& shots) {
-  f.write(g + "/shot_number", of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
-          {"counter", "Unique shot ID."});
-  f.write(g + "/delta_time", of<double>(shots, [](const Shot& s) { return s.delta_time; }),
-          {"seconds since 2018-01-01", "Transmit time of the shot since 2018-01-01T00:00:00Z"});
-  f.write(g + "/beam", of<std::uint16_t>(shots, [](const Shot& s) { return s.beam; }),
-          {"counter", "Beam number"});
-  f.write(g + "/channel", of<std::uint8_t>(shots, [](const Shot& s) { return channel_of(s.beam); }),
-          {"counter", "Channel number (the beam's place among the eight)"});
+  write_shot_ids(f, g, shots, "Transmit time of the shot since 2018-01-01T00:00:00Z");
   f.write(g + "/lat_lowestmode",
           of<double>(shots, [](const Shot& s) { return or_fill(s.lowest.lat_deg); }),
           {"degrees", "Latitude of the center of the lowest mode", kGediFill});

@@ -27,15 +27,7 @@ using namespace test_support;
 
 class HostileInput : public ::testing::Test {
  protected:
-  json base() const {
-    return {
-        {"sensor", {{"preset", "glas"}}},
-        {"simulation", {{"rays_per_shot", 100}}},
-        {"terrain", {{"plane", {{"origin_lat_deg", 46.0}, {"origin_lon_deg", 8.0}}}}},
-        {"canopy", nullptr},
-        {"track", {{"start_lat_deg", 46.0}, {"start_lon_deg", 8.0}, {"shots", 1}}},
-    };
-  }
+  json base() const { return one_glas_shot(); }
   std::string write(const std::string& name, const std::string& text) {
     const fs::path file = dir_ / name;
     std::ofstream(file) << text;

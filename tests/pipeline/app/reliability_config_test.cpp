@@ -30,13 +30,7 @@ class Refused : public ::testing::Test {
  protected:
   // One shot over a plane, with `changes` merged in.
   std::string write_config(const json& changes, const std::string& name = "config.json") {
-    json config = {
-        {"sensor", {{"preset", "glas"}}},
-        {"simulation", {{"rays_per_shot", 100}}},
-        {"terrain", {{"plane", {{"origin_lat_deg", 46.0}, {"origin_lon_deg", 8.0}}}}},
-        {"canopy", nullptr},
-        {"track", {{"start_lat_deg", 46.0}, {"start_lon_deg", 8.0}, {"shots", 1}}},
-    };
+    json config = one_glas_shot();
     config.merge_patch(changes);
     const fs::path file = dir_ / name;
     std::ofstream(file) << config.dump(2);

@@ -15,6 +15,18 @@
 
 namespace glaswave::test_support {
 
+// The command-line tests' base: one shot of the glas preset over a plane at (46 N, 8 E), 100
+// rays, no canopy; each merges its changes in (merge_patch).
+inline nlohmann::json one_glas_shot() {
+  return {
+      {"sensor", {{"preset", "glas"}}},
+      {"simulation", {{"rays_per_shot", 100}}},
+      {"terrain", {{"plane", {{"origin_lat_deg", 46.0}, {"origin_lon_deg", 8.0}}}}},
+      {"canopy", nullptr},
+      {"track", {{"start_lat_deg", 46.0}, {"start_lon_deg", 8.0}, {"shots", 1}}},
+  };
+}
+
 // One shot of a points track aiming at the origin (0, 0) from 600 km, tilted off nadir toward
 // the east, over bare Lambertian soil (0.15) on a plane facing east with the given slope.
 inline nlohmann::json plane_shot(const std::string& preset, double slope_deg, double off_nadir_deg,

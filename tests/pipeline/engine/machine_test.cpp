@@ -19,8 +19,7 @@ namespace glaswave {
 namespace {
 
 using nlohmann::json;
-using test_support::doc;
-using test_support::error_of;
+using namespace test_support;  // doc, error_of
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
 
