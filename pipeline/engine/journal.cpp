@@ -152,17 +152,14 @@ void RunJournal::remove() {
   std::filesystem::remove(path_, ignored);
 }
 
-std::unique_ptr<RunJournal> RunJournal::resume(
-    const std::filesystem::path& path, const std::string& identity,
-    const std::function<void(const ShotRecord&)>& consume, std::int64_t& ray_queries) {
-  ray_queries = 0;
-  // A journal replaced by a FIFO would be waited on for ever.
-  require_input_file(path.native(), "the run journal", ErrorKind::config);
-  std::ifstream in(path, std::ios::binary);
+namespace {
+
+// The journal's header, checked against this version and this run's identity: false when it is
+// not whole (killed before it was).
+bool read_header(std::ifstream& in, const std::filesystem::path& path,
+                 const std::string& identity) {
   std::array<std::uint64_t, 2> header{};
-  // A journal killed before its header was whole holds no shot: begin it again.
-  if (!in.read(reinterpret_cast<char*>(header.data()), sizeof header))
-    return std::make_unique<RunJournal>(path, identity);
+  if (!in.read(reinterpret_cast<char*>(header.data()), sizeof header)) return false;
   // "GWJRNL" and two digits: the digits say the format.
   constexpr std::uint64_t kMagicName = 0xffffffffffff;
   if ((header[0] & kMagicName) == (kMagic & kMagicName) && header[0] != kMagic)
@@ -176,26 +173,46 @@ std::unique_ptr<RunJournal> RunJournal::resume(
                        "the interrupted run there was made with another configuration, --set, "
                        "--seed or --shots (or another glaswave version): --resume must repeat "
                        "its command; or remove the directory");
-  std::uint64_t valid_end = sizeof header;
+  return true;
+}
+
+// The next whole frame (its words, and its bytes with them in `frame`); false at the end or at
+// a torn frame.
+bool read_frame(std::ifstream& in, std::array<std::uint64_t, 6>& words, std::string& frame) {
+  if (!in.read(reinterpret_cast<char*>(words.data()), sizeof words)) return false;
+  // Sizes beyond what LZ4 takes: not a frame.
+  if (words[0] != kFrameMarker ||
+      words[4] > static_cast<std::uint64_t>(LZ4_COMPRESSBOUND(kLargestFrame)) ||
+      words[5] > kLargestFrame)
+    return false;
+  frame.assign(reinterpret_cast<const char*>(words.data()), sizeof words);
+  frame.resize(sizeof words + words[4] + sizeof(std::uint64_t));
+  if (!in.read(frame.data() + sizeof words,
+               static_cast<std::streamsize>(frame.size() - sizeof words)))
+    return false;
+  std::uint64_t checksum = 0;
+  std::memcpy(&checksum, frame.data() + frame.size() - sizeof checksum, sizeof checksum);
+  return checksum == fnv1a(frame.data(), frame.size() - sizeof checksum);  // else torn
+}
+
+}  // namespace
+
+std::unique_ptr<RunJournal> RunJournal::resume(
+    const std::filesystem::path& path, const std::string& identity,
+    const std::function<void(const ShotRecord&)>& consume, std::int64_t& ray_queries) {
+  ray_queries = 0;
+  // A journal replaced by a FIFO would be waited on for ever.
+  require_input_file(path.native(), "the run journal", ErrorKind::config);
+  std::ifstream in(path, std::ios::binary);
+  // A journal killed before its header was whole holds no shot: begin it again.
+  if (!read_header(in, path, identity)) return std::make_unique<RunJournal>(path, identity);
+  std::uint64_t valid_end = 2 * sizeof(std::uint64_t);
   std::uint64_t records = 0;  // handed on so far: the index the next frame must begin at
   std::string frame, raw;
   for (std::uint64_t number = 0;; ++number) {
     // marker, first record, records, ray queries, sizes
     std::array<std::uint64_t, 6> words{};
-    if (!in.read(reinterpret_cast<char*>(words.data()), sizeof words)) break;
-    // Sizes beyond what LZ4 takes: not a frame.
-    if (words[0] != kFrameMarker ||
-        words[4] > static_cast<std::uint64_t>(LZ4_COMPRESSBOUND(kLargestFrame)) ||
-        words[5] > kLargestFrame)
-      break;
-    frame.assign(reinterpret_cast<const char*>(words.data()), sizeof words);
-    frame.resize(sizeof words + words[4] + sizeof(std::uint64_t));
-    if (!in.read(frame.data() + sizeof words,
-                 static_cast<std::streamsize>(frame.size() - sizeof words)))
-      break;
-    std::uint64_t checksum = 0;
-    std::memcpy(&checksum, frame.data() + frame.size() - sizeof checksum, sizeof checksum);
-    if (checksum != fnv1a(frame.data(), frame.size() - sizeof checksum)) break;  // torn
+    if (!read_frame(in, words, frame)) break;
     // A whole frame out of its place (a frame repeated, one lost, frames swapped) is not a
     // torn end: the journal no longer says which shots were done, and resuming would double
     // some and lose others.

@@ -204,7 +204,16 @@ struct RunOutput {
   std::vector<std::unique_ptr<ProductWriter>> writers;
   bool resumed = false;
   bool complete = false;
-  std::int64_t written = 0;  // records handed to the writers
+  std::int64_t written = 0;                    // records handed to the writers
+  std::vector<std::array<double, 2>> centres;  // the shots' (lat, lon), for stands_off_track
+
+  // One record to every writer, counted in the summary.
+  void take(const ShotRecord& shot, RunSummary& summary) {
+    for (const auto& writer : writers) writer->write(written, shot);
+    ++written;
+    if (shot.quality_flag != quality_good) ++summary.shots_flagged;
+    centres.push_back({shot.lat_deg, shot.lon_deg});
+  }
 
   ~RunOutput() {
     writers.clear();  // their .part files go first
@@ -328,8 +337,7 @@ std::string run_identity(const RunInfo& info, std::int64_t first, std::int64_t l
 // Rank 0: the output directory made (or taken, to resume), the journal and the writers begun,
 // and an interrupted run's records handed to the writers again.
 std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& request,
-                                       const RunInfo& info, RunSummary& summary,
-                                       std::vector<std::array<double, 2>>& centres) {
+                                       const RunInfo& info, RunSummary& summary) {
   auto output = std::make_unique<RunOutput>();
   output->directory = std::make_unique<OutputDirectory>(request.out_dir, request.resume);
   const fs::path journal_path = request.out_dir / RunJournal::kFileName;
@@ -354,17 +362,31 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
   if (output->resumed) {
     RunOutput& out = *output;
     out.journal = RunJournal::resume(
-        journal_path, identity,
-        [&](const ShotRecord& shot) {
-          for (const auto& writer : out.writers) writer->write(out.written, shot);
-          ++out.written;
-          if (shot.quality_flag != quality_good) ++summary.shots_flagged;
-          centres.push_back({shot.lat_deg, shot.lon_deg});
-        },
+        journal_path, identity, [&](const ShotRecord& shot) { out.take(shot, summary); },
         summary.ray_queries);
     summary.shots_resumed = out.written;
   }
   return output;
+}
+
+// Rank 0's end of a run: the stands' and crowns' warnings, the products completed, the journal
+// removed.
+void finish_output(RunOutput& output, const Config& config, const VegetationSource* vegetation,
+                   RunSummary& summary, std::chrono::steady_clock::time_point started) {
+  if (const auto warning = stands_off_track(config, output.centres))
+    summary.warnings.push_back(*warning);
+  if (const auto warning = crowns_off_track(config, vegetation, output.centres))
+    summary.warnings.push_back(*warning);
+  summary.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  RunStats stats;
+  stats.ray_queries = summary.ray_queries;
+  stats.wall_s = summary.wall_s;
+  stats.shots_flagged = summary.shots_flagged;
+  for (const auto& writer : output.writers) writer->finish(stats);
+  output.complete = true;
+  output.journal->remove();
+  output.directory->keep();
 }
 
 }  // namespace
@@ -386,10 +408,9 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   RunInfo info = run_info(setup->used, *setup->simulator, last - first, request.command_line);
   info.vertical_datum = setup->terrain->vertical_datum().description;
   RunSummary summary;
-  std::vector<std::array<double, 2>> centres;
   std::unique_ptr<RunOutput> output;
   try {
-    if (cluster.rank() == 0) output = open_output(*setup, request, info, summary, centres);
+    if (cluster.rank() == 0) output = open_output(*setup, request, info, summary);
   } catch (...) {
     failure = std::current_exception();
   }
@@ -398,18 +419,11 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   if (cluster.rank() == 0)
     if (auto warning = narrowed_threads_warning(request.threads, cluster))
       summary.warnings.push_back(std::move(*warning));
-  if (cluster.rank() == 0)
-    for (const std::string& warning : setup->track->warnings()) summary.warnings.push_back(warning);
 
   simulate_batches(
       cluster, *setup->simulator, *setup->track, first + done, last, request.threads,
       [&](std::int64_t, std::span<const ShotRecord> records, std::int64_t queries) {
-        for (const ShotRecord& shot : records) {
-          for (const auto& writer : output->writers) writer->write(output->written, shot);
-          ++output->written;
-          if (shot.quality_flag != quality_good) ++summary.shots_flagged;
-          centres.push_back({shot.lat_deg, shot.lon_deg});
-        }
+        for (const ShotRecord& shot : records) output->take(shot, summary);
         output->journal->append(records, queries);
         summary.ray_queries += queries;
       },
@@ -418,23 +432,8 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   summary.shots = last - first;
   summary.vertical_datum = setup->terrain->vertical_datum().description;
   try {
-    if (cluster.rank() == 0) {
-      if (const auto warning = stands_off_track(config, centres))
-        summary.warnings.push_back(*warning);
-      if (const auto warning =
-              crowns_off_track(config, setup->simulator->scenes().vegetation(), centres))
-        summary.warnings.push_back(*warning);
-      summary.wall_s =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-      RunStats stats;
-      stats.ray_queries = summary.ray_queries;
-      stats.wall_s = summary.wall_s;
-      stats.shots_flagged = summary.shots_flagged;
-      for (const auto& writer : output->writers) writer->finish(stats);
-      output->complete = true;
-      output->journal->remove();
-      output->directory->keep();
-    }
+    if (cluster.rank() == 0)
+      finish_output(*output, config, setup->simulator->scenes().vegetation(), summary, started);
   } catch (...) {
     failure = std::current_exception();
   }
