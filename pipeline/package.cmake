@@ -14,6 +14,9 @@ add_library(glaswave_all INTERFACE)
 add_library(glaswave::glaswave ALIAS glaswave_all)
 set_target_properties(glaswave_all PROPERTIES EXPORT_NAME glaswave)
 target_link_libraries(glaswave_all INTERFACE ${libraries})
+# The headers are C++20 (std::span, std::numbers): the standard travels with the target, so that a
+# consumer without a CMAKE_CXX_STANDARD of its own compiles them (tests/install/consumer).
+target_compile_features(glaswave_all INTERFACE cxx_std_20)
 target_include_directories(glaswave_all INTERFACE $<BUILD_INTERFACE:${umbrella_stage}>
                                                   $<INSTALL_INTERFACE:include>)
 

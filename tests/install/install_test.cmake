@@ -1,6 +1,7 @@
 # `cmake --install` into a scratch prefix, then what a user does with it: the package's files are
 # there, the example is configured and built against it from a copy outside the source tree and
-# run (it checks its shot against the closed form), the installed command runs, and the installed
+# run (it checks its shot against the closed form), a consumer that sets no C++ standard of its own
+# builds and runs (tests/install/consumer), the installed command runs, and the installed
 # Python module imports. Run by ctest as `cmake -P` with BINARY_DIR, SOURCE_DIR, WORK_DIR, LIBDIR,
 # COMPILER, LAUNCHER (may be empty), PYTHON (empty: no module) and PYTHON_DIR.
 function(run_step what)
@@ -43,6 +44,15 @@ if(NOT package_dir STREQUAL "glaswave_DIR:PATH=${prefix}/${LIBDIR}/cmake/glaswav
 endif()
 run_step("build the example" ${CMAKE_COMMAND} --build ${WORK_DIR}/example-build)
 run_step("run the example" ${WORK_DIR}/example-build/one_shot)
+message(STATUS "${step_output}")
+
+# A consumer that sets no language standard: the package's target must carry C++20 itself.
+file(COPY ${SOURCE_DIR}/tests/install/consumer/ DESTINATION ${WORK_DIR}/consumer-source)
+run_step("configure a consumer without a standard" ${CMAKE_COMMAND} -S ${WORK_DIR}/consumer-source
+         -B ${WORK_DIR}/consumer-build -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${prefix}
+         -DCMAKE_CXX_COMPILER=${COMPILER} ${launcher} -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF)
+run_step("build the consumer" ${CMAKE_COMMAND} --build ${WORK_DIR}/consumer-build)
+run_step("run the consumer" ${WORK_DIR}/consumer-build/consumer)
 message(STATUS "${step_output}")
 
 run_step("the installed command" ${prefix}/bin/glaswave --version)
