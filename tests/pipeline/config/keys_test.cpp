@@ -103,8 +103,6 @@ void key_paths(const json& value, std::vector<std::string> path,
 
 TEST(Schema, IsWellFormedJsonOfDraft202012) {
   const json schema = configuration_schema();
-  const json again = json::parse(schema.dump(2));  // what `check --schema` prints
-  EXPECT_EQ(again, schema);
   EXPECT_EQ(schema["$schema"], "https://json-schema.org/draft/2020-12/schema");
   EXPECT_EQ(schema["type"], "object");
   EXPECT_EQ(schema["additionalProperties"], false);

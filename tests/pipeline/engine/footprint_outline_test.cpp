@@ -24,8 +24,9 @@ struct Outline {
 
 // One shot aimed at the plane's origin, tilted toward the east; its polygon measured on the
 // plane: the longest chord (the ellipse's major axis) and the width north-south.
-Outline outline(double off_nadir_deg, double slope_deg) {
-  const nlohmann::json document = test_support::plane_shot("glas", slope_deg, off_nadir_deg, 200);
+Outline outline(double off_nadir_deg, double slope_deg, double ifov_rad = 0.0004) {
+  nlohmann::json document = test_support::plane_shot("glas", slope_deg, off_nadir_deg, 200);
+  document["sensor"]["ifov_rad"] = ifov_rad;
   const Config config = parse_config(document);
   const auto terrain = make_terrain(config.terrain);
   const Footprint footprint = Track(config.track, *terrain).footprint(0);
@@ -55,7 +56,9 @@ Outline outline(double off_nadir_deg, double slope_deg) {
   const LocalFrame frame(footprint.ground);
   out.incidence_deg = std::acos(-dot(frame.local_direction(footprint.beam_ecef), normal)) / deg;
   out.range_m = footprint.range_m;
-  out.angle_rad = std::min(2.0 * simulator.lidar().beam_sigma_rad(), 0.5 * config.sensor.ifov_rad);
+  // The 1/e^2 contour's half-angle: two sigma of the glas preset's beam (29.2 urad), unless the
+  // field of view (its half-angle) is narrower: the receiver sees nothing beyond it.
+  out.angle_rad = std::min(2.0 * 29.2e-6, 0.5 * ifov_rad);
   // Counter-clockwise in longitude and latitude.
   double twice_area = 0.0;
   for (std::size_t i = 0; i + 1 < record.footprint_lonlat.size(); ++i) {
@@ -72,6 +75,11 @@ TEST(FootprintOutline, OffNadirPolygonIsStretchedAlongTheTiltBy1OverCosIncidence
   EXPECT_NEAR(nadir.across_m / (2.0 * nadir.range_m * nadir.angle_rad), 1.0, 0.01);
   EXPECT_NEAR(nadir.along_m / nadir.across_m, 1.0, 0.01);
   EXPECT_NEAR(nadir.along_m, 70.0, 5.0);  // the glas beam
+
+  // A field of view of 100 urad clips the beam: the outline is its edge, 50 urad, 60 m across.
+  const Outline clipped = outline(0.0, 0.0, 100e-6);
+  EXPECT_NEAR(clipped.across_m / (2.0 * clipped.range_m * 50e-6), 1.0, 0.01);
+  EXPECT_NEAR(clipped.along_m / clipped.across_m, 1.0, 0.01);
 
   for (const double slope_deg : {0.0, 15.0}) {
     const Outline tilted = outline(30.0, slope_deg);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <set>
+#include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -59,8 +60,8 @@ TEST(ProductFields, TableIsConsistent) {
       EXPECT_EQ(field.geojson, GeojsonProperty::none) << field.name;
       continue;
     }
+    // The member's type has as many dimensions as the row declares (band, then its inner ones).
     EXPECT_EQ(rank_of(field), field.per_band() ? 1 + inner : 0) << field.name;
-    EXPECT_EQ(field.per_band(), rank_of(field) > 0) << field.name;
     // Only metrics come from the waveform processing, and every one names its metric.
     EXPECT_EQ(field.source == FieldSource::metrics,
               !std::holds_alternative<std::monostate>(field.metric))
@@ -74,6 +75,38 @@ TEST(ProductFields, TableIsConsistent) {
   }
   EXPECT_EQ(find_product_field("rx_waveform")->name, std::string("rx_waveform"));
   EXPECT_EQ(find_product_field("no_such_field"), nullptr);
+}
+
+std::set<std::string> words(const std::string& text) {
+  std::set<std::string> out;
+  std::istringstream in(text);
+  for (std::string word; in >> word;) out.insert(word);
+  return out;
+}
+
+// Which variables of shots.nc have a band dimension, typed from PRODUCT.md section 4's table
+// (its dims column), and the granule and sun fields added since (per shot). A row whose member
+// changes shape, or a new row, has to agree with the contract written here.
+TEST(ProductFields, PerBandFieldsAreThoseOfProductMdsTable) {
+  const std::set<std::string> per_band = words(
+      "rx_waveform rx_waveform_canopy rx_waveform_ground rx_waveform_order rx_energy "
+      "rx_energy_canopy rx_energy_ground reflectance energy_tr energy_cr energy_gr waveform_index "
+      "sig_begin_m sig_end_m centroid_m n_peaks gauss_amp gauss_center_m gauss_sigma_ns "
+      "gauss_area ground_elev_est canopy_height_est rh");
+  const std::set<std::string> per_shot = words(
+      "shot shot_number quality_flag quality_reason time lat lon elev sc_lat sc_lon sc_alt "
+      "off_nadir_deg range_m slope_deg aspect_deg elev_bin0 elev_lastbin cover_true pai_true "
+      "canopy_height_true beam degrade_flag solar_elevation solar_azimuth");
+  std::size_t fixed = 0;
+  for (const ProductField& field : product_fields()) {
+    if (field.ragged()) continue;  // the photon lists: their own test above
+    ++fixed;
+    const bool listed_per_band = per_band.count(field.name) == 1;
+    EXPECT_TRUE(listed_per_band || per_shot.count(field.name) == 1)
+        << field.name << " is in neither list of PRODUCT.md";
+    EXPECT_EQ(field.per_band(), listed_per_band) << field.name;
+  }
+  EXPECT_EQ(fixed, per_band.size() + per_shot.size()) << "a variable of PRODUCT.md is missing";
 }
 
 // Per-band properties carry the band's name as a suffix, band after band; per-shot scalars none.

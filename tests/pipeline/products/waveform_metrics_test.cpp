@@ -76,10 +76,11 @@ TEST(WaveformMetrics, LonePulse) {
   // The ground is the pulse; the height (signal begin - ground) is the pulse's own rise.
   EXPECT_NEAR(m.ground_elev_m, elevation(center), 1e-5);
   EXPECT_NEAR(m.canopy_height_m, reach_bins * kBinM, 0.05 * kBinM);
-  // rh: symmetric about the centre, rh0 and rh100 at signal end and begin.
+  // rh: symmetric about the centre, rh0 and rh100 at the threshold's crossings, reach_bins
+  // below and above the ground (the pulse's centre).
   EXPECT_NEAR(m.rh_m[50], 0.0, 0.002);
-  EXPECT_NEAR(m.rh_m[0], m.sig_end_m - m.ground_elev_m, 1e-6);
-  EXPECT_NEAR(m.rh_m[100], m.sig_begin_m - m.ground_elev_m, 1e-6);
+  EXPECT_NEAR(m.rh_m[0], -reach_bins * kBinM, 0.05 * kBinM);
+  EXPECT_NEAR(m.rh_m[100], reach_bins * kBinM, 0.05 * kBinM);
   EXPECT_NEAR(m.rh_m[16], -m.rh_m[84], 0.005);
   for (int k = 1; k < kRhLevels; ++k) EXPECT_GE(m.rh_m[k], m.rh_m[k - 1]) << k;
   // rh84 - rh16 is two sigma of the pulse in metres, nearly (the window cuts the tails).
@@ -134,7 +135,7 @@ TEST(WaveformMetrics, CanopyOverGround) {
   EXPECT_NEAR(m.sig_begin_bin, begin, 0.05);
   // Height: signal begin above the ground (the ground Gaussian's centre at bin 300), = rh100.
   EXPECT_NEAR(m.canopy_height_m, (300.0 - begin) * kBinM, 0.01);
-  EXPECT_NEAR(m.canopy_height_m, m.rh_m[100], 1e-6);  // rh100 goes through the bin axis
+  EXPECT_NEAR(m.rh_m[100], (300.0 - begin) * kBinM, 0.01);  // rh100 goes through the bin axis
 }
 
 // With noise: the threshold sits 4 noise sigmas (of the smoothed waveform) over the noise mean,
@@ -152,8 +153,6 @@ TEST(WaveformMetrics, ThresholdAboveTheNoise) {
   // White noise through a Gaussian filter of s bins keeps 1 / sqrt(2 sqrt(pi) s) of its RMS.
   const double smoothed_sd = noise_W / std::sqrt(2.0 * std::sqrt(std::numbers::pi) * kPulseNs);
   EXPECT_NEAR(m.noise_sd_W / smoothed_sd, 1.0, 0.2);
-  EXPECT_NEAR(m.threshold_W, m.noise_mean_W + 4.0 * m.noise_sd_W, 1e-15)
-      << "4 sigma above 1 % of the peak";
   const double reach =
       std::sqrt(2.0) * kPulseNs *
       std::sqrt(2.0 * std::log(1.0e-6 / std::sqrt(2.0) / (m.threshold_W - m.noise_mean_W)));
@@ -169,6 +168,24 @@ TEST(WaveformMetrics, ThresholdAboveTheNoise) {
   // Signal begin (about 21 bins above the centre) barely reaches past the split 4 sigma
   // (20 bins) above it: nearly all of TR is ground.
   EXPECT_NEAR(m.energy_gr_J / area_J, 1.0, 0.03);
+}
+
+// The threshold on a window whose noise is known exactly: +-a alternating about the background
+// (mean the background, sample sd a sqrt(60/59) over the 15 % = 60 bins of an end), so it must
+// sit 4 sd of the smoothed noise above the background: GLA14's rule, the white-noise gain of a
+// Gaussian filter of s bins 1 / sqrt(2 sqrt(pi) s) (the sum of its squared weights, to 4e-5).
+// 4 sd (0.0096e-6 W) is above 1 % of the smoothed peak (0.0071e-6 W), which does not decide.
+TEST(WaveformMetrics, ThresholdIsFourSmoothedNoiseSigmasAboveTheBackground) {
+  const double background_W = 0.05e-6, a_W = 0.01e-6;
+  auto values = gaussians({{1.0e-6, 200.0, kPulseNs}});
+  for (int i = 0; i < kBins; ++i) values[i] += background_W + (i % 2 == 0 ? a_W : -a_W);
+  WaveformProcessing processing = noise_free();
+  processing.noise_free = false;
+  const auto m = process_waveform(values, kAxis, processing);
+  const double sample_sd = a_W * std::sqrt(60.0 / 59.0);
+  const double smoothed_sd = sample_sd / std::sqrt(2.0 * std::sqrt(std::numbers::pi) * kPulseNs);
+  EXPECT_NEAR(m.threshold_W / (background_W + 4.0 * smoothed_sd), 1.0, 1e-4);
+  EXPECT_GT(4.0 * smoothed_sd, 0.01 * 1.0e-6 / std::sqrt(2.0));
 }
 
 TEST(WaveformMetrics, NoSignal) {
