@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 #include "core/error.hpp"
@@ -145,21 +146,52 @@ void Track::check_times() const {
                             " shots from start_time comes at a time that " + why);
 }
 
+namespace {
+
+// Whether two passes differ in more than their start and heading.
+bool same_but_place(TrackSettings a, const TrackSettings& b) {
+  a.start_lat_deg = b.start_lat_deg;
+  a.start_lon_deg = b.start_lon_deg;
+  a.heading_deg = b.heading_deg;
+  return a.type == TrackType::pass && b.type == TrackType::pass && a.shots == b.shots &&
+         a.rate_hz == b.rate_hz && a.start_time_s == b.start_time_s &&
+         a.altitude_m == b.altitude_m && a.spacing_m == b.spacing_m &&
+         a.off_nadir_deg == b.off_nadir_deg && a.pointing_azimuth_deg == b.pointing_azimuth_deg;
+}
+
+const TrackSettings& first_pass(const std::vector<BeamPass>& beams) {
+  if (beams.empty()) throw std::invalid_argument("a pass of several beams needs a beam");
+  for (const BeamPass& beam : beams)
+    if (!same_but_place(beam.pass, beams.front().pass))
+      throw std::invalid_argument(
+          "the beams of one pass must be passes differing only in their start and heading");
+  return beams.front().pass;
+}
+
+}  // namespace
+
+Track::Track(const std::vector<BeamPass>& beams, const Terrain& terrain,
+             const TerrainLimits& limits)
+    : Track(first_pass(beams), terrain, limits) {
+  beams_ = beams;
+}
+
 std::int64_t Track::size() const {
   return settings_.type == TrackType::orbit ? static_cast<std::int64_t>(kept_shots_.size())
-                                            : sequence_length_;
+                                            : sequence_length_ * beams_per_shot();
 }
 
 std::int64_t Track::shot_number(std::int64_t record) const {
   return settings_.type == TrackType::orbit ? kept_shots_.at(static_cast<std::size_t>(record))
-                                            : record;
+                                            : record / beams_per_shot();
 }
 
 std::pair<std::int64_t, std::int64_t> Track::records_of_shots(std::int64_t first_shot,
                                                               std::int64_t last_shot) const {
   first_shot = std::clamp<std::int64_t>(first_shot, 0, sequence_length_);
   last_shot = std::clamp<std::int64_t>(last_shot, first_shot, sequence_length_);
-  if (settings_.type != TrackType::orbit) return {first_shot, last_shot};
+  if (settings_.type != TrackType::orbit)
+    return {first_shot * beams_per_shot(), last_shot * beams_per_shot()};
   const auto first = std::lower_bound(kept_shots_.begin(), kept_shots_.end(), first_shot);
   const auto last = std::lower_bound(first, kept_shots_.end(), last_shot);
   return {first - kept_shots_.begin(), last - kept_shots_.begin()};
@@ -175,12 +207,14 @@ std::vector<Footprint> Track::footprints(std::int64_t first_record,
   return out;
 }
 
-bool Track::place_spacecraft(std::int64_t shot, Footprint& f) const {
+bool Track::place_spacecraft(std::int64_t shot, int beam, Footprint& f) const {
   switch (settings_.type) {
     case TrackType::pass: {
+      const TrackSettings& pass =
+          beams_.empty() ? settings_ : beams_.at(static_cast<std::size_t>(beam)).pass;
       double lat_deg = 0.0, lon_deg = 0.0;
       GeographicLib::Geodesic::WGS84().Direct(
-          settings_.start_lat_deg, settings_.start_lon_deg, settings_.heading_deg,
+          pass.start_lat_deg, pass.start_lon_deg, pass.heading_deg,
           static_cast<double>(shot) * pass_spacing_m_, lat_deg, lon_deg);
       f.spacecraft = {lat_deg, lon_deg, settings_.altitude_m};
       f.spacecraft_ecef = ecef_from_geodetic(f.spacecraft);
@@ -223,7 +257,7 @@ bool Track::place_spacecraft(std::int64_t shot, Footprint& f) const {
   return true;
 }
 
-Footprint Track::locate_shot(std::int64_t shot) const {
+Footprint Track::locate_shot(std::int64_t shot, int beam) const {
   Footprint f;
   f.shot_number = shot;
   f.source_shot_number = shot;
@@ -238,8 +272,9 @@ Footprint Track::locate_shot(std::int64_t shot) const {
     f.shot_count = g.shot_count;
     if (gedi_coverage_beam(g.beam)) f.pulse_energy_scale = 0.5;
   }
+  if (!beams_.empty()) f.beam = beams_.at(static_cast<std::size_t>(beam)).beam;
   f.off_nadir_deg = settings_.off_nadir_deg;
-  if (!place_spacecraft(shot, f)) return f;
+  if (!place_spacecraft(shot, beam, f)) return f;
   if (const auto hit = intersect_terrain(terrain_, f.spacecraft_ecef, f.beam_ecef, limits_)) {
     f.on_terrain = true;
     f.ground = geodetic_from_ecef(*hit);

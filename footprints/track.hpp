@@ -24,8 +24,9 @@ struct Footprint {
   // i_rec_ndx * 40 + i_shot_count - 1); shot_number for the synthetic tracks.
   std::int64_t source_shot_number = 0;
   double time_s = 0.0;  // seconds since 2000-01-01T12:00:00Z
-  // A granule's beam (GEDI: its number, BEAM0101 is 5; -1 for GLAH14 and the synthetic tracks)
-  // and degrade_flag; GLAH14's i_rec_ndx and i_shot_count (-1 and 0 elsewhere).
+  // A granule's beam (GEDI: its number, BEAM0101 is 5; -1 for GLAH14 and the synthetic tracks;
+  // a pass of several beams: the beam's BeamPass::beam, ATLAS's spot number) and degrade_flag;
+  // GLAH14's i_rec_ndx and i_shot_count (-1 and 0 elsewhere).
   int beam = -1;
   std::uint8_t degrade_flag = 0;
   std::int64_t record_index = -1;
@@ -50,6 +51,14 @@ Vec3 pointing_direction(const Geodetic& spacecraft, double off_nadir_deg,
 // Angle (deg) between a beam direction and the geodetic nadir at the spacecraft.
 double off_nadir_angle_deg(const Vec3& spacecraft_ecef, const Vec3& beam_ecef);
 
+// One beam of a pass flown by several at once (ICESat-2's six, footprints/atlas_beams.hpp): its
+// own pass (the shared pass moved to the beam's start and heading) and the number its footprints
+// carry as Footprint::beam.
+struct BeamPass {
+  TrackSettings pass;
+  int beam = -1;
+};
+
 // A planned track. Shot numbers count the track's shots in time order, from 0:
 //   pass, points  shot k is the k-th shot of `track.shots` (the k-th point), at start_time + k /
 //   rate_hz; orbit         shot k is at start_time + k / rate_hz, k < track.shots; only the shots
@@ -60,13 +69,20 @@ double off_nadir_angle_deg(const Vec3& spacecraft_ecef, const Vec3& beam_ecef);
 //                 time, aimed at its latitude and longitude as a point is.
 // A shot number is the same whichever part of the track a run simulates (`--shots A:B`).
 // Records are the shots a run writes, in shot order: every shot of pass, points and ephemeris
-// (those that miss the terrain flagged), the kept shots of an orbit.
+// (those that miss the terrain flagged), the kept shots of an orbit. A pass flown by several
+// beams has one record per shot and beam, a shot's beams together in the beams' order: record
+// shot * beams + k is shot `shot` of beam k.
 class Track {
  public:
   // Plans the geometry (no simulation): reads an ephemeris file and, for an orbit, locates every
   // shot to keep those on the terrain. The terrain must outlive the track.
   // Throws an input Error when no shot of the track meets the terrain, or for a bad ephemeris file.
   Track(const TrackSettings& settings, const Terrain& terrain, const TerrainLimits& limits = {});
+  // A pass flown by every beam of `beams` at once: each its own pass (type pass, all with the
+  // same shots, rate, times and altitude), its footprints carrying its number. Throws
+  // std::invalid_argument when there is no beam or a beam's pass differs in more than its place.
+  Track(const std::vector<BeamPass>& beams, const Terrain& terrain,
+        const TerrainLimits& limits = {});
 
   // Number of records.
   std::int64_t size() const;
@@ -81,18 +97,26 @@ class Track {
   // each.
   const std::vector<std::string>& warnings() const { return warnings_; }
 
+  // The beams that fire each shot: 1 but for a pass flown by several.
+  std::int64_t beams_per_shot() const {
+    return beams_.empty() ? 1 : static_cast<std::int64_t>(beams_.size());
+  }
+
   // The footprint of a record, and of the records [first, last).
-  Footprint footprint(std::int64_t record) const { return locate_shot(shot_number(record)); }
+  Footprint footprint(std::int64_t record) const {
+    return locate_shot(shot_number(record), static_cast<int>(record % beams_per_shot()));
+  }
   std::vector<Footprint> footprints(std::int64_t first_record, std::int64_t last_record) const;
-  // The footprint of any shot of the sequence, kept or not, 0 <= shot_number < sequence_length().
-  Footprint locate_shot(std::int64_t shot_number) const;
+  // The footprint of any shot of the sequence, kept or not, 0 <= shot_number < sequence_length(),
+  // by the beam of index `beam` (0 <= beam < beams_per_shot()).
+  Footprint locate_shot(std::int64_t shot_number, int beam = 0) const;
 
  private:
   // Refuses a shot whose time is not finite or outside the years a track may have.
   void check_times() const;
   // The spacecraft and the beam of a shot; false when the shot is flagged before any search for
   // the ground (a target point over no data).
-  bool place_spacecraft(std::int64_t shot, Footprint& f) const;
+  bool place_spacecraft(std::int64_t shot, int beam, Footprint& f) const;
 
   TrackSettings settings_;
   const Terrain& terrain_;
@@ -104,6 +128,7 @@ class Track {
   std::vector<std::string> warnings_;
   std::vector<std::int64_t> kept_shots_;  // orbit: shot numbers of the records, ascending
   double pass_spacing_m_ = 0.0;           // pass
+  std::vector<BeamPass> beams_;           // a pass flown by several beams; empty otherwise
 };
 
 }  // namespace glaswave

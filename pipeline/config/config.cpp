@@ -140,10 +140,9 @@ void check_beams(JsonReader& r, SensorSettings& s) {
     if (std::find(known.begin(), known.end(), beam) == known.end())
       r.fail("beams", "no beam \"" + beam + "\"; the beams are gt1l gt1r gt2l gt2r gt3l gt3r" +
                           did_you_mean(beam, known));
-  if (s.beams.size() != 1)
-    r.fail("beams",
-           "one beam a run for now (run each beam with --set "
-           "'sensor.beams=[\"gt1r\"]')");
+  for (auto beam = s.beams.begin(); beam != s.beams.end(); ++beam)
+    if (std::find(s.beams.begin(), beam, *beam) != beam)
+      r.fail("beams", "names \"" + *beam + "\" twice: its shots would be simulated twice");
 }
 
 SensorSettings read_sensor(JsonReader& root) {
@@ -613,7 +612,10 @@ Config parse_config(const json& document) {
 
 void check_outputs(const Config& config) {
   const OutputSettings& o = config.output;
-  if (!o.netcdf && !o.geojson)
+  // A photon-counting run's ICESat-2 granules are products of their own.
+  const bool granules = config.sensor.receiver == "photon_counting" &&
+                        (o.atl03.value_or(true) || o.atl08.value_or(true));
+  if (!o.netcdf && !o.geojson && !granules)
     throw config_error("/output",
                        "nothing to write: output.netcdf and output.geojson are both false");
   if (o.plots && !(o.netcdf && o.geojson))

@@ -435,7 +435,7 @@ Key sensor_keys() {
                       "photon counting: which of ATLAS's beams `gt1l gt1r gt2l gt2r gt3l gt3r` to "
                       "simulate (strong: the `l` beams, weak: the `r` ones at 45/175 of the "
                       "energy), each on its own ground track about the `pass`'s reference track; "
-                      "one a run for now"),
+                      "several only on a `pass`"),
        s.number("photon_efficiency", &S::photon_efficiency, open_closed(0, 1), "",
                 "photon counting: the receiver's optical throughput times its detectors' photon "
                 "detection efficiency (ATLAS: 0.45 × 0.15)"),

@@ -44,22 +44,25 @@ ShotSettings shot_settings(const Config& config) {
   return settings;
 }
 
-// The photon-counting receiver's settings: the configuration's, for its one beam.
-PhotonCountingSettings photon_settings(const Config& config) {
-  const AtlasBeam beam = select_atlas_beams(config.sensor.beams).front();
-  PhotonCountingSettings p;
-  p.efficiency = config.sensor.photon_efficiency;
-  p.filter_bandwidth_nm = config.sensor.filter_bandwidth_nm;
-  p.dead_time_ns = config.sensor.dead_time_ns;
-  p.channels = beam.strong ? 16 : 4;
-  p.energy_ratio = beam.energy_ratio;
-  p.beam = static_cast<std::uint32_t>(beam.spot_number);
-  p.background = config.simulation.background == "sun"    ? BackgroundSource::sun
-                 : config.simulation.background == "none" ? BackgroundSource::none
-                                                          : BackgroundSource::rate;
-  p.background_rate_Hz = config.simulation.background_rate_MHz * 1e6;
-  p.keep_orders = config.output.per_order;
-  return p;
+// The photon-counting receiver's settings: the configuration's, one for each of its beams.
+std::vector<PhotonCountingSettings> photon_settings(const Config& config) {
+  std::vector<PhotonCountingSettings> beams;
+  for (const AtlasBeam& beam : select_atlas_beams(config.sensor.beams)) {
+    PhotonCountingSettings p;
+    p.efficiency = config.sensor.photon_efficiency;
+    p.filter_bandwidth_nm = config.sensor.filter_bandwidth_nm;
+    p.dead_time_ns = config.sensor.dead_time_ns;
+    p.channels = beam.strong ? 16 : 4;
+    p.energy_ratio = beam.energy_ratio;
+    p.beam = static_cast<std::uint32_t>(beam.spot_number);
+    p.background = config.simulation.background == "sun"    ? BackgroundSource::sun
+                   : config.simulation.background == "none" ? BackgroundSource::none
+                                                            : BackgroundSource::rate;
+    p.background_rate_Hz = config.simulation.background_rate_MHz * 1e6;
+    p.keep_orders = config.output.per_order;
+    beams.push_back(p);
+  }
+  return beams;
 }
 
 ReceiverSettings receiver_settings(const Config& config) {
@@ -122,13 +125,22 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
 }
 
 std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain) {
-  // A photon-counting pass flies its beam's own ground track about the reference one.
-  const bool beam_track =
-      config.sensor.receiver == "photon_counting" && config.track.type == TrackType::pass;
-  const TrackSettings track =
-      beam_track ? beam_pass(config.track, select_atlas_beams(config.sensor.beams).front())
-                 : config.track;
-  return at_section("/track", [&] { return std::make_unique<Track>(track, terrain); });
+  if (config.sensor.receiver != "photon_counting")
+    return at_section("/track", [&] { return std::make_unique<Track>(config.track, terrain); });
+  // A photon-counting pass: each beam flies its own ground track about the reference one, its
+  // footprints carrying its spot number, the receiver's key for it.
+  const std::vector<AtlasBeam> beams = select_atlas_beams(config.sensor.beams);
+  if (config.track.type != TrackType::pass) {
+    if (beams.size() > 1)
+      throw config_error("/sensor/beams",
+                         "several beams fly a pass only (track.type \"pass\"); other tracks "
+                         "give one beam's footprints: name one beam");
+    return at_section("/track", [&] { return std::make_unique<Track>(config.track, terrain); });
+  }
+  std::vector<BeamPass> passes;
+  for (const AtlasBeam& beam : beams)
+    passes.push_back({beam_pass(config.track, beam), beam.spot_number});
+  return at_section("/track", [&] { return std::make_unique<Track>(passes, terrain); });
 }
 
 std::optional<std::string> stands_off_track(const Config& config,

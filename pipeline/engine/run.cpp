@@ -314,16 +314,15 @@ CheckSummary check_inputs(const Config& config) {
 namespace {
 
 // The ICESat-2 granules of a photon-counting run (on unless output.atl03/atl08 say otherwise),
-// for its beam.
+// for its beams.
 Icesat2ProductSettings icesat2_product_settings(const Config& config) {
   Icesat2ProductSettings s;
   if (config.sensor.receiver != "photon_counting") return s;
   s.atl03 = config.output.atl03.value_or(true);
   s.atl08 = config.output.atl08.value_or(true);
-  const AtlasBeam beam = select_atlas_beams(config.sensor.beams).front();
-  s.beam = beam.name;
-  s.strong = beam.strong;
-  s.spot_number = beam.spot_number;
+  s.beams.clear();
+  for (const AtlasBeam& beam : select_atlas_beams(config.sensor.beams))
+    s.beams.push_back({beam.name, beam.strong, beam.spot_number});
   return s;
 }
 

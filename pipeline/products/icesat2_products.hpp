@@ -50,13 +50,20 @@ struct BeamTrack {
   std::vector<BeamPhoton> photons;
 };
 
-// Which ICESat-2 granules a run writes, and for which beam.
+// One beam of the granules: its group, its strength and ATLAS's spot.
+struct GranuleBeam {
+  std::string name = "gt2l";
+  bool strong = true;
+  int spot_number = 3;
+};
+
+// Which ICESat-2 granules a run writes, and for which beams (in the granules' order). With
+// several beams a record belongs to the one whose spot number is its ShotRecord::beam; one beam
+// takes every record.
 struct Icesat2ProductSettings {
   bool atl03 = false;
   bool atl08 = false;
-  std::string beam = "gt2l";
-  bool strong = true;
-  int spot_number = 3;
+  std::vector<GranuleBeam> beams = {GranuleBeam{}};
 };
 
 struct GranuleInfo {

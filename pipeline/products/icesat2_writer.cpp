@@ -57,6 +57,7 @@ void Icesat2Writer::write(std::int64_t index, const ShotRecord& shot) {
     throw run_error(out_dir_.string(), "ICESat-2 granules: record " + std::to_string(index) +
                                            " out of range or written twice");
   Kept kept;
+  kept.beam = shot.beam;
   kept.shot.lat_deg = shot.lat_deg;
   kept.shot.lon_deg = shot.lon_deg;
   kept.shot.delta_time_s = shot.time_s - atlas_epoch_since_glas_epoch_s;
@@ -72,7 +73,9 @@ void Icesat2Writer::write(std::int64_t index, const ShotRecord& shot) {
     p.h_m = shot.photon_h_m[i];
     p.lat_deg = shot.photon_lat_deg[i];
     p.lon_deg = shot.photon_lon_deg[i];
-    // The event's own time: the shot's, the time of flight being a millisecond at most.
+    // ATL03's heights/delta_time is the transmit time of the photon's pulse ("multiple received
+    // photons associated with a single transmit pulse will have the same delta_time", the ATL03
+    // data dictionary), the shot's; the 3.3 ms of flight are in no ATL03 time.
     p.delta_time_s = kept.shot.delta_time_s;
     p.truth_class = static_cast<std::uint8_t>(shot.photon_class[i]);
     p.order = i < shot.photon_order.size() ? static_cast<std::uint8_t>(shot.photon_order[i]) : 0;
@@ -81,30 +84,38 @@ void Icesat2Writer::write(std::int64_t index, const ShotRecord& shot) {
   kept_.emplace(index, std::move(kept));
 }
 
+BeamTrack Icesat2Writer::gather_beam(const GranuleBeam& granule_beam) const {
+  BeamTrack beam;
+  beam.name = granule_beam.name;
+  beam.strong = granule_beam.strong;
+  beam.spot_number = granule_beam.spot_number;
+  const bool every_record = settings_.beams.size() == 1;
+  std::vector<double> below;
+  for (const auto& [index, kept] : kept_) {
+    if (!every_record && kept.beam != granule_beam.spot_number) continue;
+    // Shots off the terrain have no position: they are left out of the granules.
+    if (!std::isfinite(kept.shot.lat_deg) || !std::isfinite(kept.shot.lon_deg)) continue;
+    BeamShot shot = kept.shot;
+    shot.along_m =
+        beam.shots.empty() ? 0.0 : beam.shots.back().along_m + distance_m(beam.shots.back(), shot);
+    shot.first_photon = static_cast<std::uint32_t>(beam.photons.size());
+    shot.photon_count = static_cast<std::uint32_t>(kept.photons.size());
+    beam.shots.push_back(shot);
+    below.push_back(kept.below_ground);
+    beam.photons.insert(beam.photons.end(), kept.photons.begin(), kept.photons.end());
+  }
+  estimate_background(beam.shots, below);
+  return beam;
+}
+
 void Icesat2Writer::finish(const RunStats&) {
   if (static_cast<std::int64_t>(kept_.size()) != shots_)
     throw run_error(
         out_dir_.string(),
         "ICESat-2 granules: " + std::to_string(shots_ - kept_.size()) + " records never written");
-  BeamTrack beam;
-  beam.name = settings_.beam;
-  beam.strong = settings_.strong;
-  beam.spot_number = settings_.spot_number;
-  std::vector<double> below;
-  for (auto& [index, kept] : kept_) {
-    // Shots off the terrain have no position: they are left out of the granules.
-    if (!std::isfinite(kept.shot.lat_deg) || !std::isfinite(kept.shot.lon_deg)) continue;
-    kept.shot.along_m = beam.shots.empty()
-                            ? 0.0
-                            : beam.shots.back().along_m + distance_m(beam.shots.back(), kept.shot);
-    kept.shot.first_photon = static_cast<std::uint32_t>(beam.photons.size());
-    kept.shot.photon_count = static_cast<std::uint32_t>(kept.photons.size());
-    beam.shots.push_back(kept.shot);
-    below.push_back(kept.below_ground);
-    beam.photons.insert(beam.photons.end(), kept.photons.begin(), kept.photons.end());
-  }
-  estimate_background(beam.shots, below);
-  const std::vector<BeamTrack> beams = {std::move(beam)};
+  std::vector<BeamTrack> beams;
+  for (const GranuleBeam& granule_beam : settings_.beams)
+    beams.push_back(gather_beam(granule_beam));
   const Atl08Settings atl08;
   const std::vector<Atl08Classes> classes = classify_beams(beams, atl08);
   if (settings_.atl03) write_atl03(out_dir_ / "atl03.h5", beams, classes, info_);

@@ -1,5 +1,5 @@
 // The ATL03- and ATL08-like granules as a product writer: it keeps each record's photons and
-// footprint as they come (in any order), and at the end classifies the beam's photons and writes
+// footprint as they come (in any order), and at the end classifies each beam's photons and writes
 // DIR/atl03.h5 and DIR/atl08.h5 (icesat2_products.hpp). The background rate ATL03 reports and
 // ATL08's noise filter uses is estimated from the photons, as ATLAS's processing does. A record's
 // photons are in its own time order; the records go in shot order, so the products are the same for
@@ -26,6 +26,7 @@ class Icesat2Writer : public ProductWriter {
 
  private:
   struct Kept {
+    std::uint8_t beam = 0;  // ShotRecord::beam
     BeamShot shot;
     std::vector<BeamPhoton> photons;
     double below_ground = 0;  // its photons in the range window's lowest fifth
@@ -35,6 +36,8 @@ class Icesat2Writer : public ProductWriter {
   // those in the lowest fifth of the range window (15 m or more below the ground at the
   // footprint centre), over the shots within 500 of it.
   void estimate_background(std::vector<BeamShot>& shots, const std::vector<double>& below) const;
+  // The beam's shots and photons from the kept records that belong to it, in record order.
+  BeamTrack gather_beam(const GranuleBeam& granule_beam) const;
 
   std::filesystem::path out_dir_;
   Icesat2ProductSettings settings_;

@@ -48,12 +48,20 @@ double canopy_top_ns(const std::vector<double>& canopy, const std::vector<double
 }  // namespace
 
 PhotonCountingReceiver::PhotonCountingReceiver(const ReceiverSettings& settings)
-    : settings_(settings), waveform_(settings), lidar_(settings.lidar) {}
+    : settings_(settings), waveform_(settings), lidar_(settings.lidar) {
+  if (settings_.photons.empty()) settings_.photons.emplace_back();
+}
 
-double PhotonCountingReceiver::background_rate_Hz(const ShotRecord& record,
+const PhotonCountingSettings& PhotonCountingReceiver::beam_settings(int beam) const {
+  for (const PhotonCountingSettings& p : settings_.photons)
+    if (static_cast<std::int64_t>(p.beam) == beam) return p;
+  return settings_.photons.front();
+}
+
+double PhotonCountingReceiver::background_rate_Hz(const PhotonCountingSettings& p,
+                                                  const ShotRecord& record,
                                                   const ShotWaveforms& waveforms,
                                                   double range_m) const {
-  const PhotonCountingSettings& p = settings_.photons;
   if (p.background == BackgroundSource::none) return 0.0;
   if (p.background == BackgroundSource::rate) return p.background_rate_Hz;
   const LidarBand& band = settings_.lidar.bands[0];
@@ -77,12 +85,13 @@ double PhotonCountingReceiver::background_rate_Hz(const ShotRecord& record,
 }
 
 void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) const {
-  const PhotonCountingSettings& p = settings_.photons;
+  const PhotonCountingSettings& p = beam_settings(returns.beam);
+  // The returns are the power of the band's pulse energy; a weak beam carries a part of it.
+  scale_pulse_energy(returns.waveforms, p.energy_ratio);
   const ShotWaveforms& w = returns.waveforms;
   const double bin_ns = settings_.lidar.bin_ns;
   const double wavelength_nm = settings_.lidar.bands[0].wavelength_nm;
-  // The returns are the power of the band's pulse energy; a weak beam carries a part of it.
-  const double efficiency = p.efficiency * p.energy_ratio;
+  const double efficiency = p.efficiency;
   const std::vector<double> canopy =
       expected_photons(w.canopy_W[0], bin_ns, wavelength_nm, efficiency);
   const std::vector<double> ground =
@@ -98,7 +107,7 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
   const std::vector<double> times_ns = lidar_.bin_time_ns();
   const PhotonDraw draw{settings_.seed, returns.shot_number,
                         p.beam,         bin_ns,
-                        canopy.size(),  background_rate_Hz(record, w, returns.range_m),
+                        canopy.size(),  background_rate_Hz(p, record, w, returns.range_m),
                         p.channels};
   const std::vector<PhotonEvent> events =
       apply_dead_time(draw_photons(draw, sources), p.dead_time_ns);
@@ -106,6 +115,9 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
   const double window_start_ns = times_ns.front() - 0.5 * bin_ns;
   const std::function<Geodetic(double)> position_at = returns.position_at;
   waveform_.receive(std::move(returns), record);
+  // Eq. (1)'s reflectance divides by the band's pulse energy, not the beam's.
+  if (p.energy_ratio != 1.0)
+    for (double& r : record.reflectance) r /= p.energy_ratio;
   if (!p.keep_orders) record.rx_waveform_order_W.clear();
   for (const PhotonEvent& e : events) {
     const double time_ns = window_start_ns + e.time_ns;

@@ -24,8 +24,10 @@ class PhotonCountingReceiver : public Receiver {
   bool photon_events() const override { return true; }
 
  private:
-  double background_rate_Hz(const ShotRecord& record, const ShotWaveforms& waveforms,
-                            double range_m) const;
+  // The settings of the beam that fired the shot.
+  const PhotonCountingSettings& beam_settings(int beam) const;
+  double background_rate_Hz(const PhotonCountingSettings& p, const ShotRecord& record,
+                            const ShotWaveforms& waveforms, double range_m) const;
 
   ReceiverSettings settings_;
   WaveformReceiver waveform_;

@@ -28,6 +28,21 @@ Registry& registry() {
 
 }  // namespace
 
+void scale_pulse_energy(ShotWaveforms& w, double scale) {
+  if (scale == 1.0) return;
+  auto times = [](std::vector<double>& v, double k) {
+    for (double& x : v) x *= k;
+  };
+  for (auto* set : {&w.total_W, &w.canopy_W, &w.ground_W})
+    for (auto& band : *set) times(band, scale);
+  for (auto& band : w.total_variance_W2) times(band, scale * scale);
+  for (auto& band : w.order_W)
+    for (auto& order : band) times(order, scale);
+  times(w.energy_J, scale);
+  times(w.canopy_energy_J, scale);
+  times(w.ground_energy_J, scale);
+}
+
 void register_receiver(const std::string& name, ReceiverFactory make) {
   Registry& receivers = registry();
   const std::lock_guard lock(receivers.mutex);

@@ -16,6 +16,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "pipeline/products/shot_record.hpp"
 #include "pipeline/transport/detector.hpp"
@@ -33,11 +34,17 @@ struct ShotReturns {
   // light), per order when asked for, and the Monte Carlo variance of the total.
   ShotWaveforms waveforms;
   std::int64_t shot_number = 0;
+  int beam = -1;         // the footprint's beam (Footprint::beam): ATLAS's spot number, or -1
   double range_m = 0.0;  // to the footprint centre
   // Where light of two-way time `time_ns` (the bins' clock) was scattered, on the beam's axis:
   // latitude, longitude and height above the ellipsoid.
   std::function<Geodetic(double time_ns)> position_at;
 };
+
+// The returns of a pulse of `scale` times the sensor's energy (a GEDI coverage beam's half, an
+// ATLAS weak beam's 45/175): every received power and energy scales with it, the Monte Carlo
+// variance with its square.
+void scale_pulse_energy(ShotWaveforms& waveforms, double scale);
 
 class Receiver {
  public:
@@ -59,8 +66,11 @@ struct ReceiverSettings {
   LidarSettings lidar;                         // bands, bins, pulse, telescope
   std::optional<Detector::Settings> detector;  // none: the noise-free received power
   bool metrics = true;                         // the waveform processing (decomposition, metrics)
-  std::uint64_t seed = 1;          // the detector's noise is keyed by (seed, shot, band, bin)
-  PhotonCountingSettings photons;  // "photon_counting": ATLAS's strong beam by default
+  std::uint64_t seed = 1;  // the detector's noise is keyed by (seed, shot, band, bin)
+  // "photon_counting": one per beam of the run, each keyed by its `beam` (ATLAS's spot number);
+  // a shot is received as the beam whose key is its footprint's beam, the first when none is.
+  // Empty: ATLAS's strong beam.
+  std::vector<PhotonCountingSettings> photons;
 };
 
 using ReceiverFactory = std::function<std::unique_ptr<Receiver>(const ReceiverSettings&)>;

@@ -49,23 +49,6 @@ void set_sun(ShotRecord& record) {
   }
 }
 
-// A pulse of `scale` times the sensor's energy (a GEDI coverage beam's half): every received
-// power and energy scales with it, the Monte Carlo variance with its square.
-void scale_energy(ShotWaveforms& w, double scale) {
-  if (scale == 1.0) return;
-  auto times = [](std::vector<double>& v, double k) {
-    for (double& x : v) x *= k;
-  };
-  for (auto* set : {&w.total_W, &w.canopy_W, &w.ground_W})
-    for (auto& band : *set) times(band, scale);
-  for (auto& band : w.total_variance_W2) times(band, scale * scale);
-  for (auto& band : w.order_W)
-    for (auto& order : band) times(order, scale);
-  times(w.energy_J, scale);
-  times(w.canopy_energy_J, scale);
-  times(w.ground_energy_J, scale);
-}
-
 }  // namespace
 
 ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray_queries) const {
@@ -93,8 +76,9 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   returns.waveforms = simulate_shot(scene, lidar_, shot.where.geometry, shot.built.optics,
                                     settings_.transport, footprint.shot_number);
   if (ray_queries) *ray_queries += returns.waveforms.ray_queries + outline_vertices;
-  scale_energy(returns.waveforms, footprint.pulse_energy_scale);
+  scale_pulse_energy(returns.waveforms, footprint.pulse_energy_scale);
   returns.shot_number = footprint.shot_number;
+  returns.beam = footprint.beam;
   returns.range_m = footprint.range_m;
   returns.position_at = [&shot](double time_ns) {
     const double along_m = 0.5 * speed_of_light_m_s * time_ns * 1e-9;

@@ -6,6 +6,7 @@
 #include <hdf5.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -133,6 +134,110 @@ TEST(Icesat2Run, AnAtlasPassWritesAtl03AndAtl08TheSameForAnyThreads) {
     }
   EXPECT_GT(ground, 0.0);
   EXPECT_GT(near_plane / ground, 0.9);
+}
+
+double mean_of(const std::vector<double>& v) {
+  double sum = 0.0;
+  for (const double x : v) sum += x;
+  return v.empty() ? std::nan("") : sum / static_cast<double>(v.size());
+}
+
+// All six beams in one run: 60 shots 0.7 m apart northward over bare level ground of reflectance
+// 0.9, the sun near the zenith. Each beam flies its own track (atlas_beams: pairs 3.3 km apart, 90
+// m within a pair, the weak beam 2.5 km ahead) and records its own photons (its energy, its
+// channels) under the same sun; the granules hold the same values for one thread and two, and a run
+// split by --shots holds the whole run's photons, shot for shot.
+TEST(Icesat2Run, SixBeamsEachOnItsOwnTrackTheSameForAnyThreadsAndSplit) {
+  const test_support::ScratchDir dir("glaswave_icesat2_beams");
+  nlohmann::json pass = atlas_pass();
+  pass.erase("canopy");
+  pass["terrain"]["soil_reflectance"] = 0.9;
+  pass["track"]["shots"] = 60;
+  pass["sensor"]["beams"] = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};
+  pass["simulation"] = {{"rays_per_shot", 100}, {"max_order", 1}};
+  pass["output"]["netcdf"] = false;
+  const fs::path config = dir.path() / "beams.json";
+  std::ofstream(config) << pass.dump(2);
+  for (const auto& [run, extra] :
+       std::vector<std::pair<std::string, std::string>>{{"one", "--threads 1"},
+                                                        {"two", "--threads 2"},
+                                                        {"first", "--threads 2 --shots 0:25"},
+                                                        {"rest", "--threads 2 --shots 25:60"}})
+    ASSERT_EQ(run_glaswave(config, dir.path() / run, extra, dir.path() / (run + ".txt")), 0)
+        << bytes(dir.path() / (run + ".txt"));
+  // Other tracks give one beam's footprints: several beams there are refused, by check as by run.
+  nlohmann::json points = pass;
+  points["track"] = {{"type", "points"}, {"points", {{{"lat_deg", 10.0}, {"lon_deg", 0.0}}}}};
+  const fs::path points_config = dir.path() / "points.json";
+  std::ofstream(points_config) << points.dump(2);
+  ASSERT_EQ(run_glaswave(points_config, dir.path() / "points", "", dir.path() / "points.txt"), 2);
+  EXPECT_NE(bytes(dir.path() / "points.txt").find("/sensor/beams: several beams fly a pass only"),
+            std::string::npos)
+      << bytes(dir.path() / "points.txt");
+  const std::string check =
+      std::string(GLASWAVE_BINARY) + " check '" + points_config.string() + "' >/dev/null 2>&1";
+  const int status = std::system(check.c_str());
+  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 2);
+
+  const auto values = [&](const std::string& run, const std::string& path) {
+    const hid_t f = H5Fopen((dir.path() / run / "atl03.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    std::vector<double> v = read<double>(f, path, H5T_NATIVE_DOUBLE);
+    H5Fclose(f);
+    return v;
+  };
+  const std::vector<std::string> beams = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};
+  std::vector<double> photons, background, lat, lon;
+  for (const std::string& beam : beams) {
+    for (const char* field : {"h_ph", "lat_ph", "lon_ph", "delta_time", "glaswave_truth_class"}) {
+      const std::string path = "/" + beam + "/heights/" + field;
+      const std::vector<double> whole = values("one", path);
+      EXPECT_EQ(whole, values("two", path)) << path;
+      std::vector<double> split = values("first", path);
+      const std::vector<double> rest = values("rest", path);
+      split.insert(split.end(), rest.begin(), rest.end());
+      EXPECT_EQ(whole, split) << path;
+    }
+    const std::vector<double> truth = values("one", "/" + beam + "/heights/glaswave_truth_class");
+    photons.push_back(static_cast<double>(
+        std::count_if(truth.begin(), truth.end(), [](double c) { return c > 0.0; })));
+    background.push_back(static_cast<double>(truth.size()) - photons.back());
+    lat.push_back(mean_of(values("one", "/" + beam + "/heights/lat_ph")));
+    lon.push_back(mean_of(values("one", "/" + beam + "/heights/lon_ph")));
+  }
+  // Metres a degree at 10 N on WGS84: 110 608 of latitude, 109 640 of longitude.
+  const auto east_m = [&](int a, int b) { return (lon[b] - lon[a]) * 109640.0; };
+  const auto north_m = [&](int a, int b) { return (lat[b] - lat[a]) * 110608.0; };
+  for (int pair = 0; pair < 3; ++pair) {
+    EXPECT_NEAR(east_m(2 * pair, 2 * pair + 1), 90.0, 1.0) << beams[2 * pair];
+    EXPECT_NEAR(north_m(2 * pair, 2 * pair + 1), 2500.0, 5.0) << beams[2 * pair];
+    if (pair > 0) {
+      EXPECT_NEAR(east_m(0, 2 * pair), 3300.0 * pair, 5.0) << beams[2 * pair];
+      EXPECT_NEAR(north_m(0, 2 * pair), 0.0, 5.0) << beams[2 * pair];
+    }
+  }
+  // The sun's background is the same light in either kind of beam (the same field of view,
+  // filter and scene): strong and weak beams count it alike, to 3 standard errors.
+  const double strong_background = background[0] + background[2] + background[4];
+  const double weak_background = background[1] + background[3] + background[5];
+  EXPECT_GT(strong_background, 100.0);
+  EXPECT_NEAR(weak_background / strong_background, 1.0,
+              3.0 * std::sqrt(1.0 / strong_background + 1.0 / weak_background));
+  // A strong beam's shot: E T A_T rho eta / (pi R^2 h nu) = 175 uJ 0.64 0.41 m^2 0.9 0.0675 /
+  // (pi 495.9 km^2 3.734e-19 J) = 9.67 photons (the field of view takes all the beam), a weak
+  // one's 45/175 of it, 2.49. The pulse (0.64 ns) is far shorter than the dead time (3.2 ns): each
+  // of a beam's n channels (16 strong, 4 weak) counts Poisson(mu / n) photons but records at most
+  // one, so a shot records n (1 - exp(-mu / n)) photons (7.26 strong, 1.85 weak; 2.30 had the weak
+  // beam 16 channels) with the variance n p (1 - p); the mean over each kind's 180 shots to 3
+  // standard errors (0.27 and 0.22).
+  for (const bool strong : {true, false}) {
+    const double mu = strong ? 9.67 : 9.67 * 45.0 / 175.0, n = strong ? 16.0 : 4.0;
+    const double p = 1.0 - std::exp(-mu / n);
+    const double recorded =
+        (strong ? photons[0] + photons[2] + photons[4] : photons[1] + photons[3] + photons[5]) /
+        180.0;
+    EXPECT_NEAR(recorded, n * p, 3.0 * std::sqrt(n * p * (1.0 - p) / 180.0))
+        << (strong ? "strong" : "weak");
+  }
 }
 
 }  // namespace

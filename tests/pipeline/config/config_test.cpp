@@ -171,9 +171,13 @@ TEST(PhotonCountingKeys, ReceiverBeamsBackgroundAndGranules) {
             "none");
   EXPECT_THAT(error_of(doc(R"({"sensor": {"receiver": "photon_counting", "beams": ["gt4l"]}})")),
               HasSubstr("/sensor/beams: no beam \"gt4l\""));
+  EXPECT_EQ(parse_config(doc(R"({"sensor": {"receiver": "photon_counting",
+      "beams": ["gt3r", "gt1l"]}})"))
+                .sensor.beams,
+            (std::vector<std::string>{"gt3r", "gt1l"}));
   EXPECT_THAT(
-      error_of(doc(R"({"sensor": {"receiver": "photon_counting", "beams": ["gt1l", "gt1r"]}})")),
-      HasSubstr("/sensor/beams: one beam a run"));
+      error_of(doc(R"({"sensor": {"receiver": "photon_counting", "beams": ["gt1l", "gt1l"]}})")),
+      HasSubstr("/sensor/beams: names \"gt1l\" twice"));
   EXPECT_THAT(error_of(doc(R"({"simulation": {"background": "moon"}})")),
               HasSubstr("/simulation/background: must be"));
   EXPECT_THAT(error_of(doc(R"({"simulation": {"background": {"rate_MHz": -1}}})")),
