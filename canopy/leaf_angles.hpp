@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "canopy/canopy_settings.hpp"
-#include "canopy/turn_trig.hpp"
+#include "core/turn_trig.hpp"
 #include "terrain/local_frame.hpp"
 
 namespace glaswave {

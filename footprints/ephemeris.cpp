@@ -10,7 +10,7 @@
 
 #include "core/csv.hpp"
 #include "core/error.hpp"
-#include "footprints/glas_time.hpp"
+#include "core/glas_time.hpp"
 
 namespace glaswave {
 namespace {

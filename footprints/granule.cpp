@@ -18,9 +18,9 @@
 #include <type_traits>
 
 #include "core/error.hpp"
+#include "core/glas_time.hpp"
 #include "core/input_file.hpp"
 #include "core/netcdf_lock.hpp"
-#include "footprints/glas_time.hpp"
 
 namespace glaswave {
 namespace {

@@ -12,7 +12,7 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "footprints/glas_time.hpp"
+#include "core/glas_time.hpp"
 
 namespace glaswave {
 namespace {
@@ -126,7 +126,7 @@ Track::Track(const TrackSettings& settings, const Terrain& terrain, const Terrai
                           " shots' beams reaches ground with data");
 }
 
-// Every shot's time within the years a track may have (footprints/glas_time.hpp): the products'
+// Every shot's time within the years a track may have (core/glas_time.hpp): the products'
 // times and coverage attributes are written from them. An ephemeris file's rows are checked as
 // they are read.
 void Track::check_times() const {

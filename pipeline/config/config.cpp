@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/glas_time.hpp"
 #include "core/names.hpp"
-#include "footprints/glas_time.hpp"
 #include "pipeline/config/canopy_section.hpp"
 #include "pipeline/config/cross_checks.hpp"
 #include "pipeline/config/json_reader.hpp"

@@ -13,8 +13,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <ctime>
 #include <limits>
 #include <map>
 #include <span>
@@ -27,6 +25,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/glas_time.hpp"
 #include "core/netcdf_lock.hpp"
 #include "core/write_error.hpp"
 #include "pipeline/products/product_fields.hpp"
@@ -57,29 +56,9 @@ constexpr const char* kCrsWkt =
     R"wkt(ANGLEUNIT["degree",0.0174532925199433]],AXIS["geodetic longitude (Lon)",east,ORDER[2],)wkt"
     R"wkt(ANGLEUNIT["degree",0.0174532925199433]],AXIS["ellipsoidal height (h)",up,ORDER[3],)wkt"
     R"wkt(LENGTHUNIT["metre",1]],ID["EPSG",4979]])wkt";
-// Seconds from 1970-01-01T00:00:00Z to the GLAS epoch 2000-01-01T12:00:00Z (UTC as POSIX and
-// CF's standard calendar count it, without leap seconds).
-constexpr double kGlasEpochUnix_s = 946728000.0;
 
 bool is_shot_coordinate(std::string_view name) {
   return name == "shot" || name == "time" || name == "lat" || name == "lon";
-}
-
-// ISO 8601 UTC with microseconds, as ACDD's time attributes take it.
-std::string iso8601_utc(double unix_s) {
-  double whole_s = std::floor(unix_s);
-  auto micro = static_cast<long>(std::llround((unix_s - whole_s) * 1e6));
-  if (micro >= 1000000) {
-    whole_s += 1.0;
-    micro -= 1000000;
-  }
-  const auto time = static_cast<std::time_t>(whole_s);
-  std::tm utc{};
-  gmtime_r(&time, &utc);
-  char text[64];
-  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%06ldZ", utc.tm_year + 1900,
-                utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, micro);
-  return text;
 }
 
 // The smallest and largest finite values seen; empty until one is.
@@ -480,8 +459,9 @@ struct NetcdfWriter::Impl {
     const auto now = std::chrono::system_clock::now();
     const auto micro =
         std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count();
-    return iso8601_utc(static_cast<double>(micro / 1000000) +
-                       static_cast<double>(micro % 1000000) * 1e-6);
+    return format_iso8601_utc_microseconds(
+        static_cast<double>(micro / 1000000 - glas_epoch_unix_s) +
+        static_cast<double>(micro % 1000000) * 1e-6);
   }
 
   void define_dims() {
@@ -799,9 +779,9 @@ struct NetcdfWriter::Impl {
   void define_coverage() const {
     if (!time_s.empty()) {
       put_text(NC_GLOBAL, "global", "time_coverage_start",
-               iso8601_utc(kGlasEpochUnix_s + time_s.min));
+               format_iso8601_utc_microseconds(time_s.min));
       put_text(NC_GLOBAL, "global", "time_coverage_end",
-               iso8601_utc(kGlasEpochUnix_s + time_s.max));
+               format_iso8601_utc_microseconds(time_s.max));
     }
     if (!lat_deg.empty()) {
       put_double("geospatial_lat_min", lat_deg.min);

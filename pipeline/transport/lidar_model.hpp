@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "canopy/turn_trig.hpp"
+#include "core/turn_trig.hpp"
 #include "core/vec3.hpp"
 
 namespace glaswave {

@@ -10,7 +10,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
-#include "footprints/glas_time.hpp"
+#include "core/glas_time.hpp"
 #include "footprints/track.hpp"
 #include "tests/footprints/test_terrains.hpp"
 #include "tests/scratch_dir.hpp"

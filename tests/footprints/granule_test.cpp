@@ -9,7 +9,7 @@
 #include <limits>
 
 #include "core/error.hpp"
-#include "footprints/glas_time.hpp"
+#include "core/glas_time.hpp"
 #include "footprints/track.hpp"
 #include "tests/footprints/granule_files.hpp"
 #include "tests/footprints/test_terrains.hpp"

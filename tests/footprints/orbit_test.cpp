@@ -9,7 +9,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "footprints/glas_time.hpp"
+#include "core/glas_time.hpp"
 
 namespace glaswave {
 namespace {

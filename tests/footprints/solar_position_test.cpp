@@ -10,7 +10,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "footprints/glas_time.hpp"
+#include "core/glas_time.hpp"
 
 namespace glaswave {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "footprints/glas_time.hpp"
+#include "core/glas_time.hpp"
 
 namespace glaswave {
 namespace {

@@ -8,8 +8,8 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "core/glas_time.hpp"
 #include "footprints/ephemeris.hpp"
-#include "footprints/glas_time.hpp"
 #include "footprints/track.hpp"
 #include "tests/footprints/test_terrains.hpp"
 #include "tests/scratch_dir.hpp"

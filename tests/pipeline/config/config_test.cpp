@@ -13,7 +13,6 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
-#include "footprints/glas_time.hpp"
 #include "pipeline/config/presets.hpp"
 #include "tests/pipeline/config/config_test_support.hpp"
 #include "tests/scratch_dir.hpp"
@@ -942,50 +941,6 @@ TEST(Detector, Errors) {
             "/detector/quantum_efficiency");
   EXPECT_THAT(error_of(doc(R"({"detector": {"noise_rms": 1e-8}})")),
               HasSubstr("did you mean \"noise_rms_W\"?"));
-}
-
-// ---- ISO 8601 and the GLAS epoch ------------------------------------------------------------
-
-TEST(GlasTime, ParsesAgainstHandComputedValues) {
-  EXPECT_EQ(parse_iso8601_utc("2000-01-01T12:00:00Z"), 0.0);  // the GLAS epoch itself
-  EXPECT_EQ(parse_iso8601_utc("2000-01-01T00:00:00Z"), -43200.0);
-  // 2000-01-01 to 2005-01-01: 2000 and 2004 are leap years, 366+365+365+365+366 = 1827 days;
-  // 2005-01-01 to 2005-10-21: Jan..Sep = 31+28+31+30+31+30+31+31+30 = 273 days, plus 20 = 293;
-  // 1827 + 293 = 2120 days = 2120 * 86400 s = 183168000 s, both times at 12:00.
-  EXPECT_EQ(parse_iso8601_utc("2005-10-21T12:00:00Z"), 183168000.0);
-  EXPECT_EQ(parse_iso8601_utc("2005-10-21T12:00:00+00:00"), 183168000.0);
-  // 2000 is a leap year: 31 (January) + 29 (February) days to 1 March.
-  EXPECT_EQ(parse_iso8601_utc("2000-03-01T12:00:00Z"), 60.0 * 86400.0);
-  // The Unix epoch: 946728000 s before the GLAS epoch (10957 days and 12 hours).
-  EXPECT_EQ(parse_iso8601_utc("1970-01-01T00:00:00Z"), -(10957.0 * 86400.0 + 43200.0));
-  EXPECT_EQ(parse_iso8601_utc("2000-01-01T12:00:00.25Z"), 0.25);
-  EXPECT_NEAR(parse_iso8601_utc("2003-02-20T01:02:03.123456Z"),
-              // 2000..2002: 366+365+365 = 1096 days; January 31 + 19 days = 50; total 1146 days,
-              // from 12:00 to 01:02:03.123456 is -(10*3600 + 57*60 + 56.876544) s.
-              1146.0 * 86400.0 - (10 * 3600 + 57 * 60 + 56.876544), 1e-6);
-}
-
-TEST(GlasTime, RefusesBadText) {
-  for (const char* text : {"", "2005-10-21", "2005-10-21T12:00:00", "2005-10-21 12:00:00Z",
-                           "2005-10-21T12:00:00+01:00", "2005-13-01T00:00:00Z",
-                           "2005-02-29T00:00:00Z", "2005-10-32T00:00:00Z", "2005-10-21T24:00:00Z",
-                           "2005-10-21T12:60:00Z", "2005-10-21T12:00:60Z", "2005-10-21T12:00:00.Z",
-                           "05-10-21T12:00:00Z", "2005-10-21T12:00:00Zjunk"}) {
-    EXPECT_THROW(parse_iso8601_utc(text), std::invalid_argument) << text;
-  }
-  EXPECT_NO_THROW(parse_iso8601_utc("2004-02-29T00:00:00Z"));
-}
-
-TEST(GlasTime, FormatsAndRoundTrips) {
-  EXPECT_EQ(format_iso8601_utc(0.0), "2000-01-01T12:00:00Z");
-  EXPECT_EQ(format_iso8601_utc(183168000.0), "2005-10-21T12:00:00Z");
-  EXPECT_EQ(format_iso8601_utc(0.25), "2000-01-01T12:00:00.25Z");
-  EXPECT_EQ(format_iso8601_utc(-43200.5), "1999-12-31T23:59:59.5Z");
-  EXPECT_EQ(format_iso8601_utc(59.9999999), "2000-01-01T12:01:00Z");  // rounds to the microsecond
-  for (double s : {-1.0e9, -0.125, 1.0, 1.0e8 + 0.5, 5.0e8}) {
-    EXPECT_NEAR(parse_iso8601_utc(format_iso8601_utc(s)), s, 1e-6) << s;
-  }
-  EXPECT_THROW(format_iso8601_utc(std::numeric_limits<double>::infinity()), std::invalid_argument);
 }
 
 }  // namespace

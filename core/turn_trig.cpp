@@ -1,5 +1,5 @@
 // The table of sines and cosines over one turn.
-#include "canopy/turn_trig.hpp"
+#include "core/turn_trig.hpp"
 
 #include <cmath>
 #include <numbers>

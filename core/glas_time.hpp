@@ -1,10 +1,16 @@
 // Time stamps of the GLAS products: seconds since the GLAS epoch, 2000-01-01T12:00:00Z, counted
-// without leap seconds (every day has 86400 s), to and from ISO 8601 UTC text.
+// without leap seconds (every day has 86400 s), to and from ISO 8601 UTC text. In core because
+// the tracks read times and the product writers write them.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 namespace glaswave {
+
+// The GLAS epoch 2000-01-01T12:00:00Z in seconds since 1970-01-01T00:00:00Z (POSIX time, and CF's
+// standard calendar, count no leap seconds): 10957 days and 12 hours.
+inline constexpr std::int64_t glas_epoch_unix_s = 946728000;
 
 // Parses "YYYY-MM-DDTHH:MM:SS[.fff...](Z|+00:00)" into seconds since 2000-01-01T12:00:00Z,
 // ignoring leap seconds. Only UTC is accepted, so a time stamp never depends on a local zone.
@@ -28,5 +34,10 @@ std::string time_out_of_range(double seconds_since_glas_epoch);
 // fraction (to the microsecond, trailing zeros dropped) only when there is one.
 // Throws std::invalid_argument for a non-finite value or a year outside 0..9999.
 std::string format_iso8601_utc(double seconds_since_glas_epoch);
+
+// Writes "YYYY-MM-DDTHH:MM:SS.ffffffZ", always six digits of fraction, as the NetCDF products'
+// ACDD time attributes are written: the time is taken to POSIX seconds (a double) first, then
+// rounded to the microsecond. Throws std::invalid_argument as format_iso8601_utc does.
+std::string format_iso8601_utc_microseconds(double seconds_since_glas_epoch);
 
 }  // namespace glaswave

@@ -1,6 +1,6 @@
 // ISO 8601 UTC text <-> seconds since the GLAS epoch (2000-01-01T12:00:00Z), leap seconds
 // ignored, with the proleptic Gregorian calendar arithmetic of H. Hinnant's days_from_civil.
-#include "footprints/glas_time.hpp"
+#include "core/glas_time.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -15,7 +15,7 @@ namespace glaswave {
 namespace {
 
 // Days from 1970-01-01 to the given date (proleptic Gregorian).
-std::int64_t days_from_civil(std::int64_t y, int m, int d) {
+constexpr std::int64_t days_from_civil(std::int64_t y, int m, int d) {
   y -= m <= 2;
   const std::int64_t era = (y >= 0 ? y : y - 399) / 400;
   const std::int64_t yoe = y - era * 400;
@@ -44,8 +44,31 @@ int days_in_month(std::int64_t y, int m) {
   return m == 2 && is_leap(y) ? 29 : days[m - 1];
 }
 
-// 2000-01-01T12:00:00Z in seconds since 1970-01-01T00:00:00Z, leap seconds ignored.
-const std::int64_t glas_epoch_unix_s = days_from_civil(2000, 1, 1) * 86400 + 12 * 3600;
+static_assert(days_from_civil(2000, 1, 1) * 86400 + 12 * 3600 == glas_epoch_unix_s);
+
+// "YYYY-MM-DDTHH:MM:SSZ" with the fraction `micro` (0..999999) in six digits or, with `trim`,
+// without its trailing zeros (and none at all when it is 0).
+std::string write_utc(std::int64_t unix_s, std::int64_t micro, bool trim) {
+  const std::int64_t days = unix_s >= 0 ? unix_s / 86400 : -((-unix_s + 86399) / 86400);
+  const std::int64_t second_of_day = unix_s - days * 86400;
+  std::int64_t year = 0;
+  int month = 0, day = 0;
+  civil_from_days(days, year, month, day);
+  if (year < 0 || year > 9999) throw std::invalid_argument("time out of range for ISO 8601");
+
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d", static_cast<int>(year),
+                month, day, static_cast<int>(second_of_day / 3600),
+                static_cast<int>(second_of_day / 60 % 60), static_cast<int>(second_of_day % 60));
+  std::string out = buffer;
+  if (!trim || micro != 0) {
+    std::snprintf(buffer, sizeof buffer, ".%06d", static_cast<int>(micro));
+    std::string fraction = buffer;
+    while (trim && fraction.back() == '0') fraction.pop_back();
+    out += fraction;
+  }
+  return out + "Z";
+}
 
 [[noreturn]] void bad(const std::string& text, const std::string& why) {
   throw std::invalid_argument(
@@ -127,28 +150,24 @@ std::string format_iso8601_utc(double seconds_since_glas_epoch) {
   const double micro_total = std::round(seconds_since_glas_epoch * 1e6);
   if (std::fabs(micro_total) > 4.0e17)  // about ±12700 years: outside 0..9999 anyway
     throw std::invalid_argument("time out of range for ISO 8601");
-  std::int64_t micro = static_cast<std::int64_t>(micro_total) + glas_epoch_unix_s * 1000000;
-  std::int64_t seconds = micro >= 0 ? micro / 1000000 : -((-micro + 999999) / 1000000);
-  const std::int64_t micro_part = micro - seconds * 1000000;
-  std::int64_t days = seconds >= 0 ? seconds / 86400 : -((-seconds + 86399) / 86400);
-  const std::int64_t second_of_day = seconds - days * 86400;
-  std::int64_t year = 0;
-  int month = 0, day = 0;
-  civil_from_days(days, year, month, day);
-  if (year < 0 || year > 9999) throw std::invalid_argument("time out of range for ISO 8601");
+  const std::int64_t micro = static_cast<std::int64_t>(micro_total) + glas_epoch_unix_s * 1000000;
+  const std::int64_t seconds = micro >= 0 ? micro / 1000000 : -((-micro + 999999) / 1000000);
+  return write_utc(seconds, micro - seconds * 1000000, true);
+}
 
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d", static_cast<int>(year),
-                month, day, static_cast<int>(second_of_day / 3600),
-                static_cast<int>(second_of_day / 60 % 60), static_cast<int>(second_of_day % 60));
-  std::string out = buffer;
-  if (micro_part != 0) {
-    std::snprintf(buffer, sizeof buffer, ".%06d", static_cast<int>(micro_part));
-    std::string fraction = buffer;
-    while (fraction.back() == '0') fraction.pop_back();
-    out += fraction;
+std::string format_iso8601_utc_microseconds(double seconds_since_glas_epoch) {
+  if (!std::isfinite(seconds_since_glas_epoch) || std::fabs(seconds_since_glas_epoch) > 4.0e11)
+    throw std::invalid_argument("time out of range for ISO 8601");
+  // The POSIX time as a double, then its fraction rounded: the products' attributes have always
+  // been written so, and must stay the same bits.
+  const double unix_s = static_cast<double>(glas_epoch_unix_s) + seconds_since_glas_epoch;
+  double whole_s = std::floor(unix_s);
+  auto micro = static_cast<std::int64_t>(std::llround((unix_s - whole_s) * 1e6));
+  if (micro >= 1000000) {
+    whole_s += 1.0;
+    micro -= 1000000;
   }
-  return out + "Z";
+  return write_utc(static_cast<std::int64_t>(whole_s), micro, false);
 }
 
 }  // namespace glaswave
