@@ -47,7 +47,7 @@ int main() try {
   std::printf("band  simulated (J)  closed form (J)  ratio\n");
   bool agree = true;
   for (std::size_t b = 0; b < sensor.bands.size(); ++b) {
-    const glaswave::Band& band = sensor.bands[b];
+    const glaswave::LidarBand& band = sensor.bands[b];
     const double expected_J = band.pulse_energy_mJ * 1e-3 * band.atmos_transmission_roundtrip *
                               sensor.telescope_area_m2 * soil_reflectance * cos_alpha * f_fov /
                               (std::numbers::pi * shot.range_m * shot.range_m);

@@ -198,7 +198,7 @@ int debug_ray_command(const Arguments& arguments) {
               static_cast<long long>(ray), static_cast<long long>(shot));
   std::printf("%-6s %-11s %5s %12s %12s %12s %-24s", "path", "event", "order", "east_m", "north_m",
               "up_m", "element");
-  for (const Band& band : config.sensor.bands)
+  for (const LidarBand& band : config.sensor.bands)
     std::printf(" %14s", ("weight_" + band.name).c_str());
   std::printf(" %16s %6s\n", "path_m", "bin");
   const RayDebug debug = debug_ray(config, shot, ray, [](const RayEvent& event) {

@@ -13,6 +13,6 @@ namespace glaswave {
 
 // The canopy of `root`'s "canopy" object, its per-band optics in the order of `bands`; none (bare
 // ground) when the key is absent or null.
-std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Band>& bands);
+std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<LidarBand>& bands);
 
 }  // namespace glaswave

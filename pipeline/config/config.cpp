@@ -29,7 +29,7 @@ constexpr double wgs84_equatorial_radius_m = 6378137.0;
 
 // ---- spectral properties --------------------------------------------------------------------
 
-std::string band_list(const std::vector<Band>& bands) {
+std::string band_list(const std::vector<LidarBand>& bands) {
   std::string list;
   for (std::size_t i = 0; i < bands.size(); ++i) list += (i ? ", " : "") + bands[i].name;
   return list;
@@ -38,7 +38,7 @@ std::string band_list(const std::vector<Band>& bands) {
 // A per-band optical property: one number for every band, or an object keyed by band name that
 // gives every band its own value. Resolved in band order; written to `resolved` as given.
 std::vector<double> spectral(JsonReader& reader, const std::string& key,
-                             const std::vector<Band>& bands) {
+                             const std::vector<LidarBand>& bands) {
   const Key& declared = reader.declared(key, KeyType::spectral);
   const double fallback = declared.default_value.get<double>();
   const Range& range = declared.range;
@@ -59,14 +59,14 @@ std::vector<double> spectral(JsonReader& reader, const std::string& key,
   }
   for (const auto& [name, v] : value.items()) {
     bool known = false;
-    for (const Band& band : bands) known = known || band.name == name;
+    for (const LidarBand& band : bands) known = known || band.name == name;
     if (!known) {
       throw config_error(json_pointer_child(place, name),
                          "unknown band \"" + name + "\"; the bands are " + band_list(bands));
     }
   }
   std::vector<double> values;
-  for (const Band& band : bands) {
+  for (const LidarBand& band : bands) {
     const auto it = value.find(band.name);
     if (it == value.end()) {
       throw config_error(place, "missing band \"" + band.name +
@@ -114,13 +114,13 @@ std::string sensor_preset(const json& given) {
 // The laser's bands, their names unique.
 void read_bands(JsonReader& r, SensorSettings& s) {
   for (JsonReader& b : r.object_array("bands", true)) {
-    Band band;
+    LidarBand band;
     for (const char* key :
          {"name", "wavelength_nm", "pulse_energy_mJ", "atmos_transmission_roundtrip"})
       b.require(key);
     band.name = b.string("name", "");
     if (band.name.empty()) b.fail("name", "must not be empty");
-    for (const Band& other : s.bands)
+    for (const LidarBand& other : s.bands)
       if (other.name == band.name) b.fail("name", "duplicate band name \"" + band.name + "\"");
     band.wavelength_nm = b.number("wavelength_nm");
     band.pulse_energy_mJ = b.number("pulse_energy_mJ");
@@ -231,7 +231,7 @@ void read_vertical_datum(JsonReader& r, TerrainSettings& t) {
 }
 
 // The terrain, which the caller has seen to be given.
-TerrainSettings read_terrain(JsonReader& root, const std::vector<Band>& bands) {
+TerrainSettings read_terrain(JsonReader& root, const std::vector<LidarBand>& bands) {
   TerrainSettings t;
   JsonReader r = root.object("terrain");
   read_fields(
@@ -329,7 +329,8 @@ void check_crown_cover(JsonReader& r, const CanopySettings& c) {
 }
 
 // Energy conservation of a bi-Lambertian leaf: what is not reflected or transmitted is absorbed.
-void check_leaf_optics(JsonReader& r, const CanopySettings& c, const std::vector<Band>& bands) {
+void check_leaf_optics(JsonReader& r, const CanopySettings& c,
+                       const std::vector<LidarBand>& bands) {
   for (std::size_t i = 0; i < bands.size(); ++i) {
     const double sum = c.leaf_reflectance[i] + c.leaf_transmittance[i];
     if (sum > 1.0 + 1e-12) {
@@ -341,7 +342,7 @@ void check_leaf_optics(JsonReader& r, const CanopySettings& c, const std::vector
 
 // The keys every canopy's leaves have (crowns, voxels, point clouds): the leaf angle
 // distribution and the optical properties of leaves and bark, per band.
-KeyHooks leaf_hooks(JsonReader& r, CanopySettings& c, const std::vector<Band>& bands) {
+KeyHooks leaf_hooks(JsonReader& r, CanopySettings& c, const std::vector<LidarBand>& bands) {
   return {
       {"lad", [&] { read_lad(r, c); }},
       {"leaf_reflectance", [&] { c.leaf_reflectance = spectral(r, "leaf_reflectance", bands); }},
@@ -354,7 +355,7 @@ KeyHooks leaf_hooks(JsonReader& r, CanopySettings& c, const std::vector<Band>& b
 }
 
 // canopy.voxels or canopy.point_cloud: measured vegetation, alone in the canopy.
-CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<Band>& bands) {
+CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<LidarBand>& bands) {
   const bool voxels = canopy.has("voxels");
   const char* name = voxels ? "voxels" : "point_cloud";
   for (const std::string& key : canopy.given())
@@ -372,7 +373,7 @@ CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<Band>&
 }
 
 // canopy.facets.materials: each material's optics per band, a leaf where a transmittance is given.
-void read_facet_materials(JsonReader& r, CanopySettings& c, const std::vector<Band>& bands) {
+void read_facet_materials(JsonReader& r, CanopySettings& c, const std::vector<LidarBand>& bands) {
   for (auto& [name, entry] : r.object_map("materials")) {
     FacetMaterialSettings m;
     m.name = name;
@@ -392,7 +393,7 @@ void read_facet_materials(JsonReader& r, CanopySettings& c, const std::vector<Ba
 }
 
 // canopy.facets: facet trees, alone in the canopy.
-CanopySettings read_facet_canopy(JsonReader& canopy, const std::vector<Band>& bands) {
+CanopySettings read_facet_canopy(JsonReader& canopy, const std::vector<LidarBand>& bands) {
   for (const std::string& key : canopy.given())
     if (key != "facets")
       canopy.fail(key,
@@ -411,7 +412,7 @@ CanopySettings read_facet_canopy(JsonReader& canopy, const std::vector<Band>& ba
 
 }  // namespace
 
-std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Band>& bands) {
+std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<LidarBand>& bands) {
   if (!root.has("canopy")) {
     root.resolved()["canopy"] = nullptr;  // bare ground
     return std::nullopt;

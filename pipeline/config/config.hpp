@@ -11,29 +11,17 @@
 
 #include "canopy/canopy_settings.hpp"
 #include "core/error.hpp"
+#include "footprints/lidar_settings.hpp"
 #include "footprints/track_settings.hpp"
 #include "pipeline/config/json_text.hpp"  // read_json_file and apply_override, as load_config
 #include "terrain/terrain_settings.hpp"
 
 namespace glaswave {
 
-struct Band {
-  std::string name;
-  double wavelength_nm = 0.0;
-  double pulse_energy_mJ = 0.0;
-  double atmos_transmission_roundtrip = 1.0;
-};
-
-// The lidar (the seed's Table 2). Defaults are the `north2010` preset.
-struct SensorSettings {
-  std::string preset;  // "north2010", "glas", "gedi" or empty
-  double pulse_sigma_ns = 5.0;
-  double divergence_sigma_rad = 0.00011;  // beam angular RMS width per axis
-  double ifov_rad = 0.0004;               // detector full field of view (top-hat cone)
-  double telescope_area_m2 = 0.709;
-  double bin_ns = 1.0;
-  int bins = 544;
-  std::vector<Band> bands;
+// The sensor: the lidar the transport and the receivers use (the seed's Table 2, with the
+// `north2010` preset's defaults), and what the configuration says beside it.
+struct SensorSettings : LidarSettings {
+  std::string preset;  // "north2010", "glas", "gedi", "atlas" or empty
   // What makes the record: "waveform" (the received waveform and its processing) or
   // "photon_counting" (ICESat-2's photon events; docs/icesat2.md), with the photon-counting
   // receiver's own settings (ATLAS's by default) and its beams.
@@ -66,25 +54,6 @@ struct OutputSettings {
   std::string glas_ellipsoid = "wgs84";       // "wgs84" or "topex": the GLAS granules' heights
   // The ICESat-2 granules (atl03.h5, atl08.h5); absent: on with the photon-counting receiver.
   std::optional<bool> atl03, atl08;
-};
-
-// The detector and digitiser between the received light and the recorded waveform (`"detector"`).
-// Off by default: the waveform is then the noise-free received power. All levels are referred
-// to the detector's input (W of received light), so rx_waveform keeps its unit whatever the gain.
-struct DetectorSettings {
-  // Which receiver makes the record from the returns (pipeline/shot/receiver.hpp): "waveform",
-  // this analog detector and the waveform processing.
-  std::string kind = "waveform";
-  bool enabled = false;
-  double background_W = 0.0;        // mean background light in the field of view (sunlit scene)
-  bool photon_noise = false;        // Poisson statistics of signal and background photons
-  double quantum_efficiency = 1.0;  // photoelectrons per photon, for photon_noise
-  double noise_rms_W = 0.0;         // Gaussian detector (dark and amplifier) noise, RMS
-  double gain = 1.0;                // amplification before the digitiser
-  int bits = 0;                     // digitiser resolution; 0: not digitised
-  // Full scale at the digitiser (its input-referred level is saturation_W / gain): output above
-  // it clips. Required when bits > 0; absent: no saturation.
-  std::optional<double> saturation_W;
 };
 
 struct BrfView {

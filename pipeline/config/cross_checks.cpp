@@ -76,7 +76,7 @@ void check_track_type_keys(const nlohmann::json& document, TrackType type,
   }
 }
 
-void check_band_wavelengths(const std::vector<Band>& bands) {
+void check_band_wavelengths(const std::vector<LidarBand>& bands) {
   for (std::size_t b = 1; b < bands.size(); ++b) {
     for (std::size_t a = 0; a < b; ++a) {
       if (bands[a].wavelength_nm != bands[b].wavelength_nm) continue;

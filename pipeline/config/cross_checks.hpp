@@ -18,7 +18,7 @@ void check_track_type_keys(const nlohmann::json& document, TrackType type,
 
 // Two bands with one wavelength (the products' `band` coordinate would not be unique) are
 // refused at the second one's wavelength_nm.
-void check_band_wavelengths(const std::vector<Band>& bands);
+void check_band_wavelengths(const std::vector<LidarBand>& bands);
 
 void check_across_keys(const nlohmann::json& document, const Config& config);
 

@@ -304,7 +304,7 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
 // its fields applied, checked as the configuration is; a fault is the file's (exit status 3),
 // named by its feature and key.
 std::vector<StandArea> read_stands(const std::string& path, const json& scene_canopy,
-                                   const std::vector<Band>& bands) {
+                                   const std::vector<LidarBand>& bands) {
   std::vector<StandArea> areas;
   for (StandFeature& feature : read_stand_features(path)) {
     const std::string& where = feature.name;

@@ -30,6 +30,6 @@ std::vector<StandFeature> read_stand_features(const std::string& path);
 // per-band optics in the order of `bands`. A fault is the file's (exit status 3), named by its
 // feature and key.
 std::vector<StandArea> read_stands(const std::string& path, const nlohmann::json& scene_canopy,
-                                   const std::vector<Band>& bands);
+                                   const std::vector<LidarBand>& bands);
 
 }  // namespace glaswave

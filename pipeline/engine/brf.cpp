@@ -108,7 +108,7 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
     const double h = tile_half_size_m, pixel_m = config.brf.image_resolution_m;
     image.geotransform = {-h, pixel_m, 0.0, h, 0.0, -pixel_m};
     image.crs = summary.crs;
-    for (const Band& band : config.sensor.bands) image.band_names.push_back(band.name);
+    for (const LidarBand& band : config.sensor.bands) image.band_names.push_back(band.name);
     image.bands = result.image;
     write_json(request.out_dir / "brf.json", summary.document);
     write_geotiff(request.out_dir / "scene.tif", image);

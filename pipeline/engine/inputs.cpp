@@ -15,23 +15,9 @@ std::unique_ptr<Terrain> open_terrain(const Config& config) {
   return at_section("/terrain", [&] { return make_terrain(config.terrain); });
 }
 
-LidarSettings lidar_settings(const SensorSettings& sensor) {
-  LidarSettings lidar;
-  lidar.pulse_sigma_ns = sensor.pulse_sigma_ns;
-  lidar.divergence_sigma_rad = sensor.divergence_sigma_rad;
-  lidar.ifov_rad = sensor.ifov_rad;
-  lidar.telescope_area_m2 = sensor.telescope_area_m2;
-  lidar.bin_ns = sensor.bin_ns;
-  lidar.bins = sensor.bins;
-  for (const Band& band : sensor.bands)
-    lidar.bands.push_back(
-        {band.wavelength_nm, band.pulse_energy_mJ, band.atmos_transmission_roundtrip});
-  return lidar;
-}
-
 ShotSettings shot_settings(const Config& config) {
   ShotSettings settings;
-  settings.lidar = lidar_settings(config.sensor);
+  settings.lidar = config.sensor;  // the sensor's lidar, as the configuration read it
   settings.transport.rays = config.simulation.rays_per_shot;
   settings.transport.max_order = config.simulation.max_order;
   settings.transport.quasi_random = config.simulation.quasi_random;
@@ -69,19 +55,10 @@ ReceiverSettings receiver_settings(const Config& config) {
   ReceiverSettings settings;
   settings.kind = config.sensor.receiver;
   if (settings.kind == "photon_counting") settings.photons = photon_settings(config);
-  settings.lidar = lidar_settings(config.sensor);
+  settings.lidar = config.sensor;
   settings.metrics = config.output.metrics;
   settings.seed = config.seed;
-  if (!config.detector.enabled) return settings;
-  const DetectorSettings& detector = config.detector;
-  Detector::Settings& chain = settings.detector.emplace();
-  chain.background_W = detector.background_W;
-  chain.photon_noise = detector.photon_noise;
-  chain.quantum_efficiency = detector.quantum_efficiency;
-  chain.noise_rms_W = detector.noise_rms_W;
-  chain.gain = detector.gain;
-  chain.bits = detector.bits;
-  chain.saturation_W = detector.saturation_W;
+  if (config.detector.enabled) settings.detector = config.detector;
   return settings;
 }
 
@@ -110,7 +87,7 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
   info.config_json = config.resolved.dump();
   info.seed = config.seed;
   info.shots = shots;
-  for (const Band& band : config.sensor.bands)
+  for (const LidarBand& band : config.sensor.bands)
     info.bands.push_back({band.name, band.wavelength_nm, band.atmos_transmission_roundtrip});
   info.bin_time_ns = lidar.bin_time_ns();
   info.tx_time_ns = lidar.tx_time_ns();

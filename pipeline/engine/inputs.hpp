@@ -18,7 +18,6 @@ namespace glaswave {
 
 std::unique_ptr<Terrain> open_terrain(const Config& config);
 // The shot layer's settings from the configuration's.
-LidarSettings lidar_settings(const SensorSettings& sensor);
 ShotSettings shot_settings(const Config& config);
 ReceiverSettings receiver_settings(const Config& config);
 VegetationSettings vegetation_settings(const Config& config);  // config.canopy must be set

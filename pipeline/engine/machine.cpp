@@ -144,7 +144,7 @@ void check_run(const Config& config) {
   check_outputs(config);
   if (config.output.geojson) {
     std::vector<std::string> band_names;
-    for (const Band& band : config.sensor.bands) band_names.push_back(band.name);
+    for (const LidarBand& band : config.sensor.bands) band_names.push_back(band.name);
     check_footprint_properties(band_names, config.output.footprints_format == "GPKG"
                                                ? FootprintsFormat::gpkg
                                                : FootprintsFormat::geojson);

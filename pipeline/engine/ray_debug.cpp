@@ -31,7 +31,7 @@ RayDebug debug_ray(const Config& config, std::int64_t shot_number, std::int64_t 
   debug.shot_number = shot_number;
   debug.ray = ray;
   debug.rays_per_shot = rays;
-  for (const Band& band : config.sensor.bands) debug.band_names.push_back(band.name);
+  for (const LidarBand& band : config.sensor.bands) debug.band_names.push_back(band.name);
   std::optional<ShotWaveforms> waveforms = at_section(
       "/terrain", [&] { return simulator->simulate_ray(track.footprint(first), ray, observer); });
   if (!waveforms)

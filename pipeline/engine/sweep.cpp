@@ -120,7 +120,7 @@ Variation parse_variation(const std::string& text) {
 namespace {
 
 // sensitivity.csv: one row per case and band, deviations from the base case in percent.
-std::string sensitivity_csv(const std::vector<Band>& bands, const CaseReturns& base,
+std::string sensitivity_csv(const std::vector<LidarBand>& bands, const CaseReturns& base,
                             const std::vector<CaseReturns>& cases) {
   std::ostringstream csv;
   csv << "key,value,band,tr,cr,gr,tr_pct,cr_pct,gr_pct\n";
@@ -141,7 +141,7 @@ std::string sensitivity_csv(const std::vector<Band>& bands, const CaseReturns& b
 std::string sensitivity_markdown(const Config& base_config,
                                  const std::vector<Variation>& variations, const CaseReturns& base,
                                  const std::vector<CaseReturns>& cases) {
-  const std::vector<Band>& bands = base_config.sensor.bands;
+  const std::vector<LidarBand>& bands = base_config.sensor.bands;
   std::ostringstream md;
   for (std::size_t b = 0; b < bands.size(); ++b) {
     md << "## Band " << bands[b].name << "\n\n"

@@ -10,22 +10,14 @@
 #include <span>
 #include <vector>
 
+#include "footprints/lidar_settings.hpp"
+
 namespace glaswave {
 
 class Detector {
  public:
-  // The signal chain, every level in W of received light at the detector's input except
-  // saturation_W, the digitiser's full scale after the gain. The engine fills it from the
-  // configuration's detector.
-  struct Settings {
-    double background_W = 0.0;           // mean background light in the field of view
-    bool photon_noise = false;           // Poisson statistics of signal and background photons
-    double quantum_efficiency = 1.0;     // photoelectrons per photon, for photon_noise
-    double noise_rms_W = 0.0;            // Gaussian detector (dark and amplifier) noise, RMS
-    double gain = 1.0;                   // amplification before the digitiser
-    int bits = 0;                        // digitiser resolution; 0: not digitised
-    std::optional<double> saturation_W;  // full scale; absent: no saturation
-  };
+  // The signal chain, the configuration's `"detector"` as it reads it.
+  using Settings = DetectorSettings;
 
   Detector(const Settings& settings, std::uint64_t seed);
 

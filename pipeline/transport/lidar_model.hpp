@@ -6,29 +6,11 @@
 
 #include "core/turn_trig.hpp"
 #include "core/vec3.hpp"
+#include "footprints/lidar_settings.hpp"
 
 namespace glaswave {
 
 constexpr double speed_of_light_m_s = 299792458.0;
-
-// One band of the lidar as the transport needs it.
-struct LidarBand {
-  double wavelength_nm = 0.0;
-  double pulse_energy_mJ = 0.0;
-  double atmos_transmission_roundtrip = 1.0;
-};
-
-// The lidar's beam, field of view, pulse and digitiser window, as the seed's Table 2 lists
-// them. The engine fills it from the configuration's sensor, which holds the defaults.
-struct LidarSettings {
-  double pulse_sigma_ns = 0.0;
-  double divergence_sigma_rad = 0.0;  // beam angular RMS width per axis
-  double ifov_rad = 0.0;              // detector full field of view (top-hat cone)
-  double telescope_area_m2 = 0.0;
-  double bin_ns = 0.0;
-  int bins = 0;
-  std::vector<LidarBand> bands;
-};
 
 class LidarModel {
  public:

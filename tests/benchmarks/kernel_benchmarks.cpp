@@ -28,7 +28,7 @@ glaswave::LidarModel north2010() {
       {"terrain", {{"plane", {{"origin_lat_deg", 0.0}, {"origin_lon_deg", 0.0}}}}},
       {"track", {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}}},
   };
-  return glaswave::LidarModel(glaswave::lidar_settings(glaswave::parse_config(document).sensor));
+  return glaswave::LidarModel(glaswave::parse_config(document).sensor);
 }
 
 void random_stream(benchmark::State& state) {

@@ -28,7 +28,7 @@ Simulated simulate(const nlohmann::json& document) {
   const double f_fov = 1.0 - std::exp(-s.ifov_rad * s.ifov_rad /
                                       (8.0 * s.divergence_sigma_rad * s.divergence_sigma_rad));
   const double range_m = run.footprints.at(0).range_m;
-  const Band& band = s.bands.at(0);
+  const LidarBand& band = s.bands.at(0);
   const double normalisation_J = band.pulse_energy_mJ * 1e-3 * band.atmos_transmission_roundtrip *
                                  s.telescope_area_m2 * f_fov / (pi * range_m * range_m);
   return {run.records.at(0), run.bin_time_ns, normalisation_J};

@@ -78,7 +78,7 @@ LidarSettings narrow_sensor() {
   sensor.telescope_area_m2 = 0.709;
   sensor.bin_ns = 1.0;
   sensor.bins = 544;
-  sensor.bands = {{1064.0, 1.0, 1.0}};
+  sensor.bands = {{1064.0, 1.0, 1.0, "1064"}};
   return sensor;
 }
 

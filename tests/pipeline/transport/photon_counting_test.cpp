@@ -37,7 +37,7 @@ LidarSettings atlas_sensor(double energy_mJ, double transmission) {
   s.telescope_area_m2 = kAreaM2;
   s.bin_ns = 0.1;
   s.bins = 150;
-  s.bands = {{532.0, energy_mJ, transmission}};
+  s.bands = {{532.0, energy_mJ, transmission, "532"}};
   return s;
 }
 

@@ -25,7 +25,7 @@ inline LidarSettings table2_sensor() {
   sensor.telescope_area_m2 = 0.709;
   sensor.bin_ns = 1.0;
   sensor.bins = 544;
-  sensor.bands = {{532.0, 32.0, 0.8}, {1064.0, 72.0, 0.9}};
+  sensor.bands = {{532.0, 32.0, 0.8, "532"}, {1064.0, 72.0, 0.9, "1064"}};
   return sensor;
 }
 
