@@ -91,6 +91,22 @@ struct Batch {
   std::exception_ptr failure;
 };
 
+// Every rank, in the same order: rank 0 gets the batch's records from every rank.
+void gather_batch(Cluster& cluster, Batch& batch) {
+  cluster.agree(batch.failure);
+  if (cluster.size() == 1) return;
+  std::vector<std::string> parts = cluster.gather(batch.bytes);
+  batch.records.clear();
+  batch.queries = 0;
+  for (const std::string& part : parts) {  // rank 0 only: the others get none
+    std::int64_t part_queries = 0;
+    std::memcpy(&part_queries, part.data(), sizeof part_queries);
+    batch.queries += part_queries;
+    std::size_t offset = sizeof part_queries;
+    while (offset < part.size()) batch.records.push_back(decode_record(part, offset));
+  }
+}
+
 // The one batch loop. Records [first, last) shared among the cluster's processes: each batch is cut
 // into one block per rank, every rank simulates its block, rank 0 gathers the records in order and
 // alone hands them to `consume` and reports progress, while every rank simulates the next batch
@@ -120,21 +136,7 @@ void simulate_batches(Cluster& cluster, const ShotSimulator& simulator, const Tr
       batch.failure = std::current_exception();
     }
   };
-  // Every rank, in the same order: rank 0 gets the batch's records from every rank.
-  auto gather = [&](Batch& batch) {
-    cluster.agree(batch.failure);
-    if (cluster.size() == 1) return;
-    std::vector<std::string> parts = cluster.gather(batch.bytes);
-    batch.records.clear();
-    batch.queries = 0;
-    for (const std::string& part : parts) {  // rank 0 only: the others get none
-      std::int64_t part_queries = 0;
-      std::memcpy(&part_queries, part.data(), sizeof part_queries);
-      batch.queries += part_queries;
-      std::size_t offset = sizeof part_queries;
-      while (offset < part.size()) batch.records.push_back(decode_record(part, offset));
-    }
-  };
+  auto gather = [&](Batch& batch) { gather_batch(cluster, batch); };
 
   Batch current;
   simulate_batch(first, current);

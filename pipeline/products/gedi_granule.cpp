@@ -151,14 +151,20 @@ void GediGranuleWriter::write_shot_ids(Hdf5File& f, const std::string& g,
           {"counter", "Channel number (the beam's place among the eight)"});
 }
 
-void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
-                                       const std::vector<const Shot*>& shots) {
-  const std::string geo = g + "/geolocation/";
-  write_shot_ids(f, g, shots, "Transmit time of the shot, since master_time_epoch");
-  // The waveforms, concatenated; each shot's from its 1-based start index.
+namespace {
+
+// A beam's waveforms, concatenated; each shot's from its 1-based start index.
+struct Concatenated {
   std::vector<float> rx, canopy, ground, tx;
   std::vector<std::uint64_t> rx_start, tx_start;
   std::vector<std::uint16_t> rx_count, tx_count;
+};
+
+template <typename Shot>
+Concatenated concatenate(const std::vector<const Shot*>& shots,
+                         const std::vector<float>& tx_counts) {
+  Concatenated w;
+  auto& [rx, canopy, ground, tx, rx_start, tx_start, rx_count, tx_count] = w;
   for (const Shot* s : shots) {
     rx_start.push_back(rx.size() + 1);
     rx_count.push_back(static_cast<std::uint16_t>(s->rx.size()));
@@ -172,21 +178,28 @@ void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
     truth(canopy, s->rx_canopy);
     truth(ground, s->rx_ground);
     tx_start.push_back(tx.size() + 1);
-    tx_count.push_back(static_cast<std::uint16_t>(tx_counts_.size()));
-    tx.insert(tx.end(), tx_counts_.begin(), tx_counts_.end());
+    tx_count.push_back(static_cast<std::uint16_t>(tx_counts.size()));
+    tx.insert(tx.end(), tx_counts.begin(), tx_counts.end());
   }
-  f.write(g + "/rxwaveform", rx,
+  return w;
+}
+
+// L1B's waveform datasets, the energy and the noise.
+template <typename Shot>
+void write_l1b_waveforms(Hdf5File& f, const std::string& g, const std::vector<const Shot*>& shots,
+                         const Concatenated& w) {
+  f.write(g + "/rxwaveform", w.rx,
           {"counts",
            "The corrected receive (RX) waveforms, concatenated; a shot's are "
            "rx_sample_count samples from rx_sample_start_index (1-based)"});
-  f.write(g + "/rx_sample_start_index", rx_start,
+  f.write(g + "/rx_sample_start_index", w.rx_start,
           {"counter", "The index in rxwaveform of each RX waveform's first sample, from 1"});
-  f.write(g + "/rx_sample_count", rx_count,
+  f.write(g + "/rx_sample_count", w.rx_count,
           {"counter", "The number of samples of each RX waveform"});
-  f.write(g + "/txwaveform", tx, {"counts", "The transmitted (TX) waveforms, concatenated"});
-  f.write(g + "/tx_sample_start_index", tx_start,
+  f.write(g + "/txwaveform", w.tx, {"counts", "The transmitted (TX) waveforms, concatenated"});
+  f.write(g + "/tx_sample_start_index", w.tx_start,
           {"counter", "The index in txwaveform of each TX waveform's first sample, from 1"});
-  f.write(g + "/tx_sample_count", tx_count,
+  f.write(g + "/tx_sample_count", w.tx_count,
           {"counter", "The number of samples of each TX waveform"});
   f.write(g + "/rx_energy", of<float>(shots, [](const Shot& s) { return s.rx_energy; }),
           {"counts", "Integrated energy in the RX waveform after subtracting the noise mean"});
@@ -195,6 +208,13 @@ void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
   f.write(g + "/noise_stddev_corrected",
           of<float>(shots, [](const Shot& s) { return s.noise_stddev; }),
           {"counts", "Noise standard deviation (the samples before the signal begins)"});
+}
+
+// L1B's ancillary epoch and geolocation group.
+template <typename Shot>
+void write_l1b_geolocation(Hdf5File& f, const std::string& g,
+                           const std::vector<const Shot*>& shots) {
+  const std::string geo = g + "/geolocation/";
   f.write(g + "/ancillary/master_time_epoch", std::vector<double>{kGediMasterTimeEpoch},
           {"seconds", "GPS seconds of 2018-01-01T00:00:00Z, the epoch of delta_time"});
   f.write(geo + "shot_number",
@@ -228,22 +248,12 @@ void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
           {"degrees", "The sun's azimuth at the footprint, east of north (ERFA)"});
   f.write(geo + "degrade_flag", of<std::uint8_t>(shots, [](const Shot& s) { return s.degrade; }),
           {"counter", "The granule track's degrade_flag, 0 for a synthetic track"});
-  const std::string truth = g + "/glaswave_truth/";
-  f.group(g + "/glaswave_truth",
-          "The simulation's truth, not a GEDI product field: the parts of rxwaveform last "
-          "scattered by vegetation and by the ground, and the footprint's cover, PAI and height");
-  f.write(
-      truth + "rxwaveform_canopy", canopy,
-      {"counts", "The part of rxwaveform last scattered by vegetation (same indices)", kGediFill});
-  f.write(
-      truth + "rxwaveform_ground", ground,
-      {"counts", "The part of rxwaveform last scattered by the ground (same indices)", kGediFill});
-  f.write(truth + "rx_energy_canopy",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.energy_canopy_J); }),
-          {"J", "Received energy last scattered by vegetation", kGediFill});
-  f.write(truth + "rx_energy_ground",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.energy_ground_J); }),
-          {"J", "Received energy last scattered by the ground", kGediFill});
+}
+
+// The footprint's truth both levels end their glaswave_truth group with.
+template <typename Shot>
+void write_footprint_truth(Hdf5File& f, const std::string& truth,
+                           const std::vector<const Shot*>& shots) {
   f.write(truth + "cover", of<float>(shots, [](const Shot& s) { return or_fill(s.cover); }),
           {"1", "Crown cover over the footprint, beam-weighted", kGediFill});
   f.write(truth + "pai", of<float>(shots, [](const Shot& s) { return or_fill(s.pai); }),
@@ -251,6 +261,33 @@ void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
   f.write(truth + "canopy_height",
           of<float>(shots, [](const Shot& s) { return or_fill(s.height); }),
           {"meters", "Canopy height over the footprint, beam-weighted", kGediFill});
+}
+
+}  // namespace
+
+void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
+                                       const std::vector<const Shot*>& shots) {
+  write_shot_ids(f, g, shots, "Transmit time of the shot, since master_time_epoch");
+  const Concatenated w = concatenate(shots, tx_counts_);
+  write_l1b_waveforms(f, g, shots, w);
+  write_l1b_geolocation(f, g, shots);
+  const std::string truth = g + "/glaswave_truth/";
+  f.group(g + "/glaswave_truth",
+          "The simulation's truth, not a GEDI product field: the parts of rxwaveform last "
+          "scattered by vegetation and by the ground, and the footprint's cover, PAI and height");
+  f.write(
+      truth + "rxwaveform_canopy", w.canopy,
+      {"counts", "The part of rxwaveform last scattered by vegetation (same indices)", kGediFill});
+  f.write(
+      truth + "rxwaveform_ground", w.ground,
+      {"counts", "The part of rxwaveform last scattered by the ground (same indices)", kGediFill});
+  f.write(truth + "rx_energy_canopy",
+          of<double>(shots, [](const Shot& s) { return or_fill(s.energy_canopy_J); }),
+          {"J", "Received energy last scattered by vegetation", kGediFill});
+  f.write(truth + "rx_energy_ground",
+          of<double>(shots, [](const Shot& s) { return or_fill(s.energy_ground_J); }),
+          {"J", "Received energy last scattered by the ground", kGediFill});
+  write_footprint_truth(f, truth, shots);
 }
 
 void GediGranuleWriter::write_l2a_beam(Hdf5File& f, const std::string& g,
@@ -304,13 +341,7 @@ void GediGranuleWriter::write_l2a_beam(Hdf5File& f, const std::string& g,
   f.group(g + "/glaswave_truth",
           "The simulation's truth, not a GEDI product field: the footprint's cover, PAI and "
           "canopy height, beam-weighted");
-  f.write(truth + "cover", of<float>(shots, [](const Shot& s) { return or_fill(s.cover); }),
-          {"1", "Crown cover over the footprint, beam-weighted", kGediFill});
-  f.write(truth + "pai", of<float>(shots, [](const Shot& s) { return or_fill(s.pai); }),
-          {"1", "Plant area index over the footprint, beam-weighted", kGediFill});
-  f.write(truth + "canopy_height",
-          of<float>(shots, [](const Shot& s) { return or_fill(s.height); }),
-          {"meters", "Canopy height over the footprint, beam-weighted", kGediFill});
+  write_footprint_truth(f, truth, shots);
 }
 
 }  // namespace glaswave
