@@ -323,8 +323,10 @@ Icesat2ProductSettings icesat2_product_settings(const Config& config) {
   s.atl03 = config.output.atl03.value_or(true);
   s.atl08 = config.output.atl08.value_or(true);
   s.beams.clear();
+  // A pass's beams fly their own ground tracks about it; another track is the beam's own.
+  const bool pass = config.track.type == TrackType::pass;
   for (const AtlasBeam& beam : select_atlas_beams(config.sensor.beams))
-    s.beams.push_back({beam.name, beam.strong, beam.spot_number});
+    s.beams.push_back({beam.name, beam.strong, beam.spot_number, pass ? beam.across_m : 0.0});
   return s;
 }
 

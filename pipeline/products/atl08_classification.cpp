@@ -202,6 +202,53 @@ Atl08Classes classify_photons(std::span<const CloudPhoton> photons, const Atl08S
   return out;
 }
 
+namespace {
+
+// The photons of one land segment, as its metrics need them.
+struct SegmentPhotons {
+  std::vector<double> ground_along_m, ground_h_m;  // ground photons
+  std::vector<double> canopy_m, canopy_abs_m;      // canopy and top of canopy: above ground, WGS84
+};
+
+// h_te_mean, h_te_median, terrain_slope and h_te_uncertainty from the ground photons.
+void terrain_metrics(LandSegment& segment, const SegmentPhotons& p) {
+  const double n = static_cast<double>(p.ground_h_m.size());
+  const double mean_h = std::accumulate(p.ground_h_m.begin(), p.ground_h_m.end(), 0.0) / n;
+  const double mean_x = std::accumulate(p.ground_along_m.begin(), p.ground_along_m.end(), 0.0) / n;
+  double sxx = 0.0, sxh = 0.0;
+  for (std::size_t i = 0; i < p.ground_h_m.size(); ++i) {
+    sxx += (p.ground_along_m[i] - mean_x) * (p.ground_along_m[i] - mean_x);
+    sxh += (p.ground_along_m[i] - mean_x) * (p.ground_h_m[i] - mean_h);
+  }
+  const double slope = sxx > 0.0 ? sxh / sxx : 0.0;
+  double residual2 = 0.0;
+  for (std::size_t i = 0; i < p.ground_h_m.size(); ++i) {
+    const double r = p.ground_h_m[i] - mean_h - slope * (p.ground_along_m[i] - mean_x);
+    residual2 += r * r;
+  }
+  segment.h_te_mean = mean_h;
+  segment.h_te_median = median(p.ground_h_m);
+  segment.terrain_slope = slope;
+  // The line's two parameters leave n - 2 degrees of freedom.
+  segment.h_te_uncertainty = n > 2.0 ? std::sqrt(residual2 / (n - 2.0)) / std::sqrt(n) : nan;
+}
+
+// h_canopy, canopy_openness, h_mean_canopy and h_mean_canopy_abs from the canopy photons.
+void canopy_metrics(LandSegment& segment, const SegmentPhotons& p) {
+  const std::vector<double>& heights = p.canopy_m;
+  const double n = static_cast<double>(heights.size());
+  segment.h_canopy = quantile(heights, 0.98);
+  const double mean = std::accumulate(heights.begin(), heights.end(), 0.0) / n;
+  double sum2 = 0.0;
+  for (const double h : heights) sum2 += (h - mean) * (h - mean);
+  segment.canopy_openness = n > 1.0 ? std::sqrt(sum2 / (n - 1.0)) : nan;
+  segment.h_mean_canopy = mean;
+  segment.h_mean_canopy_abs =
+      std::accumulate(p.canopy_abs_m.begin(), p.canopy_abs_m.end(), 0.0) / n;
+}
+
+}  // namespace
+
 std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
                                        const Atl08Classes& classes, double first_m, double end_m,
                                        const Atl08Settings& settings) {
@@ -209,38 +256,44 @@ std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
       end_m > first_m ? static_cast<std::size_t>(std::ceil((end_m - first_m) / settings.segment_m))
                       : 0;
   std::vector<LandSegment> segments(count);
-  std::vector<std::vector<double>> canopy(count);
+  std::vector<SegmentPhotons> members(count);
   for (std::size_t i = 0; i < photons.size(); ++i) {
     const double k = std::floor((photons[i].along_m - first_m) / settings.segment_m);
     if (k < 0.0 || k >= static_cast<double>(count)) continue;
     LandSegment& segment = segments[static_cast<std::size_t>(k)];
+    SegmentPhotons& p = members[static_cast<std::size_t>(k)];
     const std::uint8_t c = classes.classes[i];
-    if (c == 1) ++segment.n_te_photons;
+    if (c == 0) ++segment.n_noise_photons;
+    if (c == 1) {
+      ++segment.n_te_photons;
+      p.ground_along_m.push_back(photons[i].along_m);
+      p.ground_h_m.push_back(photons[i].h_m);
+    }
     if (c == 2) ++segment.n_ca_photons;
     if (c == 3) ++segment.n_toc_photons;
-    if (c >= 2)
-      canopy[static_cast<std::size_t>(k)].push_back(photons[i].h_m -
-                                                    classes.ground_at(photons[i].along_m));
+    if (c >= 2) {
+      p.canopy_m.push_back(photons[i].h_m - classes.ground_at(photons[i].along_m));
+      p.canopy_abs_m.push_back(photons[i].h_m);
+    }
   }
   for (std::size_t k = 0; k < count; ++k) {
     LandSegment& segment = segments[k];
     segment.start_m = first_m + static_cast<double>(k) * settings.segment_m;
-    segment.h_te_best_fit = segment.n_te_photons >= settings.min_ground_photons
-                                ? classes.ground_at(segment.start_m + 0.5 * settings.segment_m)
-                                : nan;
-    const std::vector<double>& heights = canopy[k];
-    const double signal = static_cast<double>(heights.size()) + segment.n_te_photons;
-    if (static_cast<int>(heights.size()) < settings.min_canopy_photons ||
-        static_cast<double>(heights.size()) < settings.min_canopy_fraction * signal) {
-      segment.h_canopy = segment.canopy_openness = nan;
-      continue;
-    }
-    segment.h_canopy = quantile(heights, 0.98);
-    const double mean =
-        std::accumulate(heights.begin(), heights.end(), 0.0) / static_cast<double>(heights.size());
-    double sum2 = 0.0;
-    for (const double h : heights) sum2 += (h - mean) * (h - mean);
-    segment.canopy_openness = std::sqrt(sum2 / static_cast<double>(heights.size() - 1));
+    const bool terrain = segment.n_te_photons >= settings.min_ground_photons;
+    segment.h_te_best_fit =
+        terrain ? classes.ground_at(segment.start_m + 0.5 * settings.segment_m) : nan;
+    if (terrain)
+      terrain_metrics(segment, members[k]);
+    else
+      segment.h_te_mean = segment.h_te_median = segment.h_te_uncertainty = segment.terrain_slope =
+          nan;
+    const double canopy = static_cast<double>(members[k].canopy_m.size());
+    const double signal = canopy + segment.n_te_photons;
+    if (canopy < settings.min_canopy_photons || canopy < settings.min_canopy_fraction * signal)
+      segment.h_canopy = segment.canopy_openness = segment.h_mean_canopy =
+          segment.h_mean_canopy_abs = nan;
+    else
+      canopy_metrics(segment, members[k]);
   }
   return segments;
 }

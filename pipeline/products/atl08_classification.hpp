@@ -70,15 +70,22 @@ Atl08Classes classify_photons(std::span<const CloudPhoton> photons, const Atl08S
 struct LandSegment {
   double start_m = 0.0;  // along track
   double h_te_best_fit = 0.0;
+  double h_te_mean = 0.0, h_te_median = 0.0;  // of the ground photons' heights
+  double h_te_uncertainty = 0.0;  // their scatter about the fitted line over sqrt(n_te_photons)
+  double terrain_slope = 0.0;     // the least-squares line's slope through them (dh / d along)
   double h_canopy = 0.0;         // 98th percentile of canopy and top-of-canopy heights above ground
   double canopy_openness = 0.0;  // their standard deviation
+  double h_mean_canopy = 0.0;    // their mean
+  double h_mean_canopy_abs = 0.0;  // the mean of their heights above the ellipsoid
   std::int32_t n_te_photons = 0, n_ca_photons = 0, n_toc_photons = 0;
+  std::int32_t n_noise_photons = 0;  // the segment's photons classified noise
 };
 
 // The land segments covering [first_m, end_m) every segment_m, from the classified photons:
-// h_te_best_fit is the ground surface at the segment's centre, with at least min_ground_photons;
-// the canopy's metrics need min_canopy_photons canopy and top-of-canopy photons and
-// min_canopy_fraction of the segment's signal photons (ground, canopy and top of canopy).
+// h_te_best_fit is the ground surface at the segment's centre, and the ground photons' mean,
+// median, slope and uncertainty, with at least min_ground_photons; the canopy's metrics need
+// min_canopy_photons canopy and top-of-canopy photons and min_canopy_fraction of the segment's
+// signal photons (ground, canopy and top of canopy).
 std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
                                        const Atl08Classes& classes, double first_m, double end_m,
                                        const Atl08Settings& settings);

@@ -7,10 +7,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <type_traits>
+#include <utility>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/glas_time.hpp"
 #include "core/netcdf_lock.hpp"
 
 namespace glaswave {
@@ -48,6 +51,7 @@ hid_t memory_type() {
   if constexpr (std::is_same_v<T, float>) return H5T_NATIVE_FLOAT;
   if constexpr (std::is_same_v<T, std::int64_t>) return H5T_NATIVE_INT64;
   if constexpr (std::is_same_v<T, std::int32_t>) return H5T_NATIVE_INT32;
+  if constexpr (std::is_same_v<T, std::int16_t>) return H5T_NATIVE_INT16;
   if constexpr (std::is_same_v<T, std::int8_t>) return H5T_NATIVE_INT8;
   if constexpr (std::is_same_v<T, std::uint8_t>) return H5T_NATIVE_UINT8;
 }
@@ -58,9 +62,17 @@ hid_t file_type() {
   if constexpr (std::is_same_v<T, float>) return H5T_IEEE_F32LE;
   if constexpr (std::is_same_v<T, std::int64_t>) return H5T_STD_I64LE;
   if constexpr (std::is_same_v<T, std::int32_t>) return H5T_STD_I32LE;
+  if constexpr (std::is_same_v<T, std::int16_t>) return H5T_STD_I16LE;
   if constexpr (std::is_same_v<T, std::int8_t>) return H5T_STD_I8LE;
   if constexpr (std::is_same_v<T, std::uint8_t>) return H5T_STD_U8LE;
 }
+
+// A dataset's attributes, as the data dictionaries give them: units, long_name, contentType
+// (physicalMeasurement, referenceInformation, modelResult, qualityInformation,
+// auxiliaryInformation) and a description (where the simulation's value comes from).
+struct Meta {
+  std::string units, long_name, content_type, description;
+};
 
 class Granule {
  public:
@@ -80,11 +92,11 @@ class Granule {
   }
 
   // A dataset of `rows` x `columns` (columns 0: one dimension), chunked and compressed when
-  // large, with its units and long name.
+  // large, with its attributes; with `fill`, the type's largest value is its _FillValue (the
+  // products' 3.4028235e+38 for float32, 127 for int8).
   template <typename T>
   void dataset(hid_t parent, const std::string& name, const std::vector<T>& values,
-               const std::string& units, const std::string& long_name, std::size_t columns = 0,
-               bool fill = false) const {
+               const Meta& meta, std::size_t columns = 0, bool fill = false) const {
     const std::string what = where_ + ": " + name;
     const hsize_t rows = columns ? values.size() / columns : values.size();
     const hsize_t dims[2] = {rows, static_cast<hsize_t>(columns)};
@@ -97,23 +109,41 @@ class Granule {
       H5Pset_shuffle(properties.get());
       H5Pset_deflate(properties.get(), 4);
     }
-    fill = fill && std::is_same_v<T, float>;  // ATL08's fill value is a float's
-    if (fill) H5Pset_fill_value(properties.get(), H5T_NATIVE_FLOAT, &fill_float);
+    const T fill_value = std::numeric_limits<T>::max();
+    if (fill) H5Pset_fill_value(properties.get(), memory_type<T>(), &fill_value);
     Handle set(H5Dcreate2(parent, name.c_str(), file_type<T>(), space.get(), H5P_DEFAULT,
                           properties.get(), H5P_DEFAULT),
                H5Dclose, what);
     if (!values.empty() &&
         H5Dwrite(set.get(), memory_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0)
       throw run_error(what, "HDF5 could not write it");
-    text_attribute(set.get(), "units", units);
-    text_attribute(set.get(), "long_name", long_name);
+    attributes(set.get(), meta);
     if (fill) {
       Handle scalar(H5Screate(H5S_SCALAR), H5Sclose, what);
-      Handle attribute(H5Acreate2(set.get(), "_FillValue", H5T_IEEE_F32LE, scalar.get(),
+      Handle attribute(H5Acreate2(set.get(), "_FillValue", file_type<T>(), scalar.get(),
                                   H5P_DEFAULT, H5P_DEFAULT),
                        H5Aclose, what);
-      H5Awrite(attribute.get(), H5T_NATIVE_FLOAT, &fill_float);
+      H5Awrite(attribute.get(), memory_type<T>(), &fill_value);
     }
+  }
+
+  // A one-element dataset of fixed-length text (ancillary_data's UTC times).
+  void text_dataset(hid_t parent, const std::string& name, const std::string& text,
+                    const Meta& meta) const {
+    const std::string what = where_ + ": " + name;
+    Handle type(H5Tcopy(H5T_C_S1), H5Tclose, what);
+    H5Tset_size(type.get(), std::max<std::size_t>(text.size(), 1));
+    H5Tset_strpad(type.get(), H5T_STR_NULLTERM);
+    const hsize_t one = 1;
+    Handle space(H5Screate_simple(1, &one, nullptr), H5Sclose, what);
+    Handle properties(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, what);
+    H5Pset_obj_track_times(properties.get(), false);
+    Handle set(H5Dcreate2(parent, name.c_str(), type.get(), space.get(), H5P_DEFAULT,
+                          properties.get(), H5P_DEFAULT),
+               H5Dclose, what);
+    if (H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, text.c_str()) < 0)
+      throw run_error(what, "HDF5 could not write it");
+    attributes(set.get(), meta);
   }
 
   void text_attribute(hid_t object, const std::string& name, const std::string& text) const {
@@ -129,22 +159,14 @@ class Granule {
       throw run_error(what, "HDF5 could not write it");
   }
 
-  void ancillary(const GranuleInfo& info, const std::string& short_name) {
-    text_attribute(file(), "short_name", short_name);
-    text_attribute(file(), "title", "glaswave simulation of ICESat-2 " + short_name);
-    text_attribute(file(), "source", std::string("glaswave ") + GLASWAVE_VERSION);
-    text_attribute(file(), "history", info.history);
-    text_attribute(file(), "glaswave_config", info.config_json);
-    const Handle group_id = group(file(), "ancillary_data");
-    dataset(group_id.get(), "atlas_sdp_gps_epoch", std::vector<double>{atlas_sdp_gps_epoch_s},
-            "seconds since 1980-01-06T00:00:00.000000Z",
-            "ATLAS Standard Data Product epoch (2018-01-01T00:00:00Z) in GPS seconds");
-  }
+  void ancillary(const GranuleInfo& info, const std::string& short_name,
+                 const std::vector<BeamTrack>& beams);
 
   void beam_attributes(hid_t beam_group, const BeamTrack& beam) const {
     text_attribute(beam_group, "atlas_beam_type", beam.strong ? "strong" : "weak");
     text_attribute(beam_group, "atlas_spot_number", std::to_string(beam.spot_number));
     text_attribute(beam_group, "groundtrack_id", beam.name);
+    text_attribute(beam_group, "sc_orientation", "Backward");
   }
 
   void finish() {
@@ -153,10 +175,82 @@ class Granule {
   }
 
  private:
+  void attributes(hid_t object, const Meta& meta) const {
+    text_attribute(object, "units", meta.units);
+    text_attribute(object, "long_name", meta.long_name);
+    if (!meta.content_type.empty()) text_attribute(object, "contentType", meta.content_type);
+    if (!meta.description.empty()) text_attribute(object, "description", meta.description);
+  }
+
   AtomicFile file_;
   std::string where_;
   Handle id_;
 };
+
+const Meta delta_time_meta{"seconds since 2018-01-01", "Elapsed GPS seconds",
+                           "referenceInformation",
+                           "Seconds since the ATLAS Standard Data Product epoch, "
+                           "ancillary_data/atlas_sdp_gps_epoch GPS seconds after the GPS epoch"};
+
+// A field of the simulation's truth, in no real product.
+Meta truth_meta(const std::string& units, const std::string& long_name) {
+  return {units, long_name, "modelResult", "glaswave's own: the simulation's truth"};
+}
+
+// The first and last shot times of all beams (the ATLAS epoch when there is none).
+std::pair<double, double> time_span(const std::vector<BeamTrack>& beams) {
+  double first = std::numeric_limits<double>::infinity(), last = -first;
+  for (const BeamTrack& beam : beams)
+    for (const BeamShot& shot : beam.shots) {
+      first = std::min(first, shot.delta_time_s);
+      last = std::max(last, shot.delta_time_s);
+    }
+  if (first > last) first = last = 0.0;
+  return {first, last};
+}
+
+// The file's attributes, ancillary_data/ (the epoch, the data's first and last times) and
+// orbit_info/ (the spacecraft's orientation; the orbit's numbers, which a simulation has not,
+// their fill value).
+void Granule::ancillary(const GranuleInfo& info, const std::string& short_name,
+                        const std::vector<BeamTrack>& beams) {
+  text_attribute(file(), "short_name", short_name);
+  text_attribute(file(), "identifier_product_type", short_name);
+  text_attribute(file(), "title", "glaswave simulation of ICESat-2 " + short_name);
+  text_attribute(file(), "source", std::string("glaswave ") + GLASWAVE_VERSION);
+  text_attribute(file(), "history", info.history);
+  text_attribute(file(), "glaswave_config", info.config_json);
+  const auto [first_s, last_s] = time_span(beams);
+  const auto utc = [](double delta_time_s) {
+    return format_iso8601_utc_microseconds(delta_time_s + atlas_epoch_since_glas_epoch_s);
+  };
+  const Handle a = group(file(), "ancillary_data");
+  dataset(
+      a.get(), "atlas_sdp_gps_epoch", std::vector<double>{atlas_sdp_gps_epoch_s},
+      {"seconds since 1980-01-06T00:00:00.000000Z", "ATLAS Epoch Offset", "auxiliaryInformation",
+       "GPS seconds between the GPS epoch and the ATLAS Standard Data Product epoch "
+       "(2018-01-01T00:00:00Z); add it to delta_time for GPS seconds"});
+  text_dataset(a.get(), "data_start_utc", utc(first_s),
+               {"1", "Start UTC Time of Granule (CCSDS-A, Actual)", "auxiliaryInformation",
+                "UTC of the first shot"});
+  text_dataset(a.get(), "data_end_utc", utc(last_s),
+               {"1", "End UTC Time of Granule (CCSDS-A, Actual)", "auxiliaryInformation",
+                "UTC of the last shot"});
+  const Handle o = group(file(), "orbit_info");
+  dataset(o.get(), "sc_orient", std::vector<std::int8_t>{atlas_sc_orient_backward},
+          {"1", "Spacecraft Orientation", "modelResult",
+           "0 backward, 1 forward, 2 transition: backward, the beams of footprints/atlas_beams "
+           "(the left beam of each pair strong)"});
+  dataset(o.get(), "sc_orient_time", std::vector<double>{first_s},
+          {"seconds since 2018-01-01", "Time of Last Spacecraft Orientation Change",
+           "referenceInformation", "The run's first shot: one orientation throughout"});
+  dataset(o.get(), "rgt", std::vector<std::int16_t>{std::numeric_limits<std::int16_t>::max()},
+          {"1", "Reference Ground track", "referenceInformation", "Not simulated: the fill value"},
+          0, true);
+  dataset(o.get(), "cycle_number",
+          std::vector<std::int8_t>{std::numeric_limits<std::int8_t>::max()},
+          {"1", "Cycle Number", "referenceInformation", "Not simulated: the fill value"}, 0, true);
+}
 
 std::int32_t segment_of(double along_m) {
   return static_cast<std::int32_t>(std::floor(along_m / segment_20m)) + 1;
@@ -227,63 +321,138 @@ std::vector<T> each_photon(const BeamTrack& beam, F f) {
   return out;
 }
 
+// Each photon's distance across track, right of the reference ground track: its beam's offset
+// plus its own from its shot's footprint centre, across the direction from the shot before to
+// the shot after (in the local east-north plane).
+std::vector<float> across_track(const BeamTrack& beam, const std::vector<std::size_t>& shot) {
+  constexpr double radius_m = 6371008.8, to_rad = std::numbers::pi / 180.0;
+  std::vector<float> across(beam.photons.size());
+  for (std::size_t i = 0; i < across.size(); ++i) {
+    const std::size_t k = shot[i];
+    const BeamShot& before = beam.shots[k > 0 ? k - 1 : k];
+    const BeamShot& after = beam.shots[std::min(k + 1, beam.shots.size() - 1)];
+    const double cos_lat = std::cos(beam.shots[k].lat_deg * to_rad);
+    const double east = (after.lon_deg - before.lon_deg) * cos_lat;
+    const double north = after.lat_deg - before.lat_deg;
+    const double length = std::hypot(east, north);
+    double offset_m = 0.0;
+    if (length > 0.0) {
+      const double d_east = (beam.photons[i].lon_deg - beam.shots[k].lon_deg) * cos_lat;
+      const double d_north = beam.photons[i].lat_deg - beam.shots[k].lat_deg;
+      offset_m = (d_east * north - d_north * east) / length * to_rad * radius_m;
+    }
+    across[i] = static_cast<float>(beam.across_m + offset_m);
+  }
+  return across;
+}
+
 void write_heights(Granule& g, hid_t beam_group, const BeamTrack& beam, const Atl08Classes& c) {
   const Handle heights = g.group(beam_group, "heights");
   const hid_t h = heights.get();
-  g.dataset(h, "h_ph", each_photon<float>(beam, [](auto& p) { return p.h_m; }), "meters",
-            "Photon WGS84 height");
+  g.dataset(h, "h_ph", each_photon<float>(beam, [](auto& p) { return p.h_m; }),
+            {"meters", "Photon WGS84 Height", "physicalMeasurement",
+             "Height above the WGS84 ellipsoid of the point that scattered the photon (the "
+             "simulation's exact one; a background photon's: the range it was timed at)"});
   g.dataset(h, "lat_ph", each_photon<double>(beam, [](auto& p) { return p.lat_deg; }),
-            "degrees_north", "Latitude");
+            {"degrees_north", "Latitude", "modelResult", "Latitude of the photon's point"});
   g.dataset(h, "lon_ph", each_photon<double>(beam, [](auto& p) { return p.lon_deg; }),
-            "degrees_east", "Longitude");
+            {"degrees_east", "Longitude", "modelResult", "Longitude of the photon's point"});
   g.dataset(h, "delta_time", each_photon<double>(beam, [](auto& p) { return p.delta_time_s; }),
-            "seconds since 2018-01-01", "Elapsed GPS seconds");
+            {delta_time_meta.units, delta_time_meta.long_name, delta_time_meta.content_type,
+             "The transmit time of the photon's pulse; " + delta_time_meta.description});
   const std::vector<std::size_t> shot = shot_of_photons(beam);
   std::vector<float> along(beam.photons.size());
   for (std::size_t i = 0; i < along.size(); ++i) {
     const double x = beam.shots[shot[i]].along_m;
     along[i] = static_cast<float>(x - (segment_of(x) - 1) * segment_20m);
   }
-  g.dataset(h, "dist_ph_along", along, "meters", "Distance from the segment's start");
+  g.dataset(h, "dist_ph_along", along,
+            {"meters", "Distance from Segment start", "modelResult",
+             "Along-track distance of the photon's shot from the start of its 20 m segment"});
+  g.dataset(h, "dist_ph_across", across_track(beam, shot),
+            {"meters", "Distance off RGT", "modelResult",
+             "Across-track distance of the photon's point right of the reference ground track: "
+             "the beam's offset (footprints/atlas_beams) plus the point's from its shot's centre"});
+  g.dataset(h, "quality_ph", std::vector<std::int8_t>(beam.photons.size(), 0),
+            {"1", "Photon Quality", "qualityInformation",
+             "0 nominal: the simulation has no afterpulses, impulse-response effects or TEP"});
   std::vector<std::int8_t> confidence(beam.photons.size() * 5, -1);
   for (std::size_t i = 0; i < beam.photons.size(); ++i) confidence[5 * i] = c.confidence[i];
-  g.dataset(h, "signal_conf_ph", confidence, "counts",
-            "Photon signal confidence (land, ocean, sea ice, land ice, inland water): -1 not "
-            "considered, 0 noise, 2 low, 3 medium, 4 high",
+  g.dataset(h, "signal_conf_ph", confidence,
+            {"counts", "Photon Signal Confidence", "modelResult",
+             "Per surface type (land, ocean, sea ice, land ice, inland water): -1 not considered, "
+             "0 noise, 2 low, 3 medium, 4 high; the land column from the classification's noise "
+             "filter (pipeline/products/atl08_classification.hpp)"},
             5);
   g.dataset(h, "glaswave_truth_class",
-            each_photon<std::uint8_t>(beam, [](auto& p) { return p.truth_class; }), "1",
-            "Simulation truth: 0 background, 1 ground, 2 canopy, 3 top of canopy");
+            each_photon<std::uint8_t>(beam, [](auto& p) { return p.truth_class; }),
+            truth_meta("1", "Simulation truth: 0 background, 1 ground, 2 canopy, 3 top of canopy"));
   g.dataset(h, "glaswave_order", each_photon<std::uint8_t>(beam, [](auto& p) { return p.order; }),
-            "1", "Simulation truth: scattering order, 0 for background");
+            truth_meta("1", "Simulation truth: scattering order, 0 for background"));
+}
+
+// A 20 m segment's reference shot: its first (or the nearest before, for an empty one).
+struct SegmentColumns {
+  std::vector<std::int32_t> id;
+  std::vector<double> dist, lat, lon, time;
+  std::vector<float> solar_elevation, dem_h;
+};
+
+SegmentColumns segment_columns(const BeamTrack& beam, const Segments& s) {
+  SegmentColumns c;
+  for (std::size_t j = 0; j < s.ph_cnt.size(); ++j) {
+    c.id.push_back(s.first + static_cast<std::int32_t>(j));
+    c.dist.push_back((c.id.back() - 1) * segment_20m);
+    const BeamShot& shot = beam.shots[s.first_shot[j]];
+    c.lat.push_back(shot.lat_deg);
+    c.lon.push_back(shot.lon_deg);
+    c.time.push_back(shot.delta_time_s);
+    c.solar_elevation.push_back(std::isfinite(shot.solar_elevation_deg)
+                                    ? static_cast<float>(shot.solar_elevation_deg)
+                                    : fill_float);
+    c.dem_h.push_back(static_cast<float>(shot.ground_h_m));
+  }
+  return c;
 }
 
 void write_geolocation(Granule& g, hid_t beam_group, const BeamTrack& beam) {
   const Segments s = segments_of(beam);
+  const SegmentColumns c = segment_columns(beam, s);
   const Handle geolocation = g.group(beam_group, "geolocation");
   const hid_t h = geolocation.get();
-  std::vector<std::int32_t> id(s.ph_cnt.size());
-  std::vector<double> dist(id.size()), lat(id.size()), lon(id.size()), time(id.size());
-  std::vector<float> length(id.size(), static_cast<float>(segment_20m));
-  for (std::size_t j = 0; j < id.size(); ++j) {
-    id[j] = s.first + static_cast<std::int32_t>(j);
-    dist[j] = (id[j] - 1) * segment_20m;
-    const BeamShot& shot = beam.shots[s.first_shot[j]];
-    lat[j] = shot.lat_deg;
-    lon[j] = shot.lon_deg;
-    time[j] = shot.delta_time_s;
-  }
-  g.dataset(h, "segment_id", id, "1", "Along-track segment ID number (20 m, from 1)");
-  g.dataset(h, "ph_index_beg", s.ph_index_beg, "1",
-            "1-based index of the segment's first photon in heights/ (0: none)");
-  g.dataset(h, "segment_ph_cnt", s.ph_cnt, "1", "Number of photons in the segment");
-  g.dataset(h, "segment_dist_x", dist, "meters", "Along-track distance of the segment's start");
-  g.dataset(h, "segment_length", length, "meters", "Along-track length of the segment");
-  g.dataset(h, "reference_photon_lat", lat, "degrees_north",
-            "Latitude of the segment's first shot");
-  g.dataset(h, "reference_photon_lon", lon, "degrees_east",
-            "Longitude of the segment's first shot");
-  g.dataset(h, "delta_time", time, "seconds since 2018-01-01", "Time of the segment's first shot");
+  g.dataset(h, "segment_id", c.id,
+            {"1", "Along-track segment ID number", "referenceInformation",
+             "20 m segments counted from 1 at the track's first shot"});
+  g.dataset(h, "ph_index_beg", s.ph_index_beg,
+            {"1", "Photon Index Begin", "referenceInformation",
+             "1-based index in heights/ of the segment's first photon (0: none)"});
+  g.dataset(h, "segment_ph_cnt", s.ph_cnt,
+            {"1", "Number of photons in a given along-track segment", "referenceInformation",
+             "The segment's photons, consecutive in heights/"});
+  g.dataset(h, "segment_dist_x", c.dist,
+            {"meters", "Along-track distance", "modelResult",
+             "Along-track distance of the segment's start from the track's first shot"});
+  g.dataset(h, "segment_length", std::vector<double>(c.id.size(), segment_20m),
+            {"meters", "Along-track length of segment", "modelResult", "20 m"});
+  g.dataset(h, "reference_photon_lat", c.lat,
+            {"degrees_north", "Latitude", "modelResult", "Latitude of the segment's first shot"});
+  g.dataset(h, "reference_photon_lon", c.lon,
+            {"degrees_east", "Longitude", "modelResult", "Longitude of the segment's first shot"});
+  g.dataset(h, "delta_time", c.time,
+            {delta_time_meta.units, delta_time_meta.long_name, delta_time_meta.content_type,
+             "Time of the segment's first shot; " + delta_time_meta.description});
+  g.dataset(h, "solar_elevation", c.solar_elevation,
+            {"degrees", "solar elevation", "modelResult",
+             "The sun's elevation above the first shot's footprint (footprints/solar_position)"},
+            0, true);
+  g.dataset(h, "sigma_h", std::vector<float>(c.id.size(), 0.0f),
+            {"meters", "height uncertainty", "qualityInformation",
+             "0: the simulation's photons are placed without geolocation error"});
+  const Handle corrections = g.group(beam_group, "geophys_corr");
+  g.dataset(corrections.get(), "dem_h", c.dem_h,
+            {"meters", "DEM Height", "referenceInformation",
+             "The scene's terrain height above WGS84 at the segment's first shot"});
+  g.dataset(corrections.get(), "delta_time", c.time, delta_time_meta);
 }
 
 void write_background(Granule& g, hid_t beam_group, const BeamTrack& beam) {
@@ -294,10 +463,11 @@ void write_background(Granule& g, hid_t beam_group, const BeamTrack& beam) {
     rate.push_back(static_cast<float>(shot.background_rate_Hz));
     time.push_back(shot.delta_time_s);
   }
-  g.dataset(background.get(), "bckgrd_rate", rate, "counts / second",
-            "Background count rate (each shot's; ATLAS's is per 50 shots)");
-  g.dataset(background.get(), "delta_time", time, "seconds since 2018-01-01",
-            "Elapsed GPS seconds");
+  g.dataset(background.get(), "bckgrd_rate", rate,
+            {"counts / second", "Background count rate", "modelResult",
+             "Each shot's, estimated from its photons low in the range window over the 1001 "
+             "shots about it (ATLAS's is per 50 shots)"});
+  g.dataset(background.get(), "delta_time", time, delta_time_meta);
 }
 
 }  // namespace
@@ -313,7 +483,7 @@ void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>
                  const std::vector<Atl08Classes>& classes, const GranuleInfo& info) {
   const std::lock_guard<std::mutex> hdf5(netcdf_library_mutex());  // HDF5 is not thread-safe
   Granule g(path);
-  g.ancillary(info, "ATL03");
+  g.ancillary(info, "ATL03", beams);
   for (std::size_t b = 0; b < beams.size(); ++b) {
     const Handle beam_group = g.group(g.file(), beams[b].name);
     g.beam_attributes(beam_group.get(), beams[b]);
@@ -327,10 +497,31 @@ void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>
 namespace {
 
 struct SegmentTruth {
-  std::vector<float> h_te, h_canopy, cover, pai, lat, lon;
+  std::vector<float> h_te, h_canopy, cover, pai, lat, lon, dem_h, solar_elevation;
   std::vector<double> time;
   std::vector<std::int32_t> id_beg, id_end;
+  std::vector<std::int8_t> night;
 };
+
+// The simulation's place and truth at one segment: `middle` its shot nearest the centre (null
+// when it has none), `n` its shots and the sums of their truths.
+void add_segment_truth(SegmentTruth& t, const BeamShot* middle, double n, double h, double ch,
+                       double cv, double pai) {
+  const auto mean = [&](double sum) { return n > 0.0 ? static_cast<float>(sum / n) : fill_float; };
+  t.h_te.push_back(mean(h));
+  t.h_canopy.push_back(mean(ch));
+  t.cover.push_back(mean(cv));
+  t.pai.push_back(mean(pai));
+  t.lat.push_back(middle ? static_cast<float>(middle->lat_deg) : fill_float);
+  t.lon.push_back(middle ? static_cast<float>(middle->lon_deg) : fill_float);
+  t.time.push_back(middle ? middle->delta_time_s : fill_float);
+  t.dem_h.push_back(middle ? static_cast<float>(middle->ground_h_m) : fill_float);
+  const bool sun = middle && std::isfinite(middle->solar_elevation_deg);
+  t.solar_elevation.push_back(sun ? static_cast<float>(middle->solar_elevation_deg) : fill_float);
+  // ATL08's night_flag: the sun below the horizon.
+  t.night.push_back(sun ? static_cast<std::int8_t>(middle->solar_elevation_deg < 0.0)
+                        : std::numeric_limits<std::int8_t>::max());
+}
 
 // The shots' positions and the simulation's truth averaged over each land segment.
 SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t count,
@@ -352,16 +543,8 @@ SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t co
     if (off < best[j]) best[j] = off, middle[j] = k;
   }
   for (std::size_t j = 0; j < count; ++j) {
-    const bool any = n[j] > 0.0;
-    const auto mean = [&](double sum) { return any ? static_cast<float>(sum / n[j]) : fill_float; };
-    t.h_te.push_back(mean(h[j]));
-    t.h_canopy.push_back(mean(ch[j]));
-    t.cover.push_back(mean(cv[j]));
-    t.pai.push_back(mean(pai[j]));
-    const BeamShot* s = any ? &beam.shots[middle[j]] : nullptr;
-    t.lat.push_back(s ? static_cast<float>(s->lat_deg) : fill_float);
-    t.lon.push_back(s ? static_cast<float>(s->lon_deg) : fill_float);
-    t.time.push_back(s ? s->delta_time_s : fill_float);
+    add_segment_truth(t, n[j] > 0.0 ? &beam.shots[middle[j]] : nullptr, n[j], h[j], ch[j], cv[j],
+                      pai[j]);
     const double start = first_m + static_cast<double>(j) * segment_m;
     t.id_beg.push_back(segment_of(start));
     t.id_end.push_back(segment_of(start + segment_m) - 1);
@@ -385,6 +568,142 @@ std::vector<std::int32_t> as_int(const std::vector<LandSegment>& s,
   return out;
 }
 
+// land_segments/: where and when, the reference surface, the sun, the flags.
+void write_segment_place(Granule& g, hid_t h, const std::vector<LandSegment>& s,
+                         const SegmentTruth& t) {
+  g.dataset(h, "latitude", t.lat,
+            {"degrees_north", "Latitude", "modelResult", "The shot nearest the segment's centre"},
+            0, true);
+  g.dataset(h, "longitude", t.lon,
+            {"degrees_east", "Longitude", "modelResult", "The shot nearest the segment's centre"},
+            0, true);
+  g.dataset(h, "delta_time", t.time,
+            {delta_time_meta.units, delta_time_meta.long_name, delta_time_meta.content_type,
+             "The shot nearest the segment's centre; " + delta_time_meta.description});
+  g.dataset(h, "segment_id_beg", t.id_beg,
+            {"1", "Beginning Segment ID", "referenceInformation", "Its first ATL03 20 m segment"});
+  g.dataset(h, "segment_id_end", t.id_end,
+            {"1", "Ending Segment ID", "referenceInformation", "Its last ATL03 20 m segment"});
+  g.dataset(h, "dem_h", t.dem_h,
+            {"meters", "Reference DEM height", "modelResult",
+             "The scene's terrain height above WGS84 at the shot nearest the centre"},
+            0, true);
+  g.dataset(h, "solar_elevation", t.solar_elevation,
+            {"degrees", "Solar Angle Above or Below the Horizon", "modelResult",
+             "The sun's elevation at the shot nearest the centre"},
+            0, true);
+  g.dataset(h, "night_flag", t.night,
+            {"1", "Night Flag", "modelResult", "1 when the sun is below the horizon, else 0"}, 0,
+            true);
+  std::vector<float> snr;
+  std::vector<std::int32_t> terrain_flg;
+  for (const LandSegment& x : s) {
+    const int signal = x.n_te_photons + x.n_ca_photons + x.n_toc_photons;
+    snr.push_back(x.n_noise_photons > 0 ? static_cast<float>(signal) / x.n_noise_photons
+                                        : fill_float);
+    terrain_flg.push_back(std::isnan(x.h_te_best_fit) ? 1 : 0);
+  }
+  g.dataset(h, "snr", snr,
+            {"1", "Signal to Noise Ratio", "qualityInformation",
+             "The segment's signal photons (ground, canopy, top of canopy) over its noise "
+             "photons, both from the classification"},
+            0, true);
+  g.dataset(h, "terrain_flg", terrain_flg,
+            {"1", "Terrain Flag", "qualityInformation",
+             "1 where the segment has no terrain height (too few ground photons), else 0"});
+}
+
+// land_segments/ flags of what the simulation does not have: no clouds or blowing snow, no
+// atmospheric multiple scattering, no photons removed between ATL03 and ATL08; saturation is
+// not assessed (fill).
+void write_segment_flags(Granule& g, hid_t h, std::size_t count) {
+  const std::vector<std::int8_t> zero(count, 0);
+  g.dataset(h, "msw_flag", zero,
+            {"1", "Multiple Scattering Warning Flag", "qualityInformation",
+             "0 (no layers): the simulated atmosphere has no clouds or blowing snow"});
+  g.dataset(h, "layer_flag", zero,
+            {"1", "Consolidated Cloud Flag", "qualityInformation",
+             "0 (clear): the simulated atmosphere has no clouds or blowing snow"});
+  g.dataset(h, "ph_removal_flag", zero,
+            {"1", "Photon Removal Flag", "qualityInformation",
+             "0: no signal photons are removed between the classification's two steps"});
+  g.dataset(h, "sat_flag", std::vector<std::int8_t>(count, std::numeric_limits<std::int8_t>::max()),
+            {"1", "Saturation Flag", "qualityInformation", "Not assessed: the fill value"}, 0,
+            true);
+}
+
+void write_terrain(Granule& g, hid_t land, const std::vector<LandSegment>& s) {
+  const Handle terrain = g.group(land, "terrain");
+  const hid_t h = terrain.get();
+  g.dataset(h, "h_te_best_fit", as_float(s, &LandSegment::h_te_best_fit),
+            {"meters", "Best fit terrain elevation", "modelResult",
+             "The classification's fitted ground at the segment's centre"},
+            0, true);
+  g.dataset(h, "h_te_mean", as_float(s, &LandSegment::h_te_mean),
+            {"meters", "Mean terrain elevation", "modelResult",
+             "Mean of the segment's ground photons' heights"},
+            0, true);
+  g.dataset(h, "h_te_median", as_float(s, &LandSegment::h_te_median),
+            {"meters", "Median terrain elevation", "modelResult",
+             "Median of the segment's ground photons' heights"},
+            0, true);
+  g.dataset(h, "h_te_uncertainty", as_float(s, &LandSegment::h_te_uncertainty),
+            {"meters", "Uncertainty of the mean terrain height", "qualityInformation",
+             "The ground photons' RMS about their least-squares line over sqrt(n_te_photons); "
+             "no geolocation error is simulated"},
+            0, true);
+  g.dataset(h, "terrain_slope", as_float(s, &LandSegment::terrain_slope),
+            {"1", "Terrain slope", "modelResult",
+             "Along-track slope of the least-squares line through the ground photons"},
+            0, true);
+  g.dataset(h, "n_te_photons", as_int(s, &LandSegment::n_te_photons),
+            {"1", "Number of ground photons", "modelResult", "The segment's ground photons"});
+}
+
+void write_canopy(Granule& g, hid_t land, const std::vector<LandSegment>& s) {
+  const Handle canopy = g.group(land, "canopy");
+  const hid_t h = canopy.get();
+  const std::string above =
+      " of the canopy and top-of-canopy photons' heights above the fitted "
+      "ground";
+  g.dataset(h, "h_canopy", as_float(s, &LandSegment::h_canopy),
+            {"meters", "Relative canopy height", "modelResult", "98th percentile" + above}, 0,
+            true);
+  g.dataset(h, "canopy_openness", as_float(s, &LandSegment::canopy_openness),
+            {"meters", "Canopy openness", "modelResult", "Standard deviation" + above}, 0, true);
+  g.dataset(h, "h_mean_canopy", as_float(s, &LandSegment::h_mean_canopy),
+            {"meters", "Mean relative canopy height", "modelResult", "Mean" + above}, 0, true);
+  g.dataset(h, "h_mean_canopy_abs", as_float(s, &LandSegment::h_mean_canopy_abs),
+            {"meters", "Mean absolute canopy height", "modelResult",
+             "Mean of the canopy and top-of-canopy photons' heights above WGS84"},
+            0, true);
+  g.dataset(h, "h_canopy_uncertainty", std::vector<float>(s.size(), fill_float),
+            {"meters", "Uncertainty of the relative canopy height", "qualityInformation",
+             "Not estimated: the fill value"},
+            0, true);
+  g.dataset(h, "n_ca_photons", as_int(s, &LandSegment::n_ca_photons),
+            {"1", "Number of canopy photons", "modelResult", "The segment's canopy photons"});
+  g.dataset(h, "n_toc_photons", as_int(s, &LandSegment::n_toc_photons),
+            {"1", "Number of top of canopy photons", "modelResult",
+             "The segment's top-of-canopy photons"});
+}
+
+void write_segment_truth(Granule& g, hid_t land, const SegmentTruth& t) {
+  const Handle truth = g.group(land, "glaswave_truth");
+  const hid_t h = truth.get();
+  g.dataset(h, "h_te", t.h_te,
+            truth_meta("meters",
+                       "Simulation truth: mean terrain height at the segment's footprint centres"),
+            0, true);
+  g.dataset(h, "h_canopy", t.h_canopy,
+            truth_meta("meters", "Simulation truth: mean of the footprints' canopy heights"), 0,
+            true);
+  g.dataset(h, "canopy_cover", t.cover,
+            truth_meta("1", "Simulation truth: mean of the footprints' crown cover"), 0, true);
+  g.dataset(h, "pai", t.pai, truth_meta("1", "Simulation truth: mean of the footprints' PAI"), 0,
+            true);
+}
+
 void write_land_segments(Granule& g, hid_t beam_group, const BeamTrack& beam,
                          const Atl08Classes& classes, const Atl08Settings& settings) {
   if (beam.shots.empty()) return;
@@ -395,35 +714,11 @@ void write_land_segments(Granule& g, hid_t beam_group, const BeamTrack& beam,
       land_segments(cloud_of(beam), classes, first_m, end_m, settings);
   const SegmentTruth t = segment_truth(beam, first_m, s.size(), settings.segment_m);
   const Handle land = g.group(beam_group, "land_segments");
-  const hid_t h = land.get();
-  g.dataset(h, "latitude", t.lat, "degrees_north", "Latitude of the segment's centre", 0, true);
-  g.dataset(h, "longitude", t.lon, "degrees_east", "Longitude of the segment's centre", 0, true);
-  g.dataset(h, "delta_time", t.time, "seconds since 2018-01-01", "Time of the segment's centre");
-  g.dataset(h, "segment_id_beg", t.id_beg, "1", "First ATL03 20 m segment of the segment");
-  g.dataset(h, "segment_id_end", t.id_end, "1", "Last ATL03 20 m segment of the segment");
-  const Handle terrain = g.group(h, "terrain");
-  g.dataset(terrain.get(), "h_te_best_fit", as_float(s, &LandSegment::h_te_best_fit), "meters",
-            "Best fit terrain elevation at the segment's centre", 0, true);
-  g.dataset(terrain.get(), "n_te_photons", as_int(s, &LandSegment::n_te_photons), "1",
-            "Number of ground photons");
-  const Handle canopy = g.group(h, "canopy");
-  g.dataset(canopy.get(), "h_canopy", as_float(s, &LandSegment::h_canopy), "meters",
-            "98th percentile of the canopy heights above the terrain", 0, true);
-  g.dataset(canopy.get(), "canopy_openness", as_float(s, &LandSegment::canopy_openness), "meters",
-            "Standard deviation of the canopy heights above the terrain", 0, true);
-  g.dataset(canopy.get(), "n_ca_photons", as_int(s, &LandSegment::n_ca_photons), "1",
-            "Number of canopy photons");
-  g.dataset(canopy.get(), "n_toc_photons", as_int(s, &LandSegment::n_toc_photons), "1",
-            "Number of top of canopy photons");
-  const Handle truth = g.group(h, "glaswave_truth");
-  g.dataset(truth.get(), "h_te", t.h_te, "meters",
-            "Simulation truth: mean terrain height at the segment's footprint centres", 0, true);
-  g.dataset(truth.get(), "h_canopy", t.h_canopy, "meters",
-            "Simulation truth: mean of the footprints' canopy heights", 0, true);
-  g.dataset(truth.get(), "canopy_cover", t.cover, "1",
-            "Simulation truth: mean of the footprints' crown cover", 0, true);
-  g.dataset(truth.get(), "pai", t.pai, "1", "Simulation truth: mean of the footprints' PAI", 0,
-            true);
+  write_segment_place(g, land.get(), s, t);
+  write_segment_flags(g, land.get(), s.size());
+  write_terrain(g, land.get(), s);
+  write_canopy(g, land.get(), s);
+  write_segment_truth(g, land.get(), t);
 }
 
 void write_signal_photons(Granule& g, hid_t beam_group, const BeamTrack& beam,
@@ -447,12 +742,24 @@ void write_signal_photons(Granule& g, hid_t beam_group, const BeamTrack& beam,
   }
   const Handle signal = g.group(beam_group, "signal_photons");
   const hid_t h = signal.get();
-  g.dataset(h, "classed_pc_flag", flag, "1",
-            "Photon land classification: 1 ground, 2 canopy, 3 top of canopy");
-  g.dataset(h, "classed_pc_indx", index, "1", "1-based index of the photon in its ATL03 segment");
-  g.dataset(h, "ph_segment_id", segment, "1", "The photon's ATL03 20 m segment");
-  g.dataset(h, "ph_h", height, "meters", "Photon height above the fitted terrain");
-  g.dataset(h, "delta_time", time, "seconds since 2018-01-01", "Elapsed GPS seconds");
+  g.dataset(h, "classed_pc_flag", flag,
+            {"1", "Photon Land Classification", "modelResult",
+             "1 ground, 2 canopy, 3 top of canopy (the classification's; noise is left out)"});
+  g.dataset(h, "classed_pc_indx", index,
+            {"1", "Classified Photon Index", "referenceInformation",
+             "1-based index of the photon among its ATL03 20 m segment's photons"});
+  g.dataset(h, "ph_segment_id", segment,
+            {"1", "Georeferenced Segment ID", "referenceInformation",
+             "The photon's ATL03 20 m segment (geolocation/segment_id)"});
+  g.dataset(h, "ph_h", height,
+            {"meters", "Height of photon above interpolated ground surface", "modelResult",
+             "The photon's height above the classification's fitted ground at its shot"});
+  g.dataset(h, "d_flag", std::vector<std::int8_t>(flag.size(), 1),
+            {"1", "DRAGANN flag", "qualityInformation",
+             "1: every classified photon passed the noise filter (signal)"});
+  g.dataset(h, "delta_time", time,
+            {delta_time_meta.units, delta_time_meta.long_name, delta_time_meta.content_type,
+             "The transmit time of the photon's pulse; " + delta_time_meta.description});
 }
 
 }  // namespace
@@ -462,7 +769,7 @@ void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>
                  const GranuleInfo& info) {
   const std::lock_guard<std::mutex> hdf5(netcdf_library_mutex());  // HDF5 is not thread-safe
   Granule g(path);
-  g.ancillary(info, "ATL08");
+  g.ancillary(info, "ATL08", beams);
   for (std::size_t b = 0; b < beams.size(); ++b) {
     const Handle beam_group = g.group(g.file(), beams[b].name);
     g.beam_attributes(beam_group.get(), beams[b]);

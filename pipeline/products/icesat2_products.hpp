@@ -36,8 +36,9 @@ struct BeamShot {
   double ground_h_m = 0.0;       // the terrain at the footprint centre
   double canopy_height_m = 0.0;  // the simulation's truth over the footprint
   double canopy_cover = 0.0, pai = 0.0;
-  double background_rate_Hz = 0.0;  // the background photons' rate in the receiver (ATL03's
-                                    // bckgrd_atlas/bckgrd_rate): measured by ATLAS, here known
+  double background_rate_Hz = 0.0;   // the background photons' rate in the receiver (ATL03's
+                                     // bckgrd_atlas/bckgrd_rate): measured by ATLAS, here known
+  double solar_elevation_deg = 0.0;  // the sun above the footprint's horizon (NaN: unknown)
   std::uint32_t first_photon = 0, photon_count = 0;  // its photons in BeamTrack::photons
 };
 
@@ -45,7 +46,8 @@ struct BeamShot {
 struct BeamTrack {
   std::string name;  // gt1l ... gt3r
   bool strong = true;
-  int spot_number = 1;  // ATLAS's spot, 1-6
+  int spot_number = 1;    // ATLAS's spot, 1-6
+  double across_m = 0.0;  // its ground track right of the reference ground track's
   std::vector<BeamShot> shots;
   std::vector<BeamPhoton> photons;
 };
@@ -55,7 +57,12 @@ struct GranuleBeam {
   std::string name = "gt2l";
   bool strong = true;
   int spot_number = 3;
+  double across_m = 0.0;  // its ground track right of the reference ground track's
 };
+
+// ATL03's orbit_info/sc_orient: glaswave's beams are those of the "backward" orientation
+// (footprints/atlas_beams.hpp), the left beam of each pair strong.
+inline constexpr std::int8_t atlas_sc_orient_backward = 0;
 
 // Which ICESat-2 granules a run writes, and for which beams (in the granules' order). With
 // several beams a record belongs to the one whose spot number is its ShotRecord::beam; one beam
@@ -72,19 +79,25 @@ struct GranuleInfo {
 };
 
 // DIR/atl03.h5. Per beam: heights/{h_ph, lat_ph, lon_ph, delta_time, dist_ph_along,
-// signal_conf_ph (photons x 5 surface types, the land column from the classification, -1 "not
-// considered" in the others), glaswave_truth_class, glaswave_order}; geolocation/ 20 m segments
-// {segment_id (1-based from the track start), ph_index_beg (1-based, 0 when empty),
-// segment_ph_cnt, segment_dist_x, segment_length, reference_photon_lat, reference_photon_lon,
-// delta_time}; bckgrd_atlas/{bckgrd_rate, delta_time} per shot; ancillary_data/atlas_sdp_gps_epoch.
-// Throws Error (run) on a failed write.
+// dist_ph_across, quality_ph, signal_conf_ph (photons x 5 surface types, the land column from the
+// classification, -1 "not considered" in the others), glaswave_truth_class, glaswave_order};
+// geolocation/ 20 m segments {segment_id (1-based from the track start), ph_index_beg (1-based,
+// 0 when empty), segment_ph_cnt, segment_dist_x, segment_length, reference_photon_lat,
+// reference_photon_lon, delta_time, solar_elevation, sigma_h}; geophys_corr/{dem_h, delta_time};
+// bckgrd_atlas/{bckgrd_rate, delta_time} per shot. Both granules: ancillary_data/
+// {atlas_sdp_gps_epoch, data_start_utc, data_end_utc}, orbit_info/{sc_orient, sc_orient_time,
+// rgt, cycle_number} (docs/icesat2.md lists each field's source). Throws Error (run) on a failed
+// write.
 void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>& beams,
                  const std::vector<Atl08Classes>& classes, const GranuleInfo& info);
 
 // DIR/atl08.h5. Per beam: land_segments/{latitude, longitude, delta_time, segment_id_beg,
-// segment_id_end, terrain/{h_te_best_fit, n_te_photons}, canopy/{h_canopy, canopy_openness,
-// n_ca_photons, n_toc_photons}, glaswave_truth/{h_te, h_canopy, canopy_cover, pai}};
-// signal_photons/{classed_pc_flag, classed_pc_indx, ph_segment_id, ph_h, delta_time}.
+// segment_id_end, dem_h, solar_elevation, snr, night_flag, terrain_flg, msw_flag, layer_flag,
+// ph_removal_flag, sat_flag, terrain/{h_te_best_fit, h_te_mean, h_te_median, h_te_uncertainty,
+// terrain_slope, n_te_photons}, canopy/{h_canopy, canopy_openness, h_mean_canopy,
+// h_mean_canopy_abs, h_canopy_uncertainty, n_ca_photons, n_toc_photons}, glaswave_truth/{h_te,
+// h_canopy, canopy_cover, pai}}; signal_photons/{classed_pc_flag, classed_pc_indx, ph_segment_id,
+// ph_h, d_flag, delta_time}.
 void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>& beams,
                  const std::vector<Atl08Classes>& classes, const Atl08Settings& settings,
                  const GranuleInfo& info);
