@@ -228,6 +228,9 @@ void terrain_metrics(LandSegment& segment, const SegmentPhotons& p) {
   }
   segment.h_te_mean = mean_h;
   segment.h_te_median = median(p.ground_h_m);
+  const auto [low, high] = std::minmax_element(p.ground_h_m.begin(), p.ground_h_m.end());
+  segment.h_te_min = *low;
+  segment.h_te_max = *high;
   segment.terrain_slope = slope;
   // The line's two parameters leave n - 2 degrees of freedom.
   segment.h_te_uncertainty = n > 2.0 ? std::sqrt(residual2 / (n - 2.0)) / std::sqrt(n) : nan;
@@ -243,8 +246,20 @@ void canopy_metrics(LandSegment& segment, const SegmentPhotons& p) {
   for (const double h : heights) sum2 += (h - mean) * (h - mean);
   segment.canopy_openness = n > 1.0 ? std::sqrt(sum2 / (n - 1.0)) : nan;
   segment.h_mean_canopy = mean;
+  const auto [low, high] = std::minmax_element(heights.begin(), heights.end());
+  segment.h_min_canopy = *low;
+  segment.h_max_canopy = *high;
+  segment.h_median_canopy = median(heights);
+  for (std::size_t q = 0; q < segment.canopy_h_metrics.size(); ++q)
+    segment.canopy_h_metrics[q] = quantile(heights, 0.10 + 0.05 * static_cast<double>(q));
   segment.h_mean_canopy_abs =
       std::accumulate(p.canopy_abs_m.begin(), p.canopy_abs_m.end(), 0.0) / n;
+}
+
+void no_canopy(LandSegment& segment) {
+  segment.h_canopy = segment.canopy_openness = segment.h_mean_canopy = segment.h_mean_canopy_abs =
+      segment.h_min_canopy = segment.h_median_canopy = segment.h_max_canopy = nan;
+  segment.canopy_h_metrics.fill(nan);
 }
 
 }  // namespace
@@ -285,13 +300,12 @@ std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
     if (terrain)
       terrain_metrics(segment, members[k]);
     else
-      segment.h_te_mean = segment.h_te_median = segment.h_te_uncertainty = segment.terrain_slope =
-          nan;
+      segment.h_te_mean = segment.h_te_median = segment.h_te_min = segment.h_te_max =
+          segment.h_te_uncertainty = segment.terrain_slope = nan;
     const double canopy = static_cast<double>(members[k].canopy_m.size());
     const double signal = canopy + segment.n_te_photons;
     if (canopy < settings.min_canopy_photons || canopy < settings.min_canopy_fraction * signal)
-      segment.h_canopy = segment.canopy_openness = segment.h_mean_canopy =
-          segment.h_mean_canopy_abs = nan;
+      no_canopy(segment);
     else
       canopy_metrics(segment, members[k]);
   }

@@ -6,6 +6,7 @@
 // describes them, simplified and stated below.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -71,12 +72,15 @@ struct LandSegment {
   double start_m = 0.0;  // along track
   double h_te_best_fit = 0.0;
   double h_te_mean = 0.0, h_te_median = 0.0;  // of the ground photons' heights
+  double h_te_min = 0.0, h_te_max = 0.0;
   double h_te_uncertainty = 0.0;  // their scatter about the fitted line over sqrt(n_te_photons)
   double terrain_slope = 0.0;     // the least-squares line's slope through them (dh / d along)
   double h_canopy = 0.0;         // 98th percentile of canopy and top-of-canopy heights above ground
   double canopy_openness = 0.0;  // their standard deviation
   double h_mean_canopy = 0.0;    // their mean
-  double h_mean_canopy_abs = 0.0;  // the mean of their heights above the ellipsoid
+  double h_min_canopy = 0.0, h_median_canopy = 0.0, h_max_canopy = 0.0;
+  std::array<double, 18> canopy_h_metrics{};  // their 10th, 15th, ..., 95th percentiles
+  double h_mean_canopy_abs = 0.0;             // the mean of their heights above the ellipsoid
   std::int32_t n_te_photons = 0, n_ca_photons = 0, n_toc_photons = 0;
   std::int32_t n_noise_photons = 0;  // the segment's photons classified noise
 };

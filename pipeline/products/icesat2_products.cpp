@@ -652,12 +652,41 @@ void write_terrain(Granule& g, hid_t land, const std::vector<LandSegment>& s) {
              "The ground photons' RMS about their least-squares line over sqrt(n_te_photons); "
              "no geolocation error is simulated"},
             0, true);
+  g.dataset(h, "h_te_min", as_float(s, &LandSegment::h_te_min),
+            {"meters", "Minimum terrain elevation", "modelResult",
+             "Lowest of the segment's ground photons' heights"},
+            0, true);
+  g.dataset(h, "h_te_max", as_float(s, &LandSegment::h_te_max),
+            {"meters", "Maximum terrain elevation", "modelResult",
+             "Highest of the segment's ground photons' heights"},
+            0, true);
   g.dataset(h, "terrain_slope", as_float(s, &LandSegment::terrain_slope),
             {"1", "Terrain slope", "modelResult",
              "Along-track slope of the least-squares line through the ground photons"},
             0, true);
   g.dataset(h, "n_te_photons", as_int(s, &LandSegment::n_te_photons),
             {"1", "Number of ground photons", "modelResult", "The segment's ground photons"});
+}
+
+// canopy/'s distribution of the canopy photons' heights above the ground: its least, median and
+// greatest, and canopy_h_metrics (segments x 18: the 10th, 15th, ..., 95th percentiles).
+void write_canopy_distribution(Granule& g, hid_t h, const std::vector<LandSegment>& s,
+                               const std::string& above) {
+  g.dataset(h, "h_min_canopy", as_float(s, &LandSegment::h_min_canopy),
+            {"meters", "Minimum relative canopy height", "modelResult", "Least" + above}, 0, true);
+  g.dataset(h, "h_median_canopy", as_float(s, &LandSegment::h_median_canopy),
+            {"meters", "Median relative canopy height", "modelResult", "Median" + above}, 0, true);
+  g.dataset(h, "h_max_canopy", as_float(s, &LandSegment::h_max_canopy),
+            {"meters", "Maximum relative canopy height", "modelResult", "Greatest" + above}, 0,
+            true);
+  std::vector<float> metrics;
+  for (const LandSegment& x : s)
+    for (const double v : x.canopy_h_metrics)
+      metrics.push_back(std::isnan(v) ? fill_float : static_cast<float>(v));
+  g.dataset(h, "canopy_h_metrics", metrics,
+            {"meters", "Relative canopy height metrics", "modelResult",
+             "The 10th, 15th, ..., 95th percentiles" + above},
+            18, true);
 }
 
 void write_canopy(Granule& g, hid_t land, const std::vector<LandSegment>& s) {
@@ -677,6 +706,7 @@ void write_canopy(Granule& g, hid_t land, const std::vector<LandSegment>& s) {
             {"meters", "Mean absolute canopy height", "modelResult",
              "Mean of the canopy and top-of-canopy photons' heights above WGS84"},
             0, true);
+  write_canopy_distribution(g, h, s, above);
   g.dataset(h, "h_canopy_uncertainty", std::vector<float>(s.size(), fill_float),
             {"meters", "Uncertainty of the relative canopy height", "qualityInformation",
              "Not estimated: the fill value"},

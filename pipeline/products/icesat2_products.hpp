@@ -93,9 +93,11 @@ void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>
 
 // DIR/atl08.h5. Per beam: land_segments/{latitude, longitude, delta_time, segment_id_beg,
 // segment_id_end, dem_h, solar_elevation, snr, night_flag, terrain_flg, msw_flag, layer_flag,
-// ph_removal_flag, sat_flag, terrain/{h_te_best_fit, h_te_mean, h_te_median, h_te_uncertainty,
-// terrain_slope, n_te_photons}, canopy/{h_canopy, canopy_openness, h_mean_canopy,
-// h_mean_canopy_abs, h_canopy_uncertainty, n_ca_photons, n_toc_photons}, glaswave_truth/{h_te,
+// ph_removal_flag, sat_flag, terrain/{h_te_best_fit, h_te_mean, h_te_median, h_te_min, h_te_max,
+// h_te_uncertainty, terrain_slope, n_te_photons}, canopy/{h_canopy, canopy_openness,
+// h_mean_canopy, h_mean_canopy_abs, h_min_canopy, h_median_canopy, h_max_canopy,
+// canopy_h_metrics (segments x 18), h_canopy_uncertainty, n_ca_photons, n_toc_photons},
+// glaswave_truth/{h_te,
 // h_canopy, canopy_cover, pai}}; signal_photons/{classed_pc_flag, classed_pc_indx, ph_segment_id,
 // ph_h, d_flag, delta_time}.
 void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>& beams,

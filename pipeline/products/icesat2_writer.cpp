@@ -23,8 +23,8 @@ double distance_m(const BeamShot& a, const BeamShot& b) {
   const double m = wgs84_a_m * (1.0 - wgs84_e2) / (w2 * std::sqrt(w2));
   const double n = wgs84_a_m / std::sqrt(w2);
   const double north = m * (b.lat_deg - a.lat_deg) * to_rad;
-  const double east =
-      n * std::sqrt(1.0 - sin_lat * sin_lat) * std::remainder(b.lon_deg - a.lon_deg, 360.0) * to_rad;
+  const double east = n * std::sqrt(1.0 - sin_lat * sin_lat) *
+                      std::remainder(b.lon_deg - a.lon_deg, 360.0) * to_rad;
   return std::hypot(north, east);
 }
 

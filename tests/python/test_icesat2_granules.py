@@ -22,7 +22,8 @@ copied) from:
   seq_len within a segment, dist_ph_along + cumsum(segment_length) from 0, dist_ph_across,
   quality_ph, solar_elevation per segment; joined on (ph_segment_id, classed_pc_indx) to ATL08's
   signal_photons {ph_segment_id, classed_pc_indx, classed_pc_flag, ph_h, d_flag, delta_time};
-  R/ATL08_seg_attributes_dt.R's defaults h_canopy, canopy_openness, h_te_mean, terrain_slope.
+  R/ATL08_seg_attributes_dt.R's defaults h_canopy, canopy_openness, h_te_mean, terrain_slope,
+  and canopy_h_metrics (segments x 18), h_median_canopy, h_te_median among the metrics it maps.
 - icepyx, icesat2py/icepyx icepyx/core/read.py: the root attribute identifier_product_type, the
   variables it always adds (orbit_info/sc_orient, rgt, cycle_number; ancillary_data/
   atlas_sdp_gps_epoch, data_start_utc and data_end_utc as numpy datetime64).
@@ -332,6 +333,8 @@ def test_land_segments_are_their_photons_statistics(granules):
             t = land["terrain"]
             assert t["h_te_mean"][k] == pytest.approx(h.mean(), abs=2e-3)
             assert t["h_te_median"][k] == pytest.approx(np.median(h), abs=2e-3)
+            assert t["h_te_min"][k] == pytest.approx(h.min(), abs=2e-3)
+            assert t["h_te_max"][k] == pytest.approx(h.max(), abs=2e-3)
             slope, intercept = np.polyfit(x, h, 1)
             assert t["terrain_slope"][k] == pytest.approx(slope, abs=1e-4)
             residual = h - (slope * x + intercept)
@@ -350,6 +353,14 @@ def test_land_segments_are_their_photons_statistics(granules):
                 assert c["h_mean_canopy"][k] == pytest.approx(ph_h[canopy].mean(), abs=2e-3)
                 assert c["canopy_openness"][k] == pytest.approx(ph_h[canopy].std(ddof=1),
                                                                 abs=2e-3)
+                for name, value in (("h_min_canopy", ph_h[canopy].min()),
+                                    ("h_median_canopy", np.median(ph_h[canopy])),
+                                    ("h_max_canopy", ph_h[canopy].max())):
+                    assert c[name][k] == pytest.approx(value, abs=2e-3), name
+                metrics = dataset(c, "canopy_h_metrics", "f4", ndim=2)
+                assert metrics.shape == (len(land["longitude"]), 18)
+                np.testing.assert_allclose(
+                    metrics[k], np.percentile(ph_h[canopy], np.arange(10, 96, 5)), atol=2e-3)
                 abs_h = p["h"][joined[canopy]].astype(np.float64)
                 assert c["h_mean_canopy_abs"][k] == pytest.approx(abs_h.mean(), abs=2e-3)
             checked += 1
