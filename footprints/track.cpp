@@ -257,6 +257,13 @@ bool Track::place_spacecraft(std::int64_t shot, int beam, Footprint& f) const {
   return true;
 }
 
+int Track::beam_index(int beam) const {
+  if (beams_.empty()) return 0;
+  for (std::size_t k = 0; k < beams_.size(); ++k)
+    if (beams_[k].beam == beam) return static_cast<int>(k);
+  throw std::out_of_range("beam " + std::to_string(beam) + " does not fly this pass");
+}
+
 Footprint Track::locate_shot(std::int64_t shot, int beam) const {
   Footprint f;
   f.shot_number = shot;

@@ -110,6 +110,9 @@ class Track {
   // The footprint of any shot of the sequence, kept or not, 0 <= shot_number < sequence_length(),
   // by the beam of index `beam` (0 <= beam < beams_per_shot()).
   Footprint locate_shot(std::int64_t shot_number, int beam = 0) const;
+  // The index of the beam whose footprints carry `beam` (Footprint::beam), for locate_shot: 0 on
+  // a track of one beam. Throws std::out_of_range for a beam the pass has not.
+  int beam_index(int beam) const;
 
  private:
   // Refuses a shot whose time is not finite or outside the years a track may have.

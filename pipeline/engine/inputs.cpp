@@ -27,6 +27,8 @@ ShotSettings shot_settings(const Config& config) {
   settings.transport.seed = config.seed;
   settings.soil_reflectance = config.terrain.soil_reflectance;
   settings.roughness = config.terrain.roughness;
+  // Photon counting's 10 kHz footprints overlap almost entirely: they share their stretch's scene.
+  if (config.sensor.receiver == "photon_counting") settings.stretch_shots = stretch_shots;
   return settings;
 }
 

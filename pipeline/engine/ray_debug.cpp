@@ -27,6 +27,7 @@ RayDebug debug_ray(const Config& config, std::int64_t shot_number, std::int64_t 
                                           std::to_string(rays) + " rays (0 to " +
                                           std::to_string(rays - 1) + ")");
   const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
+  simulator->share_scenes_along(track);  // the ray as it ran in the shot
   RayDebug debug;
   debug.shot_number = shot_number;
   debug.ray = ray;

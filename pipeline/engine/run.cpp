@@ -185,6 +185,7 @@ std::unique_ptr<RunSetup> set_up(const Config& config, const RunRequest& request
   // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
   setup->track = plan_track(config, *setup->terrain);
   const Track& track = *setup->track;
+  setup->simulator->share_scenes_along(track);
   const std::int64_t length = track.sequence_length();
   const auto selected =
       track.records_of_shots(request.first_shot.value_or(0), request.last_shot.value_or(length));

@@ -31,6 +31,7 @@ CaseReturns simulate_case(const SweepRequest& request, const std::string& key,
   const std::unique_ptr<Track> planned = plan_track(config, *terrain);
   const Track& track = *planned;
   const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
+  simulator->share_scenes_along(track);  // as a run does
   const std::size_t bands = config.sensor.bands.size();
   CaseReturns returns{key, value, std::vector<double>(bands, 0.0), std::vector<double>(bands, 0.0),
                       std::vector<double>(bands, 0.0)};

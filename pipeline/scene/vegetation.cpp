@@ -1,49 +1,150 @@
 // The footprint's truth, measured along vertical lines through the scene.
 #include "pipeline/scene/vegetation.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
 
 namespace glaswave {
 
-VegetationTruth measure_vegetation(const Scene& scene, double sigma_m) {
-  VegetationTruth truth;
-  if (!scene.has_volumes()) return truth;
-  constexpr int half_nodes = 20;  // a 41 x 41 grid out to 3 sigma
-  const double step_m = 3.0 * sigma_m / half_nodes;
-  const double start_m = scene.top_m() + 1.0;
+namespace {
+
+constexpr int half_nodes = 20;  // a footprint's grid: 41 x 41 lines out to 3 sigma
+
+// One vertical line down through the scene from above everything at (x_m, y_m).
+struct VerticalLine {
+  bool ground = false;      // it met the ground (else it is left out)
+  double plant_area = 0.0;  // m^2 m^-2 crossed
+  bool covered = false;     // it crossed foliage
+  double canopy_m = 0.0;    // its first foliage above the ground
+};
+
+VerticalLine measure_line(const Scene& scene, double x_m, double y_m,
+                          std::vector<VolumeSpan>& spans) {
+  VerticalLine line;
+  const Vec3 origin{x_m, y_m, scene.top_m() + 1.0};
   const Vec3 down{0.0, 0.0, -1.0};
-  std::vector<VolumeSpan> spans;
-  double weights = 0.0;
-  for (int j = -half_nodes; j <= half_nodes; ++j) {
-    for (int i = -half_nodes; i <= half_nodes; ++i) {
-      const double x = i * step_m, y = j * step_m, r_sq = x * x + y * y;
-      const Vec3 origin{x, y, start_m};
-      const SurfaceHit ground = scene.intersect(origin, down, 1.0e5);
-      if (ground.kind == SurfaceKind::none) continue;
-      scene.volume_spans(origin, down, ground.distance_m, spans);
-      double plant_area = 0.0, first_m = ground.distance_m;
-      for (const VolumeSpan& span : spans) {
-        plant_area += span.area_density_m2_m3 * (span.end_m - span.start_m);
-        first_m = std::min(first_m, span.start_m);
-      }
-      const double weight = std::exp(-r_sq / (2.0 * sigma_m * sigma_m));
-      weights += weight;
-      truth.pai += weight * plant_area;
-      truth.cover += spans.empty() ? 0.0 : weight;
-      if (r_sq <= 4.0 * sigma_m * sigma_m)
-        truth.canopy_height_m = std::max(truth.canopy_height_m, ground.distance_m - first_m);
-    }
+  const SurfaceHit ground = scene.intersect(origin, down, 1.0e5);
+  if (ground.kind == SurfaceKind::none) return line;
+  line.ground = true;
+  scene.volume_spans(origin, down, ground.distance_m, spans);
+  double first_m = ground.distance_m;
+  for (const VolumeSpan& span : spans) {
+    line.plant_area += span.area_density_m2_m3 * (span.end_m - span.start_m);
+    first_m = std::min(first_m, span.start_m);
   }
-  if (weights > 0.0) {
-    truth.pai /= weights;
-    truth.cover /= weights;
-  }
-  return truth;
+  line.covered = !spans.empty();
+  line.canopy_m = ground.distance_m - first_m;
+  return line;
 }
 
-VegetationTruth measure_facets(const Scene& scene, double sigma_m) {
+// The beam-weighted sums of the lines a footprint weighs, `r_sq` from its centre.
+struct TruthSums {
+  VegetationTruth truth;
+  double weights = 0.0;
+
+  void add(const VerticalLine& line, double r_sq, double sigma_m) {
+    if (!line.ground) return;
+    const double weight = std::exp(-r_sq / (2.0 * sigma_m * sigma_m));
+    weights += weight;
+    truth.pai += weight * line.plant_area;
+    truth.cover += line.covered ? weight : 0.0;
+    if (r_sq <= 4.0 * sigma_m * sigma_m)
+      truth.canopy_height_m = std::max(truth.canopy_height_m, line.canopy_m);
+  }
+  VegetationTruth mean() const {
+    VegetationTruth mean = truth;
+    if (weights > 0.0) {
+      mean.pai /= weights;
+      mean.cover /= weights;
+    }
+    return mean;
+  }
+};
+
+}  // namespace
+
+VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot) {
+  if (!scene.has_volumes()) return {};
+  const double step_m = 3.0 * spot.sigma_m / half_nodes;
+  std::vector<VolumeSpan> spans;
+  TruthSums sums;
+  for (int j = -half_nodes; j <= half_nodes; ++j) {
+    for (int i = -half_nodes; i <= half_nodes; ++i) {
+      const double x = i * step_m, y = j * step_m;
+      sums.add(measure_line(scene, spot.x_m + x, spot.y_m + y, spans), x * x + y * y, spot.sigma_m);
+    }
+  }
+  return sums.mean();
+}
+
+// The lines of a tile of kTile x kTile nodes, measured by the first footprint that weighs one.
+struct TruthGrid::Tile {
+  static constexpr int kTile = 16;
+  std::once_flag measured;
+  std::array<VerticalLine, kTile * kTile> lines;
+};
+
+TruthGrid::TruthGrid(const Scene& scene, double step_m) : scene_(scene), step_m_(step_m) {}
+
+TruthGrid::~TruthGrid() = default;
+
+const TruthGrid::Tile& TruthGrid::tile(std::int64_t ti, std::int64_t tj) const {
+  Tile* found = nullptr;
+  {
+    const std::lock_guard lock(mutex_);
+    std::unique_ptr<Tile>& held = tiles_[{ti, tj}];
+    if (!held) held = std::make_unique<Tile>();
+    found = held.get();
+  }
+  std::call_once(found->measured, [&] {
+    std::vector<VolumeSpan> spans;
+    for (int b = 0; b < Tile::kTile; ++b)
+      for (int a = 0; a < Tile::kTile; ++a)
+        found->lines[b * Tile::kTile + a] =
+            measure_line(scene_, static_cast<double>(ti * Tile::kTile + a) * step_m_,
+                         static_cast<double>(tj * Tile::kTile + b) * step_m_, spans);
+  });
+  return *found;
+}
+
+VegetationTruth TruthGrid::measure(const BeamSpot& spot) const {
+  if (!scene_.has_volumes()) return {};
+  const double reach_m = 3.0 * spot.sigma_m;
+  const auto first = [&](double centre_m) {
+    return static_cast<std::int64_t>(std::ceil((centre_m - reach_m) / step_m_));
+  };
+  const auto last = [&](double centre_m) {
+    return static_cast<std::int64_t>(std::floor((centre_m + reach_m) / step_m_));
+  };
+  const auto tile_of = [](std::int64_t node) {
+    return node >= 0 ? node / Tile::kTile : -((-node - 1) / Tile::kTile) - 1;
+  };
+  TruthSums sums;
+  const Tile* held = nullptr;
+  std::int64_t held_ti = 0, held_tj = 0;
+  for (std::int64_t j = first(spot.y_m); j <= last(spot.y_m); ++j) {
+    for (std::int64_t i = first(spot.x_m); i <= last(spot.x_m); ++i) {
+      const std::int64_t ti = tile_of(i), tj = tile_of(j);
+      if (!held || ti != held_ti || tj != held_tj) {
+        held = &tile(ti, tj);  // a lock a tile, not a line
+        held_ti = ti;
+        held_tj = tj;
+      }
+      const VerticalLine& line =
+          held->lines[(j - tj * Tile::kTile) * Tile::kTile + (i - ti * Tile::kTile)];
+      const double x = static_cast<double>(i) * step_m_ - spot.x_m;
+      const double y = static_cast<double>(j) * step_m_ - spot.y_m;
+      sums.add(line, x * x + y * y, spot.sigma_m);
+    }
+  }
+  return sums.mean();
+}
+
+VegetationTruth measure_facets(const Scene& scene, const BeamSpot& spot) {
+  const double sigma_m = spot.sigma_m;
   VegetationTruth truth;
   if (scene.facets().empty()) return truth;
   const double two_sigma_sq = 2.0 * sigma_m * sigma_m;
@@ -51,13 +152,12 @@ VegetationTruth measure_facets(const Scene& scene, double sigma_m) {
     const double c = std::cos(tree.rotation_rad), s = std::sin(tree.rotation_rad);
     const double scale_sq = tree.scale * tree.scale;
     for (const FacetModel::AreaCell& cell : tree.model->area_cells()) {
-      const double x = tree.foot_m[0] + tree.scale * (c * cell.x_m + s * cell.y_m);
-      const double y = tree.foot_m[1] + tree.scale * (-s * cell.x_m + c * cell.y_m);
+      const double x = tree.foot_m[0] + tree.scale * (c * cell.x_m + s * cell.y_m) - spot.x_m;
+      const double y = tree.foot_m[1] + tree.scale * (-s * cell.x_m + c * cell.y_m) - spot.y_m;
       truth.pai += cell.area_m2 * scale_sq * std::exp(-(x * x + y * y) / two_sigma_sq);
     }
   }
   truth.pai /= std::numbers::pi * two_sigma_sq;
-  constexpr int half_nodes = 20;  // a 41 x 41 grid out to 3 sigma, as for the volumes
   constexpr int max_crossings = 100000;
   const double step_m = 3.0 * sigma_m / half_nodes;
   const double start_m = scene.top_m() + 1.0;
@@ -66,7 +166,7 @@ VegetationTruth measure_facets(const Scene& scene, double sigma_m) {
   for (int j = -half_nodes; j <= half_nodes; ++j) {
     for (int i = -half_nodes; i <= half_nodes; ++i) {
       const double x = i * step_m, y = j * step_m, r_sq = x * x + y * y;
-      const Vec3 origin{x, y, start_m};
+      const Vec3 origin{spot.x_m + x, spot.y_m + y, start_m};
       const SurfaceHit first = scene.intersect(origin, down, 1.0e5);
       if (first.kind == SurfaceKind::none) continue;
       const double weight = std::exp(-r_sq / (2.0 * sigma_m * sigma_m));

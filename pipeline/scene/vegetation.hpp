@@ -2,25 +2,60 @@
 // in the scene comes from a vegetation source, pipeline/shot/vegetation_source.hpp.)
 #pragma once
 
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <utility>
+
 #include "pipeline/scene/scene.hpp"
 
 namespace glaswave {
 
+// Where the beam falls on a scene: its centre in the scene's frame (the footprint centre, the
+// frame's origin when the scene is the shot's own) and its RMS radius, in the horizontal.
+struct BeamSpot {
+  double x_m = 0.0, y_m = 0.0;
+  double sigma_m = 0.0;
+};
+
 // What the beam falls on, as the simulation knows it: the footprint's truth, each point of the
-// ground weighted by the beam's irradiance (a Gaussian of RMS radius sigma_m about the frame's
-// origin, in the horizontal).
+// ground weighted by the beam's irradiance (a Gaussian of RMS radius sigma_m about the spot's
+// centre, in the horizontal).
 struct VegetationTruth {
   double cover = 0.0;            // part of the beam's light falling on a crown's shadow from above
   double pai = 0.0;              // plant area crossed by a vertical line, beam-weighted mean
   double canopy_height_m = 0.0;  // highest foliage above the ground within 2 sigma of the centre
 };
 
-VegetationTruth measure_vegetation(const Scene& scene, double sigma_m);
+VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot);
+
+// measure_vegetation's vertical lines on one grid of the scene's frame (nodes at multiples of
+// step_m east and north), each measured once, by the first footprint that weighs it, and shared
+// by the footprints after: the truth of the shots sharing a stretch's scene, whose 41 x 41
+// lines overlap almost entirely. A footprint weighs the nodes within 3 sigma of its centre (east
+// and north), as measure_vegetation weighs its own grid; at step_m = 3 sigma / 20 the two are
+// quadratures of the same integral on grids shifted by under a step. Thread-safe.
+class TruthGrid {
+ public:
+  TruthGrid(const Scene& scene, double step_m);  // the scene outlives the grid
+  ~TruthGrid();
+  VegetationTruth measure(const BeamSpot& spot) const;
+
+ private:
+  struct Tile;
+  const Tile& tile(std::int64_t ti, std::int64_t tj) const;
+
+  const Scene& scene_;
+  double step_m_;
+  mutable std::mutex mutex_;
+  mutable std::map<std::pair<std::int64_t, std::int64_t>, std::unique_ptr<Tile>> tiles_;
+};
 
 // The same for facet trees: cover and height along the vertical lines (a line covered where the
 // first surface it meets is a facet), and the plant area as the facets' one-sided area under
 // the beam's weight, over the weight's integral 2 pi sigma^2 (each model's area gathered on its
 // area cells).
-VegetationTruth measure_facets(const Scene& scene, double sigma_m);
+VegetationTruth measure_facets(const Scene& scene, const BeamSpot& spot);
 
 }  // namespace glaswave

@@ -74,8 +74,8 @@ RegionVegetation FacetSource::grow(const VegetationRegion& region) const {
   return grown;
 }
 
-VegetationTruth FacetSource::truth(const Scene& scene, double sigma_m) const {
-  return measure_facets(scene, sigma_m);
+VegetationTruth FacetSource::truth(const Scene& scene, const BeamSpot& spot) const {
+  return measure_facets(scene, spot);
 }
 
 std::vector<VegetationSource::Placed> FacetSource::placed() const {

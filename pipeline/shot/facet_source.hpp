@@ -25,9 +25,11 @@ class FacetSource : public VegetationSource {
   RegionVegetation grow(const VegetationRegion& region) const override;
 
   // Cover and height along vertical lines, the plant area from the facets' own area.
-  VegetationTruth truth(const Scene& scene, double sigma_m) const override;
+  VegetationTruth truth(const Scene& scene, const BeamSpot& spot) const override;
 
   std::vector<Placed> placed() const override;
+  bool fixed_on_the_ground() const override { return true; }  // trees placed on the Earth
+  bool measured_on_volumes() const override { return false; }
 
   const std::vector<std::shared_ptr<const FacetModel>>& models() const { return models_; }
   const std::vector<FacetTree>& trees() const { return trees_; }

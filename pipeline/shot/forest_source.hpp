@@ -24,6 +24,12 @@ class ForestSource : public VegetationSource {
 
   const Forest& forest() const { return forest_; }
 
+  // Crowns stand where the forest placed them on the Earth; a layer follows the footprint's
+  // mean ground.
+  bool fixed_on_the_ground() const override {
+    return forest_.canopy(0).crown_shape != CrownShape::layer;
+  }
+
   // The crowns file's crowns.
   std::vector<Placed> placed() const override {
     std::vector<Placed> crowns;

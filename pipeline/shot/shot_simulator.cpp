@@ -20,6 +20,24 @@ struct ShotSimulator::FootprintScene {
   BuiltScene built;
 };
 
+// What a shot is traced through: its own scene, or its stretch's. The shot's geometry is in the
+// scene's frame, where its footprint centre lies at centre_m (the origin of its own); the
+// ground's orientation is the footprint's, fitted in its own frame.
+struct ShotSimulator::ShotScene {
+  std::optional<FootprintScene> own;
+  std::shared_ptr<const StretchScene> stretch;
+  ShotGeometry geometry;
+  Vec3 centre_m{};
+  SurfaceOrientation orientation;
+
+  const LocalFrame& frame() const { return stretch ? stretch->frame : own->where.frame; }
+  const BuiltScene& built() const { return stretch ? stretch->built : own->built; }
+  // The point `along_m` down the beam axis from the footprint centre.
+  Geodetic on_axis(double along_m) const {
+    return frame().to_geodetic(centre_m + along_m * geometry.axis);
+  }
+};
+
 ShotSimulator::ShotSimulator(const ShotSettings& settings, const Terrain& terrain,
                              std::unique_ptr<VegetationSource> vegetation,
                              std::unique_ptr<Receiver> receiver)
@@ -34,10 +52,26 @@ ShotSimulator::~ShotSimulator() = default;
 
 void ShotSimulator::check_scene(const Footprint& footprint) const { build_scene(footprint); }
 
+void ShotSimulator::share_scenes_along(const Track& track) {
+  stretches_.reset();
+  if (settings_.stretch_shots <= 0 || scenes_.roughness().enabled() ||
+      (vegetation_ && !vegetation_->fixed_on_the_ground()))
+    return;
+  stretches_ = std::make_unique<StretchScenes>(
+      scenes_, lidar_, track, vegetation_ ? vegetation_margin_m : 0.0, settings_.stretch_shots);
+}
+
 namespace {
 
-// The sun at the footprint, where the shot has a position and a time ERFA can take.
-void set_sun(ShotRecord& record) {
+// The sun at the footprint, where the shot has a position and a time ERFA can take (or the
+// stretch's, interpolated to the shot).
+void set_sun(ShotRecord& record, const std::optional<StretchSun>& stretch = std::nullopt) {
+  if (stretch) {
+    const SolarPosition sun = stretch->at(record.shot_number);
+    record.solar_elevation_deg = sun.elevation_deg;
+    record.solar_azimuth_deg = sun.azimuth_deg;
+    return;
+  }
   if (!std::isfinite(record.lat_deg) || !std::isfinite(record.lon_deg)) return;
   try {
     const SolarPosition sun = solar_position(record.time_s, record.lat_deg, record.lon_deg,
@@ -68,12 +102,19 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
     set_sun(record);
     return record;
   }
-  const FootprintScene shot = build_scene(footprint);
+  const ShotScene shot = scene_of(footprint);
   locate(record, footprint, shot);
-  set_sun(record);
-  const Scene& scene = *shot.built.scene;
+  set_sun(record, shot.stretch ? shot.stretch->sun : std::nullopt);
+  trace(record, footprint, shot, ray_queries);
+  return record;
+}
+
+// The shot's returns traced through its scene, received, and the truth and outline beside them.
+void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const ShotScene& shot,
+                          std::int64_t* ray_queries) const {
+  const Scene& scene = *shot.built().scene;
   ShotReturns returns;
-  returns.waveforms = simulate_shot(scene, lidar_, shot.where.geometry, shot.built.optics,
+  returns.waveforms = simulate_shot(scene, lidar_, shot.geometry, shot.built().optics,
                                     settings_.transport, footprint.shot_number);
   if (ray_queries) *ray_queries += returns.waveforms.ray_queries + outline_vertices;
   scale_pulse_energy(returns.waveforms, footprint.pulse_energy_scale);
@@ -81,38 +122,38 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   returns.beam = footprint.beam;
   returns.range_m = footprint.range_m;
   returns.position_at = [&shot](double time_ns) {
-    const double along_m = 0.5 * speed_of_light_m_s * time_ns * 1e-9;
-    return shot.where.frame.to_geodetic(along_m * shot.where.geometry.axis);
+    return shot.on_axis(0.5 * speed_of_light_m_s * time_ns * 1e-9);
   };
   receiver_->receive(std::move(returns), record);
   // The receiver's reflectance divides by the sensor's pulse energy, not the beam's.
   if (footprint.pulse_energy_scale != 1.0)
     for (double& r : record.reflectance) r /= footprint.pulse_energy_scale;
   // The truth over the footprint, beside the estimates: what the beam really fell on.
-  const double sigma_m = footprint.range_m * lidar_.beam_sigma_rad();
-  const VegetationTruth truth =
-      vegetation_ ? vegetation_->truth(scene, sigma_m) : measure_vegetation(scene, sigma_m);
+  const BeamSpot spot{shot.centre_m[0], shot.centre_m[1],
+                      footprint.range_m * lidar_.beam_sigma_rad()};
+  const VegetationTruth truth = shot.stretch && shot.stretch->truth
+                                    ? shot.stretch->truth->measure(spot)
+                                : vegetation_ ? vegetation_->truth(scene, spot)
+                                              : measure_vegetation(scene, spot);
   record.cover_true = truth.cover;
   record.pai_true = truth.pai;
   record.canopy_height_true_m = truth.canopy_height_m;
-  record.footprint_lonlat = beam_outline(scene, lidar_, shot.where.geometry, shot.where.frame);
-  return record;
+  record.footprint_lonlat = beam_outline(scene, lidar_, shot.geometry, shot.frame());
 }
 
 // The footprint's place, its ground's orientation and the bins' elevations along the beam axis
 // from the footprint centre.
 void ShotSimulator::locate(ShotRecord& record, const Footprint& footprint,
-                           const FootprintScene& shot) const {
+                           const ShotScene& shot) const {
   record.lat_deg = footprint.ground.lat_deg;
   record.lon_deg = footprint.ground.lon_deg;
   record.elev_m = footprint.ground.h_m;
   record.range_m = footprint.range_m;
-  record.slope_deg = shot.where.orientation.slope_deg;
-  record.aspect_deg = shot.where.orientation.aspect_deg;
+  record.slope_deg = shot.orientation.slope_deg;
+  record.aspect_deg = shot.orientation.aspect_deg;
   const std::vector<double> bin_time_ns = lidar_.bin_time_ns();
   auto elevation_at = [&](double time_ns) {
-    const double along_m = 0.5 * speed_of_light_m_s * time_ns * 1e-9;
-    return shot.where.frame.to_geodetic(along_m * shot.where.geometry.axis).h_m;
+    return shot.on_axis(0.5 * speed_of_light_m_s * time_ns * 1e-9).h_m;
   };
   record.elev_bin0_m = elevation_at(bin_time_ns.front());
   record.elev_lastbin_m = elevation_at(bin_time_ns.back());
@@ -122,8 +163,8 @@ std::optional<ShotWaveforms> ShotSimulator::simulate_ray(const Footprint& footpr
                                                          std::int64_t ray,
                                                          const RayObserver& observer) const {
   if (!beam_on_terrain_data(scenes_.terrain(), lidar_, footprint)) return std::nullopt;
-  const FootprintScene shot = build_scene(footprint);
-  return glaswave::simulate_ray(*shot.built.scene, lidar_, shot.where.geometry, shot.built.optics,
+  const ShotScene shot = scene_of(footprint);
+  return glaswave::simulate_ray(*shot.built().scene, lidar_, shot.geometry, shot.built().optics,
                                 settings_.transport, footprint.shot_number, ray, observer);
 }
 
@@ -167,6 +208,24 @@ ShotSimulator::FootprintScene ShotSimulator::build_scene(const Footprint& footpr
           : 0.0;
   shot.built =
       scenes_.build(shot.where.frame, shot.where.orientation, half_size_m, rough_half_size_m);
+  return shot;
+}
+
+ShotSimulator::ShotScene ShotSimulator::scene_of(const Footprint& footprint) const {
+  ShotScene shot;
+  if (stretches_) shot.stretch = stretches_->find(footprint);
+  if (!shot.stretch) {
+    shot.own = build_scene(footprint);
+    shot.geometry = shot.own->where.geometry;
+    shot.orientation = shot.own->where.orientation;
+    return shot;
+  }
+  const LocalFrame& frame = shot.stretch->frame;
+  shot.geometry.sensor_m = frame.local_from_ecef(footprint.spacecraft_ecef);
+  shot.geometry.axis = frame.local_direction(footprint.beam_ecef);
+  shot.geometry.range_m = footprint.range_m;
+  shot.centre_m = frame.to_local(footprint.ground);
+  shot.orientation = footprint_frame(scenes_.terrain(), lidar_, footprint).orientation;
   return shot;
 }
 

@@ -14,6 +14,7 @@
 #include "pipeline/products/shot_record.hpp"
 #include "pipeline/shot/receiver.hpp"
 #include "pipeline/shot/scene_builder.hpp"
+#include "pipeline/shot/stretch_scenes.hpp"
 #include "pipeline/shot/vegetation_source.hpp"
 #include "pipeline/transport/lidar_model.hpp"
 #include "pipeline/transport/ray_event.hpp"
@@ -28,6 +29,9 @@ struct ShotSettings {
   TransportOptions transport;            // rays, orders, sampling, per-order output, seed
   std::vector<double> soil_reflectance;  // [band], Lambertian
   RoughnessSettings roughness;
+  // Consecutive shots of a beam that share one scene once the simulator follows a track
+  // (stretch_scenes.hpp; the photon-counting receiver's 10 kHz); 0: each shot builds its own.
+  std::int64_t stretch_shots = 0;
 };
 
 class ShotSimulator {
@@ -51,21 +55,32 @@ class ShotSimulator {
   // too fine to mesh under the beam), for `check`.
   void check_scene(const Footprint& footprint) const;
 
+  // The footprints to come are the track's: consecutive shots of a beam share a stretch's scene
+  // when settings.stretch_shots asks for it and the scene allows (no roughness, which is meshed
+  // only where the beam is; vegetation fixed on the ground). The track outlives the simulator.
+  void share_scenes_along(const Track& track);
+  bool shares_scenes() const { return stretches_ != nullptr; }
+
   const LidarModel& lidar() const { return lidar_; }
   const SceneBuilder& scenes() const { return scenes_; }
   const Receiver& receiver() const { return *receiver_; }
 
  private:
   struct FootprintScene;
+  struct ShotScene;
   FootprintScene build_scene(const Footprint& footprint) const;
+  ShotScene scene_of(const Footprint& footprint) const;
   void flag_off_terrain(ShotRecord& record, const Footprint& footprint) const;
-  void locate(ShotRecord& record, const Footprint& footprint, const FootprintScene& shot) const;
+  void locate(ShotRecord& record, const Footprint& footprint, const ShotScene& shot) const;
+  void trace(ShotRecord& record, const Footprint& footprint, const ShotScene& shot,
+             std::int64_t* ray_queries) const;
 
   ShotSettings settings_;
   LidarModel lidar_;
   std::unique_ptr<VegetationSource> vegetation_;
   std::unique_ptr<Receiver> receiver_;
   SceneBuilder scenes_;
+  std::unique_ptr<StretchScenes> stretches_;  // when shots share their stretch's scene
 };
 
 }  // namespace glaswave

@@ -49,8 +49,8 @@ VegetationKind kind_of(const std::string& name) {
 
 }  // namespace
 
-VegetationTruth VegetationSource::truth(const Scene& scene, double sigma_m) const {
-  return measure_vegetation(scene, sigma_m);
+VegetationTruth VegetationSource::truth(const Scene& scene, const BeamSpot& spot) const {
+  return measure_vegetation(scene, spot);
 }
 
 void register_vegetation_source(const std::string& name, VegetationKind kind) {

@@ -53,9 +53,18 @@ class VegetationSource {
   virtual RegionVegetation grow(const VegetationRegion& region) const = 0;
 
   // The truth over a footprint (cover, PAI, canopy height along vertical lines under the beam,
-  // a Gaussian of RMS radius sigma_m about the frame's origin). By default measured on the
-  // scene's turbid volumes; a source of surfaces (leaf facets) says what its facets make.
-  virtual VegetationTruth truth(const Scene& scene, double sigma_m) const;
+  // a Gaussian about the spot's centre). By default measured on the scene's turbid volumes; a
+  // source of surfaces (leaf facets) says what its facets make.
+  virtual VegetationTruth truth(const Scene& scene, const BeamSpot& spot) const;
+  // Whether truth() is measure_vegetation's, which shots sharing a scene measure on one grid
+  // (TruthGrid); false for a source that says its own.
+  virtual bool measured_on_volumes() const { return true; }
+
+  // Whether what grows in a region is the same in any frame that covers it (plants placed on the
+  // Earth, as crowns are), so that shots may share a scene built around several footprints
+  // (stretch_scenes.hpp); false for vegetation shaped by the footprint (a layer that follows its
+  // mean ground) or resampled in its frame.
+  virtual bool fixed_on_the_ground() const { return false; }
 
   // Plants a file placed (a crowns file's crowns): where each stands and how far it reaches,
   // for the warning that they lie far from every footprint. Empty for vegetation that grows

@@ -2,10 +2,14 @@
 // strong ATLAS beam (gt2l) at 10 kHz, 0.7 m between shots, over the seed's Table 1 forest and
 // over bare ground on a level plane, writing atl03.h5 and atl08.h5 alone, every core; their
 // shots a second against the mission's 10,000 (one beam in real time) and against each other,
-// measured in this one process so that the ratios hold on a shared machine. Beside them, the
-// Monte Carlo noise of a shot's expected photons at each ray count: the same footprints traced
-// with two seeds give Var_MC = <(mu_1 - mu_2)^2> / 2, compared with the Poisson variance mu that
-// the photon draw adds (Var_MC / mu < 0.1: the rays add under a tenth to the counts' variance).
+// measured in this one process so that the ratios hold on a shared machine. Then the shots alone
+// (the engine's batch loop, nothing written) with each stretch of 256 shots sharing one scene, as
+// a run does, against each shot building its own (the per-shot path every other receiver takes).
+// Beside the wall-clock rates, the process's CPU time a shot (every thread's), which other loads
+// on the machine disturb less. Last, the Monte Carlo noise of a shot's expected photons at each
+// ray count: the same footprints traced with two seeds give Var_MC = <(mu_1 - mu_2)^2> / 2,
+// compared with the Poisson variance mu that the photon draw adds (Var_MC / mu < 0.1: the rays
+// add under a tenth to the counts' variance).
 // Not a test: `--quick` is the short mode that ctest runs.
 #include <sys/resource.h>
 #include <unistd.h>
@@ -22,6 +26,7 @@
 #include "footprints/track.hpp"
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/run.hpp"
+#include "tests/pipeline/atlas_pass.hpp"
 
 namespace {
 
@@ -30,40 +35,65 @@ using Clock = std::chrono::steady_clock;
 
 // One strong beam over a level plane at 10 N, the sun 10 degrees from the zenith.
 glaswave::Config atlas_config(int shots, int rays, bool forest, std::uint64_t seed) {
-  nlohmann::json document = {
-      {"seed", seed},
-      {"sensor", {{"preset", "atlas"}, {"beams", {"gt2l"}}}},
-      {"simulation", {{"rays_per_shot", rays}, {"max_order", 3}}},
-      {"terrain",
-       {{"plane", {{"origin_lat_deg", 10.0}, {"origin_lon_deg", 0.0}, {"elevation_m", 100.0}}},
-        {"soil_reflectance", 0.15}}},
-      {"canopy", forest ? nlohmann::json::object() : nlohmann::json()},  // {}: Table 1
-      {"track",
-       {{"type", "pass"},
-        {"start_lat_deg", 10.0},
-        {"start_lon_deg", 0.0},
-        {"heading_deg", 0.0},
-        {"shots", shots},
-        {"spacing_m", 0.7},
-        {"altitude_m", 496000.0},
-        {"start_time", "2019-03-20T12:00:00Z"}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
-  };
-  return glaswave::parse_config(document);
+  nlohmann::json pass = glaswave::test_support::atlas_pass(shots, rays, seed);
+  pass["sensor"]["beams"] = {"gt2l"};
+  if (!forest) pass["canopy"] = nullptr;
+  return glaswave::parse_config(pass);
 }
 
-double shots_per_s(const glaswave::Config& config) {
+double cpu_s() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+// Shots a second (wall clock) and CPU milliseconds a shot of one measurement.
+struct Speed {
+  double shots_per_s = std::nan("");
+  double cpu_ms_per_shot = std::nan("");
+};
+
+template <typename Work>
+Speed measure(std::int64_t shots, Work work) {
+  const auto start = Clock::now();
+  const double cpu_start = cpu_s();
+  if (!work()) return {};
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return {static_cast<double>(shots) / seconds,
+          1e3 * (cpu_s() - cpu_start) / static_cast<double>(shots)};
+}
+
+// A whole run, its products written.
+Speed run_speed(const glaswave::Config& config) {
   glaswave::RunRequest request;
   request.out_dir =
       fs::temp_directory_path() / ("glaswave-atlas-benchmark-" + std::to_string(getpid()));
   fs::remove_all(request.out_dir);
-  const auto start = Clock::now();
-  const glaswave::RunSummary summary = glaswave::run_simulation(config, request, {});
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  const bool written =
-      fs::exists(request.out_dir / "atl03.h5") && fs::exists(request.out_dir / "atl08.h5");
+  const Speed speed = measure(config.track.shots, [&] {
+    glaswave::run_simulation(config, request, {});
+    return fs::exists(request.out_dir / "atl03.h5") && fs::exists(request.out_dir / "atl08.h5");
+  });
   fs::remove_all(request.out_dir);
-  return written ? static_cast<double>(summary.shots) / seconds : std::nan("");
+  return speed;
+}
+
+// The shots alone through the engine's batch loop, sharing their stretches' scenes or not.
+Speed shot_speed(const glaswave::Config& config, bool shared) {
+  const auto terrain = glaswave::make_terrain(config.terrain);
+  const auto track = glaswave::plan_track(config, *terrain);
+  const auto simulator = glaswave::make_shot_simulator(config, *terrain);
+  if (shared) simulator->share_scenes_along(*track);
+  if (simulator->shares_scenes() != shared) return {};
+  std::int64_t photons = 0;
+  return measure(track->size(), [&] {
+    glaswave::simulate_records(*simulator, *track, 0, track->size(), 0,
+                               [&](std::int64_t, const glaswave::ShotRecord& shot) {
+                                 photons += static_cast<std::int64_t>(shot.photon_class.size());
+                               },
+                               {});
+    return photons > 0;
+  });
 }
 
 // Var_MC / mu of a strong beam's expected signal photons a shot over the forest at `rays`: one
@@ -113,17 +143,32 @@ int main(int argc, char** argv) {
   std::printf(
       "ICESat-2: one strong beam, 0.7 m between shots, atl03.h5 and atl08.h5 written, "
       "every core\n");
-  std::printf("%-28s %6s %6s %10s %14s\n", "case", "shots", "rays", "shots/s", "of 10,000/s");
+  std::printf("%-28s %6s %6s %10s %14s %12s\n", "case", "shots", "rays", "shots/s", "of 10,000/s",
+              "CPU ms/shot");
   std::vector<double> figures;
   for (const bool forest : {true, false})
     for (const int rays : {30, 300}) {
-      const double rate = shots_per_s(atlas_config(shots, rays, forest, 1));
-      std::printf("%-28s %6d %6d %10.1f %13.2f%%\n", forest ? "Table 1 forest" : "bare ground",
-                  shots, rays, rate, 100.0 * rate / 10000.0);
-      figures.push_back(rate);
+      const Speed speed = run_speed(atlas_config(shots, rays, forest, 1));
+      std::printf("%-28s %6d %6d %10.1f %13.2f%% %12.3f\n",
+                  forest ? "Table 1 forest" : "bare ground", shots, rays, speed.shots_per_s,
+                  100.0 * speed.shots_per_s / 10000.0, speed.cpu_ms_per_shot);
+      figures.push_back(speed.shots_per_s);
     }
   std::printf("ratios: forest 300/30 rays time %.2f; forest/bare time at 30 rays %.2f\n",
               figures[0] / figures[1], figures[2] / figures[0]);
+  std::printf(
+      "the shots alone (nothing written), 30 rays: a stretch's scene shared against each "
+      "shot's own\n");
+  std::printf("%-28s %12s %12s %10s %12s %12s\n", "case", "shared /s", "own /s", "speed-up",
+              "shared ms", "own ms");
+  for (const bool forest : {true, false}) {
+    const glaswave::Config config = atlas_config(shots, 30, forest, 1);
+    const Speed shared = shot_speed(config, true), own = shot_speed(config, false);
+    std::printf("%-28s %12.1f %12.1f %9.2fx %12.3f %12.3f\n",
+                forest ? "Table 1 forest" : "bare ground", shared.shots_per_s, own.shots_per_s,
+                shared.shots_per_s / own.shots_per_s, shared.cpu_ms_per_shot, own.cpu_ms_per_shot);
+    figures.insert(figures.end(), {shared.shots_per_s, own.shots_per_s});
+  }
   std::printf("Monte Carlo noise of the expected photons (forest, %d shots, two seeds):\n",
               mc_shots);
   for (const int rays : {30, 100, 300}) figures.push_back(monte_carlo_over_poisson(mc_shots, rays));

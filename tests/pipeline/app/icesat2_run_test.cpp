@@ -1,7 +1,7 @@
 // End to end: an ATLAS pass (the atlas preset, its photon-counting receiver) over a forest on a
 // plane writes atl03.h5 and atl08.h5 beside shots.nc; the photons a shot are the few the
 // mission reports, the sun at noon adds background, and the granules hold the same values for
-// one thread and two.
+// one thread and two, and for a run split inside a stretch of shots sharing one scene.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <sys/wait.h>
@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/pipeline/atlas_pass.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace glaswave {
@@ -40,27 +41,11 @@ std::string bytes(const fs::path& file) {
 }
 
 // 300 shots 0.7 m apart northward over a level forest (the seed's Table 1 canopy), at noon
-// near the equator at an equinox: the sun 10 degrees from the zenith.
+// near the equator at an equinox: the sun 10 degrees from the zenith; shots.nc written too.
 nlohmann::json atlas_pass() {
-  return {
-      {"seed", 3},
-      {"sensor", {{"preset", "atlas"}}},
-      {"simulation", {{"rays_per_shot", 300}, {"max_order", 3}}},
-      {"terrain",
-       {{"plane", {{"origin_lat_deg", 10.0}, {"origin_lon_deg", 0.0}, {"elevation_m", 100.0}}},
-        {"soil_reflectance", 0.15}}},
-      {"canopy", nlohmann::json::object()},
-      {"track",
-       {{"type", "pass"},
-        {"start_lat_deg", 10.0},
-        {"start_lon_deg", 0.0},
-        {"heading_deg", 0.0},
-        {"shots", kShots},
-        {"spacing_m", 0.7},
-        {"altitude_m", 496000.0},
-        {"start_time", "2019-03-20T12:00:00Z"}}},
-      {"output", {{"netcdf", true}, {"geojson", false}}},
-  };
+  nlohmann::json pass = test_support::atlas_pass(kShots, 300, 3);
+  pass["output"]["netcdf"] = true;
+  return pass;
 }
 
 template <typename T>
@@ -84,6 +69,15 @@ TEST(Icesat2Run, AnAtlasPassWritesAtl03AndAtl08TheSameForAnyThreads) {
       << bytes(dir.path() / "one.txt");
   ASSERT_EQ(run_glaswave(config, dir.path() / "two", "--threads 2", dir.path() / "two.txt"), 0)
       << bytes(dir.path() / "two.txt");
+  // Split inside the first stretch of 256 shots, whose one scene both parts build alike.
+  ASSERT_EQ(run_glaswave(config, dir.path() / "first", "--threads 2 --shots 0:131",
+                         dir.path() / "first.txt"),
+            0)
+      << bytes(dir.path() / "first.txt");
+  ASSERT_EQ(run_glaswave(config, dir.path() / "rest", "--threads 1 --shots 131:300",
+                         dir.path() / "rest.txt"),
+            0)
+      << bytes(dir.path() / "rest.txt");
   for (const char* name : {"atl03.h5", "atl08.h5", "shots.nc"}) {
     ASSERT_TRUE(fs::exists(dir.path() / "one" / name)) << name;
     EXPECT_FALSE(fs::exists(dir.path() / "one" / (std::string(name) + ".part"))) << name;
@@ -99,6 +93,15 @@ TEST(Icesat2Run, AnAtlasPassWritesAtl03AndAtl08TheSameForAnyThreads) {
                            "/gt2l/heights/glaswave_truth_class", "/gt2l/heights/signal_conf_ph",
                            "/gt2l/geolocation/ph_index_beg", "/gt2l/bckgrd_atlas/bckgrd_rate"})
     EXPECT_EQ(values("one", "atl03.h5", path), values("two", "atl03.h5", path)) << path;
+  // A shot's photons, whichever part of the run simulated it (the background rate and the
+  // classes estimated from a run's neighbouring shots are the run's).
+  for (const char* path : {"/gt2l/heights/h_ph", "/gt2l/heights/lat_ph", "/gt2l/heights/lon_ph",
+                           "/gt2l/heights/delta_time", "/gt2l/heights/glaswave_truth_class"}) {
+    std::vector<double> split = values("first", "atl03.h5", path);
+    const std::vector<double> rest = values("rest", "atl03.h5", path);
+    split.insert(split.end(), rest.begin(), rest.end());
+    EXPECT_EQ(values("one", "atl03.h5", path), split) << path;
+  }
   for (const char* path :
        {"/gt2l/land_segments/terrain/h_te_best_fit", "/gt2l/land_segments/canopy/h_canopy",
         "/gt2l/signal_photons/classed_pc_flag"})

@@ -1,0 +1,84 @@
+// Consecutive shots of a beam share one scene (issue 25). ATLAS fires 10,000 shots a second, its
+// footprints 0.7 m apart and about 11 m across: a shot's scene (the ground its light reaches and
+// what grows on it, some 250 m across with vegetation) is nearly its neighbours'. A stretch, a
+// fixed block of shot numbers of one beam, builds one scene in the frame of its middle footprint,
+// wide enough for every one of its shots' patches, and each of its shots is traced through it.
+// The scene depends on the stretch alone, never on which thread, batch, --shots part, process or
+// --resume met it first, so the products are the same bits for any of them.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include "footprints/solar_position.hpp"
+#include "footprints/track.hpp"
+#include "pipeline/scene/vegetation.hpp"
+#include "pipeline/shot/scene_builder.hpp"
+#include "pipeline/transport/lidar_model.hpp"
+#include "terrain/local_frame.hpp"
+
+namespace glaswave {
+
+// Shots of a stretch: 256 at 0.7 m are 179 m of track, whose scene (with vegetation's 100 m
+// margin) is about 2.6 times a shot's in area, built once for 256 shots.
+inline constexpr std::int64_t stretch_shots = 256;
+// A stretch whose footprints lie farther than this from its middle one (consecutive shots far
+// apart: points, a granule's beams one after another) shares no scene: its shots build their own.
+inline constexpr double max_stretch_reach_m = 500.0;
+
+// The sun over a stretch: ERFA's place at its first and last footprints, interpolated in shot
+// number between them. The sun moves 0.004 deg in a second, the footprint 0.0016 deg of latitude
+// over a stretch: the interpolation's error is under 1e-6 deg, far below ERFA's 0.001 deg against
+// SPA.
+struct StretchSun {
+  std::int64_t first_shot = 0, last_shot = 0;
+  SolarPosition first, last;
+  // The sun at shot `shot` of the stretch.
+  SolarPosition at(std::int64_t shot) const;
+};
+
+// One stretch's scene, in the frame of its middle footprint.
+struct StretchScene {
+  LocalFrame frame;
+  BuiltScene built;
+  // Absent when the sun's place is not known at an end, or turns fast (near the zenith): each
+  // shot then asks ERFA.
+  std::optional<StretchSun> sun;
+  // The truth's vertical lines on one grid for every shot (the middle one's spacing); absent
+  // when the vegetation measures its own truth (facets).
+  std::unique_ptr<TruthGrid> truth;
+};
+
+class StretchScenes {
+ public:
+  // The builder, lidar and track outlive this. `margin_m`: how far beyond a shot's traced patch
+  // its scene reaches (vegetation's diffuse light). `shots`: shots a stretch.
+  StretchScenes(const SceneBuilder& scenes, const LidarModel& lidar, const Track& track,
+                double margin_m, std::int64_t shots = stretch_shots);
+
+  // The scene of the footprint's stretch, built at its first use and kept while the run is near
+  // it; null when the stretch shares none (its footprints spread too far). Thread-safe; a
+  // footprint the stretch's scene holds is on the terrain's data (beam_on_terrain_data).
+  std::shared_ptr<const StretchScene> find(const Footprint& footprint) const;
+
+  std::int64_t shots() const { return shots_; }
+
+ private:
+  struct Entry;
+  std::shared_ptr<const StretchScene> build(int beam_index, std::int64_t stretch) const;
+
+  const SceneBuilder& scenes_;
+  const LidarModel& lidar_;
+  const Track& track_;
+  double margin_m_;
+  std::int64_t shots_;
+  // The stretches met last, the most recent last: a run walks the track in order, so two a beam
+  // (the one a batch ends in, the one it starts) are all it meets again.
+  mutable std::mutex mutex_;
+  mutable std::vector<std::shared_ptr<Entry>> recent_;
+};
+
+}  // namespace glaswave
