@@ -208,6 +208,7 @@ namespace {
 struct SegmentPhotons {
   std::vector<double> ground_along_m, ground_h_m;  // ground photons
   std::vector<double> canopy_m, canopy_abs_m;      // canopy and top of canopy: above ground, WGS84
+  std::vector<double> canopy_along_m;
 };
 
 // h_te_mean, h_te_median, terrain_slope and h_te_uncertainty from the ground photons.
@@ -256,6 +257,24 @@ void canopy_metrics(LandSegment& segment, const SegmentPhotons& p) {
       std::accumulate(p.canopy_abs_m.begin(), p.canopy_abs_m.end(), 0.0) / n;
 }
 
+// The five sub-segments' ground and canopy heights.
+void sub_segment_metrics(LandSegment& segment, const SegmentPhotons& p, const Atl08Classes& classes,
+                         const Atl08Settings& settings) {
+  const double width_m = settings.segment_m / 5.0;
+  for (std::size_t j = 0; j < 5; ++j) {
+    const double from = segment.start_m + static_cast<double>(j) * width_m, to = from + width_m;
+    const auto inside = [&](double along_m) { return along_m >= from && along_m < to; };
+    const auto ground = std::count_if(p.ground_along_m.begin(), p.ground_along_m.end(), inside);
+    segment.h_te_best_fit_20m[j] = ground >= 3 ? classes.ground_at(from + 0.5 * width_m) : nan;
+    std::vector<double> canopy;
+    for (std::size_t i = 0; i < p.canopy_m.size(); ++i)
+      if (inside(p.canopy_along_m[i])) canopy.push_back(p.canopy_m[i]);
+    segment.h_canopy_20m[j] = static_cast<int>(canopy.size()) >= settings.min_canopy_photons
+                                  ? quantile(canopy, 0.98)
+                                  : nan;
+  }
+}
+
 void no_canopy(LandSegment& segment) {
   segment.h_canopy = segment.canopy_openness = segment.h_mean_canopy = segment.h_mean_canopy_abs =
       segment.h_min_canopy = segment.h_median_canopy = segment.h_max_canopy = nan;
@@ -289,6 +308,7 @@ std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
     if (c >= 2) {
       p.canopy_m.push_back(photons[i].h_m - classes.ground_at(photons[i].along_m));
       p.canopy_abs_m.push_back(photons[i].h_m);
+      p.canopy_along_m.push_back(photons[i].along_m);
     }
   }
   for (std::size_t k = 0; k < count; ++k) {
@@ -297,6 +317,7 @@ std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
     const bool terrain = segment.n_te_photons >= settings.min_ground_photons;
     segment.h_te_best_fit =
         terrain ? classes.ground_at(segment.start_m + 0.5 * settings.segment_m) : nan;
+    sub_segment_metrics(segment, members[k], classes, settings);
     if (terrain)
       terrain_metrics(segment, members[k]);
     else

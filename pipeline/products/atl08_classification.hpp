@@ -80,7 +80,11 @@ struct LandSegment {
   double h_mean_canopy = 0.0;    // their mean
   double h_min_canopy = 0.0, h_median_canopy = 0.0, h_max_canopy = 0.0;
   std::array<double, 18> canopy_h_metrics{};  // their 10th, 15th, ..., 95th percentiles
-  double h_mean_canopy_abs = 0.0;             // the mean of their heights above the ellipsoid
+  // Its five sub-segments (ATL08's 20 m with 100 m segments): the fitted ground at each centre
+  // with at least 3 ground photons, the 98th percentile of the canopy heights with at least
+  // min_canopy_photons.
+  std::array<double, 5> h_te_best_fit_20m{}, h_canopy_20m{};
+  double h_mean_canopy_abs = 0.0;  // the mean of their heights above the ellipsoid
   std::int32_t n_te_photons = 0, n_ca_photons = 0, n_toc_photons = 0;
   std::int32_t n_noise_photons = 0;  // the segment's photons classified noise
 };

@@ -5,6 +5,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -498,6 +499,7 @@ namespace {
 
 struct SegmentTruth {
   std::vector<float> h_te, h_canopy, cover, pai, lat, lon, dem_h, solar_elevation;
+  std::vector<float> lat_20m, lon_20m;  // segments x 5: the shot nearest each 20 m's centre
   std::vector<double> time;
   std::vector<std::int32_t> id_beg, id_end;
   std::vector<std::int8_t> night;
@@ -523,15 +525,28 @@ void add_segment_truth(SegmentTruth& t, const BeamShot* middle, double n, double
                         : std::numeric_limits<std::int8_t>::max());
 }
 
+// For each of `pieces` pieces of `width_m` along track from first_m, its shot nearest its
+// centre (beam.shots.size() where it has none; shots past the end belong to the last piece).
+std::vector<std::size_t> nearest_to_centres(const BeamTrack& beam, double first_m,
+                                            std::size_t pieces, double width_m) {
+  std::vector<std::size_t> nearest(pieces, beam.shots.size());
+  std::vector<double> best(pieces, 1e300);
+  for (std::size_t k = 0; k < beam.shots.size(); ++k) {
+    const double along = beam.shots[k].along_m;
+    const std::size_t j = static_cast<std::size_t>(
+        std::clamp(std::floor((along - first_m) / width_m), 0.0, double(pieces - 1)));
+    const double off = std::abs(along - (first_m + (j + 0.5) * width_m));
+    if (off < best[j]) best[j] = off, nearest[j] = k;
+  }
+  return nearest;
+}
+
 // The shots' positions and the simulation's truth averaged over each land segment.
 SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t count,
                            double segment_m) {
   SegmentTruth t;
   std::vector<double> n(count, 0.0), h(count, 0.0), ch(count, 0.0), cv(count, 0.0), pai(count, 0.0);
-  std::vector<std::size_t> middle(count, beam.shots.size());
-  std::vector<double> best(count, 1e300);
-  for (std::size_t k = 0; k < beam.shots.size(); ++k) {
-    const BeamShot& s = beam.shots[k];
+  for (const BeamShot& s : beam.shots) {
     const std::size_t j = static_cast<std::size_t>(
         std::clamp(std::floor((s.along_m - first_m) / segment_m), 0.0, double(count - 1)));
     n[j] += 1.0;
@@ -539,9 +554,8 @@ SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t co
     ch[j] += s.canopy_height_m;
     cv[j] += s.canopy_cover;
     pai[j] += s.pai;
-    const double off = std::abs(s.along_m - (first_m + (j + 0.5) * segment_m));
-    if (off < best[j]) best[j] = off, middle[j] = k;
   }
+  const std::vector<std::size_t> middle = nearest_to_centres(beam, first_m, count, segment_m);
   for (std::size_t j = 0; j < count; ++j) {
     add_segment_truth(t, n[j] > 0.0 ? &beam.shots[middle[j]] : nullptr, n[j], h[j], ch[j], cv[j],
                       pai[j]);
@@ -549,7 +563,52 @@ SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t co
     t.id_beg.push_back(segment_of(start));
     t.id_end.push_back(segment_of(start + segment_m) - 1);
   }
+  for (const std::size_t k : nearest_to_centres(beam, first_m, 5 * count, segment_m / 5.0)) {
+    const bool any = k < beam.shots.size();
+    t.lat_20m.push_back(any ? static_cast<float>(beam.shots[k].lat_deg) : fill_float);
+    t.lon_20m.push_back(any ? static_cast<float>(beam.shots[k].lon_deg) : fill_float);
+  }
   return t;
+}
+
+// A land segments' five sub-segments' values, segments x 5 (fill for NaN).
+std::vector<float> as_float_20m(const std::vector<LandSegment>& s,
+                                std::array<double, 5> LandSegment::*member) {
+  std::vector<float> out;
+  for (const LandSegment& x : s)
+    for (const double v : x.*member)
+      out.push_back(std::isnan(v) ? fill_float : static_cast<float>(v));
+  return out;
+}
+
+// The 20 m sub-segments (ATL08 from version 5): their places and heights; the subset flags,
+// which rate the photons' spread in each, are not assessed (fill).
+void write_20m(Granule& g, hid_t land, hid_t terrain, hid_t canopy,
+               const std::vector<LandSegment>& s, const SegmentTruth& t) {
+  g.dataset(land, "latitude_20m", t.lat_20m,
+            {"degrees_north", "Latitude of 20m segment", "modelResult",
+             "The shot nearest each 20 m sub-segment's centre"},
+            5, true);
+  g.dataset(land, "longitude_20m", t.lon_20m,
+            {"degrees_east", "Longitude of 20m segment", "modelResult",
+             "The shot nearest each 20 m sub-segment's centre"},
+            5, true);
+  g.dataset(terrain, "h_te_best_fit_20m", as_float_20m(s, &LandSegment::h_te_best_fit_20m),
+            {"meters", "Terrain height at 20m", "modelResult",
+             "The fitted ground at each 20 m sub-segment's centre, with 3 ground photons there"},
+            5, true);
+  g.dataset(canopy, "h_canopy_20m", as_float_20m(s, &LandSegment::h_canopy_20m),
+            {"meters", "Relative canopy height at 20m", "modelResult",
+             "98th percentile of each 20 m sub-segment's canopy and top-of-canopy photons' "
+             "heights above the fitted ground, with 5 of them there"},
+            5, true);
+  const std::vector<std::int8_t> unassessed(5 * s.size(), std::numeric_limits<std::int8_t>::max());
+  g.dataset(terrain, "subset_te_flag", unassessed,
+            {"1", "Terrain subset flag", "qualityInformation", "Not assessed: the fill value"}, 5,
+            true);
+  g.dataset(canopy, "subset_can_flag", unassessed,
+            {"1", "Canopy subset flag", "qualityInformation", "Not assessed: the fill value"}, 5,
+            true);
 }
 
 std::vector<float> as_float(const std::vector<LandSegment>& s, double LandSegment::*member) {
@@ -632,9 +691,7 @@ void write_segment_flags(Granule& g, hid_t h, std::size_t count) {
             true);
 }
 
-void write_terrain(Granule& g, hid_t land, const std::vector<LandSegment>& s) {
-  const Handle terrain = g.group(land, "terrain");
-  const hid_t h = terrain.get();
+void write_terrain(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
   g.dataset(h, "h_te_best_fit", as_float(s, &LandSegment::h_te_best_fit),
             {"meters", "Best fit terrain elevation", "modelResult",
              "The classification's fitted ground at the segment's centre"},
@@ -689,9 +746,7 @@ void write_canopy_distribution(Granule& g, hid_t h, const std::vector<LandSegmen
             18, true);
 }
 
-void write_canopy(Granule& g, hid_t land, const std::vector<LandSegment>& s) {
-  const Handle canopy = g.group(land, "canopy");
-  const hid_t h = canopy.get();
+void write_canopy(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
   const std::string above =
       " of the canopy and top-of-canopy photons' heights above the fitted "
       "ground";
@@ -746,8 +801,11 @@ void write_land_segments(Granule& g, hid_t beam_group, const BeamTrack& beam,
   const Handle land = g.group(beam_group, "land_segments");
   write_segment_place(g, land.get(), s, t);
   write_segment_flags(g, land.get(), s.size());
-  write_terrain(g, land.get(), s);
-  write_canopy(g, land.get(), s);
+  const Handle terrain = g.group(land.get(), "terrain");
+  const Handle canopy = g.group(land.get(), "canopy");
+  write_terrain(g, terrain.get(), s);
+  write_canopy(g, canopy.get(), s);
+  write_20m(g, land.get(), terrain.get(), canopy.get(), s, t);
   write_segment_truth(g, land.get(), t);
 }
 

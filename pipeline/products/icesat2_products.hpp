@@ -96,7 +96,9 @@ void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>
 // ph_removal_flag, sat_flag, terrain/{h_te_best_fit, h_te_mean, h_te_median, h_te_min, h_te_max,
 // h_te_uncertainty, terrain_slope, n_te_photons}, canopy/{h_canopy, canopy_openness,
 // h_mean_canopy, h_mean_canopy_abs, h_min_canopy, h_median_canopy, h_max_canopy,
-// canopy_h_metrics (segments x 18), h_canopy_uncertainty, n_ca_photons, n_toc_photons},
+// canopy_h_metrics (segments x 18), h_canopy_uncertainty, n_ca_photons, n_toc_photons}, the 20 m
+// sub-segments' latitude_20m, longitude_20m, terrain/{h_te_best_fit_20m, subset_te_flag} and
+// canopy/{h_canopy_20m, subset_can_flag} (segments x 5),
 // glaswave_truth/{h_te,
 // h_canopy, canopy_cover, pai}}; signal_photons/{classed_pc_flag, classed_pc_indx, ph_segment_id,
 // ph_h, d_flag, delta_time}.

@@ -365,3 +365,48 @@ def test_land_segments_are_their_photons_statistics(granules):
                 assert c["h_mean_canopy_abs"][k] == pytest.approx(abs_h.mean(), abs=2e-3)
             checked += 1
     assert checked >= 4
+
+
+def test_20m_sub_segments_read_as_spacelidar_highres_reads_them(granules):
+    """SpaceLiDAR's points(highres=true): land_segments/{latitude_20m, longitude_20m},
+    terrain/{h_te_best_fit_20m, subset_te_flag}, canopy/{h_canopy_20m, subset_can_flag}, each
+    segments x 5, float32 and int8; the five are the ATL03 20 m segments of the 100 m one."""
+    atl03, atl08 = granules
+    checked = 0
+    for beam in BEAMS:
+        land = atl08[f"{beam}/land_segments"]
+        n = len(land["longitude"])
+        lat = dataset(land, "latitude_20m", "f4", ndim=2)
+        dataset(land, "longitude_20m", "f4", ndim=2)
+        ground = dataset(land, "terrain/h_te_best_fit_20m", "f4", ndim=2)
+        canopy = dataset(land, "canopy/h_canopy_20m", "f4", ndim=2)
+        for name in ("terrain/subset_te_flag", "canopy/subset_can_flag"):
+            assert dataset(land, name, "i1", ndim=2).shape == (n, 5)
+        assert lat.shape == ground.shape == canopy.shape == (n, 5)
+        fill = np.float32(3.4028235e38)
+        # The middle 20 m's centre is the 100 m segment's: the same fitted ground.
+        best = land["terrain/h_te_best_fit"][()]
+        both = (best != fill) & (ground[:, 2] != fill)
+        assert both.sum() >= 2
+        assert np.array_equal(best[both], ground[both, 2])
+        for k, p, inside, joined, flag, ph_h in segment_photons(atl03, atl08, beam):
+            first = land["segment_id_beg"][k]
+            for j in range(5):
+                mine = p["segment"][joined] == first + j
+                # The fitted ground under the photons of the 20 m (h_ph - ph_h at their shots)
+                # spans the ground at its centre.
+                under = p["h"][joined[mine]].astype(np.float64) - ph_h[mine]
+                if ground[k, j] != fill:
+                    assert under.min() - 0.05 <= ground[k, j] <= under.max() + 0.05
+                # Its photons lie about its latitude, within the 20 m (2e-4 degrees).
+                here = p["segment"] == first + j
+                if here.any() and lat[k, j] != fill:
+                    assert abs(lat[k, j] - np.median(p["lat"][here])) < 2e-4
+                tall = mine & (flag >= 2)
+                if canopy[k, j] != fill:
+                    assert tall.sum() >= 5
+                    assert canopy[k, j] == pytest.approx(np.percentile(ph_h[tall], 98), abs=2e-3)
+                    checked += 1
+                else:
+                    assert tall.sum() < 5
+    assert checked >= 10
