@@ -13,6 +13,10 @@
 
 namespace glaswave {
 
+namespace {
+constexpr std::uint64_t kPointWindow = 1 << 20;  // points read at a time: memory is the grid's
+}  // namespace
+
 double GroundGrid::height_at(double x, double y) const {
   const double u = (x - x0) / cell_m - 0.5, v = (y - y0) / cell_m - 0.5;
   if (!(u >= -0.5 && u <= nx - 0.5 && v >= -0.5 && v <= ny - 0.5))
@@ -151,25 +155,22 @@ VoxelBlock GapFractionInversion::result(VoxelizeReport& report) const {
   return block;
 }
 
-VoxelizeResult voxelize_point_cloud(const LasFile& cloud, const std::string& crs,
-                                    const std::string& crs_place,
-                                    const GapFractionSettings& settings) {
-  VoxelizeResult out;
+CloudGround grid_cloud_ground(const LasFile& cloud, const std::string& crs,
+                              const std::string& crs_place, const GapFractionSettings& settings) {
+  CloudGround out;
   const std::string place = cloud.path().string();
   const double s = settings.voxel_size_m;
   if (!(s > 0.0)) throw config_error("voxel_size_m", "must be > 0");
-  out.voxels.crs_wkt = las_crs(cloud, crs, crs_place);
-  const LasHeader& h = cloud.header();
-  const std::uint64_t count = h.point_count;
-  constexpr std::uint64_t window = 1 << 20;
-  // Pass 1: the extent, and the ground points.
+  out.crs_wkt = las_crs(cloud, crs, crs_place);
+  const std::uint64_t count = cloud.header().point_count;
+  // The extent, and the ground points.
   double lo[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   double hi[2] = {-lo[0], -lo[1]};
   std::vector<std::array<double, 3>> ground;
   std::vector<LasPoint> points;
-  for (std::uint64_t first = 0; first < count; first += window) {
+  for (std::uint64_t first = 0; first < count; first += kPointWindow) {
     points.clear();
-    cloud.read_points(first, window, points);
+    cloud.read_points(first, kPointWindow, points);
     for (const LasPoint& p : points) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
       lo[0] = std::min(lo[0], p.x);
@@ -179,8 +180,8 @@ VoxelizeResult voxelize_point_cloud(const LasFile& cloud, const std::string& crs
       if (p.classification == 2 && !p.withheld) ground.push_back({p.x, p.y, p.z});
     }
   }
-  out.report.points = count;
-  out.report.ground_points = ground.size();
+  out.points = count;
+  out.ground_points = ground.size();
   if (!(hi[0] >= lo[0])) throw input_error(place, "the point cloud holds no point");
   const double x0 = std::floor(lo[0] / s) * s, y0 = std::floor(lo[1] / s) * s;
   const double nx_real = std::floor((hi[0] - x0) / s) + 1,
@@ -192,25 +193,39 @@ VoxelizeResult voxelize_point_cloud(const LasFile& cloud, const std::string& crs
                                  " m: more voxels than the limit of " +
                                  std::to_string(VoxelGridFile::max_window_voxels) +
                                  " (a larger voxel size, or tiles)");
-  const int nx = static_cast<int>(nx_real), ny = static_cast<int>(ny_real);
-  out.ground = grid_ground(ground, x0, y0, nx, ny, s, place);
-  ground.clear();
-  ground.shrink_to_fit();
+  out.ground =
+      grid_ground(ground, x0, y0, static_cast<int>(nx_real), static_cast<int>(ny_real), s, place);
+  return out;
+}
+
+VoxelizeResult voxelize_point_cloud(const LasFile& cloud, const std::string& crs,
+                                    const std::string& crs_place,
+                                    const GapFractionSettings& settings) {
+  VoxelizeResult out;
+  // Pass 1: the extent and the ground.
+  CloudGround ground = grid_cloud_ground(cloud, crs, crs_place, settings);
+  out.voxels.crs_wkt = ground.crs_wkt;
+  out.ground = std::move(ground.ground);
+  out.report.points = ground.points;
+  out.report.ground_points = ground.ground_points;
+  const int nx = out.ground.nx, ny = out.ground.ny;
+  const double s = settings.voxel_size_m;
 
   VoxelBlock shape;
   shape.crs_wkt = out.voxels.crs_wkt;
   shape.nx = nx;
   shape.ny = ny;
-  shape.nz = static_cast<int>(nz_real);
-  shape.x0 = x0;
-  shape.y0 = y0;
+  shape.nz = static_cast<int>(std::ceil(settings.max_height_m / s));
+  shape.x0 = out.ground.x0;
+  shape.y0 = out.ground.y0;
   shape.dx = shape.dy = s;
   for (int k = 0; k <= shape.nz; ++k) shape.z_edges_m.push_back(k * s);
   GapFractionInversion inversion(shape, out.ground, settings);
   // Pass 2: every return into its column and layer.
-  for (std::uint64_t first = 0; first < count; first += window) {
+  std::vector<LasPoint> points;
+  for (std::uint64_t first = 0; first < ground.points; first += kPointWindow) {
     points.clear();
-    cloud.read_points(first, window, points);
+    cloud.read_points(first, kPointWindow, points);
     for (const LasPoint& p : points) inversion.add(p, out.report);
   }
   out.voxels = inversion.result(out.report);

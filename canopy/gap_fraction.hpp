@@ -73,6 +73,17 @@ class GapFractionInversion {
   std::vector<double> column_weight_;
 };
 
+// A cloud's CRS and its ground gridded on the columns of its voxels (cells of voxel_size_m over
+// its points' extent): the first pass of voxelize_point_cloud, and terrain.point_cloud's ground.
+// An input error naming the file when it has no point, no ground or too many columns.
+struct CloudGround {
+  std::string crs_wkt;
+  GroundGrid ground;
+  std::uint64_t points = 0, ground_points = 0;
+};
+CloudGround grid_cloud_ground(const LasFile& cloud, const std::string& crs,
+                              const std::string& crs_place, const GapFractionSettings& settings);
+
 struct VoxelizeResult {
   VoxelBlock voxels;  // with the cloud's CRS
   GroundGrid ground;

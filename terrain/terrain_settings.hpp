@@ -1,5 +1,6 @@
-// What the configuration says about the ground: a DEM file or a synthetic plane, its roughness
-// and its reflectance. Filled by pipeline/config, read by the terrain library.
+// What the configuration says about the ground: a DEM file, a synthetic plane or a point cloud's
+// ground, its roughness and its reflectance. Filled by pipeline/config, read by the terrain
+// library.
 #pragma once
 
 #include <optional>
@@ -33,7 +34,10 @@ struct TerrainSettings {
   // which is then refused (vertical_datum_given).
   std::string vertical_datum = "ellipsoid";
   bool vertical_datum_given = false;   // set by the user: a DEM's own other datum is then refused
-  std::optional<PlaneSettings> plane;  // exactly one of dem and plane
+  std::optional<PlaneSettings> plane;  // exactly one of dem, plane and point_cloud
+  // The ground of canopy.point_cloud's cloud (its class-2 points, gridded as `glaswave voxelize`
+  // grids them), built by canopy/cloud_terrain.hpp: no DEM file. Set (true) or absent.
+  std::optional<bool> point_cloud;
   RoughnessSettings roughness;
   std::vector<double> soil_reflectance;  // Lambertian, one value per sensor band
 };

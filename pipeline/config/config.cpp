@@ -192,15 +192,28 @@ SimulationSettings read_simulation(JsonReader& root) {
   return s;
 }
 
-// Exactly one of "dem" and "plane"; the plane is read as its key comes.
+// Exactly one of "dem", "plane" and "point_cloud"; the plane and the cloud's flag are read as
+// their keys come. A point cloud's ground beside another ground is refused at its own key.
 void read_dem(JsonReader& r, TerrainSettings& t) {
   const std::optional<std::string> dem = r.optional_string("dem");
-  const bool has_plane = r.has("plane");
+  const bool has_plane = r.has("plane"), has_cloud = r.has("point_cloud");
+  if (has_cloud && (dem || has_plane))
+    r.fail("point_cloud", std::string("cannot be given beside terrain.") + (dem ? "dem" : "plane") +
+                              ": the ground is one of \"dem\", \"plane\" and \"point_cloud\"");
   if (dem && has_plane)
     throw config_error(r.path(), "give exactly one of \"dem\" and \"plane\", not both");
-  if (!dem && !has_plane) throw config_error(r.path(), "give exactly one of \"dem\" and \"plane\"");
+  if (!dem && !has_plane && !has_cloud)
+    throw config_error(r.path(), "give exactly one of \"dem\", \"plane\" and \"point_cloud\"");
   if (dem && dem->empty()) r.fail("dem", "must not be empty");
   t.dem = dem.value_or("");
+}
+
+// terrain.point_cloud: true or absent (false would leave no ground).
+void check_point_cloud_terrain(JsonReader& r, const TerrainSettings& t) {
+  if (t.point_cloud && !*t.point_cloud)
+    r.fail("point_cloud",
+           "must be true (the ground of canopy.point_cloud's cloud); give \"dem\" or \"plane\" "
+           "instead of false");
 }
 
 // The DEM's band of heights, required by the terrain when it has several.
@@ -225,9 +238,10 @@ void read_vertical_datum(JsonReader& r, TerrainSettings& t) {
     message += " or a vertical CRS such as \"EPSG:3855\", got \"" + t.vertical_datum + "\"";
     r.fail("vertical_datum", message + did_you_mean(t.vertical_datum, datum.choices));
   }
-  if (t.dem.empty() && t.vertical_datum != datum.default_value.get<std::string>())
+  if (t.dem.empty() && !t.point_cloud && t.vertical_datum != datum.default_value.get<std::string>())
     r.fail("vertical_datum",
-           "applies to terrain.dem only: a plane's elevation_m is above the WGS84 ellipsoid");
+           "applies to terrain.dem and terrain.point_cloud only: a plane's elevation_m is above "
+           "the WGS84 ellipsoid");
 }
 
 // The terrain, which the caller has seen to be given.
@@ -237,6 +251,7 @@ TerrainSettings read_terrain(JsonReader& root, const std::vector<LidarBand>& ban
   read_fields(
       r,
       {{"dem", [&] { read_dem(r, t); }},
+       {"point_cloud", [&] { check_point_cloud_terrain(r, t); }},
        {"dem_band", [&] { read_dem_band(r, t); }},
        {"vertical_datum", [&] { read_vertical_datum(r, t); }},
        {"soil_reflectance", [&] { t.soil_reflectance = spectral(r, "soil_reflectance", bands); }}},
@@ -604,7 +619,8 @@ Config parse_config(const json& document) {
   c.detector = read_detector(root);
   c.brf = read_brf(root);
   root.finish();
-  if (!terrain_given) root.fail("terrain", "is required: give \"dem\" or \"plane\"");
+  if (!terrain_given)
+    root.fail("terrain", "is required: give \"dem\", \"plane\" or \"point_cloud\"");
   c.resolved.erase("$schema");
   check_across_keys(document, c);
   check_shot_size(c);

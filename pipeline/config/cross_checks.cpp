@@ -1,4 +1,5 @@
-// Checks across keys (issue 28): keys of another track type, bands sharing a wavelength.
+// Checks across keys (issue 28): keys of another track type, bands sharing a wavelength, a
+// point cloud's ground without a point cloud.
 #include "pipeline/config/cross_checks.hpp"
 
 #include <string>
@@ -89,9 +90,18 @@ void check_band_wavelengths(const std::vector<LidarBand>& bands) {
   }
 }
 
+void check_point_cloud_ground(const Config& config) {
+  if (!config.terrain.point_cloud || (config.canopy && config.canopy->kind == "point_cloud"))
+    return;
+  throw config_error("/terrain/point_cloud",
+                     "is the ground of canopy.point_cloud's cloud, and the canopy has no point "
+                     "cloud: give canopy.point_cloud, or the ground as \"dem\" or \"plane\"");
+}
+
 void check_across_keys(const nlohmann::json& document, const Config& config) {
   check_track_type_keys(document, config.track.type, config.resolved["track"]);
   check_band_wavelengths(config.sensor.bands);
+  check_point_cloud_ground(config);
 }
 
 }  // namespace glaswave

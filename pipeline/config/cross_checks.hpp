@@ -20,6 +20,10 @@ void check_track_type_keys(const nlohmann::json& document, TrackType type,
 // refused at the second one's wavelength_nm.
 void check_band_wavelengths(const std::vector<LidarBand>& bands);
 
+// terrain.point_cloud without a canopy.point_cloud to take the ground of is refused at
+// /terrain/point_cloud.
+void check_point_cloud_ground(const Config& config);
+
 void check_across_keys(const nlohmann::json& document, const Config& config);
 
 }  // namespace glaswave

@@ -487,7 +487,8 @@ Key terrain_keys() {
   Key dem =
       path("dem",
            "a raster GDAL reads, with a CRS (geographic or projected; nodata honoured); "
-           "exactly one of `dem` and `plane`. A shot whose beam (3 σ) falls over nodata or "
+           "exactly one of `dem`, `plane` and `point_cloud`. A shot whose beam (3 σ) falls over "
+           "nodata or "
            "off the raster is flagged, its waveform fill. An unusable file (missing, corrupt, "
            "truncated, no CRS) is an error, exit status 3");
   Key dem_band = integer("dem_band", std::nullopt, 1, int_max, "",
@@ -495,7 +496,8 @@ Key terrain_keys() {
                          "more than one");
   Key datum = choice(
       "vertical_datum", t.vertical_datum, {"ellipsoid", "egm96"},
-      "`dem` only: what the DEM's heights are measured from when its CRS has no vertical part: "
+      "`dem` and `point_cloud` only: what the DEM's (the cloud's) heights are measured from when "
+      "its CRS has no vertical part: "
       "`ellipsoid` (its own), `egm96` (the EGM96 geoid, through PROJ's `egm96_15.gtx`), or a "
       "vertical CRS PROJ knows (`EPSG:3855` when its grid is installed). A DEM with a vertical "
       "CRS of its own uses it when this key is not set; set to another datum, it is refused. The "
@@ -505,11 +507,11 @@ Key terrain_keys() {
   datum.pattern = ":";
   Key terrain =
       object(
-          "terrain", "the ground: exactly one of `dem` and `plane`",
+          "terrain", "the ground: exactly one of `dem`, `plane` and `point_cloud`",
           {std::move(dem),
            f.object("plane", &TerrainSettings::plane,
                     "a synthetic plane, anchored at the origin's latitude and longitude, for slope "
-                    "studies; exactly one of `dem` and `plane`",
+                    "studies; exactly one of `dem`, `plane` and `point_cloud`",
                     {p.number("origin_lat_deg", &PlaneSettings::origin_lat_deg, closed(-90, 90),
                               "deg", "latitude of the origin"),
                      p.number("origin_lon_deg", &PlaneSettings::origin_lon_deg, closed(-180, 360),
@@ -520,6 +522,12 @@ Key terrain_keys() {
                               "slope of the plane"),
                      p.number("aspect_deg", &PlaneSettings::aspect_deg, any_finite(), "deg",
                               "the azimuth the slope faces (clockwise from north)")}),
+           f.boolean("point_cloud", &TerrainSettings::point_cloud,
+                     "`true`: the ground of `canopy.point_cloud`'s cloud (its class-2 points "
+                     "gridded on its voxels' columns, as `glaswave voxelize` writes "
+                     "`ground_elevation`), without a DEM file; exactly one of `dem`, `plane` and "
+                     "`point_cloud`, and only with a `canopy.point_cloud`",
+                     "absent"),
            std::move(dem_band), std::move(datum),
            f.object(
                "roughness", &TerrainSettings::roughness,
@@ -985,10 +993,19 @@ json configuration_schema() {
             {"title", "glaswave configuration"},
             {"description", root.description + " (glaswave " GLASWAVE_VERSION ")"}};
   s.update(object_schema(root));
-  // Exactly one of `dem` and `plane`, as the parser asks.
-  s["properties"]["terrain"]["oneOf"] =
-      json::array({{{"required", {"dem"}}, {"not", {{"required", {"plane"}}}}},
-                   {{"required", {"plane"}}, {"not", {{"required", {"dem"}}}}}});
+  // Exactly one of `dem`, `plane` and `point_cloud` (which is true when given), as the parser
+  // asks.
+  json one_of = json::array();
+  const std::vector<std::string> grounds = {"dem", "plane", "point_cloud"};
+  for (const std::string& ground : grounds) {
+    json others = json::array();
+    for (const std::string& other : grounds)
+      if (other != ground) others.push_back({{"required", {other}}});
+    one_of.push_back({{"required", {ground}}, {"not", {{"anyOf", others}}}});
+  }
+  json& terrain = s["properties"]["terrain"];
+  terrain["oneOf"] = one_of;
+  terrain["properties"]["point_cloud"]["const"] = true;
   return s;
 }
 

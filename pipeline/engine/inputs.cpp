@@ -7,11 +7,15 @@
 #include <limits>
 #include <numbers>
 
+#include "canopy/cloud_terrain.hpp"
 #include "footprints/atlas_beams.hpp"
 
 namespace glaswave {
 
 std::unique_ptr<Terrain> open_terrain(const Config& config) {
+  if (config.terrain.point_cloud)  // the parser saw that canopy.point_cloud is given
+    return at_section("/canopy/point_cloud",
+                      [&] { return point_cloud_terrain(config.terrain, *config.canopy); });
   return at_section("/terrain", [&] { return make_terrain(config.terrain); });
 }
 

@@ -10,17 +10,26 @@ within +-15 degrees across track (x), each pulse four independent beamlets (a fo
 gaps); a beamlet meets foliage at an optical depth drawn from Exp(1), with G = 1/2, or the
 ground. Each beamlet gives one return (number_of_returns 4), as glaswave's inversion expects.
 
+With --trees TREES_CSV (a facets trees file, x and y from facets.json's terrain.plane origin,
+45.0009 N 15.00127 E, the plot's centre), the crowns are instead those trees' as turbid
+ellipsoids of the facet model's crown and leaf area (make_facet_tree.turbid_crowns), on level
+ground at 300 m: the forest of share/vegetation/facets.json, so that the point cloud, its voxels,
+the facet trees and turbid crowns are one scene (plot_waveforms.py).
+
 Writes CLOUD (LAS 1.4, point format 6, with the CRS as a WKT record) and, beside it,
 CLOUD.truth.csv: the scene's mean plant area density by 1 m layer above the ground, for
 comparison with `glaswave voxelize`'s grid.
 
     /usr/bin/python3 share/vegetation/make_als_cloud.py out/forest.las [--density 2] [--seed 1]
+        [--trees share/vegetation/facet_trees.csv]
     build/glaswave voxelize out/forest.las --out out/forest_pad.nc
 """
 import argparse
 import struct
 
 import numpy as np
+
+from make_facet_tree import turbid_crowns
 
 UTM33 = ('PROJCS["WGS 84 / UTM zone 33N",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",'
          '6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],'
@@ -29,25 +38,38 @@ UTM33 = ('PROJCS["WGS 84 / UTM zone 33N",GEOGCS["WGS 84",DATUM["WGS_1984",SPHERO
          'PARAMETER["false_easting",500000],PARAMETER["false_northing",0],UNIT["metre",1],'
          'AUTHORITY["EPSG","32633"]]')
 X0, Y0, SIDE = 500000.0, 4982950.0, 200.0  # the plot's south-west corner, near 45 N 15 E
+# facets.json's terrain.plane origin (45.0009 N, 15.00127 E) in UTM 33N, by PROJ: the plot's
+# centre. Trees files are in metres from it (UTM's scale, 0.9996, moves a tree 1 cm at 26 m).
+ORIGIN = (500100.094, 4983050.380)
 G = 0.5
+HILLS = [True]  # level ground at 300 m for a trees file's forest (main sets it)
 
 
 def ground(x, y):
     """The hills: height above the ellipsoid (m)."""
     h = np.full(np.shape(x), 300.0)
+    if not HILLS[0]:
+        return h
     for cx, cy, height, width in ((60, 70, 25, 40), (150, 130, 18, 30), (120, 20, 10, 25)):
         h = h + height * np.exp(-((x - X0 - cx) ** 2 + (y - Y0 - cy) ** 2) / (2 * width ** 2))
     return h
 
 
-def crowns(rng):
-    """Ellipsoids (x, y, base above ground, radius, half height) of cover about 0.5."""
+def crowns(rng, trees=None):
+    """Ellipsoids (x, y, base above ground, radius, half height, PAD) of cover about 0.5, or
+    those of a trees file's facet trees."""
+    if trees:
+        c = np.array(turbid_crowns(trees))
+        c[:, 0] += ORIGIN[0]
+        c[:, 1] += ORIGIN[1]
+        return c
     r = rng.uniform(3.0, 5.0, 400)
     keep = np.cumsum(np.pi * r ** 2) < -np.log(1 - 0.5) * SIDE ** 2
     r = r[keep]
     n = len(r)
     return np.column_stack([X0 + rng.uniform(0, SIDE, n), Y0 + rng.uniform(0, SIDE, n),
-                            rng.uniform(6.0, 12.0, n), r, rng.uniform(4.0, 7.0, n)])
+                            rng.uniform(6.0, 12.0, n), r, rng.uniform(4.0, 7.0, n),
+                            np.full(n, 0.6)])
 
 
 CELL = 0.5  # the scene's plant area density on a grid of this size, height above the ground
@@ -60,14 +82,14 @@ def pad_grid(trees):
     grid = np.zeros((n, n, LAYERS), dtype=np.float32)
     c = (np.arange(n) + 0.5) * CELL
     h = (np.arange(LAYERS) + 0.5) * CELL
-    for cx, cy, base, r, hh in trees:
+    for cx, cy, base, r, hh, pad in trees:
         i0, i1 = max(0, int((cx - X0 - r) / CELL)), min(n, int((cx - X0 + r) / CELL) + 1)
         j0, j1 = max(0, int((cy - Y0 - r) / CELL)), min(n, int((cy - Y0 + r) / CELL) + 1)
         dx = (c[i0:i1] - (cx - X0))[:, None, None] / r
         dy = (c[j0:j1] - (cy - Y0))[None, :, None] / r
         dz = (h - base - hh)[None, None, :] / hh
         inside = dx ** 2 + dy ** 2 + dz ** 2 < 1.0
-        grid[i0:i1, j0:j1, :][inside] = 0.6
+        grid[i0:i1, j0:j1, :][inside] = pad
     return grid
 
 
@@ -91,9 +113,11 @@ def main():
     parser.add_argument("cloud")
     parser.add_argument("--density", type=float, default=2.0, help="pulses per square metre")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--trees", help="a facets trees file (x,y): its forest, on level ground")
     args = parser.parse_args()
     rng = np.random.default_rng(args.seed)
-    trees = crowns(rng)
+    HILLS[0] = args.trees is None
+    trees = crowns(rng, args.trees)
     grid = pad_grid(trees)
     n = int(args.density * SIDE * SIDE)
     records = []

@@ -13,10 +13,38 @@ sphere (spherical leaf angles). Materials: `wood` (trunk, branches) and `leaf`. 
     /usr/bin/python3 share/vegetation/make_facet_tree.py out/vegetation/tree.obj [--leaves 20000]
 """
 import argparse
+import csv
 import math
 import os
 
 import numpy as np
+
+# The model's defaults: the tree of share/vegetation/facets.json's forest.
+MODEL = {"leaves": 20000, "leaf_size_m": 0.12, "height_m": 14.0, "crown_base_m": 5.0,
+         "crown_radius_m": 3.5}
+
+
+def leaf_area_m2(leaves, leaf_size_m):
+    """One-sided area of `leaves` equilateral triangles of side `leaf_size_m`."""
+    return leaves * math.sqrt(3.0) / 4.0 * leaf_size_m ** 2
+
+
+def turbid_crowns(trees_csv, model=MODEL):
+    """The trees of a facets trees file (header x,y,model,rotation_deg,scale) as turbid crowns:
+    each the model's ellipsoidal crown scaled, holding its leaf area. Rows of (x_m, y_m, base_m,
+    radius_m, half_height_m, pad_m2_m3), x and y east and north of terrain.plane's origin; the
+    crown's axis is the stem's, so the turn of a tree does not move it."""
+    half_height = 0.5 * (model["height_m"] - model["crown_base_m"])
+    rows = []
+    with open(trees_csv, newline="") as f:
+        for tree in csv.DictReader(f):
+            s = float(tree["scale"])
+            radius, half = model["crown_radius_m"] * s, half_height * s
+            volume = 4.0 / 3.0 * math.pi * radius ** 2 * half
+            area = leaf_area_m2(model["leaves"], model["leaf_size_m"]) * s ** 2
+            rows.append((float(tree["x"]), float(tree["y"]), model["crown_base_m"] * s, radius,
+                         half, area / volume))
+    return rows
 
 
 def prism(a, b, radius, sides, vertices, faces):
@@ -44,11 +72,11 @@ def prism(a, b, radius, sides, vertices, faces):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("obj")
-    parser.add_argument("--leaves", type=int, default=20000)
-    parser.add_argument("--leaf-size-m", type=float, default=0.12)
-    parser.add_argument("--height-m", type=float, default=14.0)
-    parser.add_argument("--crown-base-m", type=float, default=5.0)
-    parser.add_argument("--crown-radius-m", type=float, default=3.5)
+    parser.add_argument("--leaves", type=int, default=MODEL["leaves"])
+    parser.add_argument("--leaf-size-m", type=float, default=MODEL["leaf_size_m"])
+    parser.add_argument("--height-m", type=float, default=MODEL["height_m"])
+    parser.add_argument("--crown-base-m", type=float, default=MODEL["crown_base_m"])
+    parser.add_argument("--crown-radius-m", type=float, default=MODEL["crown_radius_m"])
     parser.add_argument("--trunk-radius-m", type=float, default=0.15)
     parser.add_argument("--branches", type=int, default=12)
     parser.add_argument("--seed", type=int, default=1)
@@ -89,7 +117,7 @@ def main():
         angle = spin + 2 * math.pi * k / 3
         leaf_vertices.append(centres + circumradius * (np.cos(angle) * u + np.sin(angle) * v))
     leaf_vertices = np.stack(leaf_vertices, axis=1).reshape(-1, 3)
-    leaf_area = args.leaves * math.sqrt(3.0) / 4.0 * args.leaf_size_m ** 2
+    leaf_area = leaf_area_m2(args.leaves, args.leaf_size_m)
 
     os.makedirs(os.path.dirname(os.path.abspath(args.obj)), exist_ok=True)
     mtl = os.path.splitext(args.obj)[0] + ".mtl"

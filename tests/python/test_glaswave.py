@@ -116,7 +116,7 @@ def test_the_contracts_example_names_the_wrong_value_before_the_missing_terrain(
     assert raised.value.place == "/canopy/pai"
     with pytest.raises(glaswave.ConfigError) as raised:
         glaswave.check({"canopy": {"pai": 1}})
-    assert str(raised.value) == '/terrain: is required: give "dem" or "plane"'
+    assert str(raised.value) == '/terrain: is required: give "dem", "plane" or "point_cloud"'
 
 
 def test_unusable_input_is_an_input_error_and_relative_paths_start_in_the_current_directory(

@@ -66,7 +66,7 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
        "/simulation/rays_per_shot: must be <= 1000000000"},
       {{{"terrain", {{"vertical_datum", "egm96"}}}},
        2,
-       "/terrain/vertical_datum: applies to terrain.dem only"},
+       "/terrain/vertical_datum: applies to terrain.dem and terrain.point_cloud only"},
       {{{"terrain", {{"dem_band", 1}}}}, 2, "/terrain/dem_band: applies to terrain.dem only"},
       {{{"canopy", {{"crown_shape", "layer"}, {"stands", stands.string()}}}},
        3,

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "tests/pipeline/app/product_compare.hpp"
+#include "tests/pipeline/app/run_control.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -18,22 +19,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace test_support;
-
-// Two processes on this machine whatever its cores; shared memory between them only; root
-// (a container) allowed; mpirun's own notices off (-q); `options` more of mpirun's. Sanitized,
-// OpenMPI's own allocations kept to the exit are not reported (openmpi_lsan.supp says why and
-// how); nothing changes otherwise.
-CommandOutcome run_mpi(int processes, const std::string& arguments,
-                       const std::string& options = "") {
-  const std::string root = geteuid() == 0 ? " --allow-run-as-root" : "";
-  const std::string lsan = std::string("LSAN_OPTIONS=\"${LSAN_OPTIONS:+$LSAN_OPTIONS:}") +
-                           "suppressions=" + GLASWAVE_SOURCE_DIR +
-                           "/tests/pipeline/app/openmpi_lsan.supp:fast_unwind_on_malloc=0:"
-                           "print_suppressions=0\" ";
-  return run_command(lsan + "mpirun -q --oversubscribe --mca btl self,vader" + root + " " +
-                     options + " -np " + std::to_string(processes) + " " + GLASWAVE_BINARY + " " +
-                     arguments + " 2>&1");
-}
 
 class Mpi : public ::testing::Test {
  protected:

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace glaswave::test_support {
@@ -60,6 +61,70 @@ inline void expect_same_variables(const std::filesystem::path& expected,
   }
   nc_close(a);
   nc_close(b);
+}
+
+// A variable's bytes (strings by value, one after another, each ending in a NUL) and whether
+// its first dimension is `shot`.
+inline std::pair<std::string, bool> variable_bytes(int nc, int var) {
+  nc_type type = NC_NAT;
+  int dims = 0, dimids[NC_MAX_VAR_DIMS];
+  nc_inq_var(nc, var, nullptr, &type, &dims, dimids, nullptr);
+  std::size_t count = 1, length = 0;
+  char first[NC_MAX_NAME + 1] = {};
+  for (int d = 0; d < dims; ++d) {
+    nc_inq_dimlen(nc, dimids[d], &length);
+    count *= length;
+  }
+  if (dims > 0) nc_inq_dimname(nc, dimids[0], first);
+  std::string bytes;
+  if (type == NC_STRING) {
+    std::vector<char*> x(count);
+    nc_get_var_string(nc, var, x.data());
+    for (char* text : x) bytes += std::string(text ? text : "") + '\0';
+    nc_free_string(count, x.data());
+  } else {
+    std::size_t size = 0;
+    nc_inq_type(nc, type, nullptr, &size);
+    bytes.resize(count * size);
+    nc_get_var(nc, var, bytes.data());
+  }
+  return {bytes, std::string(first) == "shot"};
+}
+
+// shots.nc of a run split by --shots into `parts` (in order) holds the whole run's: each
+// variable along `shot` is the parts' one after another, every other variable each part's.
+inline void expect_same_split(const std::filesystem::path& whole,
+                              const std::vector<std::filesystem::path>& parts) {
+  int a = -1, variables = 0;
+  ASSERT_EQ(nc_open((whole / "shots.nc").c_str(), NC_NOWRITE, &a), NC_NOERR) << whole;
+  std::vector<int> part_ids;
+  for (const auto& part : parts) {
+    int b = -1;
+    ASSERT_EQ(nc_open((part / "shots.nc").c_str(), NC_NOWRITE, &b), NC_NOERR) << part;
+    part_ids.push_back(b);
+  }
+  nc_inq_nvars(a, &variables);
+  EXPECT_GT(variables, 40);
+  for (int var = 0; var < variables; ++var) {
+    char name[NC_MAX_NAME + 1] = {};
+    nc_inq_varname(a, var, name);
+    const auto [expected, per_shot] = variable_bytes(a, var);
+    std::string joined;
+    for (const int b : part_ids) {
+      int var_b = -1;
+      ASSERT_EQ(nc_inq_varid(b, name, &var_b), NC_NOERR) << name;
+      const std::string bytes = variable_bytes(b, var_b).first;
+      if (per_shot)
+        joined += bytes;
+      else
+        EXPECT_TRUE(bytes == expected) << "variable " << name << " differs in a part";
+    }
+    if (per_shot) {
+      EXPECT_TRUE(joined == expected) << "variable " << name << " differs";
+    }
+  }
+  nc_close(a);
+  for (const int b : part_ids) nc_close(b);
 }
 
 // shots.nc's variables and footprints.geojson of two output directories.

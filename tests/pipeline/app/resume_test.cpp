@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "tests/pipeline/app/product_compare.hpp"
+#include "tests/pipeline/app/run_control.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -42,40 +43,6 @@ std::string write_config(const fs::path& dir, int shots) {
   const fs::path file = dir / "pass.json";
   std::ofstream(file) << config.dump(2);
   return file.string();
-}
-
-// Starts `glaswave ARGUMENTS` in the background, its output discarded.
-pid_t start_glaswave(const std::string& arguments) {
-  const std::string command =
-      "exec " + std::string(GLASWAVE_BINARY) + " " + arguments + " >/dev/null 2>&1";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  return pid;
-}
-
-std::uintmax_t size_or_zero(const fs::path& file) {
-  std::error_code error;
-  const std::uintmax_t size = fs::file_size(file, error);
-  return error ? 0 : size;
-}
-
-// Kills the run with SIGKILL once its journal holds `journal_bytes` (0: at once). False when
-// the run ended first.
-bool kill_when(pid_t pid, const fs::path& journal, std::uintmax_t journal_bytes) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (journal_bytes > 0 && size_or_zero(journal) < journal_bytes &&
-         std::chrono::steady_clock::now() < deadline) {
-    int status = 0;
-    if (waitpid(pid, &status, WNOHANG) == pid) return false;
-    std::this_thread::sleep_for(std::chrono::microseconds(200));
-  }
-  kill(pid, SIGKILL);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFSIGNALED(status);
 }
 
 class Resume : public ::testing::Test {

@@ -567,12 +567,30 @@ TEST(Errors, NonFiniteNumbers) {
   EXPECT_THAT(error_of(d), StartsWith("/canopy/leaf_reflectance/532: must be a finite number"));
 }
 
-TEST(Errors, TerrainNeedsExactlyOneOfDemAndPlane) {
+TEST(Errors, TerrainNeedsExactlyOneOfDemPlaneAndPointCloud) {
   EXPECT_EQ(error_of(doc(R"({"terrain": {}})")),
-            "/terrain: give exactly one of \"dem\" and \"plane\"");
+            "/terrain: give exactly one of \"dem\", \"plane\" and \"point_cloud\"");
   EXPECT_EQ(error_of(doc(R"({"terrain": {"dem": "a.tif", "plane": {}}})")),
             "/terrain: give exactly one of \"dem\" and \"plane\", not both");
-  EXPECT_EQ(error_of(json::object()), "/terrain: is required: give \"dem\" or \"plane\"");
+  EXPECT_EQ(error_of(json::object()),
+            "/terrain: is required: give \"dem\", \"plane\" or \"point_cloud\"");
+  // The point cloud's ground beside another, or false, is refused at its own key.
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"plane": {}, "point_cloud": true}})")),
+            "/terrain/point_cloud: cannot be given beside terrain.plane: the ground is one of "
+            "\"dem\", \"plane\" and \"point_cloud\"");
+  EXPECT_EQ(error_of(doc(R"({"terrain": {"dem": "a.tif", "point_cloud": true}})")),
+            "/terrain/point_cloud: cannot be given beside terrain.dem: the ground is one of "
+            "\"dem\", \"plane\" and \"point_cloud\"");
+  EXPECT_THAT(error_of(doc(R"({"terrain": {"point_cloud": false}})")),
+              StartsWith("/terrain/point_cloud: must be true"));
+  EXPECT_THAT(error_of(doc(R"({"terrain": {"point_cloud": 1}})")),
+              StartsWith("/terrain/point_cloud: must be a boolean"));
+  // Without a point cloud in the canopy there is no ground to take.
+  EXPECT_THAT(error_of(doc(R"({"terrain": {"point_cloud": true}})")),
+              StartsWith("/terrain/point_cloud: is the ground of canopy.point_cloud's cloud, and "
+                         "the canopy has no point cloud"));
+  EXPECT_THAT(error_of(doc(R"({"terrain": {"point_cloud": true, "dem_band": 2}})")),
+              StartsWith("/terrain/dem_band: applies to terrain.dem only"));
   EXPECT_EQ(error_of(doc(R"({"terrain": {"dem": ""}})")), "/terrain/dem: must not be empty");
   const Config c = parse_config(doc(R"({"terrain": {"dem": "/data/dem.tif"}})"));
   EXPECT_EQ(c.terrain.dem, "/data/dem.tif");
@@ -589,7 +607,7 @@ TEST(Errors, AWrongValueIsNamedBeforeAMissingTerrain) {
             "/output/netcdf: must be a boolean (true or false), got 1");
   // With every given value right, the missing terrain is the error.
   EXPECT_EQ(error_of(json::parse(R"({"canopy": {"pai": 1}})")),
-            "/terrain: is required: give \"dem\" or \"plane\"");
+            "/terrain: is required: give \"dem\", \"plane\" or \"point_cloud\"");
   EXPECT_EQ(place_of(json::parse(R"({"terrain": null})")), "/terrain");
   // A misspelt terrain is named as such, with the key it was meant to be.
   EXPECT_EQ(error_of(json::parse(R"({"terrian": {"plane": {}}})")),
@@ -618,8 +636,9 @@ TEST(Terrain, DemBandAndVerticalDatum) {
   EXPECT_THAT(
       error_of(doc(R"({"terrain": {"dem": "a.tif", "vertical_datum": "egm69"}})")),
       AllOf(StartsWith("/terrain/vertical_datum: must be"), HasSubstr("did you mean \"egm96\"?")));
-  EXPECT_THAT(error_of(doc(R"({"terrain": {"plane": {}, "vertical_datum": "egm96"}})")),
-              StartsWith("/terrain/vertical_datum: applies to terrain.dem only"));
+  EXPECT_THAT(
+      error_of(doc(R"({"terrain": {"plane": {}, "vertical_datum": "egm96"}})")),
+      StartsWith("/terrain/vertical_datum: applies to terrain.dem and terrain.point_cloud only"));
   // A plane's resolved configuration says "ellipsoid", and parses back.
   c = parse_config(doc(R"({"terrain": {"plane": {}}})"));
   EXPECT_EQ(c.resolved["terrain"]["vertical_datum"], "ellipsoid");

@@ -231,6 +231,14 @@ TEST(Schema, ValidatesWithPythonJsonschema) {
     good.push_back(document);
     good.push_back(parse_config(document).resolved);
   }
+  // A point cloud's ground, and that ground beside another or false.
+  const json cloud = doc(R"({"terrain": {"point_cloud": true},
+                             "canopy": {"point_cloud": {"file": "plot.las"}}})");
+  good.push_back(cloud);
+  good.push_back(parse_config(cloud).resolved);
+  bad.push_back(doc(R"({"terrain": {"plane": {}, "point_cloud": true},
+                        "canopy": {"point_cloud": {"file": "plot.las"}}})"));
+  bad.push_back(doc(R"({"terrain": {"point_cloud": false}})"));
   bad.push_back(doc(R"({"canopy": {"pai": -1}})"));
   bad.push_back(doc(R"({"canopy": {"pia": 1}})"));
   bad.push_back(doc(R"({"output": {"footprints_format": "shapefile"}})"));

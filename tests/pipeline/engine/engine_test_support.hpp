@@ -64,7 +64,7 @@ struct SimulatedTrack {
 // Every shot of the configuration's track.
 inline SimulatedTrack simulate_track(Config config) {
   SimulatedTrack run{std::move(config), {}, {}, {}};
-  const auto terrain = make_terrain(run.config.terrain);
+  const auto terrain = open_terrain(run.config);
   const Track track(run.config.track, *terrain);
   run.footprints = track.footprints(0, track.size());
   const std::unique_ptr<ShotSimulator> made = make_shot_simulator(run.config, *terrain);
