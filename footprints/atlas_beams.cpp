@@ -11,12 +11,12 @@ const std::array<AtlasBeam, 6>& atlas_beams() {
   constexpr double pair_m = 3300.0, half_pair_m = 45.0, weak_ahead_m = 2500.0;
   constexpr double weak = 45.0 / 175.0;
   static const std::array<AtlasBeam, 6> beams = {{
-      {"gt1l", 1, true, -pair_m - half_pair_m, 0.0, 1.0},
-      {"gt1r", 2, false, -pair_m + half_pair_m, weak_ahead_m, weak},
+      {"gt1l", 5, true, -pair_m - half_pair_m, 0.0, 1.0},
+      {"gt1r", 6, false, -pair_m + half_pair_m, weak_ahead_m, weak},
       {"gt2l", 3, true, -half_pair_m, 0.0, 1.0},
       {"gt2r", 4, false, half_pair_m, weak_ahead_m, weak},
-      {"gt3l", 5, true, pair_m - half_pair_m, 0.0, 1.0},
-      {"gt3r", 6, false, pair_m + half_pair_m, weak_ahead_m, weak},
+      {"gt3l", 1, true, pair_m - half_pair_m, 0.0, 1.0},
+      {"gt3r", 2, false, pair_m + half_pair_m, weak_ahead_m, weak},
   }};
   return beams;
 }

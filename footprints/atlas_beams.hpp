@@ -22,7 +22,9 @@ struct AtlasBeam {
 };
 
 // The six beams with the spacecraft in its "backward" orientation (ATL03's sc_orient 0): the
-// left beam of each pair strong, spots 1-6 from gt1l to gt3r. Pair centres at -3300, 0 and
+// left beam of each pair strong; the spots 5, 6, 3, 4, 1, 2 from gt1l to gt3r (the forward
+// orientation's 2, 1, 4, 3, 6, 5 turned through 180 degrees, as icepyx's gt2spot has them).
+// Pair centres at -3300, 0 and
 // +3300 m across track, their beams 45 m either side; the weak beam of each pair 2.5 km ahead of
 // the strong one (the sign of that offset is a choice here).
 const std::array<AtlasBeam, 6>& atlas_beams();

@@ -488,7 +488,7 @@ void read_epoch(JsonReader& r, TrackSettings& t, const std::string& start_time) 
                                format_number(run_limits::altitude_m) + " m");
 }
 
-TrackSettings read_track(JsonReader& root) {
+TrackSettings read_track(JsonReader& root, const SensorSettings& sensor) {
   TrackSettings t;
   JsonReader r = root.object("track");
   std::string start_time;
@@ -511,6 +511,11 @@ TrackSettings read_track(JsonReader& root) {
                {"ephemeris", ephemeris_given},
                {"beams", granule_given}},
               t, t.orbit);
+  // A track fires at its laser's rate unless it says otherwise (ATLAS's 10 kHz, not GLAS's 40).
+  if (!r.has("rate_hz")) {
+    t.rate_hz = sensor.pulse_rate_hz;
+    r.resolved()["rate_hz"] = sensor.pulse_rate_hz;
+  }
   r.finish();
   return t;
 }
@@ -614,7 +619,7 @@ Config parse_config(const json& document) {
   const bool terrain_given = root.has("terrain");
   if (terrain_given) c.terrain = read_terrain(root, c.sensor.bands);
   c.canopy = read_canopy(root, c.sensor.bands);
-  c.track = read_track(root);
+  c.track = read_track(root, c.sensor);
   c.output = read_output(root);
   c.detector = read_detector(root);
   c.brf = read_brf(root);

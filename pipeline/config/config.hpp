@@ -21,7 +21,8 @@ namespace glaswave {
 // The sensor: the lidar the transport and the receivers use (the seed's Table 2, with the
 // `north2010` preset's defaults), and what the configuration says beside it.
 struct SensorSettings : LidarSettings {
-  std::string preset;  // "north2010", "glas", "gedi", "atlas" or empty
+  std::string preset;           // "north2010", "glas", "gedi", "atlas" or empty
+  double pulse_rate_hz = 40.0;  // the laser's: a track's shot rate when it gives none
   // What makes the record: "waveform" (the received waveform and its processing) or
   // "photon_counting" (ICESat-2's photon events; docs/icesat2.md), with the photon-counting
   // receiver's own settings (ATLAS's by default) and its beams.

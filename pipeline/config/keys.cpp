@@ -389,6 +389,11 @@ Key sensor_keys() {
               [](JsonReader& r, const std::string& key) {
                 return r.optional_string(key).value_or("");
               }),
+       // Up to 1 MHz: ATLAS fires 10 kHz, airborne scanners hundreds of kHz.
+       s.number("pulse_rate_hz", &S::pulse_rate_hz, open_closed(0, 1e6), "Hz",
+                "the laser's pulse rate (GLAS 40, GEDI 242, ATLAS 10 000): the shot rate of a "
+                "track that gives no `rate_hz`, and so its shots' times and, without "
+                "`spacing_m`, their spacing"),
        // 1 ps to 1 us: shorter would put the whole pulse energy into an infinite power; longer is
        // no longer a ranging pulse.
        s.number("pulse_sigma_ns", &S::pulse_sigma_ns, closed(0.001, 1000), "ns",
@@ -714,7 +719,8 @@ Key track_keys() {
                  "their place in that sequence; only those whose footprint falls on the terrain "
                  "are simulated and written, the others skipped (`check` says how many). "
                  "`points`: the number of points"),
-       t.number("rate_hz", &S::rate_hz, above(0), "Hz", "shot rate (times)"),
+       t.number("rate_hz", &S::rate_hz, above(0), "Hz", "shot rate (times)")
+           .with_default_text("`sensor.pulse_rate_hz`"),
        t.number("spacing_m", &S::spacing_m, above(0), "m",
                 "spacing of shots along track; from the orbital ground speed and `rate_hz` when "
                 "not given")

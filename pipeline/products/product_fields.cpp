@@ -154,7 +154,7 @@ const ProductField kProductFields[] = {
      .units = "1",
      .long_name = "the GEDI beam of a granule track's shot, by number (BEAM0101 is 5; 0 to 3 are "
                   "coverage beams of half the pulse energy); on an ICESat-2 pass, ATLAS's spot "
-                  "number (1 to 6, gt1l to gt3r); 255 for other tracks",
+                  "number (1 to 6; gt1l to gt3r are 5, 6, 3, 4, 1, 2); 255 for other tracks",
      .gedi_name = "beam"},
     {.name = "degrade_flag",
      .type = S::uint8,

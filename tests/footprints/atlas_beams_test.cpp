@@ -24,9 +24,11 @@ double distance_m(double lat1, double lon1, double lat2, double lon2) {
 TEST(AtlasBeams, NamesSpotsAndStrengthsOfTheBackwardOrientation) {
   const auto& beams = atlas_beams();
   const char* names[] = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};
+  // icepyx's gt2spot for sc_orient 0: the spots' order across the instrument turned about.
+  const int spots[] = {5, 6, 3, 4, 1, 2};
   for (int i = 0; i < 6; ++i) {
     EXPECT_EQ(beams[i].name, names[i]);
-    EXPECT_EQ(beams[i].spot_number, i + 1);
+    EXPECT_EQ(beams[i].spot_number, spots[i]);
     EXPECT_EQ(beams[i].strong, i % 2 == 0);
     EXPECT_NEAR(beams[i].energy_ratio, i % 2 == 0 ? 1.0 : 45.0 / 175.0, 1e-12);
   }

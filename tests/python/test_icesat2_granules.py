@@ -198,7 +198,10 @@ def test_atl03_reads_as_spacelidar_and_icesat2vegr_read_it(granules):
         # GPS seconds less the leap seconds are the run's shot times, 0.1 ms apart.
         gps_s = p["time"] + 1198800018.0
         utc = GPS_EPOCH + timedelta(seconds=float(gps_s.min()) - GPS_MINUS_UTC_S)
-        assert abs((utc - datetime(2019, 6, 21, 19, 30, tzinfo=timezone.utc)).total_seconds()) \
+        # The first photon comes from one of the pass's shots (not always shot 0: a shot may
+        # record none), each 0.1 ms after the one before.
+        after_s = (utc - datetime(2019, 6, 21, 19, 30, tzinfo=timezone.utc)).total_seconds()
+        assert 0 <= round(after_s / 1e-4) < 400 and abs(after_s - round(after_s / 1e-4) * 1e-4) \
             < 1e-6
         assert np.ptp(p["time"]) <= 399 * 1e-4 + 1e-9
         # ph_index_beg is 1-based and agrees with the counts (0 for an empty segment).
@@ -209,7 +212,11 @@ def test_atl03_reads_as_spacelidar_and_icesat2vegr_read_it(granules):
         assert np.all((p["along"] >= 0) & (p["along"] < 20.0 * len(p["counts"])))
         steps = np.diff(np.unique(np.round(p["along"], 3)))
         assert abs(np.median(steps) - 0.7) < 0.01
-        assert abs(p["along"].max() - p["along"].min() - 399 * 0.7) < 1.0
+        # Each photon's distance is its shot's: 0.7 m for each 0.1 ms of its time (to 1 m, the
+        # shots' spread about their footprint centres), and the photons span the pass.
+        shot = np.round((p["time"] - p["time"].min()) / 1e-4)
+        assert np.all(np.abs(p["along"] - p["along"].min() - 0.7 * shot) < 1.0)
+        assert p["along"].max() - p["along"].min() > 0.9 * 399 * 0.7
         # Across track: the ground photons lie on the beam's ground track, within the 11 m
         # footprint, the ground track where the preset puts it.
         ground = p["truth"] == 1
