@@ -239,6 +239,7 @@ VoxelizeResult voxelize_point_cloud(const LasFile& cloud, const std::string& crs
   out.voxels.nz = top;
   out.voxels.z_edges_m.resize(top + 1);
   out.voxels.pad.resize(columns * top);
+  out.voxels.pad.shrink_to_fit();  // a run holds the grid: not the max_height_m layers' zeros
   return out;
 }
 

@@ -177,6 +177,9 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
   if (shape.dx < 0.0) throw input_error(place, "x must increase");
   shape.x0 = coords[2][0] - shape.dx / 2;
   shape.y0 = coords[1][0] - shape.dy / 2;
+  // Windows of consecutive shots overlap: their chunks stay decompressed (a NetCDF-3 or
+  // contiguous variable has no chunk cache: the call then changes nothing).
+  nc_set_var_chunk_cache(ncid, pad_var, VoxelGridFile::read_cache_bytes(shape), 10007, 0.75f);
   double fill_value = 0.0;
   if (nc_get_att_double(ncid, pad_var, "_FillValue", &fill_value) == NC_NOERR) fill = fill_value;
   std::string mapping = text_attribute(ncid, pad_var, "grid_mapping");
@@ -280,6 +283,13 @@ VoxelGridFile::~VoxelGridFile() {
 }
 
 const VoxelBlock& VoxelGridFile::shape() const { return impl_->shape; }
+
+bool VoxelGridFile::netcdf() const { return impl_->netcdf; }
+
+std::size_t VoxelGridFile::read_cache_bytes(const VoxelBlock& shape) {
+  const double grid_bytes = double(shape.nx) * shape.ny * shape.nz * sizeof(float);
+  return static_cast<std::size_t>(std::min(grid_bytes, double(max_read_cache_bytes)));
+}
 
 VoxelBlock VoxelGridFile::window(double x_min, double x_max, double y_min, double y_max) const {
   const VoxelBlock& s = impl_->shape;

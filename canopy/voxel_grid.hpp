@@ -56,6 +56,13 @@ class VoxelGridFile {
   // The whole grid's extent and layers (its pad is empty but for a grid held in memory).
   const VoxelBlock& shape() const;
 
+  // The decompressed chunks of a NetCDF grid kept between windows: the whole grid, up to
+  // max_read_cache_bytes (consecutive shots' windows overlap; the library's default holds less
+  // than one window of a 1 m grid, which every shot then inflated again).
+  static constexpr std::size_t max_read_cache_bytes = std::size_t{128} << 20;
+  static std::size_t read_cache_bytes(const VoxelBlock& shape);
+  bool netcdf() const;  // read through NetCDF (else GDAL, or held in memory)
+
   // The columns that meet the rectangle [x_min, x_max] x [y_min, y_max] (the grid's CRS), read
   // from the file. Empty (nx = 0) when the rectangle misses the grid. Negative, NaN or fill PAD
   // values are an input error naming the file and the voxel. Thread-safe.

@@ -202,10 +202,15 @@ std::string run_outline(const Config& config, const CheckSummary& summary,
        duration(estimated_run_s(shots, rays, max_order, !canopy.is_null(), memory.threads)) +
            " on " + plural(memory.threads, "thread", "threads") +
            " (scaled from the benchmark; expect within about 2x)");
+  // A forest's scene in trees; a measured source's in bytes, with what it holds once.
+  const bool forest = memory.vegetation.empty() || memory.vegetation == "forest";
+  const std::string scene = forest ? number(std::round(memory.trees), 12) + " trees"
+                                   : bytes(memory.scene_bytes) + " of " + memory.vegetation;
+  const std::string once =
+      memory.source_bytes > 0.0 ? ", and the source's " + bytes(memory.source_bytes) + " once" : "";
   line("memory:", "about " + bytes(memory.bytes) + " (" + number(memory.threads, 12) +
-                      " x a scene of " + number(std::round(memory.trees), 12) +
-                      " trees and its waveforms), of " + bytes(memory.available_bytes) +
-                      " available");
+                      " x a scene of " + scene + " and its waveforms" + once + "), of " +
+                      bytes(memory.available_bytes) + " available");
   line("products:", products_line(resolved.value("output", json::object()), config_file));
   return out;
 }

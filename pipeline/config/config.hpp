@@ -89,10 +89,6 @@ inline constexpr std::uint64_t max_order = 1000;  // a ray's weight is gone long
 inline constexpr double angle_rad = 0.05;
 // The highest spacecraft: above geostationary height (35786 km) nothing points a lidar down.
 inline constexpr double altitude_m = 4.0e7;
-// What a tree of a shot's scene takes in memory: its crown, its trunk's 16 triangles, Embree's
-// copy and hierarchy of them. Measured: one shot's peak resident memory grows by 2.4 to 2.6 KiB
-// a tree between 1 450 and 371 000 trees (glas preset, cover 0.7, crown radius 8, 1, 0.5 m).
-inline constexpr double tree_bytes = 2560.0;
 // The copies of a shot's waveforms the transport tallies in (pipeline/transport/
 // shot_transport.cpp).
 inline constexpr double waveform_copies = 65.0;

@@ -20,8 +20,11 @@
 #include "core/error.hpp"
 #include "footprints/ephemeris.hpp"
 #include "pipeline/config/json_reader.hpp"
+#include "pipeline/engine/inputs.hpp"
 #include "pipeline/products/ogr_writer.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
+#include "pipeline/shot/forest_source.hpp"
+#include "pipeline/shot/vegetation_source.hpp"
 
 namespace glaswave {
 namespace {
@@ -45,12 +48,33 @@ double highest_spacecraft_m(const Config& c) {
   return height_m;
 }
 
-// Trees a square metre: randomly placed crowns of cover c and radius r are -ln(1 - c) / (pi r^2)
-// a square metre; a layer or a crowns file has none at random.
-double tree_density_m2(const CanopySettings& canopy) {
-  if (canopy.crown_shape == CrownShape::layer || !canopy.crowns_file.empty()) return 0.0;
-  return -std::log1p(-canopy.cover) /
-         (std::numbers::pi * canopy.crown_radius_m * canopy.crown_radius_m);
+// What a run's vegetation takes: a region `side_m` across (which every thread's shot holds),
+// what its source holds once, the trees of a forest on the region (for the message), and the
+// key that makes it large. None without a canopy.
+struct VegetationMemory {
+  double region_bytes = 0.0, source_bytes = 0.0, trees = 0.0;
+  std::string key = "/canopy", kind;
+};
+
+VegetationMemory vegetation_memory(const Config& c, double side_m) {
+  VegetationMemory m;
+  if (!c.canopy) return m;
+  const VegetationSettings settings = vegetation_settings(c);
+  m.region_bytes = vegetation_region_bytes(settings, side_m);
+  m.source_bytes = vegetation_source_bytes(settings);
+  m.key = vegetation_memory_key(settings);
+  m.kind = c.canopy->kind;
+  if (m.kind == "forest") m.trees = m.region_bytes / forest_tree_bytes;
+  return m;
+}
+
+// A scene's vegetation in words: a forest's trees, else its source's bytes in a region.
+std::string scene_words(const std::string& kind, double trees, double region_bytes, double side_m) {
+  const std::string across = " over " + format_number(std::round(side_m)) + " m across";
+  if (kind.empty() || kind == "forest")
+    return format_number(std::round(trees)) + " trees" + across + ", at " +
+           format_number(forest_tree_bytes / 1024.0) + " KiB a tree";
+  return mebibytes(region_bytes) + " of " + kind + across;
 }
 
 // The patch a shot's rays reach, as the shot layer sizes it before any terrain is opened: over a
@@ -100,25 +124,24 @@ RunMemory estimate_run_memory(const Config& c) {
   const double range_m =
       highest_spacecraft_m(c) / std::cos(c.track.off_nadir_deg * std::numbers::pi / 180.0);
   m.scene_half_size_m = shot_patch_half_size_m(c, range_m);
-  double density = 0.0;
-  if (c.canopy) {
-    density = tree_density_m2(*c.canopy);
-    for (const StandArea& stand : c.canopy->stand_areas)
-      density = std::max(density, tree_density_m2(stand.canopy));
-  }
-  const double side_m = 2.0 * m.scene_half_size_m;
-  m.trees = density * side_m * side_m;
-  m.scene_bytes = m.trees * run_limits::tree_bytes;
+  const VegetationMemory vegetation = vegetation_memory(c, 2.0 * m.scene_half_size_m);
+  m.trees = vegetation.trees;
+  m.scene_bytes = vegetation.region_bytes;
+  m.source_bytes = vegetation.source_bytes;
+  m.vegetation = vegetation.kind;
   m.waveform_bytes = shot_size(c).bytes * run_limits::waveform_copies;
   m.threads = usable_cores();
-  m.bytes = m.threads * (m.scene_bytes + m.waveform_bytes);
+  m.bytes = m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes);
   m.available_bytes = available_memory_bytes();
-  // The key to change: the crowns when they are many on a scene of a usual size, the waveforms
-  // when they weigh most, else what makes the scene wide.
-  if (m.waveform_bytes > m.scene_bytes)
+  // The key to change: the vegetation's when what its source holds weighs most, or when its
+  // region does on a scene of a usual size; the waveforms when they weigh most; else what makes
+  // the scene wide.
+  if (m.source_bytes > m.threads * (m.scene_bytes + m.waveform_bytes))
+    m.place = vegetation.key;
+  else if (m.waveform_bytes > m.scene_bytes)
     m.place = "/sensor/bins";
   else if (m.scene_half_size_m < 1000.0)
-    m.place = "/canopy/crown_radius_m";
+    m.place = vegetation.key;
   else if (range_m > 2.0e6)
     m.place = c.track.type == TrackType::orbit       ? "/track/semi_major_axis_m"
               : c.track.type == TrackType::ephemeris ? "/track/ephemeris"
@@ -133,11 +156,14 @@ void check_run(const Config& config) {
   if (memory.bytes > memory.available_bytes) {
     std::ostringstream why;
     why << "a run would hold about " << gibibytes(memory.bytes) << " (" << memory.threads
-        << " threads x a shot's scene of " << format_number(std::round(memory.trees))
-        << " trees over " << format_number(std::round(2.0 * memory.scene_half_size_m))
-        << " m across, at " << format_number(run_limits::tree_bytes / 1024.0)
-        << " KiB a tree, and its waveforms' " << mebibytes(memory.waveform_bytes)
-        << "), more than the " << gibibytes(memory.available_bytes)
+        << " threads x a shot's scene of "
+        << scene_words(memory.vegetation, memory.trees, memory.scene_bytes,
+                       2.0 * memory.scene_half_size_m)
+        << ", and its waveforms' " << mebibytes(memory.waveform_bytes);
+    if (memory.source_bytes > 0.0)
+      why << "; the " << memory.vegetation << " source's " << mebibytes(memory.source_bytes)
+          << " once";
+    why << "), more than the " << gibibytes(memory.available_bytes)
         << " of memory this process may have";
     throw config_error(memory.place, why.str());
   }
@@ -156,23 +182,19 @@ BrfMemory estimate_brf_memory(const Config& c) {
   m.pixels = std::ceil(c.brf.scene_size_m / c.brf.image_resolution_m);
   const double tile_m = m.pixels * c.brf.image_resolution_m;
   m.scene_side_m = 2.0 * brf_scene_half_size_m(0.5 * tile_m, c.terrain.plane.has_value());
-  double density = 0.0;
-  if (c.canopy) {
-    density = tree_density_m2(*c.canopy);
-    for (const StandArea& stand : c.canopy->stand_areas)
-      density = std::max(density, tree_density_m2(stand.canopy));
-  }
-  m.trees = density * m.scene_side_m * m.scene_side_m;
-  m.scene_bytes = m.trees * run_limits::tree_bytes;
+  const VegetationMemory vegetation = vegetation_memory(c, m.scene_side_m);
+  m.trees = vegetation.trees;
+  m.scene_bytes = vegetation.region_bytes + vegetation.source_bytes;
+  m.vegetation = vegetation.kind;
   m.image_bytes = static_cast<double>(c.sensor.bands.size()) * m.pixels * m.pixels * 8.0 *
                   run_limits::brf_image_copies;
   m.bytes = m.scene_bytes + m.image_bytes;
   m.available_bytes = available_memory_bytes();
   // The key to change: the pixels when the image weighs most, else the tile when it is wide,
-  // else the crowns that crowd it.
+  // else the vegetation that crowds it.
   m.place = m.image_bytes > m.scene_bytes ? "/brf/image_resolution_m"
             : tile_m > 1000.0             ? "/brf/scene_size_m"
-                                          : "/canopy/crown_radius_m";
+                                          : vegetation.key;
   return m;
 }
 
@@ -189,12 +211,10 @@ void check_brf(const Config& config) {
   if (memory.bytes <= memory.available_bytes) return;
   std::ostringstream why;
   why << "brf's scene would hold about " << gibibytes(memory.bytes) << " ("
-      << format_number(std::round(memory.trees)) << " trees over "
-      << format_number(std::round(memory.scene_side_m)) << " m across, at "
-      << format_number(run_limits::tree_bytes / 1024.0) << " KiB a tree, and scene.tif's "
-      << config.sensor.bands.size() << " bands of " << format_number(memory.pixels) << " x "
-      << format_number(memory.pixels) << " pixels, " << mebibytes(memory.image_bytes)
-      << "), more than the " << gibibytes(memory.available_bytes)
+      << scene_words(memory.vegetation, memory.trees, memory.scene_bytes, memory.scene_side_m)
+      << ", and scene.tif's " << config.sensor.bands.size() << " bands of "
+      << format_number(memory.pixels) << " x " << format_number(memory.pixels) << " pixels, "
+      << mebibytes(memory.image_bytes) << "), more than the " << gibibytes(memory.available_bytes)
       << " of memory this process may have";
   throw config_error(memory.place, why.str());
 }

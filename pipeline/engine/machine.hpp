@@ -15,15 +15,18 @@ namespace glaswave {
 int threads_of_process(int threads, int processes_here);
 
 // What a run will hold in memory, estimated from the configuration before anything is
-// allocated: each thread simulates a shot, holding its scene (the trees and ground under the
-// field of view) and its waveforms' tallies.
+// allocated: each thread simulates a shot, holding its scene (the vegetation and ground under
+// the field of view, as its source's region_bytes says) and its waveforms' tallies; the
+// vegetation source holds its own once (a point cloud's voxelisation, facet models).
 struct RunMemory {
   double scene_half_size_m = 0.0;  // half the side of the ground patch a shot's rays can reach
-  double trees = 0.0;              // trees on it (the densest stand's density)
-  double scene_bytes = 0.0;        // the trees' (a DEM's mesh is capped: ground_mesh.cpp)
+  double trees = 0.0;              // a forest's trees on it (the densest stand's density)
+  double scene_bytes = 0.0;        // its vegetation's (a DEM's mesh is capped: ground_mesh.cpp)
+  double source_bytes = 0.0;       // what the vegetation source holds once (a point cloud, models)
+  std::string vegetation;          // the canopy's kind; empty for bare ground
   double waveform_bytes = 0.0;     // the tallies of a shot's waveforms
   int threads = 1;                 // the cores this process may use: a run's default
-  double bytes = 0.0;              // threads x (scene + waveforms)
+  double bytes = 0.0;              // source + threads x (scene + waveforms)
   double available_bytes = 0.0;    // the machine's memory (or the cgroup's limit when lower)
   std::string place;               // the key that makes it large, when it is too large
 };
@@ -35,13 +38,14 @@ RunMemory estimate_run_memory(const Config& config);
 void check_run(const Config& config);
 
 // What `glaswave brf` will hold in memory, estimated as for a run: one scene (shared by the
-// threads), the trees on its tile and beyond its sides (5 m over a periodic plane, 100 m over a
-// DEM), and scene.tif's bands of doubles.
+// threads), the vegetation on its tile and beyond its sides (5 m over a periodic plane, 100 m
+// over a DEM) with what its source holds, and scene.tif's bands of doubles.
 struct BrfMemory {
   double pixels = 0.0;        // scene.tif's side: brf.scene_size_m in whole pixels
   double scene_side_m = 0.0;  // the ground the scene is built over
-  double trees = 0.0;         // on it, at the densest stand's density
-  double scene_bytes = 0.0;   // the trees'
+  double trees = 0.0;         // a forest's on it, at the densest stand's density
+  double scene_bytes = 0.0;   // its vegetation's, and what the vegetation source holds once
+  std::string vegetation;     // the canopy's kind; empty for bare ground
   double image_bytes = 0.0;   // scene.tif's bands, brf_image_copies times
   double bytes = 0.0;         // scene + image
   double available_bytes = 0.0;

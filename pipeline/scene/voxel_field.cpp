@@ -15,16 +15,17 @@
 namespace glaswave {
 
 double VoxelField::top_m() const {
-  double top = -std::numeric_limits<double>::infinity();
+  // Layer by layer from the top, in memory order (a column's layers lie `columns` apart): the
+  // highest top of a non-empty voxel, down to the layer whose top cannot beat it.
+  double top = -std::numeric_limits<double>::infinity(), highest_ground = top;
   const std::size_t columns = static_cast<std::size_t>(nx) * ny;
-  for (std::size_t c = 0; c < columns; ++c) {
-    if (!std::isfinite(ground_m[c])) continue;
-    for (int k = nz - 1; k >= 0; --k) {
-      if (pad[k * columns + c] > 0.0f) {
+  for (std::size_t c = 0; c < columns; ++c)
+    if (std::isfinite(ground_m[c])) highest_ground = std::max(highest_ground, ground_m[c]);
+  for (int k = nz - 1; k >= 0 && highest_ground + z_edges_m[k + 1] > top; --k) {
+    const float* layer = pad.data() + k * columns;
+    for (std::size_t c = 0; c < columns; ++c)
+      if (layer[c] > 0.0f && std::isfinite(ground_m[c]))
         top = std::max(top, ground_m[c] + z_edges_m[k + 1]);
-        break;
-      }
-    }
   }
   return top;
 }
@@ -76,6 +77,17 @@ void voxel_spans(const VoxelField& f, const Vec3& origin, const Vec3& direction,
     return true;
   };
   if (!clip(u0, du, f.nx) || !clip(v0, dv, f.ny) || !(t_enter < t_exit)) return;
+  // Above the highest column and below the lowest there is nothing to meet.
+  if (direction[2] != 0.0) {
+    double t0 = (f.bottom_m - origin[2]) / direction[2],
+           t1 = (f.ceiling_m - origin[2]) / direction[2];
+    if (t0 > t1) std::swap(t0, t1);
+    t_enter = std::max(t_enter, t0);
+    t_exit = std::min(t_exit, t1);
+    if (!(t_enter < t_exit)) return;
+  } else if (!(origin[2] >= f.bottom_m && origin[2] <= f.ceiling_m)) {
+    return;
+  }
 
   const auto cell = [](double x, int n) {
     return std::clamp(static_cast<int>(std::floor(x)), 0, n - 1);
@@ -144,6 +156,73 @@ void voxel_spans(const VoxelField& f, const Vec3& origin, const Vec3& direction,
   }
 }
 
+namespace {
+
+// Nodes along an axis of n columns: every `stride`-th and the last.
+std::vector<int> ground_nodes(int n, int stride) {
+  std::vector<int> nodes;
+  for (int i = 0; i < n; i += stride) nodes.push_back(i);
+  if (nodes.back() != n - 1) nodes.push_back(n - 1);
+  return nodes;
+}
+
+// Column i between nodes k and k + 1 at weight t of the second.
+void between_nodes(const std::vector<int>& nodes, int i, int stride, std::size_t& k, double& t) {
+  k = std::min(static_cast<std::size_t>(i / stride), nodes.size() - 1);
+  if (k + 1 >= nodes.size() || nodes[k] == i) {
+    t = 0.0;
+    return;
+  }
+  t = static_cast<double>(i - nodes[k]) / (nodes[k + 1] - nodes[k]);
+}
+
+}  // namespace
+
+void fill_ground(VoxelField& f, const LocalFrame& frame, const Terrain& terrain, double cell_m) {
+  const auto exact = [&](int i, int j) {
+    const double lx = f.origin_m[0] + (i + 0.5) * f.axis_i_m[0] + (j + 0.5) * f.axis_j_m[0];
+    const double ly = f.origin_m[1] + (i + 0.5) * f.axis_i_m[1] + (j + 0.5) * f.axis_j_m[1];
+    const Geodetic g = frame.to_geodetic({lx, ly, 0.0});
+    const double h = terrain.height_m(g.lat_deg, g.lon_deg);
+    return std::isfinite(h) ? frame.to_local(Geodetic{g.lat_deg, g.lon_deg, h})[2]
+                            : std::numeric_limits<double>::quiet_NaN();
+  };
+  const int stride = std::clamp(static_cast<int>(0.25 * terrain.detail_m() / cell_m), 1, 16);
+  const std::vector<int> nodes_i = ground_nodes(f.nx, stride), nodes_j = ground_nodes(f.ny, stride);
+  std::vector<double> node_m(nodes_i.size() * nodes_j.size());
+  for (std::size_t b = 0; b < nodes_j.size(); ++b)
+    for (std::size_t a = 0; a < nodes_i.size(); ++a)
+      node_m[b * nodes_i.size() + a] = exact(nodes_i[a], nodes_j[b]);
+  f.ground_m.resize(static_cast<std::size_t>(f.nx) * f.ny);
+  for (int j = 0; j < f.ny; ++j) {
+    std::size_t b = 0;
+    double v = 0.0;
+    between_nodes(nodes_j, j, stride, b, v);
+    const std::size_t b1 = std::min(b + 1, nodes_j.size() - 1);
+    for (int i = 0; i < f.nx; ++i) {
+      std::size_t a = 0;
+      double u = 0.0;
+      between_nodes(nodes_i, i, stride, a, u);
+      const std::size_t a1 = std::min(a + 1, nodes_i.size() - 1);
+      const std::size_t w = nodes_i.size();
+      const double g00 = node_m[b * w + a], g10 = node_m[b * w + a1];
+      const double g01 = node_m[b1 * w + a], g11 = node_m[b1 * w + a1];
+      double g = (1 - v) * ((1 - u) * g00 + u * g10) + v * ((1 - u) * g01 + u * g11);
+      if (u == 0.0 && v == 0.0) g = g00;
+      // Where the terrain has no data about the column, its own ground (or none).
+      if (!std::isfinite(g)) g = exact(i, j);
+      f.ground_m[static_cast<std::size_t>(j) * f.nx + i] = g;
+    }
+  }
+  f.bottom_m = std::numeric_limits<double>::infinity();
+  f.ceiling_m = -f.bottom_m;
+  for (const double g : f.ground_m) {
+    if (!std::isfinite(g)) continue;
+    f.bottom_m = std::min(f.bottom_m, g + f.z_edges_m.front());
+    f.ceiling_m = std::max(f.ceiling_m, g + f.z_edges_m.back());
+  }
+}
+
 struct VoxelFieldSource::Impl {
   const VoxelGridFile* grid;
   std::string place;
@@ -194,20 +273,7 @@ std::shared_ptr<const VoxelField> VoxelFieldSource::field(const LocalFrame& fram
   field->nz = block.nz;
   field->z_edges_m = std::move(block.z_edges_m);
   field->pad = std::move(block.pad);
-  field->ground_m.resize(static_cast<std::size_t>(block.nx) * block.ny);
-  for (int j = 0; j < block.ny; ++j) {
-    for (int i = 0; i < block.nx; ++i) {
-      const double lx =
-          field->origin_m[0] + (i + 0.5) * field->axis_i_m[0] + (j + 0.5) * field->axis_j_m[0];
-      const double ly =
-          field->origin_m[1] + (i + 0.5) * field->axis_i_m[1] + (j + 0.5) * field->axis_j_m[1];
-      const Geodetic g = frame.to_geodetic({lx, ly, 0.0});
-      const double h = terrain.height_m(g.lat_deg, g.lon_deg);
-      field->ground_m[static_cast<std::size_t>(j) * block.nx + i] =
-          std::isfinite(h) ? frame.to_local(Geodetic{g.lat_deg, g.lon_deg, h})[2]
-                           : std::numeric_limits<double>::quiet_NaN();
-    }
-  }
+  fill_ground(*field, frame, terrain, std::min(cell_i_m, cell_j_m));
   return field;
 }
 

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +35,10 @@ struct VoxelField {
   std::vector<double> ground_m;   // local height of the ground under each column, [j * nx + i]
   std::vector<float> pad;         // m^2/m^3 at [(k * ny + j) * nx + i]
   int material = 0;               // the foliage of every voxel
+  // The lowest bottom and highest top of any column (local frame), set with the ground by
+  // fill_ground: a ray is traversed only between them (unbounded when not set).
+  double bottom_m = -std::numeric_limits<double>::infinity();
+  double ceiling_m = std::numeric_limits<double>::infinity();
 
   // Highest point of any non-empty voxel (local frame); -infinity for an empty field.
   double top_m() const;
@@ -46,6 +51,13 @@ struct VoxelField {
 void voxel_spans(const VoxelField& field, const Vec3& origin, const Vec3& direction,
                  double max_distance_m, std::vector<VolumeSpan>& spans, double depth = 0.0,
                  const std::vector<double>* extinction_per_density = nullptr);
+
+// Sets the ground under each of the field's columns (its origin, axes and sizes set), in the
+// frame: the terrain's height under the column's centre, exact at nodes every few columns (as
+// many as fit in a quarter of the terrain's detail, the spacing of the ground mesh the rays meet;
+// at most 16) and bilinear between them, or exact at every column of a fine DEM. Computing it at
+// every column of a 1 m grid (a quarter of a million geodetic conversions) was most of a shot.
+void fill_ground(VoxelField& field, const LocalFrame& frame, const Terrain& terrain, double cell_m);
 
 // A voxel grid file placed under shots: for each shot, the window of the grid within
 // `half_size_m` of the footprint, carried into the shot's frame, each column standing on the

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <numbers>
 
@@ -87,6 +88,16 @@ std::vector<VegetationSource::Placed> FacetSource::placed() const {
 
 double FacetSource::region_bytes(const VegetationSettings&, double side_m) {
   return side_m * side_m / 20.0 * 256.0;
+}
+
+double FacetSource::source_bytes(const VegetationSettings& settings) {
+  double bytes = 0.0;
+  for (const auto& [name, file] : settings.canopy.facet_models) {
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(file, error);
+    if (!error) bytes += facet_model_bytes_per_file_byte * static_cast<double>(size);
+  }
+  return bytes;
 }
 
 }  // namespace glaswave

@@ -16,6 +16,12 @@
 
 namespace glaswave {
 
+// What a model takes at its peak (Assimp's read, the mesh and its BVH) for a byte of its file:
+// facet_benchmark's OBJ of 100 016 triangles, 10.6 MB, took the process to a peak of 242 MiB
+// (about 210 MiB above its start; 131 MiB kept after the read). Binary meshes (PLY, glb) hold
+// about twice the triangles a byte: their estimate may be half what they take.
+inline constexpr double facet_model_bytes_per_file_byte = 20.0;
+
 class FacetSource : public VegetationSource {
  public:
   // Reads every model's mesh and the trees file: an input error naming the file when one cannot
@@ -37,6 +43,8 @@ class FacetSource : public VegetationSource {
   // A region's instances, at a tree every 20 m² (a dense plot) and 256 bytes a tree (the models
   // themselves are shared by every shot).
   static double region_bytes(const VegetationSettings& settings, double side_m);
+  // Every model, read once for the run: facet_model_bytes_per_file_byte times its file's size.
+  static double source_bytes(const VegetationSettings& settings);
 
  private:
   std::vector<std::shared_ptr<const FacetModel>> models_;

@@ -22,16 +22,17 @@ Registry& registry() {
       {},
       {{"forest",
         {[](const VegetationSettings& s) { return std::make_unique<ForestSource>(s); },
-         &ForestSource::region_bytes}},
+         &ForestSource::region_bytes, nullptr, "/canopy/crown_radius_m"}},
        {"voxels",
         {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
-         &VoxelSource::region_bytes}},
+         &VoxelSource::region_bytes, &VoxelSource::source_bytes, "/canopy/voxels/file"}},
        {"point_cloud",
         {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
-         &VoxelSource::region_bytes}},
+         &VoxelSource::region_bytes, &VoxelSource::source_bytes,
+         "/canopy/point_cloud/voxel_size_m"}},
        {"facets",
         {[](const VegetationSettings& s) { return std::make_unique<FacetSource>(s); },
-         &FacetSource::region_bytes}}}};
+         &FacetSource::region_bytes, &FacetSource::source_bytes, "/canopy/facets/models"}}}};
   return sources;
 }
 
@@ -66,6 +67,15 @@ std::unique_ptr<VegetationSource> make_vegetation_source(const VegetationSetting
 
 double vegetation_region_bytes(const VegetationSettings& settings, double side_m) {
   return kind_of(settings.canopy.kind).region_bytes(settings, side_m);
+}
+
+double vegetation_source_bytes(const VegetationSettings& settings) {
+  const VegetationKind kind = kind_of(settings.canopy.kind);
+  return kind.source_bytes ? kind.source_bytes(settings) : 0.0;
+}
+
+std::string vegetation_memory_key(const VegetationSettings& settings) {
+  return kind_of(settings.canopy.kind).memory_key;
 }
 
 }  // namespace glaswave

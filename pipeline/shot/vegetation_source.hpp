@@ -82,12 +82,16 @@ struct VegetationSettings {
   std::optional<PlaneSettings> plane;  // crowns files may be in metres on the plane
 };
 
-// One kind of source: how to make it, and what a region of it takes in memory before it is
-// made (bytes of a scene `side_m` across: the memory estimate, which runs before any file is
-// read).
+// One kind of source: how to make it, and what it takes in memory before it is made (the memory
+// estimate, which reads at most the headers of its files): bytes of a region `side_m` across,
+// which every thread's shot holds; bytes the source itself holds once for the run, at its peak
+// (a point cloud's voxelisation, facet models; none when empty); and the key that makes it
+// large, where a run too large for the machine is refused.
 struct VegetationKind {
   std::function<std::unique_ptr<VegetationSource>(const VegetationSettings&)> make;
   std::function<double(const VegetationSettings&, double side_m)> region_bytes;
+  std::function<double(const VegetationSettings&)> source_bytes;
+  std::string memory_key = "/canopy";
 };
 
 // Registers a kind of source under `name` (CanopySettings::kind); a name registered twice is an
@@ -100,5 +104,9 @@ std::unique_ptr<VegetationSource> make_vegetation_source(const VegetationSetting
 
 // Bytes a region `side_m` across of that source takes in a shot's scene.
 double vegetation_region_bytes(const VegetationSettings& settings, double side_m);
+
+// Bytes the source of `settings` holds once for the run, and the key that makes it large.
+double vegetation_source_bytes(const VegetationSettings& settings);
+std::string vegetation_memory_key(const VegetationSettings& settings);
 
 }  // namespace glaswave

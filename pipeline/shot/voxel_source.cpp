@@ -2,10 +2,12 @@
 #include "pipeline/shot/voxel_source.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "canopy/gap_fraction.hpp"
 #include "canopy/las_reader.hpp"
+#include "core/error.hpp"
 
 namespace glaswave {
 
@@ -49,10 +51,65 @@ RegionVegetation VoxelSource::grow(const VegetationRegion& region) const {
   return grown;
 }
 
+namespace {
+
+// What a grid will be, from its file's header before the source is made: a voxels file's shape
+// (its coordinates), or a cloud's extent (its z range bounds the heights above the ground) at
+// the voxel size. 1 m columns of 60 layers when the file cannot be read: making the source names
+// its fault.
+struct GridShape {
+  double cell_x_m = 1.0, cell_y_m = 1.0, layers = 60.0;
+  double columns = 0.0, points = 0.0;  // the whole grid's, a cloud's
+  double inversion_layers = 0.0;       // a cloud's layers while it is voxelised
+  double cache_bytes = 0.0;            // a NetCDF file's decompressed chunks kept between windows
+};
+
+GridShape grid_shape(const VegetationSettings& settings) {
+  GridShape g;
+  const CanopySettings& canopy = settings.canopy;
+  try {
+    if (canopy.kind == "point_cloud") {
+      const LasHeader h = LasFile(canopy.point_cloud_file).header();
+      const double size_m = canopy.voxel_size_m;
+      g.cell_x_m = g.cell_y_m = size_m;
+      g.inversion_layers = std::ceil(GapFractionSettings{}.max_height_m / size_m);
+      g.layers = std::min(g.inversion_layers, std::ceil((h.max[2] - h.min[2]) / size_m) + 1.0);
+      g.columns = (std::floor((h.max[0] - h.min[0]) / size_m) + 1.0) *
+                  (std::floor((h.max[1] - h.min[1]) / size_m) + 1.0);
+      g.points = static_cast<double>(h.point_count);
+    } else {
+      const VoxelGridFile grid(canopy.voxels_file);
+      const VoxelBlock& shape = grid.shape();
+      g.cell_x_m = std::abs(shape.dx);
+      g.cell_y_m = std::abs(shape.dy);
+      g.layers = shape.nz;
+      g.columns = static_cast<double>(shape.nx) * shape.ny;
+      if (grid.netcdf())
+        g.cache_bytes = static_cast<double>(VoxelGridFile::read_cache_bytes(shape));
+    }
+  } catch (const Error&) {
+  }
+  return g;
+}
+
+}  // namespace
+
 double VoxelSource::region_bytes(const VegetationSettings& settings, double side_m) {
-  const double cell_m = settings.canopy.kind == "point_cloud" ? settings.canopy.voxel_size_m : 1.0;
-  const double columns = (side_m / cell_m + 1.0) * (side_m / cell_m + 1.0);
-  return columns * (60.0 * sizeof(float) + sizeof(double));
+  const GridShape g = grid_shape(settings);
+  const double columns = (side_m / g.cell_x_m + 1.0) * (side_m / g.cell_y_m + 1.0);
+  return std::min(columns, g.columns > 0.0 ? g.columns : columns) *
+         (g.layers * sizeof(float) + sizeof(double));
+}
+
+double VoxelSource::source_bytes(const VegetationSettings& settings) {
+  const GridShape g = grid_shape(settings);
+  if (settings.canopy.kind != "point_cloud") return g.cache_bytes;
+  // Reading: the ground points (three doubles each, at most every point) and a window of a
+  // million points. Inverting: each voxel's weight (a double) and density (a float) at once.
+  const double reading = g.points * 3.0 * sizeof(double) + (1 << 20) * sizeof(LasPoint);
+  const double inverting = g.columns * ((g.inversion_layers + 1.0) * sizeof(double) +
+                                        g.inversion_layers * sizeof(float) + 3.0 * sizeof(double));
+  return std::max(reading, inverting);
 }
 
 }  // namespace glaswave

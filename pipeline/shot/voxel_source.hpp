@@ -27,9 +27,13 @@ class VoxelSource : public VegetationSource {
 
   const VoxelGridFile& grid() const { return *grid_; }
 
-  // A region `side_m` across: its columns (of the grid's size, 1 m when unknown before the
-  // file is read) of 60 layers of 4 bytes, and the ground under each.
+  // A region `side_m` across: its columns (of the grid's size, as the file's header gives it)
+  // of the grid's layers of 4 bytes, and the ground under each (a double).
   static double region_bytes(const VegetationSettings& settings, double side_m);
+  // What the source holds once: a NetCDF grid's decompressed chunks (VoxelGridFile::
+  // read_cache_bytes); a point cloud's voxelisation when the run starts (its peak: the ground
+  // points, or each voxel's weight and density; the grid it leaves is less).
+  static double source_bytes(const VegetationSettings& settings);
 
  private:
   CanopySettings canopy_;

@@ -26,6 +26,7 @@
 #include <string>
 
 #include "pipeline/shot/facet_source.hpp"
+#include "tests/benchmarks/process_memory.hpp"
 #include "tests/pipeline/shot/shot_test_support.hpp"
 
 namespace {
@@ -33,21 +34,12 @@ namespace {
 namespace fs = std::filesystem;
 using namespace glaswave;
 using Clock = std::chrono::steady_clock;
+using benchmarks::status_mib;
 
 constexpr double crown_radius_m = 2.5, crown_half_height_m = 4.0, crown_base_m = 6.0;
 // The full model's leaves; `--leaves N` gives the same leaf area in N leaves of another side.
 constexpr int full_leaves = 100000;
 constexpr double full_leaf_side_m = 0.04;
-
-// A line of /proc/self/status ("VmRSS", "VmHWM") in MiB.
-double status_mib(const char* field) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  const std::string key = std::string(field) + ":";
-  while (std::getline(in, line))
-    if (line.rfind(key, 0) == 0) return std::stod(line.substr(key.size())) / 1024.0;
-  return 0.0;
-}
 
 // The model: `leaves` equilateral leaves (spherical normals, centres uniform in the crown's
 // ellipsoid) and an 8-sided trunk, as OBJ and MTL.

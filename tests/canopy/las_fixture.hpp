@@ -3,6 +3,7 @@
 // any format 0-10. Fields the tests do not set stay zero.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -89,6 +90,16 @@ inline std::vector<std::uint8_t> las_bytes(const LasFixture& f) {
   for (int a = 0; a < 3; ++a) {
     put_value<double>(b, 131 + 8 * a, f.scale);
     put_value<double>(b, 155 + 8 * a, f.offset[a]);
+    // The points' extent, max then min, as writers fill it.
+    double lo = 0.0, hi = 0.0;
+    for (std::size_t k = 0; k < f.points.size(); ++k) {
+      const LasFixturePoint& p = f.points[k];
+      const double v = a == 0 ? p.x : a == 1 ? p.y : p.z;
+      lo = k == 0 ? v : std::min(lo, v);
+      hi = k == 0 ? v : std::max(hi, v);
+    }
+    put_value<double>(b, 179 + 16 * a, hi);
+    put_value<double>(b, 187 + 16 * a, lo);
   }
   if (f.version_minor >= 4) {
     if (!f.wkt.empty()) put_value<std::uint16_t>(b, 6, 16);  // global encoding: WKT

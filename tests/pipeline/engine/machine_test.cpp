@@ -7,13 +7,20 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
 
+#include "canopy/voxel_grid.hpp"
 #include "core/error.hpp"
 #include "pipeline/config/config.hpp"
+#include "pipeline/engine/inputs.hpp"
+#include "pipeline/shot/voxel_source.hpp"
+#include "tests/canopy/las_fixture.hpp"
 #include "tests/pipeline/config/config_test_support.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace glaswave {
 namespace {
@@ -61,6 +68,107 @@ TEST(RunMemory, BeyondTheMachineIsRefusedAtTheKeyThatMakesIt) {
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_EQ(e.place(), "/track/altitude_m");
+  }
+}
+
+// A voxel grid's region: the window of the grid a shot reads (its columns' densities, 4 bytes a
+// voxel, and the ground under each, 8 bytes), counted here on the field a VoxelSource grows over
+// the estimate's half size about 45 N 7 E: the estimate within 2 % of it. 2 m columns, 30
+// layers, a 1200 m square in UTM 32N; the glas preset's scene is 492 m across (247 x 247 columns
+// of 128 bytes, 7.4 MiB).
+TEST(RunMemory, CountsTheVoxelGridsWindowEachThreadHolds) {
+  test_support::ScratchDir dir;
+  VoxelBlock grid;
+  grid.crs_wkt = "EPSG:32632";
+  grid.nx = grid.ny = 600;
+  grid.nz = 30;
+  grid.dx = grid.dy = 2.0;
+  grid.x0 = 342369.0 - 600.0;
+  grid.y0 = 4984896.0 - 600.0;
+  for (int k = 0; k <= grid.nz; ++k) grid.z_edges_m.push_back(k);
+  grid.pad.assign(std::size_t(600) * 600 * 30, 0.25f);
+  write_voxel_netcdf(dir.path() / "pad.nc", grid);
+  json document = doc(R"({"sensor": {"preset": "glas"}, "terrain": {"plane": {"origin_lat_deg": 45,
+      "origin_lon_deg": 7}}})");
+  document["canopy"] = {{"voxels", {{"file", (dir.path() / "pad.nc").string()}}}};
+  const Config c = parse_config(document);
+  const RunMemory m = estimate_run_memory(c);
+  const auto terrain = make_terrain(c.terrain);
+  const VoxelSource source(vegetation_settings(c));
+  const LocalFrame frame({45.0, 7.0, 0.0});
+  const auto field = source.grow({*terrain, frame, m.scene_half_size_m, {}, 1}).geometry.voxels;
+  ASSERT_TRUE(field);
+  const double window_bytes = field->pad.size() * 4.0 + field->ground_m.size() * 8.0;
+  EXPECT_NEAR(m.scene_bytes / window_bytes, 1.0, 0.02) << field->nx << " x " << field->ny;
+  EXPECT_EQ(m.trees, 0.0);
+  // Once for the run: the grid's decompressed chunks NetCDF keeps, here the whole 41 MiB.
+  EXPECT_EQ(m.source_bytes, 600.0 * 600 * 30 * 4);
+  EXPECT_NEAR(m.bytes, m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes), 1.0);
+  EXPECT_NO_THROW(check_run(c));
+}
+
+// A point cloud is voxelised once when the run starts: each voxel's weight and density, over the
+// columns its header's extent spans at voxel_size_m and the 120 m the inversion keeps. Two
+// points 20 km apart at 5 cm: 1.6e11 columns of 2400 layers, far beyond any machine, refused at
+// the voxel size.
+TEST(RunMemory, APointCloudsVoxelisationIsRefusedAtItsVoxelSize) {
+  test_support::ScratchDir dir;
+  test::LasFixture las;
+  las.points.resize(2);
+  las.points[0].x = 500000.0;
+  las.points[0].y = 4000000.0;
+  las.points[1].x = 520000.0;
+  las.points[1].y = 4020000.0;
+  las.points[1].z = 30.0;
+  test::write_las(dir.path() / "wide.las", las);
+  json document = doc("{}");
+  document["canopy"] = {{"point_cloud",
+                         {{"file", (dir.path() / "wide.las").string()},
+                          {"crs", "EPSG:32633"},
+                          {"voxel_size_m", 0.05}}}};
+  const Config c = parse_config(document);
+  const RunMemory m = estimate_run_memory(c);
+  const double columns = (20000.0 / 0.05 + 1) * (20000.0 / 0.05 + 1);
+  EXPECT_NEAR(m.source_bytes / (columns * (2401 * 8.0 + 2400 * 4.0 + 24.0)), 1.0, 1e-5);
+  // Each thread's window: 31 m of heights in 5 cm layers (the header's z range and one more).
+  const double side_m = 2.0 * m.scene_half_size_m;
+  EXPECT_NEAR(m.scene_bytes, (side_m / 0.05 + 1) * (side_m / 0.05 + 1) * (601 * 4.0 + 8.0),
+              1e-6 * m.scene_bytes);
+  try {
+    check_run(c);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.place(), "/canopy/point_cloud/voxel_size_m");
+    EXPECT_THAT(e.message(), HasSubstr("; the point_cloud source's "));
+  }
+}
+
+// Facet models are read once for the run, at 20 bytes of memory a byte of their file (Assimp's
+// read of an OBJ at its peak, measured by facet_benchmark): a model file of 2 TiB (sparse) is
+// refused at the models before anything reads it. Each thread's scene holds the region's
+// instances, a tree every 20 m2 at 256 bytes.
+TEST(RunMemory, FacetModelsAreCountedOnceAndRefusedAtTheModels) {
+  test_support::ScratchDir dir;
+  const auto huge = dir.path() / "huge.obj";
+  std::ofstream(huge) << "v 0 0 0\n";
+  std::filesystem::resize_file(huge, std::uintmax_t{2} << 40);
+  std::ofstream(dir.path() / "trees.csv") << "x,y,model,rotation_deg,scale\n0,0,tree,0,1\n";
+  json document = doc(R"({"sensor": {"preset": "gedi"}})");
+  document["canopy"] = {{"facets",
+                         {{"trees_file", (dir.path() / "trees.csv").string()},
+                          {"models", {{"tree", huge.string()}}},
+                          {"materials", {{"leaf", {{"reflectance", 0.4}}}}}}}};
+  const Config c = parse_config(document);
+  const RunMemory m = estimate_run_memory(c);
+  EXPECT_EQ(m.source_bytes, 20.0 * std::pow(2.0, 41));
+  const double side_m = 2.0 * m.scene_half_size_m;
+  EXPECT_NEAR(m.scene_bytes, side_m * side_m / 20.0 * 256.0, 1e-6);
+  try {
+    check_run(c);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.place(), "/canopy/facets/models");
+    EXPECT_THAT(e.message(), HasSubstr("; the facets source's "));
   }
 }
 

@@ -71,11 +71,11 @@ double region_bytes(const VegetationSettings&, double side_m) { return 64.0 * si
 // Each test double registered once, as a new source is: one line.
 const bool registered = [] {
   register_vegetation_source(
-      "one_voxel",
-      {[](const VegetationSettings&) { return std::make_unique<OneVoxelSource>(); }, region_bytes});
+      "one_voxel", {[](const VegetationSettings&) { return std::make_unique<OneVoxelSource>(); },
+                    region_bytes, nullptr, "/canopy/one_voxel"});
   register_vegetation_source(
-      "plate",
-      {[](const VegetationSettings&) { return std::make_unique<PlateSource>(); }, region_bytes});
+      "plate", {[](const VegetationSettings&) { return std::make_unique<PlateSource>(); },
+                region_bytes, nullptr, "/canopy/plate"});
   return true;
 }();
 
