@@ -571,13 +571,15 @@ SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t co
   return t;
 }
 
+// A value as float32, NaN (not measured) as the products' fill value.
+float or_fill(double v) { return std::isnan(v) ? fill_float : static_cast<float>(v); }
+
 // A land segments' five sub-segments' values, segments x 5 (fill for NaN).
 std::vector<float> as_float_20m(const std::vector<LandSegment>& s,
                                 std::array<double, 5> LandSegment::*member) {
   std::vector<float> out;
   for (const LandSegment& x : s)
-    for (const double v : x.*member)
-      out.push_back(std::isnan(v) ? fill_float : static_cast<float>(v));
+    for (const double v : x.*member) out.push_back(or_fill(v));
   return out;
 }
 
@@ -613,11 +615,20 @@ void write_20m(Granule& g, hid_t land, hid_t terrain, hid_t canopy,
 
 std::vector<float> as_float(const std::vector<LandSegment>& s, double LandSegment::*member) {
   std::vector<float> out;
-  for (const LandSegment& x : s) {
-    const double v = x.*member;
-    out.push_back(std::isnan(v) ? fill_float : static_cast<float>(v));
-  }
+  for (const LandSegment& x : s) out.push_back(or_fill(x.*member));
   return out;
+}
+
+// A land segment's value written as float32, NaN as the fill value, one dataset a field in order.
+struct SegmentField {
+  const char* name;
+  double LandSegment::*member;
+  Meta meta;
+};
+
+void write_segment_fields(Granule& g, hid_t h, const std::vector<LandSegment>& s,
+                          const std::vector<SegmentField>& fields) {
+  for (const SegmentField& f : fields) g.dataset(h, f.name, as_float(s, f.member), f.meta, 0, true);
 }
 
 std::vector<std::int32_t> as_int(const std::vector<LandSegment>& s,
@@ -692,35 +703,39 @@ void write_segment_flags(Granule& g, hid_t h, std::size_t count) {
 }
 
 void write_terrain(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
-  g.dataset(h, "h_te_best_fit", as_float(s, &LandSegment::h_te_best_fit),
-            {"meters", "Best fit terrain elevation", "modelResult",
-             "The classification's fitted ground at the segment's centre"},
-            0, true);
-  g.dataset(h, "h_te_mean", as_float(s, &LandSegment::h_te_mean),
-            {"meters", "Mean terrain elevation", "modelResult",
-             "Mean of the segment's ground photons' heights"},
-            0, true);
-  g.dataset(h, "h_te_median", as_float(s, &LandSegment::h_te_median),
-            {"meters", "Median terrain elevation", "modelResult",
-             "Median of the segment's ground photons' heights"},
-            0, true);
-  g.dataset(h, "h_te_uncertainty", as_float(s, &LandSegment::h_te_uncertainty),
-            {"meters", "Uncertainty of the mean terrain height", "qualityInformation",
-             "The ground photons' RMS about their least-squares line over sqrt(n_te_photons); "
-             "no geolocation error is simulated"},
-            0, true);
-  g.dataset(h, "h_te_min", as_float(s, &LandSegment::h_te_min),
-            {"meters", "Minimum terrain elevation", "modelResult",
-             "Lowest of the segment's ground photons' heights"},
-            0, true);
-  g.dataset(h, "h_te_max", as_float(s, &LandSegment::h_te_max),
-            {"meters", "Maximum terrain elevation", "modelResult",
-             "Highest of the segment's ground photons' heights"},
-            0, true);
-  g.dataset(h, "terrain_slope", as_float(s, &LandSegment::terrain_slope),
-            {"1", "Terrain slope", "modelResult",
-             "Along-track slope of the least-squares line through the ground photons"},
-            0, true);
+  write_segment_fields(
+      g, h, s,
+      {
+          {"h_te_best_fit",
+           &LandSegment::h_te_best_fit,
+           {"meters", "Best fit terrain elevation", "modelResult",
+            "The classification's fitted ground at the segment's centre"}},
+          {"h_te_mean",
+           &LandSegment::h_te_mean,
+           {"meters", "Mean terrain elevation", "modelResult",
+            "Mean of the segment's ground photons' heights"}},
+          {"h_te_median",
+           &LandSegment::h_te_median,
+           {"meters", "Median terrain elevation", "modelResult",
+            "Median of the segment's ground photons' heights"}},
+          {"h_te_uncertainty",
+           &LandSegment::h_te_uncertainty,
+           {"meters", "Uncertainty of the mean terrain height", "qualityInformation",
+            "The ground photons' RMS about their least-squares line over sqrt(n_te_photons); "
+            "no geolocation error is simulated"}},
+          {"h_te_min",
+           &LandSegment::h_te_min,
+           {"meters", "Minimum terrain elevation", "modelResult",
+            "Lowest of the segment's ground photons' heights"}},
+          {"h_te_max",
+           &LandSegment::h_te_max,
+           {"meters", "Maximum terrain elevation", "modelResult",
+            "Highest of the segment's ground photons' heights"}},
+          {"terrain_slope",
+           &LandSegment::terrain_slope,
+           {"1", "Terrain slope", "modelResult",
+            "Along-track slope of the least-squares line through the ground photons"}},
+      });
   g.dataset(h, "n_te_photons", as_int(s, &LandSegment::n_te_photons),
             {"1", "Number of ground photons", "modelResult", "The segment's ground photons"});
 }
@@ -729,17 +744,22 @@ void write_terrain(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
 // greatest, and canopy_h_metrics (segments x 18: the 10th, 15th, ..., 95th percentiles).
 void write_canopy_distribution(Granule& g, hid_t h, const std::vector<LandSegment>& s,
                                const std::string& above) {
-  g.dataset(h, "h_min_canopy", as_float(s, &LandSegment::h_min_canopy),
-            {"meters", "Minimum relative canopy height", "modelResult", "Least" + above}, 0, true);
-  g.dataset(h, "h_median_canopy", as_float(s, &LandSegment::h_median_canopy),
-            {"meters", "Median relative canopy height", "modelResult", "Median" + above}, 0, true);
-  g.dataset(h, "h_max_canopy", as_float(s, &LandSegment::h_max_canopy),
-            {"meters", "Maximum relative canopy height", "modelResult", "Greatest" + above}, 0,
-            true);
+  write_segment_fields(
+      g, h, s,
+      {
+          {"h_min_canopy",
+           &LandSegment::h_min_canopy,
+           {"meters", "Minimum relative canopy height", "modelResult", "Least" + above}},
+          {"h_median_canopy",
+           &LandSegment::h_median_canopy,
+           {"meters", "Median relative canopy height", "modelResult", "Median" + above}},
+          {"h_max_canopy",
+           &LandSegment::h_max_canopy,
+           {"meters", "Maximum relative canopy height", "modelResult", "Greatest" + above}},
+      });
   std::vector<float> metrics;
   for (const LandSegment& x : s)
-    for (const double v : x.canopy_h_metrics)
-      metrics.push_back(std::isnan(v) ? fill_float : static_cast<float>(v));
+    for (const double v : x.canopy_h_metrics) metrics.push_back(or_fill(v));
   g.dataset(h, "canopy_h_metrics", metrics,
             {"meters", "Relative canopy height metrics", "modelResult",
              "The 10th, 15th, ..., 95th percentiles" + above},
@@ -750,17 +770,23 @@ void write_canopy(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
   const std::string above =
       " of the canopy and top-of-canopy photons' heights above the fitted "
       "ground";
-  g.dataset(h, "h_canopy", as_float(s, &LandSegment::h_canopy),
-            {"meters", "Relative canopy height", "modelResult", "98th percentile" + above}, 0,
-            true);
-  g.dataset(h, "canopy_openness", as_float(s, &LandSegment::canopy_openness),
-            {"meters", "Canopy openness", "modelResult", "Standard deviation" + above}, 0, true);
-  g.dataset(h, "h_mean_canopy", as_float(s, &LandSegment::h_mean_canopy),
-            {"meters", "Mean relative canopy height", "modelResult", "Mean" + above}, 0, true);
-  g.dataset(h, "h_mean_canopy_abs", as_float(s, &LandSegment::h_mean_canopy_abs),
-            {"meters", "Mean absolute canopy height", "modelResult",
-             "Mean of the canopy and top-of-canopy photons' heights above WGS84"},
-            0, true);
+  write_segment_fields(
+      g, h, s,
+      {
+          {"h_canopy",
+           &LandSegment::h_canopy,
+           {"meters", "Relative canopy height", "modelResult", "98th percentile" + above}},
+          {"canopy_openness",
+           &LandSegment::canopy_openness,
+           {"meters", "Canopy openness", "modelResult", "Standard deviation" + above}},
+          {"h_mean_canopy",
+           &LandSegment::h_mean_canopy,
+           {"meters", "Mean relative canopy height", "modelResult", "Mean" + above}},
+          {"h_mean_canopy_abs",
+           &LandSegment::h_mean_canopy_abs,
+           {"meters", "Mean absolute canopy height", "modelResult",
+            "Mean of the canopy and top-of-canopy photons' heights above WGS84"}},
+      });
   write_canopy_distribution(g, h, s, above);
   g.dataset(h, "h_canopy_uncertainty", std::vector<float>(s.size(), fill_float),
             {"meters", "Uncertainty of the relative canopy height", "qualityInformation",
