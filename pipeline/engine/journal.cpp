@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -177,13 +178,18 @@ bool read_header(std::ifstream& in, const std::filesystem::path& path,
 }
 
 // The next whole frame (its words, and its bytes with them in `frame`); false at the end or at
-// a torn frame.
-bool read_frame(std::ifstream& in, std::array<std::uint64_t, 6>& words, std::string& frame) {
+// a torn frame. `file_bytes` is the journal's size: a payload said to be longer than what is
+// left of the file is torn, and is not allocated (a damaged size word asked for 2 GB).
+bool read_frame(std::ifstream& in, std::uint64_t file_bytes, std::array<std::uint64_t, 6>& words,
+                std::string& frame) {
   if (!in.read(reinterpret_cast<char*>(words.data()), sizeof words)) return false;
-  // Sizes beyond what LZ4 takes: not a frame.
+  const auto at = static_cast<std::uint64_t>(in.tellg());
+  const std::uint64_t left = at <= file_bytes ? file_bytes - at : 0;
+  // Sizes beyond what LZ4 takes, or beyond the file: not a whole frame.
   if (words[0] != kFrameMarker ||
       words[4] > static_cast<std::uint64_t>(LZ4_COMPRESSBOUND(kLargestFrame)) ||
-      words[5] > kLargestFrame)
+      words[5] > kLargestFrame || left < sizeof(std::uint64_t) ||
+      words[4] > left - sizeof(std::uint64_t))
     return false;
   frame.assign(reinterpret_cast<const char*>(words.data()), sizeof words);
   frame.resize(sizeof words + words[4] + sizeof(std::uint64_t));
@@ -203,6 +209,9 @@ std::unique_ptr<RunJournal> RunJournal::resume(
   ray_queries = 0;
   // A journal replaced by a FIFO would be waited on for ever.
   require_input_file(path.native(), "the run journal", ErrorKind::config);
+  std::error_code size_error;
+  const std::uint64_t file_bytes = std::filesystem::file_size(path, size_error);
+  if (size_error) throw run_error(path.string(), "cannot read its size: " + size_error.message());
   std::ifstream in(path, std::ios::binary);
   // A journal killed before its header was whole holds no shot: begin it again.
   if (!read_header(in, path, identity)) return std::make_unique<RunJournal>(path, identity);
@@ -212,7 +221,7 @@ std::unique_ptr<RunJournal> RunJournal::resume(
   for (std::uint64_t number = 0;; ++number) {
     // marker, first record, records, ray queries, sizes
     std::array<std::uint64_t, 6> words{};
-    if (!read_frame(in, words, frame)) break;
+    if (!read_frame(in, file_bytes, words, frame)) break;
     // A whole frame out of its place (a frame repeated, one lost, frames swapped) is not a
     // torn end: the journal no longer says which shots were done, and resuming would double
     // some and lose others.

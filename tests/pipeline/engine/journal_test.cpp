@@ -3,10 +3,13 @@
 #include "pipeline/engine/journal.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <array>
 #include <cstdint>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
@@ -156,6 +159,43 @@ TEST(RunJournal, AFifoIsRefusedNotWaitedOn) {
                   ": cannot read the run journal: it is a FIFO (a pipe), not a "
                   "regular file");
   }
+}
+
+// Found by fuzz_journal: a frame whose payload-size word was damaged to near 2 GB (within what
+// LZ4 takes) had its 2 GB allocated, and filled, before the read found the file ended; the
+// fuzzer's 2 GB memory limit stopped it. A payload longer than what is left of the file is a
+// torn end, found before anything is allocated: the frames before it resume, and it goes.
+TEST(RunJournal, AFrameLongerThanTheFileIsTornAndNotAllocated) {
+  const ScratchDir dir;
+  const auto path = dir.path() / RunJournal::kFileName;
+  {
+    RunJournal journal(path, "identity");
+    for (std::int64_t batch = 0; batch < 2; ++batch) {
+      std::vector<ShotRecord> records(1);
+      records[0].shot_number = batch;
+      journal.append(records, 10);
+    }
+  }
+  JournalBytes bytes = split_frames(path);
+  ASSERT_EQ(bytes.frames.size(), 2u);
+  const std::uint64_t damaged_size = 0x7e000000;  // within LZ4_COMPRESSBOUND(LZ4_MAX_INPUT_SIZE)
+  std::memcpy(bytes.frames[1].data() + 4 * sizeof(std::uint64_t), &damaged_size,
+              sizeof damaged_size);
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << bytes.header << bytes.frames[0] << bytes.frames[1];
+  }
+  rusage before{};
+  getrusage(RUSAGE_SELF, &before);
+  std::vector<std::int64_t> shots;
+  std::int64_t ray_queries = 0;
+  RunJournal::resume(
+      path, "identity", [&](const ShotRecord& r) { shots.push_back(r.shot_number); }, ray_queries);
+  rusage after{};
+  getrusage(RUSAGE_SELF, &after);
+  EXPECT_EQ(shots, (std::vector<std::int64_t>{0}));
+  EXPECT_EQ(std::filesystem::file_size(path), bytes.header.size() + bytes.frames[0].size());
+  EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 256L * 1024);  // kB: nowhere near the 2 GB
 }
 
 }  // namespace
