@@ -43,11 +43,12 @@ void write_ground_raster(const CloudGround& cloud, const std::string& path,
   if (status != CE_None) throw input_error(place, "cannot hold the cloud's ground in memory");
 }
 
-// A DEM terrain over a file in GDAL's memory, removed with it.
+// A DEM terrain over a file in GDAL's memory, removed with it, and the grid it was written from.
 class CloudTerrain final : public Terrain {
  public:
-  CloudTerrain(const TerrainSettings& settings, std::string path)
-      : path_(std::move(path)), dem_(settings) {}
+  CloudTerrain(const TerrainSettings& settings, std::string path,
+               std::shared_ptr<const CloudGround> ground)
+      : path_(std::move(path)), ground_(std::move(ground)), dem_(settings) {}
   ~CloudTerrain() override { VSIUnlink(path_.c_str()); }
   double height_m(double lat_deg, double lon_deg) const override {
     return dem_.height_m(lat_deg, lon_deg);
@@ -60,9 +61,11 @@ class CloudTerrain final : public Terrain {
     return dem_.has_data(frame, radius_m);
   }
   VerticalDatum vertical_datum() const override { return dem_.vertical_datum(); }
+  const std::shared_ptr<const CloudGround>& ground() const { return ground_; }
 
  private:
   std::string path_;
+  std::shared_ptr<const CloudGround> ground_;
   DemTerrain dem_;
 };
 
@@ -73,19 +76,24 @@ std::unique_ptr<Terrain> point_cloud_terrain(const TerrainSettings& terrain,
   const LasFile cloud(canopy.point_cloud_file);
   GapFractionSettings grid;
   grid.voxel_size_m = canopy.voxel_size_m;
-  const CloudGround ground =
-      grid_cloud_ground(cloud, canopy.point_cloud_crs, "/canopy/point_cloud/crs", grid);
+  auto ground = std::make_shared<const CloudGround>(
+      grid_cloud_ground(cloud, canopy.point_cloud_crs, "/canopy/point_cloud/crs", grid));
   static std::atomic<unsigned> runs{0};
   const std::string path = "/vsimem/glaswave_cloud_ground_" + std::to_string(++runs) + ".tif";
   TerrainSettings dem = terrain;
   dem.dem = path;
   try {
-    write_ground_raster(ground, path, canopy.point_cloud_file);
-    return std::make_unique<CloudTerrain>(dem, path);
+    write_ground_raster(*ground, path, canopy.point_cloud_file);
+    return std::make_unique<CloudTerrain>(dem, path, std::move(ground));
   } catch (...) {
     VSIUnlink(path.c_str());
     throw;
   }
+}
+
+std::shared_ptr<const CloudGround> cloud_ground_of(const Terrain& terrain) {
+  const auto* cloud = dynamic_cast<const CloudTerrain*>(&terrain);
+  return cloud ? cloud->ground() : nullptr;
 }
 
 }  // namespace glaswave

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "canopy/canopy_settings.hpp"
+#include "canopy/gap_fraction.hpp"
 #include "terrain/terrain.hpp"
 
 namespace glaswave {
@@ -15,5 +16,10 @@ namespace glaswave {
 // (vertical datum, soil): an input error naming the file when the cloud cannot give one.
 std::unique_ptr<Terrain> point_cloud_terrain(const TerrainSettings& terrain,
                                              const CanopySettings& canopy);
+
+// The gridded ground a terrain of point_cloud_terrain stands on, for the voxelisation of the same
+// cloud to take rather than grid it again (voxelize_point_cloud's `ground`); null for any other
+// terrain.
+std::shared_ptr<const CloudGround> cloud_ground_of(const Terrain& terrain);
 
 }  // namespace glaswave

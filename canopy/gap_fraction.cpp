@@ -200,12 +200,17 @@ CloudGround grid_cloud_ground(const LasFile& cloud, const std::string& crs,
 
 VoxelizeResult voxelize_point_cloud(const LasFile& cloud, const std::string& crs,
                                     const std::string& crs_place,
-                                    const GapFractionSettings& settings) {
+                                    const GapFractionSettings& settings,
+                                    const CloudGround* gridded) {
   VoxelizeResult out;
-  // Pass 1: the extent and the ground.
-  CloudGround ground = grid_cloud_ground(cloud, crs, crs_place, settings);
+  // Pass 1: the extent and the ground, unless the caller has them.
+  if (gridded && gridded->ground.cell_m != settings.voxel_size_m)
+    throw run_error(cloud.path().string(), "the cloud's ground was gridded at another voxel size");
+  CloudGround first_pass;
+  if (!gridded) first_pass = grid_cloud_ground(cloud, crs, crs_place, settings);
+  const CloudGround& ground = gridded ? *gridded : first_pass;
   out.voxels.crs_wkt = ground.crs_wkt;
-  out.ground = std::move(ground.ground);
+  out.ground = gridded ? gridded->ground : std::move(first_pass.ground);
   out.report.points = ground.points;
   out.report.ground_points = ground.ground_points;
   const int nx = out.ground.nx, ny = out.ground.ny;

@@ -91,9 +91,12 @@ struct VoxelizeResult {
 };
 
 // The whole of `voxelize` on a LAS file: two passes over its points (ground, then the rest), in
-// windows, so that memory is the grid's, not the cloud's. `crs` is the fallback CRS.
+// windows, so that memory is the grid's, not the cloud's. `crs` is the fallback CRS. `ground`,
+// when given, is this cloud's grid_cloud_ground at these settings (terrain.point_cloud's, already
+// made): the first pass is skipped, the ground's Delaunay gridding being most of the time.
 VoxelizeResult voxelize_point_cloud(const LasFile& cloud, const std::string& crs,
                                     const std::string& crs_place,
-                                    const GapFractionSettings& settings);
+                                    const GapFractionSettings& settings,
+                                    const CloudGround* ground = nullptr);
 
 }  // namespace glaswave

@@ -69,16 +69,18 @@ ReceiverSettings receiver_settings(const Config& config) {
 }
 
 VegetationSettings vegetation_settings(const Config& config) {
-  return {*config.canopy, config.seed, config.terrain.plane};
+  return {*config.canopy, config.seed, config.terrain.plane, nullptr};
 }
 
-std::unique_ptr<VegetationSource> grow_vegetation(const Config& config) {
+std::unique_ptr<VegetationSource> grow_vegetation(const Config& config, const Terrain* terrain) {
   if (!config.canopy) return nullptr;
-  return at_section("/canopy", [&] { return make_vegetation_source(vegetation_settings(config)); });
+  VegetationSettings settings = vegetation_settings(config);
+  if (terrain) settings.cloud_ground = cloud_ground_of(*terrain);  // gridded once, not twice
+  return at_section("/canopy", [&] { return make_vegetation_source(settings); });
 }
 
 std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain) {
-  std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config);
+  std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config, &terrain);
   std::unique_ptr<Receiver> receiver =
       at_section("/detector", [&] { return make_receiver(receiver_settings(config)); });
   return std::make_unique<ShotSimulator>(shot_settings(config), terrain, std::move(vegetation),

@@ -21,8 +21,10 @@ std::unique_ptr<Terrain> open_terrain(const Config& config);
 ShotSettings shot_settings(const Config& config);
 ReceiverSettings receiver_settings(const Config& config);
 VegetationSettings vegetation_settings(const Config& config);  // config.canopy must be set
-// The configuration's vegetation source (canopy.kind); null over bare ground.
-std::unique_ptr<VegetationSource> grow_vegetation(const Config& config);
+// The configuration's vegetation source (canopy.kind); null over bare ground. Given the run's
+// terrain, a point cloud's source takes the ground terrain.point_cloud gridded from it.
+std::unique_ptr<VegetationSource> grow_vegetation(const Config& config,
+                                                  const Terrain* terrain = nullptr);
 // The shot simulator of the configuration, its vegetation grown and its receiver made.
 std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain);
 // What the products need to know besides the shots.

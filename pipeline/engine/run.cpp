@@ -285,7 +285,7 @@ CheckSummary check_inputs(const Config& config) {
   check_brf(config);  // ... and brf
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
   // The vegetation reads its crowns file and checks what the configuration cannot alone.
-  const std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config);
+  const std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config, terrain.get());
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
   CheckSummary summary;
   summary.shots = track->size();

@@ -75,11 +75,16 @@ class VegetationSource {
   virtual std::vector<Placed> placed() const { return {}; }
 };
 
+struct CloudGround;
+
 // What a source is made from: the configuration's canopy, its seed and its plane terrain.
 struct VegetationSettings {
   CanopySettings canopy;
   std::uint64_t seed = 1;
   std::optional<PlaneSettings> plane;  // crowns files may be in metres on the plane
+  // canopy.point_cloud's ground as terrain.point_cloud gridded it (canopy/cloud_terrain.hpp), so
+  // that the voxelisation does not grid it again; null: the source grids it.
+  std::shared_ptr<const CloudGround> cloud_ground;
 };
 
 // One kind of source: how to make it, and what it takes in memory before it is made (the memory

@@ -21,7 +21,8 @@ VoxelSource::VoxelSource(const VegetationSettings& settings)
     inversion.voxel_size_m = canopy_.voxel_size_m;
     inversion.leaf_projection = 0.5;  // what the inversion assumes; see docs/vegetation.md
     VoxelizeResult result =
-        voxelize_point_cloud(cloud, canopy_.point_cloud_crs, "/canopy/point_cloud/crs", inversion);
+        voxelize_point_cloud(cloud, canopy_.point_cloud_crs, "/canopy/point_cloud/crs", inversion,
+                             settings.cloud_ground.get());
     grid_ = std::make_unique<VoxelGridFile>(std::move(result.voxels));
   } else {
     place = canopy_.voxels_file;
