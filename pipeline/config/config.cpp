@@ -208,9 +208,11 @@ void read_dem(JsonReader& r, TerrainSettings& t) {
   t.dem = dem.value_or("");
 }
 
-// terrain.point_cloud: true or absent (false would leave no ground).
+// terrain.point_cloud: true or absent (false would leave no ground), as its declaration's `only`
+// says for the schema and the reference.
 void check_point_cloud_terrain(JsonReader& r, const TerrainSettings& t) {
-  if (t.point_cloud && !*t.point_cloud)
+  const Key& declared = r.declared("point_cloud", KeyType::boolean);
+  if (t.point_cloud && nlohmann::json(*t.point_cloud) != declared.only)
     r.fail("point_cloud",
            "must be true (the ground of canopy.point_cloud's cloud); give \"dem\" or \"plane\" "
            "instead of false");

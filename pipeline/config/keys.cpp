@@ -83,6 +83,10 @@ Key&& Key::with_default(json value) && {
   default_value = std::move(value);
   return std::move(*this);
 }
+Key&& Key::with_only(json value) && {
+  only = std::move(value);
+  return std::move(*this);
+}
 
 namespace {
 
@@ -531,8 +535,10 @@ Key terrain_keys() {
                      "`true`: the ground of `canopy.point_cloud`'s cloud (its class-2 points "
                      "gridded on its voxels' columns, as `glaswave voxelize` writes "
                      "`ground_elevation`), without a DEM file; exactly one of `dem`, `plane` and "
-                     "`point_cloud`, and only with a `canopy.point_cloud`",
-                     "absent"),
+                     "`point_cloud`, and only with a `canopy.point_cloud`; `false` is refused "
+                     "(give `dem` or `plane` instead)",
+                     "absent")
+               .with_only(true),
            std::move(dem_band), std::move(datum),
            f.object(
                "roughness", &TerrainSettings::roughness,
@@ -973,6 +979,7 @@ json key_schema(const Key& k) {
   if (k.nullable && k.type != KeyType::choice_or_object && k.type != KeyType::spectral &&
       s.contains("type"))
     s["type"] = json::array({s["type"], "null"});
+  if (!k.only.is_null()) s["const"] = k.only;
   if (!k.default_value.is_null()) s["default"] = k.default_value;
   s["description"] = schema_description(k);
   return s;
@@ -999,8 +1006,8 @@ json configuration_schema() {
             {"title", "glaswave configuration"},
             {"description", root.description + " (glaswave " GLASWAVE_VERSION ")"}};
   s.update(object_schema(root));
-  // Exactly one of `dem`, `plane` and `point_cloud` (which is true when given), as the parser
-  // asks.
+  // Exactly one of `dem`, `plane` and `point_cloud` (which is true when given: its declaration's
+  // `const`), as the parser asks.
   json one_of = json::array();
   const std::vector<std::string> grounds = {"dem", "plane", "point_cloud"};
   for (const std::string& ground : grounds) {
@@ -1011,7 +1018,6 @@ json configuration_schema() {
   }
   json& terrain = s["properties"]["terrain"];
   terrain["oneOf"] = one_of;
-  terrain["properties"]["point_cloud"]["const"] = true;
   return s;
 }
 
@@ -1049,6 +1055,7 @@ std::string allowed_cell(const Key& k) {
   std::string choices;
   for (std::size_t i = 0; i < k.choices.size(); ++i)
     choices += (i ? ", " : "") + code(k.choices[i]);
+  if (!k.only.is_null()) return k.only.dump() + " only";
   switch (k.type) {
     case KeyType::number:
       return k.range.low || k.range.high ? "number " + k.range.interval() : "number";

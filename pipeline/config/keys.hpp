@@ -69,6 +69,9 @@ struct Key {
   std::string what_else;      // "a vertical CRS as AUTH:CODE", with `pattern` for the schema
   std::string pattern;
   std::string format;  // "date-time" for times, "path" for files
+  // The one value accepted, where the type allows others (terrain.point_cloud: true, since false
+  // would leave no ground); null: any value of the type. The schema's `const`.
+  nlohmann::json only;
   bool required = false;
   bool nullable = false;  // null reads as absent
   std::size_t min_items = 0, max_items = std::numeric_limits<std::size_t>::max();  // arrays
@@ -88,6 +91,7 @@ struct Key {
   Key&& with_default_text(std::string text) &&;
   Key&& with_items(std::size_t least, std::size_t most) &&;
   Key&& with_default(nlohmann::json value) &&;
+  Key&& with_only(nlohmann::json value) &&;
 };
 
 // Builders of declarations: each gives the name, the default, the range and unit, and what the

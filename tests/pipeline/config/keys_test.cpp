@@ -305,6 +305,20 @@ TEST(Manual, KeyTableIsTheOneGeneratedFromTheDeclaration) {
     EXPECT_THAT(table, HasSubstr("| `canopy." + key + "` |")) << key;
 }
 
+// A key that accepts one value of its type (terrain.point_cloud: true, false being refused) says
+// so where it is declared, and the schema, the reference's table and the parser take it from
+// there: the table listed "true, false" while the parser refused false.
+TEST(Manual, AKeyOfOneValueSaysSoInTheSchemaTheTableAndTheParser) {
+  const Key* point_cloud = configuration_keys().child("terrain")->child("point_cloud");
+  ASSERT_NE(point_cloud, nullptr);
+  EXPECT_EQ(point_cloud->only, json(true));
+  const json schema = configuration_schema();
+  EXPECT_EQ(schema["properties"]["terrain"]["properties"]["point_cloud"]["const"], json(true));
+  EXPECT_THAT(configuration_keys_markdown(), HasSubstr("| `terrain.point_cloud` | true only |"));
+  EXPECT_THAT(error_of(doc(R"({"terrain": {"point_cloud": false}})")),
+              StartsWith("/terrain/point_cloud: must be true"));
+}
+
 // ---- the parser reads through the declaration -----------------------------------------------
 
 TEST(Declaration, ReadingAnUndeclaredKeyIsABug) {
