@@ -79,12 +79,32 @@ std::unique_ptr<VegetationSource> grow_vegetation(const Config& config, const Te
   return at_section("/canopy", [&] { return make_vegetation_source(settings); });
 }
 
-std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain) {
+namespace {
+
+std::unique_ptr<ShotSimulator> make_simulator(const Config& config, const Terrain& terrain,
+                                              bool shot_fields_read) {
   std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config, &terrain);
-  std::unique_ptr<Receiver> receiver =
-      at_section("/detector", [&] { return make_receiver(receiver_settings(config)); });
+  ReceiverSettings receiver = receiver_settings(config);
+  receiver.metrics_read = shot_fields_read;
+  std::unique_ptr<Receiver> made = at_section("/detector", [&] { return make_receiver(receiver); });
   return std::make_unique<ShotSimulator>(shot_settings(config), terrain, std::move(vegetation),
-                                         std::move(receiver));
+                                         std::move(made));
+}
+
+}  // namespace
+
+std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain) {
+  return make_simulator(config, terrain, true);
+}
+
+bool products_read_shot_fields(const OutputSettings& output) {
+  return output.netcdf || output.geojson || output.gedi_l1b || output.gedi_l2a || output.glah01 ||
+         output.glah14;
+}
+
+std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
+                                                       const Terrain& terrain) {
+  return make_simulator(config, terrain, products_read_shot_fields(config.output));
 }
 
 RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int64_t shots,

@@ -27,6 +27,15 @@ std::unique_ptr<VegetationSource> grow_vegetation(const Config& config,
                                                   const Terrain* terrain = nullptr);
 // The shot simulator of the configuration, its vegetation grown and its receiver made.
 std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain);
+// Whether a product of the output reads the shots' fields beyond those of the ICESat-2 granules
+// (which are made from the photons, the geolocation, the sun and the truth): the waveform
+// metrics. shots.nc, the footprints and the GEDI and GLAS granules do.
+bool products_read_shot_fields(const OutputSettings& output);
+// The shot simulator of a run writing the configuration's products: make_shot_simulator's,
+// leaving out what none of them reads (a photon-counting run writing its ICESat-2 granules
+// alone skips the waveform processing, flagging its shots as that would).
+std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
+                                                       const Terrain& terrain);
 // What the products need to know besides the shots.
 RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int64_t shots,
                  const std::string& command_line);

@@ -181,7 +181,7 @@ std::unique_ptr<RunSetup> set_up(const Config& config, const RunRequest& request
   // the track is planned, in check_inputs' order, so that both name the same first fault.
   setup->used = config;
   setup->used.resolved["terrain"]["vertical_datum"] = setup->terrain->vertical_datum().key;
-  setup->simulator = make_shot_simulator(setup->used, *setup->terrain);
+  setup->simulator = make_run_shot_simulator(setup->used, *setup->terrain);
   // --shots A:B selects shot numbers; an orbit's records are only the shots on the terrain.
   setup->track = plan_track(config, *setup->terrain);
   const Track& track = *setup->track;

@@ -263,6 +263,19 @@ void store_partition(const Partition& p, Extent extent, const WaveformAxis& axis
 
 }  // namespace
 
+namespace {
+
+// A shot none of whose bands has signal is flagged "no signal"; one whose best is low, "low
+// signal".
+void flag_signal(ShotRecord& record, std::size_t bands, SignalQuality best) {
+  if (bands > 0 && best != SignalQuality::good) {
+    record.quality_flag = quality_invalid;
+    record.quality_reason = best == SignalQuality::none ? reason_no_signal : reason_low_signal;
+  }
+}
+
+}  // namespace
+
 double WaveformAxis::elevation_m(double bin, std::size_t bins) const {
   if (bins < 2) return elev_bin0_m;
   return elev_bin0_m + (elev_lastbin_m - elev_bin0_m) * bin / static_cast<double>(bins - 1);
@@ -284,29 +297,81 @@ WaveformMetrics WaveformMetrics::none() {
   return m;
 }
 
+namespace {
+
+// Whether a waveform can be processed at all: at least 3 bins of a width, every value finite.
+bool processable(std::span<const double> power_W, const WaveformAxis& axis) {
+  if (power_W.size() < 3 || !(axis.bin_ns > 0.0)) return false;
+  for (double p : power_W)
+    if (!std::isfinite(p)) return false;
+  return true;
+}
+
+// The smoothed waveform, its noise and its threshold: the first steps of the processing, which
+// decide the signal's quality.
+struct Threshold {
+  std::vector<double> smoothed;
+  Statistics noise;
+  double above = 0.0;  // the threshold above the noise mean
+  double threshold_W = 0.0;
+  SignalQuality signal = SignalQuality::none;
+};
+
+Threshold threshold_of(std::span<const double> power_W, const WaveformAxis& axis,
+                       const WaveformProcessing& settings) {
+  Threshold t;
+  const double pulse_bins = settings.pulse_sigma_ns / axis.bin_ns;
+  t.smoothed = gaussian_smooth(power_W, pulse_bins);
+  t.noise = measure_noise(power_W, settings, pulse_bins);
+  const double peak = *std::max_element(t.smoothed.begin(), t.smoothed.end());
+  t.above =
+      std::max(settings.noise_sigmas * t.noise.sd, settings.peak_fraction * (peak - t.noise.mean));
+  t.threshold_W = t.noise.mean + t.above;
+  if (!(peak > t.threshold_W) || !(t.above > 0.0)) return t;  // no signal
+  t.signal = peak - t.noise.mean < settings.low_signal_sigmas * t.noise.sd ? SignalQuality::low
+                                                                           : SignalQuality::good;
+  return t;
+}
+
+}  // namespace
+
+SignalQuality signal_quality(std::span<const double> power_W, const WaveformAxis& axis,
+                             const WaveformProcessing& settings) {
+  if (!processable(power_W, axis)) return SignalQuality::none;
+  if (settings.noise_free) {
+    // Without noise the threshold is a fraction of the smoothed peak: a waveform of no negative
+    // value has signal exactly when one value is above 0. Its smoothed peak is then at least
+    // that value over the kernel's width (far from underflow above 1e-200), and is 0 when
+    // every value is. Anything else (negative values, tiny ones) takes the full threshold.
+    bool negative = false;
+    double largest = 0.0;
+    for (const double p : power_W) {
+      negative = negative || p < 0.0;
+      largest = std::max(largest, p);
+    }
+    if (!negative && largest == 0.0) return SignalQuality::none;
+    if (!negative && largest >= 1e-200) return SignalQuality::good;
+  }
+  return threshold_of(power_W, axis, settings).signal;
+}
+
 WaveformMetrics process_waveform(std::span<const double> power_W, const WaveformAxis& axis,
                                  const WaveformProcessing& settings,
                                  std::span<const double> mc_variance_W2) {
   WaveformMetrics m = WaveformMetrics::none();
-  const int n = static_cast<int>(power_W.size());
-  if (n < 3 || !(axis.bin_ns > 0.0)) return m;
-  for (double p : power_W)
-    if (!std::isfinite(p)) return m;
-  const auto bins = static_cast<std::size_t>(n);
+  if (!processable(power_W, axis)) return m;
+  const auto bins = power_W.size();
   const double pulse_bins = settings.pulse_sigma_ns / axis.bin_ns;
-  const std::vector<double> smoothed = gaussian_smooth(power_W, pulse_bins);
-
-  const Statistics noise = measure_noise(power_W, settings, pulse_bins);
+  const Threshold t = threshold_of(power_W, axis, settings);
+  const std::vector<double>& smoothed = t.smoothed;
+  const Statistics& noise = t.noise;
+  const double above = t.above;
   m.noise_mean_W = noise.mean;
   m.noise_sd_W = noise.sd;
-  const double peak = *std::max_element(smoothed.begin(), smoothed.end());
-  const double above =
-      std::max(settings.noise_sigmas * noise.sd, settings.peak_fraction * (peak - noise.mean));
-  m.threshold_W = noise.mean + above;
+  m.threshold_W = t.threshold_W;
   m.energy_tr_J = m.energy_cr_J = m.energy_gr_J = 0.0;
-  if (!(peak > m.threshold_W) || !(above > 0.0)) return m;  // no signal
-  m.signal = peak - noise.mean < settings.low_signal_sigmas * noise.sd ? SignalQuality::low
-                                                                       : SignalQuality::good;
+  m.signal = t.signal;
+  if (m.signal == SignalQuality::none) return m;
 
   const Extent extent = signal_extent(smoothed, m.threshold_W);
   m.sig_begin_bin = extent.begin;
@@ -344,11 +409,19 @@ std::vector<double> process_shot_waveforms(ShotRecord& record, double bin_ns,
     noise_mean_W[band] = m.noise_mean_W;
     best = std::min(best, m.signal);  // good < low < none
   }
-  if (bands > 0 && best != SignalQuality::good) {
-    record.quality_flag = quality_invalid;
-    record.quality_reason = best == SignalQuality::none ? reason_no_signal : reason_low_signal;
-  }
+  flag_signal(record, bands, best);
   return noise_mean_W;
+}
+
+void flag_shot_signal(ShotRecord& record, double bin_ns, const WaveformProcessing& settings) {
+  const WaveformAxis axis{bin_ns, record.elev_bin0_m, record.elev_lastbin_m};
+  const std::size_t bands = record.rx_waveform_W.size();
+  fill_fields(record, FieldSource::metrics, ProductShape{.bands = bands});
+  if (record.quality_flag != quality_good) return;
+  SignalQuality best = SignalQuality::none;
+  for (std::size_t band = 0; band < bands; ++band)
+    best = std::min(best, signal_quality(record.rx_waveform_W[band], axis, settings));
+  flag_signal(record, bands, best);
 }
 
 }  // namespace glaswave

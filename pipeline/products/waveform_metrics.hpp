@@ -104,6 +104,12 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
                                  const WaveformProcessing& settings,
                                  std::span<const double> mc_variance_W2 = {});
 
+// What process_waveform(power_W, axis, settings).signal is, without the decomposition and the
+// metrics: the smoothed waveform against its threshold alone, or less where the waveform has no
+// noise (signal exactly when a value is above 0, for a waveform of no negative value).
+SignalQuality signal_quality(std::span<const double> power_W, const WaveformAxis& axis,
+                             const WaveformProcessing& settings);
+
 // Processes every band of record.rx_waveform_W (bins of `bin_ns`, between elev_bin0_m and
 // elev_lastbin_m) and stores the metrics in the record's per-band fields. A band whose waveform
 // is fill (a flagged shot) gets fill, with n_peaks 0. A shot none of whose bands has signal is
@@ -113,5 +119,10 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
 std::vector<double> process_shot_waveforms(
     ShotRecord& record, double bin_ns, const WaveformProcessing& settings,
     std::span<const std::vector<double>> mc_variance_W2 = {});
+
+// The shot's flags as process_shot_waveforms sets them (no signal, low signal), its metrics left
+// fill: for a run whose products read no metric (a photon-counting run's ICESat-2 granules), which
+// still counts its flagged shots.
+void flag_shot_signal(ShotRecord& record, double bin_ns, const WaveformProcessing& settings);
 
 }  // namespace glaswave

@@ -66,6 +66,10 @@ struct ReceiverSettings {
   LidarSettings lidar;                         // bands, bins, pulse, telescope
   std::optional<Detector::Settings> detector;  // none: the noise-free received power
   bool metrics = true;                         // the waveform processing (decomposition, metrics)
+  // Whether anything reads the metrics: false (a photon-counting run that writes its ICESat-2
+  // granules alone, made from the photons and the truth) skips the decomposition and leaves
+  // them fill, the shots flagged no or low signal as the processing would flag them.
+  bool metrics_read = true;
   std::uint64_t seed = 1;  // the detector's noise is keyed by (seed, shot, band, bin)
   // "photon_counting": one per beam of the run, each keyed by its `beam` (ATLAS's spot number);
   // a shot is received as the beam whose key is its footprint's beam, the first when none is.

@@ -17,13 +17,15 @@ void WaveformReceiver::receive(ShotReturns returns, ShotRecord& record) const {
   const std::vector<std::vector<double>> mc_variance_W2 =
       std::move(returns.waveforms.total_variance_W2);
   record_waveforms(record, std::move(returns.waveforms), returns.shot_number);
-  if (settings_.metrics) {
-    // Noise-free waveforms get the fraction-of-peak threshold, detected ones the threshold
-    // above their noise.
-    WaveformProcessing processing;
-    processing.pulse_sigma_ns = settings_.lidar.pulse_sigma_ns;
-    processing.noise_free = !detector_.has_value();
+  // Noise-free waveforms get the fraction-of-peak threshold, detected ones the threshold above
+  // their noise.
+  WaveformProcessing processing;
+  processing.pulse_sigma_ns = settings_.lidar.pulse_sigma_ns;
+  processing.noise_free = !detector_.has_value();
+  if (settings_.metrics && settings_.metrics_read) {
     process_shot_waveforms(record, settings_.lidar.bin_ns, processing, mc_variance_W2);
+  } else if (settings_.metrics) {  // unread: the flags alone, the metrics fill
+    flag_shot_signal(record, settings_.lidar.bin_ns, processing);
   } else {  // as a flagged shot's: fill
     fill_fields(record, FieldSource::metrics, ProductShape{.bands = settings_.lidar.bands.size()});
   }

@@ -269,5 +269,67 @@ TEST(ProcessShotWaveforms, FillsEveryBandAndFillsFlaggedShots) {
   EXPECT_TRUE(std::isnan(record.gauss_center_m[0][0]));
 }
 
+// signal_quality is process_waveform's signal without the rest, on every kind of waveform: empty,
+// fill, one pulse, a tiny one (the noise-free shortcut's limit), negative values, noise.
+TEST(SignalQuality, IsTheProcessingsSignal) {
+  WaveformProcessing detected = noise_free();
+  detected.noise_free = false;
+  std::mt19937_64 engine(7);
+  std::normal_distribution<double> normal(0.0, 0.01e-6);
+  std::vector<std::vector<double>> waveforms = {
+      std::vector<double>(kBins, 0.0), std::vector<double>(kBins, std::nan("")),
+      gaussians({{1e-6, 250.0, kPulseNs}}), gaussians({{1e-300, 250.0, kPulseNs}}),
+      std::vector<double>(2, 1.0)};
+  std::vector<double> one_bin(kBins, 0.0);
+  one_bin[3] = 1e-9;
+  waveforms.push_back(one_bin);
+  one_bin[5] = -2e-9;
+  waveforms.push_back(one_bin);
+  for (const double amplitude_W : {0.0, 0.02e-6, 0.04e-6}) {
+    auto values = gaussians({{amplitude_W, 200.0, kPulseNs}});
+    for (double& v : values) v += normal(engine);
+    waveforms.push_back(values);
+  }
+  for (const WaveformProcessing& settings : {noise_free(), detected})
+    for (std::size_t k = 0; k < waveforms.size(); ++k)
+      EXPECT_EQ(signal_quality(waveforms[k], kAxis, settings),
+                process_waveform(waveforms[k], kAxis, settings).signal)
+          << "waveform " << k << (settings.noise_free ? ", noise-free" : ", detected");
+}
+
+// flag_shot_signal flags as process_shot_waveforms does and leaves the metrics fill.
+TEST(FlagShotSignal, FlagsAsTheProcessingAndLeavesTheMetricsFill) {
+  WaveformProcessing detected = noise_free();
+  detected.noise_free = false;
+  std::mt19937_64 engine(5);
+  std::normal_distribution<double> normal(0.0, 0.01e-6);
+  auto noisy = [&](double amplitude_W) {
+    auto values = gaussians({{amplitude_W, 200.0, kPulseNs}});
+    for (double& v : values) v += normal(engine);
+    return values;
+  };
+  const std::vector<std::vector<std::vector<double>>> shots = {
+      {std::vector<double>(kBins, 0.0), std::vector<double>(kBins, 0.0)},
+      {gaussians({{1e-6, 250.0, kPulseNs}}), std::vector<double>(kBins, 0.0)},
+      {noisy(0.02e-6), noisy(0.0)},
+      {noisy(0.02e-6), noisy(0.04e-6)},
+      {noisy(0.0), noisy(0.0)}};
+  for (const WaveformProcessing& settings : {noise_free(), detected})
+    for (std::size_t k = 0; k < shots.size(); ++k) {
+      ShotRecord processed;
+      processed.elev_bin0_m = kAxis.elev_bin0_m;
+      processed.elev_lastbin_m = kAxis.elev_lastbin_m;
+      processed.rx_waveform_W = shots[k];
+      ShotRecord flagged = processed;
+      process_shot_waveforms(processed, kBinNs, settings);
+      flag_shot_signal(flagged, kBinNs, settings);
+      EXPECT_EQ(flagged.quality_flag, processed.quality_flag) << "shot " << k;
+      EXPECT_EQ(flagged.quality_reason, processed.quality_reason) << "shot " << k;
+      ASSERT_EQ(flagged.n_peaks, (std::vector<std::int32_t>{0, 0}));
+      EXPECT_TRUE(std::isnan(flagged.energy_tr_J[0]));
+      EXPECT_TRUE(std::isnan(flagged.rh_m[1][50]));
+    }
+}
+
 }  // namespace
 }  // namespace glaswave
