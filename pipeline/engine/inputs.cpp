@@ -87,8 +87,9 @@ std::unique_ptr<ShotSimulator> make_simulator(const Config& config, const Terrai
   ReceiverSettings receiver = receiver_settings(config);
   receiver.metrics_read = shot_fields_read;
   std::unique_ptr<Receiver> made = at_section("/detector", [&] { return make_receiver(receiver); });
-  return std::make_unique<ShotSimulator>(shot_settings(config), terrain, std::move(vegetation),
-                                         std::move(made));
+  ShotSettings shot = shot_settings(config);
+  shot.shot_fields_read = shot_fields_read;
+  return std::make_unique<ShotSimulator>(shot, terrain, std::move(vegetation), std::move(made));
 }
 
 }  // namespace

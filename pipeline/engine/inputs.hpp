@@ -29,11 +29,13 @@ std::unique_ptr<VegetationSource> grow_vegetation(const Config& config,
 std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain);
 // Whether a product of the output reads the shots' fields beyond those of the ICESat-2 granules
 // (which are made from the photons, the geolocation, the sun and the truth): the waveform
-// metrics. shots.nc, the footprints and the GEDI and GLAS granules do.
+// metrics, the fitted slope and aspect, the beam's outline. shots.nc, the footprints and the
+// GEDI and GLAS granules do.
 bool products_read_shot_fields(const OutputSettings& output);
 // The shot simulator of a run writing the configuration's products: make_shot_simulator's,
 // leaving out what none of them reads (a photon-counting run writing its ICESat-2 granules
-// alone skips the waveform processing, flagging its shots as that would).
+// alone skips the waveform processing, flagging its shots as that would, the ground fitted
+// under each shot of a shared stretch and the beam's outline).
 std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
                                                        const Terrain& terrain);
 // What the products need to know besides the shots.

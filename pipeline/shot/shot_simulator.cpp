@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "footprints/solar_position.hpp"
@@ -97,12 +98,16 @@ ShotRecord ShotSimulator::simulate(const Footprint& footprint, std::int64_t* ray
   if (footprint.beam >= 0 && footprint.beam < kNoBeam)
     record.beam = static_cast<std::uint8_t>(footprint.beam);
   record.degrade_flag = footprint.degrade_flag;
-  if (!beam_on_terrain_data(scenes_.terrain(), lidar_, footprint)) {
+  // A stretch knows which of its footprints are on the terrain's data.
+  std::shared_ptr<const StretchScene> stretch =
+      stretches_ && footprint.on_terrain ? stretches_->find(footprint) : nullptr;
+  if (!(stretch && stretch->holds(footprint.shot_number)) &&
+      !beam_on_terrain_data(scenes_.terrain(), lidar_, footprint)) {
     flag_off_terrain(record, footprint);
     set_sun(record);
     return record;
   }
-  const ShotScene shot = scene_of(footprint);
+  const ShotScene shot = scene_of(footprint, std::move(stretch));
   locate(record, footprint, shot);
   set_sun(record, shot.stretch ? shot.stretch->sun : std::nullopt);
   trace(record, footprint, shot, ray_queries);
@@ -116,7 +121,9 @@ void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const 
   ShotReturns returns;
   returns.waveforms = simulate_shot(scene, lidar_, shot.geometry, shot.built().optics,
                                     settings_.transport, footprint.shot_number);
-  if (ray_queries) *ray_queries += returns.waveforms.ray_queries + outline_vertices;
+  if (ray_queries)
+    *ray_queries +=
+        returns.waveforms.ray_queries + (settings_.shot_fields_read ? outline_vertices : 0);
   scale_pulse_energy(returns.waveforms, footprint.pulse_energy_scale);
   returns.shot_number = footprint.shot_number;
   returns.beam = footprint.beam;
@@ -138,7 +145,8 @@ void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const 
   record.cover_true = truth.cover;
   record.pai_true = truth.pai;
   record.canopy_height_true_m = truth.canopy_height_m;
-  record.footprint_lonlat = beam_outline(scene, lidar_, shot.geometry, shot.frame());
+  if (settings_.shot_fields_read)
+    record.footprint_lonlat = beam_outline(scene, lidar_, shot.geometry, shot.frame());
 }
 
 // The footprint's place, its ground's orientation and the bins' elevations along the beam axis
@@ -163,7 +171,7 @@ std::optional<ShotWaveforms> ShotSimulator::simulate_ray(const Footprint& footpr
                                                          std::int64_t ray,
                                                          const RayObserver& observer) const {
   if (!beam_on_terrain_data(scenes_.terrain(), lidar_, footprint)) return std::nullopt;
-  const ShotScene shot = scene_of(footprint);
+  const ShotScene shot = scene_of(footprint, stretches_ ? stretches_->find(footprint) : nullptr);
   return glaswave::simulate_ray(*shot.built().scene, lidar_, shot.geometry, shot.built().optics,
                                 settings_.transport, footprint.shot_number, ray, observer);
 }
@@ -211,9 +219,10 @@ ShotSimulator::FootprintScene ShotSimulator::build_scene(const Footprint& footpr
   return shot;
 }
 
-ShotSimulator::ShotScene ShotSimulator::scene_of(const Footprint& footprint) const {
+ShotSimulator::ShotScene ShotSimulator::scene_of(
+    const Footprint& footprint, std::shared_ptr<const StretchScene> stretch) const {
   ShotScene shot;
-  if (stretches_) shot.stretch = stretches_->find(footprint);
+  shot.stretch = std::move(stretch);
   if (!shot.stretch) {
     shot.own = build_scene(footprint);
     shot.geometry = shot.own->where.geometry;
@@ -225,7 +234,12 @@ ShotSimulator::ShotScene ShotSimulator::scene_of(const Footprint& footprint) con
   shot.geometry.axis = frame.local_direction(footprint.beam_ecef);
   shot.geometry.range_m = footprint.range_m;
   shot.centre_m = frame.to_local(footprint.ground);
-  shot.orientation = footprint_frame(scenes_.terrain(), lidar_, footprint).orientation;
+  // The ground fitted under the shot's own beam, for the record alone: fill when unread.
+  if (settings_.shot_fields_read)
+    shot.orientation = footprint_frame(scenes_.terrain(), lidar_, footprint).orientation;
+  else
+    shot.orientation.slope_deg = shot.orientation.aspect_deg =
+        std::numeric_limits<double>::quiet_NaN();
   return shot;
 }
 

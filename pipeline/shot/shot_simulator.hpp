@@ -32,6 +32,11 @@ struct ShotSettings {
   // Consecutive shots of a beam that share one scene once the simulator follows a track
   // (stretch_scenes.hpp; the photon-counting receiver's 10 kHz); 0: each shot builds its own.
   std::int64_t stretch_shots = 0;
+  // Whether anything reads the record's fields that the ICESat-2 granules do not (the beam's
+  // outline; the ground's slope and aspect, fitted under each beam): false (a photon-counting
+  // run writing its granules alone) leaves the outline empty and, where a shot shares its
+  // stretch's scene, the slope and aspect fill, and skips their work.
+  bool shot_fields_read = true;
 };
 
 class ShotSimulator {
@@ -69,7 +74,7 @@ class ShotSimulator {
   struct FootprintScene;
   struct ShotScene;
   FootprintScene build_scene(const Footprint& footprint) const;
-  ShotScene scene_of(const Footprint& footprint) const;
+  ShotScene scene_of(const Footprint& footprint, std::shared_ptr<const StretchScene> stretch) const;
   void flag_off_terrain(ShotRecord& record, const Footprint& footprint) const;
   void locate(ShotRecord& record, const Footprint& footprint, const ShotScene& shot) const;
   void trace(ShotRecord& record, const Footprint& footprint, const ShotScene& shot,

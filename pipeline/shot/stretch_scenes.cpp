@@ -99,14 +99,16 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
   const std::int64_t first = stretch * shots_;
   const std::int64_t last = std::min(first + shots_, track_.sequence_length());
   std::vector<Footprint> held;  // the footprints whose beams fall on the terrain's data
+  std::vector<bool> on_data;
   for (std::int64_t shot = first; shot < last; ++shot) {
     Footprint footprint = track_.locate_shot(shot, beam_index);
-    if (beam_on_terrain_data(terrain, lidar_, footprint)) held.push_back(std::move(footprint));
+    on_data.push_back(beam_on_terrain_data(terrain, lidar_, footprint));
+    if (on_data.back()) held.push_back(std::move(footprint));
   }
   if (held.empty()) return nullptr;
   const Footprint& middle = held[held.size() / 2];
-  auto stretch_scene =
-      std::make_shared<StretchScene>(StretchScene{LocalFrame(middle.ground), {}, {}, {}});
+  auto stretch_scene = std::make_shared<StretchScene>(
+      StretchScene{LocalFrame(middle.ground), {}, {}, {}, first, std::move(on_data)});
   const LocalFrame& frame = stretch_scene->frame;
   double reach_m = 0.0;  // of the footprint centres from the middle one
   for (const Footprint& footprint : held) {

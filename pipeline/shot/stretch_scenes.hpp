@@ -50,6 +50,15 @@ struct StretchScene {
   // The truth's vertical lines on one grid for every shot (the middle one's spacing); absent
   // when the vegetation measures its own truth (facets).
   std::unique_ptr<TruthGrid> truth;
+  // The stretch's first shot number, and which of its shots' beams fall on the terrain's data
+  // (beam_on_terrain_data), from the first.
+  std::int64_t first_shot = 0;
+  std::vector<bool> on_data;
+
+  bool holds(std::int64_t shot) const {
+    return shot >= first_shot && shot - first_shot < static_cast<std::int64_t>(on_data.size()) &&
+           on_data[static_cast<std::size_t>(shot - first_shot)];
+  }
 };
 
 class StretchScenes {

@@ -118,5 +118,62 @@ TEST(StretchScene, OneSceneAStretchNoneForShotsFarApart) {
   EXPECT_EQ(none.find(far->footprint(0)), nullptr);
 }
 
+// A run writing the ICESat-2 granules alone computes only what they read
+// (make_run_shot_simulator): every field they take (the photons, the geolocation, the sun, the
+// truth, the flags) is the same bits as make_shot_simulator's, which computes every field; the
+// waveform metrics, the slope and aspect fitted under each shot of a shared stretch and the
+// beam's outline are left fill. A stretch knows which of its shots are on the terrain's data.
+TEST(StretchScene, GranulesAloneComputeWhatTheyReadTheSameBits) {
+  Config config = atlas_forest(300, 30);
+  ASSERT_FALSE(products_read_shot_fields(config.output));
+  Config with_netcdf = config;
+  with_netcdf.output.netcdf = true;
+  EXPECT_TRUE(products_read_shot_fields(with_netcdf.output));
+  const auto terrain = make_terrain(config.terrain);
+  const std::unique_ptr<Track> track = plan_track(config, *terrain);
+  const auto every = make_shot_simulator(config, *terrain);
+  const auto granules = make_run_shot_simulator(config, *terrain);
+  every->share_scenes_along(*track);
+  granules->share_scenes_along(*track);
+  ASSERT_TRUE(granules->shares_scenes());
+  for (const Footprint& footprint : track->footprints(240, 270)) {
+    std::int64_t queries_every = 0, queries_granules = 0;
+    const ShotRecord a = every->simulate(footprint, &queries_every);
+    const ShotRecord b = granules->simulate(footprint, &queries_granules);
+    EXPECT_EQ(queries_granules, queries_every - outline_vertices);
+    EXPECT_EQ(b.photon_time_ns, a.photon_time_ns);
+    EXPECT_EQ(b.photon_h_m, a.photon_h_m);
+    EXPECT_EQ(b.photon_lat_deg, a.photon_lat_deg);
+    EXPECT_EQ(b.photon_lon_deg, a.photon_lon_deg);
+    EXPECT_EQ(b.photon_class, a.photon_class);
+    EXPECT_EQ(b.photon_order, a.photon_order);
+    EXPECT_EQ(b.lat_deg, a.lat_deg);
+    EXPECT_EQ(b.lon_deg, a.lon_deg);
+    EXPECT_EQ(b.elev_m, a.elev_m);
+    EXPECT_EQ(b.solar_elevation_deg, a.solar_elevation_deg);
+    EXPECT_EQ(b.cover_true, a.cover_true);
+    EXPECT_EQ(b.pai_true, a.pai_true);
+    EXPECT_EQ(b.canopy_height_true_m, a.canopy_height_true_m);
+    EXPECT_EQ(b.rx_waveform_W, a.rx_waveform_W);
+    EXPECT_EQ(b.quality_flag, a.quality_flag);
+    EXPECT_EQ(b.quality_reason, a.quality_reason);
+    EXPECT_GE(a.n_peaks.at(0), 1);
+    EXPECT_EQ(b.n_peaks.at(0), 0);
+    EXPECT_TRUE(std::isnan(b.energy_tr_J.at(0)));
+    EXPECT_TRUE(std::isfinite(a.slope_deg));
+    EXPECT_TRUE(std::isnan(b.slope_deg));
+    EXPECT_TRUE(std::isnan(b.aspect_deg));
+    EXPECT_FALSE(a.footprint_lonlat.empty());
+    EXPECT_TRUE(b.footprint_lonlat.empty());
+  }
+  const StretchScenes stretches(every->scenes(), every->lidar(), *track, vegetation_margin_m);
+  const auto first = stretches.find(track->footprint(0));
+  ASSERT_NE(first, nullptr);
+  EXPECT_TRUE(first->holds(0));
+  EXPECT_TRUE(first->holds(255));
+  EXPECT_FALSE(first->holds(256));
+  EXPECT_FALSE(first->holds(-1));
+}
+
 }  // namespace
 }  // namespace glaswave
