@@ -12,12 +12,29 @@
 namespace glaswave {
 namespace {
 
+// The bins [begin, end) that hold the shot's signal: outside them neither the canopy's nor the
+// ground's power is above 0, so no expected photon is either (all of them are 0 there).
+struct SignalBins {
+  std::size_t begin = 0, end = 0;
+};
+
+SignalBins signal_bins(const std::vector<double>& canopy_W, const std::vector<double>& ground_W) {
+  SignalBins span{canopy_W.size(), 0};
+  for (std::size_t bin = 0; bin < canopy_W.size(); ++bin)
+    if (!(canopy_W[bin] <= 0.0) || !(ground_W[bin] <= 0.0)) {  // NaN counts as signal
+      span.begin = std::min(span.begin, bin);
+      span.end = bin + 1;
+    }
+  if (span.end == 0) span.begin = 0;
+  return span;
+}
+
 // The sources of one truth class: its expected photons, split by scattering order in proportion
-// to the bin's per-order power when there is one.
+// to the bin's per-order power when there is one (0 outside the signal's bins).
 void add_sources(std::vector<std::vector<double>>& means, std::vector<PhotonSource>& sources,
                  const std::vector<double>& photons, PhotonTruth truth,
                  const std::vector<std::vector<double>>& order_W,
-                 const std::vector<double>& total_W) {
+                 const std::vector<double>& total_W, SignalBins signal) {
   if (order_W.empty()) {
     means.push_back(photons);
     sources.push_back({{}, truth, 1});
@@ -25,7 +42,7 @@ void add_sources(std::vector<std::vector<double>>& means, std::vector<PhotonSour
   }
   for (std::size_t order = 0; order < order_W.size(); ++order) {
     std::vector<double> part(photons.size(), 0.0);
-    for (std::size_t bin = 0; bin < photons.size(); ++bin)
+    for (std::size_t bin = signal.begin; bin < signal.end; ++bin)
       if (total_W[bin] > 0.0)
         part[bin] = photons[bin] * std::clamp(order_W[order][bin] / total_W[bin], 0.0, 1.0);
     means.push_back(std::move(part));
@@ -33,12 +50,14 @@ void add_sources(std::vector<std::vector<double>>& means, std::vector<PhotonSour
   }
 }
 
-// The time (bins' clock) by which a tenth of the canopy's expected photons has arrived.
-double canopy_top_ns(const std::vector<double>& canopy, const std::vector<double>& times_ns) {
+// The time (bins' clock) by which a tenth of the canopy's expected photons has arrived (all of
+// them in the signal's bins).
+double canopy_top_ns(const std::vector<double>& canopy, const std::vector<double>& times_ns,
+                     SignalBins signal) {
   double total = 0.0;
-  for (const double c : canopy) total += c;
+  for (std::size_t bin = signal.begin; bin < signal.end; ++bin) total += canopy[bin];
   double sum = 0.0;
-  for (std::size_t bin = 0; bin < canopy.size(); ++bin) {
+  for (std::size_t bin = signal.begin; bin < signal.end; ++bin) {
     sum += canopy[bin];
     if (sum >= 0.1 * total && total > 0.0) return times_ns[bin];
   }
@@ -98,20 +117,23 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
       expected_photons(w.ground_W[0], bin_ns, wavelength_nm, efficiency);
   const std::vector<std::vector<double>> no_orders;
   const auto& orders = w.order_W.empty() ? no_orders : w.order_W[0];
+  const SignalBins signal = signal_bins(w.canopy_W[0], w.ground_W[0]);
   std::vector<std::vector<double>> means;
   std::vector<PhotonSource> sources;
-  add_sources(means, sources, canopy, PhotonTruth::canopy, orders, w.total_W[0]);
-  add_sources(means, sources, ground, PhotonTruth::ground, orders, w.total_W[0]);
+  add_sources(means, sources, canopy, PhotonTruth::canopy, orders, w.total_W[0], signal);
+  add_sources(means, sources, ground, PhotonTruth::ground, orders, w.total_W[0], signal);
   for (std::size_t k = 0; k < sources.size(); ++k) sources[k].mean_per_bin = means[k];
 
   const std::vector<double> times_ns = lidar_.bin_time_ns();
-  const PhotonDraw draw{settings_.seed, returns.shot_number,
-                        p.beam,         bin_ns,
-                        canopy.size(),  background_rate_Hz(p, record, w, returns.range_m),
-                        p.channels};
+  PhotonDraw draw{settings_.seed, returns.shot_number,
+                  p.beam,         bin_ns,
+                  canopy.size(),  background_rate_Hz(p, record, w, returns.range_m),
+                  p.channels};
+  draw.signal_begin = signal.begin;
+  draw.signal_end = signal.end;
   const std::vector<PhotonEvent> events =
       apply_dead_time(draw_photons(draw, sources), p.dead_time_ns);
-  const double top_ns = canopy_top_ns(canopy, times_ns);
+  const double top_ns = canopy_top_ns(canopy, times_ns, signal);
   const double window_start_ns = times_ns.front() - 0.5 * bin_ns;
   const std::function<Geodetic(double)> position_at = returns.position_at;
   waveform_.receive(std::move(returns), record);

@@ -92,7 +92,7 @@ std::vector<PhotonEvent> draw_photons(const PhotonDraw& draw,
                                       std::span<const PhotonSource> sources) {
   check(draw, sources);
   std::vector<PhotonEvent> events;
-  for (std::size_t bin = 0; bin < draw.bins; ++bin) {
+  for (std::size_t bin = draw.signal_begin; bin < std::min(draw.bins, draw.signal_end); ++bin) {
     double total = 0.0;
     for (const PhotonSource& source : sources) total += std::max(source.mean_per_bin[bin], 0.0);
     if (total > negligible_mean) draw_bin(draw, sources, bin, total, events);

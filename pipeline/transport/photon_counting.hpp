@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -95,6 +96,11 @@ struct PhotonDraw {
   std::size_t bins = 0;  // the window is bins * bin_ns long; < 2^24 - 1
   double background_rate_Hz = 0.0;
   int channels = 1;  // detector channels the beam's photons fall on, uniformly (1..255)
+  // The bins [signal_begin, signal_end) outside which every source's mean is 0, as the caller
+  // knows them (a shot's return fills a few hundred of its thousands of bins): no bin outside is
+  // looked at. The whole window by default.
+  std::size_t signal_begin = 0;
+  std::size_t signal_end = std::numeric_limits<std::size_t>::max();
 };
 
 // The photon events of one shot and beam, in time order, before dead time:

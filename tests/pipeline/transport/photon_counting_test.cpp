@@ -198,6 +198,28 @@ TEST(PhotonCounting, EventsAreKeyedBySeedShotAndBeam) {
   EXPECT_THROW(draw_photons({5, 1, 256, 0.5, 100, 0.0, 16}, sources), std::invalid_argument);
 }
 
+// The signal's bins, when the caller knows them, give the same events as the whole window: the
+// bins outside, whose means are all 0, draw nothing either way.
+TEST(PhotonCounting, TheSignalsBinsDrawWhatTheWholeWindowDraws) {
+  std::vector<double> ground(100, 0.0), canopy(100, 0.0);
+  for (std::size_t bin = 40; bin < 60; ++bin) ground[bin] = 0.5;
+  for (std::size_t bin = 10; bin < 30; ++bin) canopy[bin] = 0.3;
+  const PhotonSource sources[] = {{ground, PhotonTruth::ground, 1},
+                                  {canopy, PhotonTruth::canopy, 2}};
+  for (const std::int64_t shot : {1, 2, 3}) {
+    const PhotonDraw whole{5, shot, 1, 0.5, 100, 2e8, 16};
+    PhotonDraw signal = whole;
+    signal.signal_begin = 10;
+    signal.signal_end = 60;
+    const std::vector<PhotonEvent> a = draw_photons(whole, sources);
+    ASSERT_FALSE(a.empty());
+    EXPECT_EQ(draw_photons(signal, sources), a);
+    // Beyond the window's end the span is cut at it.
+    signal.signal_end = 1000;
+    EXPECT_EQ(draw_photons(signal, sources), a);
+  }
+}
+
 // PHYSICS.md section 2 (Gardner 1992) with ATLAS's pulse and beam: the ground photons' times on a
 // 20 degree slope at nadir spread with the RMS width sqrt(sigma_tx^2 + (2 R sigma_theta tan 20 /
 // c)^2 + bin^2 / 12) = 6.71 ns (1.01 m of height), to 2 % (about 27 000 photons: the RMS's
