@@ -8,10 +8,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <span>
+#include <tuple>
 #include <vector>
 
+#include "core/random.hpp"
+#include "core/samplers.hpp"
 #include "tests/pipeline/transport/transport_test_support.hpp"
 
 namespace glaswave {
@@ -196,6 +201,75 @@ TEST(PhotonCounting, EventsAreKeyedBySeedShotAndBeam) {
     }
   }
   EXPECT_THROW(draw_photons({5, 1, 256, 0.5, 100, 0.0, 16}, sources), std::invalid_argument);
+}
+
+// The draw as the header states it, from RandomStream itself: bin b's photons from the stream
+// (seed, shot, (beam << 24) | b), the background's from (seed, shot, (beam << 24) | 2^24 - 1),
+// sorted.
+std::vector<PhotonEvent> keyed_draw(const PhotonDraw& draw, std::span<const PhotonSource> sources) {
+  std::vector<PhotonEvent> events;
+  auto channel = [&](RandomStream& random) {
+    return static_cast<std::uint8_t>(
+        std::min(draw.channels - 1, static_cast<int>(random.uniform() * draw.channels)));
+  };
+  for (std::size_t bin = 0; bin < draw.bins; ++bin) {
+    double total = 0.0;
+    for (const PhotonSource& source : sources) total += std::max(source.mean_per_bin[bin], 0.0);
+    if (!(total > 1e-12)) continue;
+    RandomStream random(draw.seed, static_cast<std::uint64_t>(draw.shot),
+                        (std::uint64_t{draw.beam} << 24) | bin, RandomPurpose::photons);
+    const double count = poisson(random, total);
+    for (double k = 0.0; k < count; k += 1.0) {
+      double pick = random.uniform() * total;
+      std::size_t source = 0;
+      while (source + 1 < sources.size() && pick >= sources[source].mean_per_bin[bin]) {
+        pick -= sources[source].mean_per_bin[bin];
+        ++source;
+      }
+      const double time_ns = (static_cast<double>(bin) + random.uniform()) * draw.bin_ns;
+      events.push_back(
+          {time_ns, sources[source].truth_class, sources[source].order, channel(random)});
+    }
+  }
+  const double window_ns = static_cast<double>(draw.bins) * draw.bin_ns;
+  RandomStream random(draw.seed, static_cast<std::uint64_t>(draw.shot),
+                      (std::uint64_t{draw.beam} << 24) | ((1u << 24) - 1), RandomPurpose::photons);
+  const double count = poisson(random, draw.background_rate_Hz * window_ns * 1e-9);
+  for (double k = 0.0; k < count; k += 1.0) {
+    const double time_ns = random.uniform() * window_ns;
+    events.push_back({time_ns, PhotonTruth::background, 0, channel(random)});
+  }
+  std::sort(events.begin(), events.end(), [](const PhotonEvent& a, const PhotonEvent& b) {
+    return std::tie(a.time_ns, a.truth_class, a.order, a.channel) <
+           std::tie(b.time_ns, b.truth_class, b.order, b.channel);
+  });
+  return events;
+}
+
+// draw_photons steps from one bin's stream to the next's (2^32 draws on, one affine step of the
+// PCG) instead of keying each afresh: the same events, bit for bit, as each bin's RandomStream
+// gives, over runs of consecutive bins, gaps between them, several seeds, shots and beams, and
+// bins past 2^16.
+TEST(PhotonCounting, BinStreamsAreTheKeyedStreams) {
+  const std::size_t bins = 70000;
+  std::vector<double> ground(bins, 0.0), canopy(bins, 0.0);
+  for (std::size_t bin = 40; bin < 60; ++bin) ground[bin] = 0.5;
+  for (std::size_t bin = 10; bin < 30; ++bin) canopy[bin] = 0.3;
+  for (std::size_t bin = 100; bin < 400; bin += 3) canopy[bin] = 0.05;  // gaps of two bins
+  for (std::size_t bin = 65530; bin < 65545; ++bin) ground[bin] = 2.0;  // across 2^16
+  canopy[69999] = 20.0;                                                 // PTRS's means
+  const PhotonSource sources[] = {{ground, PhotonTruth::ground, 1},
+                                  {canopy, PhotonTruth::canopy, 2}};
+  std::size_t photons = 0;
+  for (const std::uint64_t seed : {1u, 77u})
+    for (const std::int64_t shot : {0, 1, 123456789})
+      for (const std::uint32_t beam : {0u, 3u, 255u}) {
+        const PhotonDraw draw{seed, shot, beam, 0.5, bins, 1e5, 16};
+        const std::vector<PhotonEvent> events = draw_photons(draw, sources);
+        EXPECT_EQ(events, keyed_draw(draw, sources)) << seed << " " << shot << " " << beam;
+        photons += events.size();
+      }
+  EXPECT_GT(photons, 1000u);
 }
 
 // The signal's bins, when the caller knows them, give the same events as the whole window: the
