@@ -43,7 +43,9 @@ class RandomStream {
  public:
   RandomStream(std::uint64_t seed, std::uint64_t shot, std::uint64_t ray,
                RandomPurpose purpose = RandomPurpose::transport)
-      : engine_(keyed(seed ^ static_cast<std::uint64_t>(purpose), shot, ray)) {}
+      : engine_(keyed(seed ^ static_cast<std::uint64_t>(purpose), shot)) {
+    engine_.advance(ray << ray_bits);
+  }
 
   // Uniform in [0, 1): one dimension, two 32-bit draws.
   double uniform() {
@@ -52,14 +54,63 @@ class RandomStream {
   }
 
  private:
-  static pcg32 keyed(std::uint64_t key, std::uint64_t shot, std::uint64_t ray) {
-    pcg32 engine(mix_bits(key ^ mix_bits(shot)),
-                 mix_bits(shot + 0x9e3779b97f4a7c15ULL * (key + 1)));
-    engine.advance(ray << 32);  // 2^32 numbers a ray before streams could overlap
-    return engine;
+  friend class RandomStreams;
+  static constexpr unsigned ray_bits = 32;  // 2^32 numbers a ray before streams could overlap
+
+  // pcg32 with its state reachable, for RandomStreams' step.
+  class Engine : public pcg32 {
+   public:
+    Engine(std::uint64_t state, std::uint64_t stream) : pcg32(state, stream) {}
+    std::uint64_t state() const { return state_; }
+    void set_state(std::uint64_t state) { state_ = state; }
+  };
+
+  explicit RandomStream(const Engine& engine) : engine_(engine) {}
+  // (seed ^ purpose, shot)'s engine, before its advance to the ray.
+  static Engine keyed(std::uint64_t key, std::uint64_t shot) {
+    return Engine(mix_bits(key ^ mix_bits(shot)),
+                  mix_bits(shot + 0x9e3779b97f4a7c15ULL * (key + 1)));
   }
 
-  pcg32 engine_;
+  Engine engine_;
+};
+
+// The streams of one (seed, shot, purpose) for rays asked in increasing order, each the same
+// bits as RandomStream(seed, shot, ray, purpose). Keying a ray advances the engine by ray << 32
+// draws (up to 59 squarings of the multiplier); consecutive rays' streams are 2^32 draws apart,
+// one affine step A s + C of the last one's state (an LCG's advance composes), so a run of
+// consecutive rays costs a multiplication each. The photon draw asks its bins in order.
+class RandomStreams {
+ public:
+  RandomStreams(std::uint64_t seed, std::uint64_t shot, RandomPurpose purpose)
+      : base_(RandomStream::keyed(seed ^ static_cast<std::uint64_t>(purpose), shot)), last_(base_) {
+    // The step's A and C from the engine's own advance: f(0) = C, f(1) = A + C.
+    RandomStream::Engine probe = base_;
+    probe.set_state(0);
+    probe.advance(std::uint64_t{1} << RandomStream::ray_bits);
+    step_plus_ = probe.state();
+    probe.set_state(1);
+    probe.advance(std::uint64_t{1} << RandomStream::ray_bits);
+    step_mult_ = probe.state() - step_plus_;
+  }
+
+  RandomStream at(std::uint64_t ray) {
+    if (have_last_ && ray == last_ray_ + 1) {
+      last_.set_state(step_mult_ * last_.state() + step_plus_);
+    } else {
+      last_ = base_;
+      last_.advance(ray << RandomStream::ray_bits);
+    }
+    have_last_ = true;
+    last_ray_ = ray;
+    return RandomStream(last_);
+  }
+
+ private:
+  RandomStream::Engine base_, last_;
+  bool have_last_ = false;
+  std::uint64_t last_ray_ = 0;
+  std::uint64_t step_mult_ = 0, step_plus_ = 0;
 };
 
 // The transport's name for its ray streams.

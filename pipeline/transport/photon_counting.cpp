@@ -28,79 +28,22 @@ RandomStream photon_stream(const PhotonDraw& draw, std::uint64_t bin) {
                       (std::uint64_t{draw.beam} << bin_bits) | bin, RandomPurpose::photons);
 }
 
-// The signal's streams, bin after bin: bin b's is photon_stream(draw, b), a RandomStream whose
-// keying advances its base PCG by ((beam << 24) | b) << 32 draws, up to 59 squarings of the
-// multiplier a bin (most of a bin's cost over a forest, where scattered light reaches most
-// bins). Consecutive bins' streams are 2^32 draws apart: one affine step A s + C of the last
-// one's state, the same state to the bit (an LCG's advance composes); a bin further on is
-// advanced to as RandomStream does. PhotonCounting.BinStreamsAreTheKeyedStreams holds them to
-// RandomStream's.
+// The signal's streams, bin after bin: bin b's is photon_stream(draw, b), stepped from the last
+// bin's rather than keyed afresh (the keying was most of a bin's cost over a forest, where
+// scattered light reaches most bins).
 class BinStreams {
  public:
-  // A bin's stream: RandomStream's draws from its engine.
-  class Stream {
-   public:
-    explicit Stream(const pcg32& engine) : engine_(engine) {}
-    double uniform() {  // RandomStream::uniform
-      const std::uint64_t bits = (static_cast<std::uint64_t>(engine_()) << 21) ^ engine_();
-      return static_cast<double>(bits & ((1ULL << 53) - 1)) * 0x1.0p-53;
-    }
-
-   private:
-    pcg32 engine_;
-  };
-
   explicit BinStreams(const PhotonDraw& draw)
-      : key_(std::uint64_t{draw.beam} << bin_bits), base_(keyed(draw)), last_(base_) {
-    // The step's A and C from the engine's own advance: f(0) = C, f(1) = A + C.
-    Engine probe = base_;
-    probe.set_state(0);
-    probe.advance(std::uint64_t{1} << 32);
-    step_plus_ = probe.state();
-    probe.set_state(1);
-    probe.advance(std::uint64_t{1} << 32);
-    step_mult_ = probe.state() - step_plus_;
-  }
-
-  // Bin `bin`'s stream; bins asked in increasing order are one step apart.
-  Stream at(std::size_t bin) {
-    if (have_last_ && bin == last_bin_ + 1) {
-      last_.set_state(step_mult_ * last_.state() + step_plus_);
-    } else {
-      last_ = base_;
-      last_.advance((key_ | bin) << 32);
-    }
-    have_last_ = true;
-    last_bin_ = bin;
-    return Stream(last_);
-  }
+      : key_(std::uint64_t{draw.beam} << bin_bits),
+        streams_(draw.seed, static_cast<std::uint64_t>(draw.shot), RandomPurpose::photons) {}
+  RandomStream at(std::size_t bin) { return streams_.at(key_ | bin); }
 
  private:
-  // pcg32 with its state reachable.
-  class Engine : public pcg32 {
-   public:
-    Engine(std::uint64_t state, std::uint64_t stream) : pcg32(state, stream) {}
-    std::uint64_t state() const { return state_; }
-    void set_state(std::uint64_t state) { state_ = state; }
-  };
-
-  // RandomStream's keying of (seed, shot) for the photons, before its advance to the ray.
-  static Engine keyed(const PhotonDraw& draw) {
-    const std::uint64_t key = draw.seed ^ static_cast<std::uint64_t>(RandomPurpose::photons);
-    const auto shot = static_cast<std::uint64_t>(draw.shot);
-    return Engine(mix_bits(key ^ mix_bits(shot)),
-                  mix_bits(shot + 0x9e3779b97f4a7c15ULL * (key + 1)));
-  }
-
   std::uint64_t key_;
-  Engine base_, last_;
-  bool have_last_ = false;
-  std::size_t last_bin_ = 0;
-  std::uint64_t step_mult_ = 0, step_plus_ = 0;
+  RandomStreams streams_;
 };
 
-template <typename Random>
-std::uint8_t draw_channel(Random& random, int channels) {
+std::uint8_t draw_channel(RandomStream& random, int channels) {
   return static_cast<std::uint8_t>(
       std::min(channels - 1, static_cast<int>(random.uniform() * channels)));
 }
@@ -119,7 +62,7 @@ void check(const PhotonDraw& draw, std::span<const PhotonSource> sources) {
 // The signal photons of one bin, `total` being the sum of the sources' means there.
 void draw_bin(const PhotonDraw& draw, std::span<const PhotonSource> sources, std::size_t bin,
               double total, BinStreams& streams, std::vector<PhotonEvent>& events) {
-  BinStreams::Stream random = streams.at(bin);
+  RandomStream random = streams.at(bin);
   const double count = poisson(random, total);
   for (double k = 0.0; k < count; k += 1.0) {
     double pick = random.uniform() * total;

@@ -71,5 +71,38 @@ TEST(RandomStream, UniformsHaveTheMomentsOfU01) {
   EXPECT_LT(highest, 1.0);
 }
 
+// RandomStreams steps from a ray's stream to the next's: each the same draws as RandomStream keyed
+// afresh, over consecutive rays, gaps, a ray asked again, and rays whose shift reaches the top
+// bits.
+TEST(RandomStreams, AreTheKeyedStreams) {
+  const std::uint64_t rays[] = {0,
+                                1,
+                                2,
+                                3,
+                                7,
+                                8,
+                                8,
+                                9,
+                                65535,
+                                65536,
+                                65537,  // runs, gaps, a ray asked again
+                                (1ull << 31) - 1,
+                                1ull << 31,
+                                (1ull << 32) - 2,
+                                (1ull << 32) - 1,
+                                5};
+  for (const std::uint64_t seed : {0ull, 42ull})
+    for (const std::uint64_t shot : {0ull, 99ull})
+      for (const RandomPurpose purpose : {RandomPurpose::transport, RandomPurpose::photons}) {
+        RandomStreams streams(seed, shot, purpose);
+        for (const std::uint64_t ray : rays) {
+          RandomStream stepped = streams.at(ray);
+          RandomStream keyed(seed, shot, ray, purpose);
+          for (int draw = 0; draw < 4; ++draw)
+            ASSERT_EQ(stepped.uniform(), keyed.uniform()) << seed << " " << shot << " " << ray;
+        }
+      }
+}
+
 }  // namespace
 }  // namespace glaswave
