@@ -55,8 +55,10 @@ void check_layers(const std::vector<double>& edges, const std::string& place) {
                         "the layers' heights do not increase (layer " + std::to_string(k) + ")");
 }
 
-void check_values(const VoxelBlock& block, const std::string& place, double fill) {
-  for (std::size_t n = 0; n < block.pad.size(); ++n) {
+// The first bad value among [from, to): an input error naming its voxel.
+void check_each_value(const VoxelBlock& block, const std::string& place, double fill,
+                      std::size_t from, std::size_t to) {
+  for (std::size_t n = from; n < to; ++n) {
     const float v = block.pad[n];
     if (!(v >= 0.0f) || !std::isfinite(v) || (std::isfinite(fill) && v == fill)) {
       const std::size_t i = n % block.nx, j = n / block.nx % block.ny, k = n / block.nx / block.ny;
@@ -64,6 +66,28 @@ void check_values(const VoxelBlock& block, const std::string& place, double fill
                                    std::to_string(j) + ", z " + std::to_string(k) +
                                    " of the window) is negative, missing or not finite");
     }
+  }
+}
+
+void check_values(const VoxelBlock& block, const std::string& place, double fill) {
+  // Every window of every shot is checked: blocks of values without a branch (the compiler
+  // vectorises them), each value again only in a block that holds a bad one. A float equals
+  // the fill value only if that is a float.
+  const bool fill_is_float =
+      std::isfinite(fill) && static_cast<double>(static_cast<float>(fill)) == fill;
+  const float fill_f = fill_is_float ? static_cast<float>(fill) : 0.0f;
+  const float* pad = block.pad.data();
+  constexpr std::size_t stretch = 4096;
+  for (std::size_t n0 = 0; n0 < block.pad.size(); n0 += stretch) {
+    const std::size_t n1 = std::min(block.pad.size(), n0 + stretch);
+    unsigned bad = 0;
+    for (std::size_t n = n0; n < n1; ++n) {
+      const float v = pad[n];
+      bad |= static_cast<unsigned>(!(v >= 0.0f)) |
+             static_cast<unsigned>(!(v <= std::numeric_limits<float>::max())) |
+             static_cast<unsigned>(fill_is_float && v == fill_f);
+    }
+    if (bad) check_each_value(block, place, fill, n0, n1);
   }
 }
 
@@ -101,6 +125,7 @@ struct VoxelGridFile::Impl {
   double fill = std::numeric_limits<double>::quiet_NaN();
   GDALDatasetH dataset = nullptr;
   bool memory = false;             // shape holds the whole grid, pad included
+  std::size_t cache_bytes = 0;     // NetCDF's chunk cache for `pad`
   std::vector<int> band_of_layer;  // GDAL band (1-based) of each layer, bottom up
   mutable std::mutex mutex;
 
@@ -179,7 +204,22 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
   shape.y0 = coords[1][0] - shape.dy / 2;
   // Windows of consecutive shots overlap: their chunks stay decompressed (a NetCDF-3 or
   // contiguous variable has no chunk cache: the call then changes nothing).
-  nc_set_var_chunk_cache(ncid, pad_var, VoxelGridFile::read_cache_bytes(shape), 10007, 0.75f);
+  // The cache holds whole chunks: those at the grid's far edges count in full (a 560-column
+  // grid of 64-column chunks needs 576 columns' worth). A cache short of the grid's chunks
+  // evicts, least recently used first, the very chunks the next shot's window reads first, and
+  // every window inflated its chunks again.
+  int storage = NC_CONTIGUOUS;
+  std::size_t chunk[3] = {0, 0, 0};
+  double chunk_bytes = double(sizes[0]) * sizes[1] * sizes[2] * sizeof(float);
+  if (nc_inq_var_chunking(ncid, pad_var, &storage, chunk) == NC_NOERR && storage == NC_CHUNKED &&
+      chunk[0] > 0 && chunk[1] > 0 && chunk[2] > 0) {
+    chunk_bytes = sizeof(float);
+    for (int d = 0; d < 3; ++d)
+      chunk_bytes *= double((sizes[d] + chunk[d] - 1) / chunk[d] * chunk[d]);
+  }
+  cache_bytes =
+      static_cast<std::size_t>(std::min(chunk_bytes, double(VoxelGridFile::max_read_cache_bytes)));
+  nc_set_var_chunk_cache(ncid, pad_var, cache_bytes, 10007, 0.75f);
   double fill_value = 0.0;
   if (nc_get_att_double(ncid, pad_var, "_FillValue", &fill_value) == NC_NOERR) fill = fill_value;
   std::string mapping = text_attribute(ncid, pad_var, "grid_mapping");
@@ -286,10 +326,7 @@ const VoxelBlock& VoxelGridFile::shape() const { return impl_->shape; }
 
 bool VoxelGridFile::netcdf() const { return impl_->netcdf; }
 
-std::size_t VoxelGridFile::read_cache_bytes(const VoxelBlock& shape) {
-  const double grid_bytes = double(shape.nx) * shape.ny * shape.nz * sizeof(float);
-  return static_cast<std::size_t>(std::min(grid_bytes, double(max_read_cache_bytes)));
-}
+std::size_t VoxelGridFile::read_cache_bytes() const { return impl_->cache_bytes; }
 
 VoxelBlock VoxelGridFile::window(double x_min, double x_max, double y_min, double y_max) const {
   const VoxelBlock& s = impl_->shape;

@@ -56,11 +56,12 @@ class VoxelGridFile {
   // The whole grid's extent and layers (its pad is empty but for a grid held in memory).
   const VoxelBlock& shape() const;
 
-  // The decompressed chunks of a NetCDF grid kept between windows: the whole grid, up to
-  // max_read_cache_bytes (consecutive shots' windows overlap; the library's default holds less
-  // than one window of a 1 m grid, which every shot then inflated again).
+  // The decompressed chunks of a NetCDF grid kept between windows: all the grid's chunks (whole
+  // chunks, those at its edges included), up to max_read_cache_bytes (consecutive shots'
+  // windows overlap; the library's default holds less than one window of a 1 m grid, which
+  // every shot then inflated again); 0 for a grid not read through NetCDF.
   static constexpr std::size_t max_read_cache_bytes = std::size_t{128} << 20;
-  static std::size_t read_cache_bytes(const VoxelBlock& shape);
+  std::size_t read_cache_bytes() const;
   bool netcdf() const;  // read through NetCDF (else GDAL, or held in memory)
 
   // The columns that meet the rectangle [x_min, x_max] x [y_min, y_max] (the grid's CRS), read

@@ -15,19 +15,73 @@
 namespace glaswave {
 
 double VoxelField::top_m() const {
+  double top = -std::numeric_limits<double>::infinity(), highest_ground = top;
+  const std::size_t columns_n = static_cast<std::size_t>(nx) * ny;
+  if (packed()) {
+    // A column's highest non-empty layer ends at its `end` edge.
+    for (std::size_t c = 0; c < columns_n; ++c)
+      if (columns[c].first < columns[c].end && std::isfinite(ground_m[c]))
+        top = std::max(top, ground_m[c] + z_edges_m[columns[c].end]);
+    return top;
+  }
   // Layer by layer from the top, in memory order (a column's layers lie `columns` apart): the
   // highest top of a non-empty voxel, down to the layer whose top cannot beat it.
-  double top = -std::numeric_limits<double>::infinity(), highest_ground = top;
-  const std::size_t columns = static_cast<std::size_t>(nx) * ny;
-  for (std::size_t c = 0; c < columns; ++c)
+  for (std::size_t c = 0; c < columns_n; ++c)
     if (std::isfinite(ground_m[c])) highest_ground = std::max(highest_ground, ground_m[c]);
   for (int k = nz - 1; k >= 0 && highest_ground + z_edges_m[k + 1] > top; --k) {
-    const float* layer = pad.data() + k * columns;
-    for (std::size_t c = 0; c < columns; ++c)
+    const float* layer = pad.data() + k * columns_n;
+    for (std::size_t c = 0; c < columns_n; ++c)
       if (layer[c] > 0.0f && std::isfinite(ground_m[c]))
         top = std::max(top, ground_m[c] + z_edges_m[k + 1]);
   }
   return top;
+}
+
+void VoxelField::pack() {
+  const std::size_t columns_n = static_cast<std::size_t>(nx) * ny;
+  if (columns_n == 0 || nz <= 0 || packed()) return;
+  // Each column's non-empty stretch, the layers read in memory order, without a branch (the
+  // compiler vectorises it), by tiles of columns that stay in cache across the layers.
+  std::vector<std::int32_t> first(columns_n, nz), end(columns_n, 0);
+  constexpr std::size_t tile = 2048;
+  for (std::size_t c0 = 0; c0 < columns_n; c0 += tile) {
+    const std::size_t c1 = std::min(columns_n, c0 + tile);
+    for (int k = 0; k < nz; ++k) {
+      const float* layer = pad.data() + k * columns_n;
+      for (std::size_t c = c0; c < c1; ++c) {
+        const bool filled = layer[c] > 0.0f;
+        first[c] = std::min(first[c], filled ? k : nz);
+        end[c] = filled ? k + 1 : end[c];
+      }
+    }
+  }
+  std::size_t packed_n = 0;
+  for (std::size_t c = 0; c < columns_n; ++c) packed_n += std::max(0, end[c] - first[c]);
+  if (packed_n > std::numeric_limits<std::uint32_t>::max()) return;  // the traversal reads `pad`
+  columns.resize(columns_n);
+  column_pad.resize(packed_n);
+  // The stretches: a small tile of columns turned column by column in a buffer that stays in
+  // the first-level cache, then each column's stretch copied out.
+  constexpr std::size_t turn = 128;
+  std::vector<float> turned(turn * static_cast<std::size_t>(nz));
+  std::size_t offset = 0;
+  for (std::size_t c0 = 0; c0 < columns_n; c0 += turn) {
+    const std::size_t c1 = std::min(columns_n, c0 + turn);
+    for (int k = 0; k < nz; ++k) {
+      const float* layer = pad.data() + k * columns_n;
+      for (std::size_t c = c0; c < c1; ++c) turned[(c - c0) * nz + k] = layer[c];
+    }
+    for (std::size_t c = c0; c < c1; ++c) {
+      Column& column = columns[c];
+      column.offset = static_cast<std::uint32_t>(offset);
+      column.first = end[c] > 0 ? first[c] : 0;
+      column.end = end[c];
+      const float* from = turned.data() + (c - c0) * nz;
+      std::copy(from + column.first, from + column.end, column_pad.data() + offset);
+      offset += static_cast<std::size_t>(column.end - column.first);
+    }
+  }
+  std::vector<float>().swap(pad);
 }
 
 namespace {
@@ -53,12 +107,37 @@ struct Emitter {
   }
 };
 
-}  // namespace
+// A column's layers as the traversal reads them: the non-empty ones lie in [first, end), the
+// density of layer k at pad[(k - base) * stride] (packed: the column's stretch, from its first
+// layer; else `pad` itself, from the ground).
+struct ColumnView {
+  const float* pad;
+  std::size_t stride;
+  int base, first, end;
+  float at(int k) const { return pad[static_cast<std::size_t>(k - base) * stride]; }
+};
 
-void voxel_spans(const VoxelField& f, const Vec3& origin, const Vec3& direction,
-                 double max_distance_m, std::vector<VolumeSpan>& spans, double depth,
-                 const std::vector<double>* extinction_per_density) {
-  if (f.nx <= 0 || f.ny <= 0 || f.nz <= 0) return;
+struct PackedColumns {
+  const VoxelField& f;
+  ColumnView operator()(std::size_t column) const {
+    const VoxelField::Column& c = f.columns[column];
+    return {f.column_pad.data() + c.offset, 1, c.first, c.first, c.end};
+  }
+};
+
+struct LayeredColumns {
+  const VoxelField& f;
+  std::size_t columns;
+  ColumnView operator()(std::size_t column) const {
+    return {f.pad.data() + column, columns, 0, 0, f.nz};
+  }
+};
+
+// The traversal, reading each column through `column_of`.
+template <class Columns>
+void column_spans(const VoxelField& f, const Columns& column_of, const Vec3& origin,
+                  const Vec3& direction, double max_distance_m, std::vector<VolumeSpan>& spans,
+                  double depth, const std::vector<double>* extinction_per_density) {
   // The ray in column coordinates (u, v): p = origin + u * axis_i + v * axis_j.
   const double a = f.axis_i_m[0], b = f.axis_j_m[0], c = f.axis_i_m[1], d = f.axis_j_m[1];
   const double det = a * d - b * c;
@@ -101,43 +180,53 @@ void voxel_spans(const VoxelField& f, const Vec3& origin, const Vec3& direction,
   double next_j = dv > 0.0 ? (j + 1 - v0) / dv : dv < 0.0 ? (j - v0) / dv : inf;
 
   Emitter emit{spans, spans.size(), f.material, extinction_per_density, depth};
-  const std::vector<double>& edges = f.z_edges_m;
-  const std::size_t columns = static_cast<std::size_t>(f.nx) * f.ny;
+  const double* edges = f.z_edges_m.data();
   const double oz = origin[2], dz = direction[2];
   for (double t_a = t_enter;;) {
     const double t_b = std::min({next_i, next_j, t_exit});
     const std::size_t column = static_cast<std::size_t>(j) * f.nx + i;
+    const ColumnView layers = column_of(column);
     const double ground = f.ground_m[column];
-    if (t_b > t_a && std::isfinite(ground)) {
-      const float* pad = f.pad.data() + column;
+    // Empty voxels give no span: only the column's non-empty stretch is cut.
+    if (t_b > t_a && layers.first < layers.end && std::isfinite(ground)) {
       if (dz == 0.0) {
         const double h = oz - ground;
-        const auto above = std::upper_bound(edges.begin(), edges.end(), h);
-        if (above != edges.begin() && above != edges.end()) {
-          const std::size_t k = static_cast<std::size_t>(above - edges.begin()) - 1;
-          if (!emit.add(t_a, t_b, pad[k * columns])) return;
+        const double* above = std::upper_bound(edges, edges + f.nz + 1, h);
+        if (above != edges && above != edges + f.nz + 1) {
+          const int k = static_cast<int>(above - edges) - 1;
+          if (k >= layers.first && k < layers.end && !emit.add(t_a, t_b, layers.at(k))) return;
         }
       } else {
         // Heights above this column's ground at the stretch's ends; the layers between them in
         // the order the ray crosses them.
         const double h_a = oz + t_a * dz - ground, h_b = oz + t_b * dz - ground;
         const double low = std::min(h_a, h_b), high = std::max(h_a, h_b);
-        if (high > edges.front() && low < edges.back()) {
-          int k_low =
-              static_cast<int>(std::upper_bound(edges.begin(), edges.end(), low) - edges.begin()) -
-              1;
-          int k_high =
-              static_cast<int>(std::lower_bound(edges.begin(), edges.end(), high) - edges.begin()) -
-              1;
-          k_low = std::max(k_low, 0);
-          k_high = std::min(k_high, f.nz - 1);
+        if (high > edges[layers.first] && low < edges[layers.end]) {
+          const double* from = edges + layers.first;
+          const double* to = edges + layers.end + 1;
+          const int k_low =
+              std::max(static_cast<int>(std::upper_bound(from, to, low) - edges) - 1, layers.first);
+          const int k_high = std::min(
+              static_cast<int>(std::lower_bound(from, to, high) - edges) - 1, layers.end - 1);
           const int k_step = dz > 0.0 ? 1 : -1;
           const int k_first = dz > 0.0 ? k_low : k_high, k_last = dz > 0.0 ? k_high : k_low;
-          for (int k = k_first;; k += k_step) {
-            double t0 = (ground + edges[k] - oz) / dz, t1 = (ground + edges[k + 1] - oz) / dz;
-            if (t0 > t1) std::swap(t0, t1);
-            if (!emit.add(std::max(t0, t_a), std::min(t1, t_b), pad[k * columns])) return;
-            if (k == k_last) break;
+          // An edge's distance serves the two layers it parts: kept for the next layer.
+          int edge_known = -1;
+          double t_known = 0.0;
+          const auto t_at = [&](int edge) {
+            if (edge != edge_known) {
+              edge_known = edge;
+              t_known = (ground + edges[edge] - oz) / dz;
+            }
+            return t_known;
+          };
+          for (int k = k_first; k_step > 0 ? k <= k_last : k >= k_last; k += k_step) {
+            const float density = layers.at(k);
+            if (!(density > 0.0f)) continue;
+            // Up, a layer is entered at its bottom edge; down, at its top.
+            const double t_in = t_at(dz > 0.0 ? k : k + 1), t_out = t_at(dz > 0.0 ? k + 1 : k);
+            const double t0 = std::min(t_in, t_out), t1 = std::max(t_in, t_out);
+            if (!emit.add(std::max(t0, t_a), std::min(t1, t_b), density)) return;
           }
         }
       }
@@ -154,6 +243,20 @@ void voxel_spans(const VoxelField& f, const Vec3& origin, const Vec3& direction,
     }
     t_a = t_b;
   }
+}
+
+}  // namespace
+
+void voxel_spans(const VoxelField& f, const Vec3& origin, const Vec3& direction,
+                 double max_distance_m, std::vector<VolumeSpan>& spans, double depth,
+                 const std::vector<double>* extinction_per_density) {
+  if (f.nx <= 0 || f.ny <= 0 || f.nz <= 0) return;
+  if (f.packed())
+    column_spans(f, PackedColumns{f}, origin, direction, max_distance_m, spans, depth,
+                 extinction_per_density);
+  else
+    column_spans(f, LayeredColumns{f, static_cast<std::size_t>(f.nx) * f.ny}, origin, direction,
+                 max_distance_m, spans, depth, extinction_per_density);
 }
 
 namespace {
@@ -274,6 +377,7 @@ std::shared_ptr<const VoxelField> VoxelFieldSource::field(const LocalFrame& fram
   field->z_edges_m = std::move(block.z_edges_m);
   field->pad = std::move(block.pad);
   fill_ground(*field, frame, terrain, std::min(cell_i_m, cell_j_m));
+  field->pack();
   return field;
 }
 

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
@@ -33,8 +34,18 @@ struct VoxelField {
   int nx = 0, ny = 0, nz = 0;
   std::vector<double> z_edges_m;  // nz + 1 heights above the ground, increasing
   std::vector<double> ground_m;   // local height of the ground under each column, [j * nx + i]
-  std::vector<float> pad;         // m^2/m^3 at [(k * ny + j) * nx + i]
+  std::vector<float> pad;         // m^2/m^3 at [(k * ny + j) * nx + i]; empty once packed
   int material = 0;               // the foliage of every voxel
+  // The grid column by column, once pack() has run: column c's layers from its lowest non-empty
+  // one to its highest, [first, end) (first == end: an empty column), at column_pad[offset] on.
+  // A ray down a column then reads consecutive floats where the layers of `pad` lie nx * ny
+  // floats apart (a cache miss a voxel, most of a shot's time), and skips the empty layers.
+  struct Column {
+    std::uint32_t offset = 0;
+    std::int32_t first = 0, end = 0;
+  };
+  std::vector<Column> columns;
+  std::vector<float> column_pad;
   // The lowest bottom and highest top of any column (local frame), set with the ground by
   // fill_ground: a ray is traversed only between them (unbounded when not set).
   double bottom_m = -std::numeric_limits<double>::infinity();
@@ -42,6 +53,11 @@ struct VoxelField {
 
   // Highest point of any non-empty voxel (local frame); -infinity for an empty field.
   double top_m() const;
+
+  // Moves `pad` into `columns` and `column_pad` (and frees it): the traversal and top_m give the
+  // same values, to the bit, packed or not.
+  void pack();
+  bool packed() const { return !columns.empty(); }
 };
 
 // Appends to `spans` every stretch of origin + t * direction, t in [0, max_distance_m], inside a

@@ -85,8 +85,7 @@ GridShape grid_shape(const VegetationSettings& settings) {
       g.cell_y_m = std::abs(shape.dy);
       g.layers = shape.nz;
       g.columns = static_cast<double>(shape.nx) * shape.ny;
-      if (grid.netcdf())
-        g.cache_bytes = static_cast<double>(VoxelGridFile::read_cache_bytes(shape));
+      if (grid.netcdf()) g.cache_bytes = static_cast<double>(grid.read_cache_bytes());
     }
   } catch (const Error&) {
   }
@@ -98,8 +97,10 @@ GridShape grid_shape(const VegetationSettings& settings) {
 double VoxelSource::region_bytes(const VegetationSettings& settings, double side_m) {
   const GridShape g = grid_shape(settings);
   const double columns = (side_m / g.cell_x_m + 1.0) * (side_m / g.cell_y_m + 1.0);
+  // The window as read, and its columns packed from it (at most as many floats) while both are
+  // held; the ground and the packed columns' index.
   return std::min(columns, g.columns > 0.0 ? g.columns : columns) *
-         (g.layers * sizeof(float) + sizeof(double));
+         (2.0 * g.layers * sizeof(float) + sizeof(double) + sizeof(VoxelField::Column));
 }
 
 double VoxelSource::source_bytes(const VegetationSettings& settings) {

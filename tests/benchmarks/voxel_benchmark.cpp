@@ -12,15 +12,18 @@
 //     starts, and a shot over it.
 // The grids are written by a child process (a 200 MB block would otherwise stay in this
 // process's peak) into a temporary folder, deleted at the end. Not a test: `--quick` (a 300 m
-// grid, 100 shots, 500 rays) is the short mode that ctest runs.
+// grid, 100 shots, 500 rays) is the short mode that ctest runs; `--speed` times the shots alone
+// (no memory pass), `--rounds N` the fastest of N.
 #include <sys/wait.h>
 #include <tbb/task_arena.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -264,8 +267,17 @@ void cast_cloud(const VoxelBlock& grid, const fs::path& file) {
 
 struct Timed {
   double seconds = 1e300, fixed_seconds = 1e300;
+  double cpu_s = 1e300, fixed_cpu_s = 1e300;  // the shot's thread's CPU time
   ShotRecord record;
 };
+
+// The calling thread's CPU time: the shot runs on it (an arena of one thread), and it leaves out
+// what the shared machine's other processes take.
+double thread_cpu_s() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return now.tv_sec + 1e-9 * now.tv_nsec;
+}
 
 // The fastest of `rounds` shots over `vegetation`, and of as many at one ray (the shot's fixed
 // cost: its scene, its truth).
@@ -288,45 +300,59 @@ void time_shots(
       for (std::size_t s = 0; s < sources.size(); ++s) {
         Timed& t = *sources[s].first;
         auto start = Clock::now();
+        double cpu_start_s = thread_cpu_s();
         t.record = full[s]->simulate(footprint);
+        t.cpu_s = std::min(t.cpu_s, thread_cpu_s() - cpu_start_s);
         t.seconds = std::min(t.seconds, seconds_since(start));
         start = Clock::now();
+        cpu_start_s = thread_cpu_s();
         fixed[s]->simulate(footprint);
+        t.fixed_cpu_s = std::min(t.fixed_cpu_s, thread_cpu_s() - cpu_start_s);
         t.fixed_seconds = std::min(t.fixed_seconds, seconds_since(start));
       }
   });
 }
 
 void print_row(const char* name, const Timed& t) {
-  std::printf("  %-22s %9.3f %13.3f %9.3f %11.3f %12.5g %12.5g\n", name, t.seconds, t.fixed_seconds,
-              t.record.pai_true, t.record.cover_true, t.record.rx_energy_J[0],
-              t.record.rx_energy_ground_J[0]);
+  std::printf("  %-22s %9.3f %13.3f %8.3f %8.3f %9.3f %11.3f %12.5g %12.5g\n", name, t.seconds,
+              t.fixed_seconds, t.cpu_s, t.fixed_cpu_s, t.record.pai_true, t.record.cover_true,
+              t.record.rx_energy_J[0], t.record.rx_energy_ground_J[0]);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  // --speed: the shots' speed alone (no memory pass), as profiling wants; --rounds N.
+  bool quick = false, speed_only = false;
+  int rounds_asked = 0;
+  for (int a = 1; a < argc; ++a) {
+    if (std::strcmp(argv[a], "--quick") == 0) quick = true;
+    if (std::strcmp(argv[a], "--speed") == 0) speed_only = true;
+    if (std::strcmp(argv[a], "--rounds") == 0 && a + 1 < argc) rounds_asked = std::atoi(argv[++a]);
+  }
   const int side = quick ? 200 : 1000, pass_shots = quick ? 30 : 1000;
-  const int rays = quick ? 500 : 10000, rounds = quick ? 1 : 5;
+  const int rays = quick ? 500 : 10000;
+  const int rounds = rounds_asked > 0 ? rounds_asked : quick ? 1 : 5;
   const fs::path folder =
       fs::temp_directory_path() / ("glaswave-voxel-benchmark-" + std::to_string(getpid()));
   fs::create_directories(folder);
 
   std::printf("voxel grids%s\nmemory: a %d-shot GLAS pass, 100 rays, order 3, every core\n",
               quick ? " (--quick)" : "", pass_shots);
-  const PassMemory pass = memory_pass(folder, side, pass_shots, 100);
+  const PassMemory pass = speed_only ? PassMemory{} : memory_pass(folder, side, pass_shots, 100);
   const double peak_mib = status_mib("VmHWM");
-  std::printf(
-      "  %lld shots in %.1f s; the run's peak added %.1f MiB of resident memory to the "
-      "process, over bare ground %.1f MiB (process peak %.1f MiB)\n",
-      static_cast<long long>(pass.shots), pass.seconds, pass.added_mib, pass.bare_added_mib,
-      peak_mib);
-  std::printf(
-      "  the estimate (estimate_run_memory): %.1f MiB in all; the voxels' %.1f MiB once "
-      "+ %d threads x %.1f MiB, against %.1f MiB measured above bare ground\n",
-      pass.estimate_mib, pass.source_mib, pass.threads, pass.region_mib,
-      pass.added_mib - pass.bare_added_mib);
+  if (!speed_only) {
+    std::printf(
+        "  %lld shots in %.1f s; the run's peak added %.1f MiB of resident memory to the "
+        "process, over bare ground %.1f MiB (process peak %.1f MiB)\n",
+        static_cast<long long>(pass.shots), pass.seconds, pass.added_mib, pass.bare_added_mib,
+        peak_mib);
+    std::printf(
+        "  the estimate (estimate_run_memory): %.1f MiB in all; the voxels' %.1f MiB once "
+        "+ %d threads x %.1f MiB, against %.1f MiB measured above bare ground\n",
+        pass.estimate_mib, pass.source_mib, pass.threads, pass.region_mib,
+        pass.added_mib - pass.bare_added_mib);
+  }
 
   // The speed: Table 1's forest about Table 2's footprint, and its crowns as voxels.
   const std::unique_ptr<Terrain> terrain = testing::plane_terrain(0.3);
@@ -425,8 +451,9 @@ int main(int argc, char** argv) {
       "  the cloud as its own terrain too: terrain and voxels in %.2f s, the ground gridded once "
       "(%.2f s gridded twice: %.2f times as long); the grids %s\n",
       shared_s, twice_s, twice_s / shared_s, same_grid ? "the same bits" : "DIFFER");
-  std::printf("  %-22s %9s %13s %9s %11s %12s %12s\n", "shot over", "seconds", "at 1 ray (s)",
-              "pai_true", "cover_true", "rx_energy_J", "ground_J");
+  std::printf("  %-22s %9s %13s %8s %8s %9s %11s %12s %12s\n", "shot over", "seconds",
+              "at 1 ray (s)", "cpu (s)", "cpu 1 ray", "pai_true", "cover_true", "rx_energy_J",
+              "ground_J");
   print_row("turbid crowns", over_crowns);
   print_row("crowns as voxels", over_voxels);
   print_row("point cloud of them", over_cloud);
@@ -441,16 +468,28 @@ int main(int argc, char** argv) {
               over_cloud.seconds / over_crowns.seconds);
   std::printf("  voxel slab / turbid layer, time:          %.2f\n",
               over_slab.seconds / over_layer.seconds);
+  std::printf(
+      "  the same by the shot's thread's CPU time: voxels / crowns %.2f (the rays alone: "
+      "%.2f), point cloud / crowns %.2f, slab / layer %.2f\n",
+      over_voxels.cpu_s / over_crowns.cpu_s,
+      (over_voxels.cpu_s - over_voxels.fixed_cpu_s) / (over_crowns.cpu_s - over_crowns.fixed_cpu_s),
+      over_cloud.cpu_s / over_crowns.cpu_s, over_slab.cpu_s / over_layer.cpu_s);
   std::printf("  voxels / crowns, energy:                  %.4f\n",
               over_voxels.record.rx_energy_J[0] / over_crowns.record.rx_energy_J[0]);
   std::printf("  voxel slab / layer, energy:               %.4f\n",
               over_slab.record.rx_energy_J[0] / over_layer.record.rx_energy_J[0]);
-  std::printf("  pass's peak resident memory / 1 GiB:      %.3f\n", peak_mib / 1024.0);
-  std::printf(
-      "  voxels' memory, estimate / measured:      %.2f\n",
-      (pass.source_mib + pass.threads * pass.region_mib) / (pass.added_mib - pass.bare_added_mib));
-  const bool measured = pass.shots == pass_shots && pass.added_mib > 0 && written &&
-                        over_voxels.seconds < 1e300 && over_crowns.seconds < 1e300 &&
+  if (!speed_only) {
+    std::printf("  pass's peak resident memory / 1 GiB:      %.3f\n", peak_mib / 1024.0);
+    std::printf("  voxels' memory, estimate / measured:      %.2f\n",
+                (pass.source_mib + pass.threads * pass.region_mib) /
+                    (pass.added_mib - pass.bare_added_mib));
+  }
+  // Every digit, so that a change of the traversal can be seen to keep the bits.
+  std::printf("energies (J): voxels %.17g, point cloud %.17g, slab %.17g\n",
+              over_voxels.record.rx_energy_J[0], over_cloud.record.rx_energy_J[0],
+              over_slab.record.rx_energy_J[0]);
+  const bool measured = (speed_only || (pass.shots == pass_shots && pass.added_mib > 0)) &&
+                        written && over_voxels.seconds < 1e300 && over_crowns.seconds < 1e300 &&
                         over_cloud.seconds < 1e300 && same_grid;
   std::printf(measured ? "every figure measured\n" : "a figure is missing\n");
   return measured ? 0 : 1;

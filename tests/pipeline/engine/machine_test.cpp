@@ -72,10 +72,11 @@ TEST(RunMemory, BeyondTheMachineIsRefusedAtTheKeyThatMakesIt) {
 }
 
 // A voxel grid's region: the window of the grid a shot reads (its columns' densities, 4 bytes a
-// voxel, and the ground under each, 8 bytes), counted here on the field a VoxelSource grows over
-// the estimate's half size about 45 N 7 E: the estimate within 2 % of it. 2 m columns, 30
-// layers, a 1200 m square in UTM 32N; the glas preset's scene is 492 m across (247 x 247 columns
-// of 128 bytes, 7.4 MiB).
+// voxel, and the ground under each, 8 bytes) and the columns packed from it (as many floats at
+// most, and 12 bytes of index a column), counted here on the field a VoxelSource grows over the
+// estimate's half size about 45 N 7 E: the estimate within 2 % of it. 2 m columns, 30 layers of
+// one density, a 1200 m square in UTM 32N; the glas preset's scene is 492 m across (247 x 247
+// columns of 260 bytes, 15 MiB).
 TEST(RunMemory, CountsTheVoxelGridsWindowEachThreadHolds) {
   test_support::ScratchDir dir;
   VoxelBlock grid;
@@ -98,11 +99,15 @@ TEST(RunMemory, CountsTheVoxelGridsWindowEachThreadHolds) {
   const LocalFrame frame({45.0, 7.0, 0.0});
   const auto field = source.grow({*terrain, frame, m.scene_half_size_m, {}, 1}).geometry.voxels;
   ASSERT_TRUE(field);
-  const double window_bytes = field->pad.size() * 4.0 + field->ground_m.size() * 8.0;
+  // The window as read, and its columns packed (here every layer) while both are held.
+  const double window_bytes = 4.0 * field->nx * field->ny * field->nz +
+                              field->column_pad.size() * 4.0 + field->ground_m.size() * 8.0 +
+                              field->columns.size() * sizeof(VoxelField::Column);
   EXPECT_NEAR(m.scene_bytes / window_bytes, 1.0, 0.02) << field->nx << " x " << field->ny;
   EXPECT_EQ(m.trees, 0.0);
-  // Once for the run: the grid's decompressed chunks NetCDF keeps, here the whole 41 MiB.
-  EXPECT_EQ(m.source_bytes, 600.0 * 600 * 30 * 4);
+  // Once for the run: the grid's decompressed chunks NetCDF keeps, here all of them: 10 x 10
+  // chunks of 64 x 64 columns (those at the far edges whole), 47 MiB.
+  EXPECT_EQ(m.source_bytes, 640.0 * 640 * 30 * 4);
   EXPECT_NEAR(m.bytes, m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes), 1.0);
   EXPECT_NO_THROW(check_run(c));
 }
@@ -130,9 +135,11 @@ TEST(RunMemory, APointCloudsVoxelisationIsRefusedAtItsVoxelSize) {
   const RunMemory m = estimate_run_memory(c);
   const double columns = (20000.0 / 0.05 + 1) * (20000.0 / 0.05 + 1);
   EXPECT_NEAR(m.source_bytes / (columns * (2401 * 8.0 + 2400 * 4.0 + 24.0)), 1.0, 1e-5);
-  // Each thread's window: 31 m of heights in 5 cm layers (the header's z range and one more).
+  // Each thread's window: 31 m of heights in 5 cm layers (the header's z range and one more),
+  // read and packed, the ground and the packed columns' index.
   const double side_m = 2.0 * m.scene_half_size_m;
-  EXPECT_NEAR(m.scene_bytes, (side_m / 0.05 + 1) * (side_m / 0.05 + 1) * (601 * 4.0 + 8.0),
+  EXPECT_NEAR(m.scene_bytes,
+              (side_m / 0.05 + 1) * (side_m / 0.05 + 1) * (2 * 601 * 4.0 + 8.0 + 12.0),
               1e-6 * m.scene_bytes);
   try {
     check_run(c);

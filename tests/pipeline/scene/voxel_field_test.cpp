@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 #include <ogr_srs_api.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -57,6 +59,206 @@ double density_at(const VoxelField& f, const Vec3& p) {
   for (int k = 0; k < f.nz; ++k)
     if (h >= f.z_edges_m[k] && h < f.z_edges_m[k + 1]) return f.pad[(k * f.ny + j) * f.nx + i];
   return 0.0;
+}
+
+// The traversal as it was before fields were packed column by column and empty layers skipped
+// (voxel_field.cpp at a33b568), kept to check that the faster one gives the same spans to the
+// bit.
+struct ReferenceEmitter {
+  std::vector<VolumeSpan>& spans;
+  std::size_t first;  // spans before this index are not ours to merge with
+  int material;
+  const std::vector<double>* extinction_per_density;
+  double depth_left;
+
+  // Adds [t0, t1] at `density`; false when the free path has ended (stop).
+  bool add(double t0, double t1, float density) {
+    if (!(t1 > t0) || !(density > 0.0f)) return true;
+    const double d = density;
+    if (spans.size() > first && spans.back().end_m == t0 && spans.back().area_density_m2_m3 == d)
+      spans.back().end_m = t1;
+    else
+      spans.push_back({t0, t1, d, material, -1});
+    if (!extinction_per_density) return true;
+    depth_left -= d * (*extinction_per_density)[material] * (t1 - t0);
+    return depth_left > 0.0;
+  }
+};
+
+void reference_spans(const VoxelField& f, const Vec3& origin, const Vec3& direction,
+                     double max_distance_m, std::vector<VolumeSpan>& spans, double depth,
+                     const std::vector<double>* extinction_per_density) {
+  if (f.nx <= 0 || f.ny <= 0 || f.nz <= 0) return;
+  // The ray in column coordinates (u, v): p = origin + u * axis_i + v * axis_j.
+  const double a = f.axis_i_m[0], b = f.axis_j_m[0], c = f.axis_i_m[1], d = f.axis_j_m[1];
+  const double det = a * d - b * c;
+  if (det == 0.0) return;
+  const double px = origin[0] - f.origin_m[0], py = origin[1] - f.origin_m[1];
+  const double u0 = (d * px - b * py) / det, v0 = (a * py - c * px) / det;
+  const double du = (d * direction[0] - b * direction[1]) / det;
+  const double dv = (a * direction[1] - c * direction[0]) / det;
+  double t_enter = 0.0, t_exit = max_distance_m;
+  const auto clip = [&](double start, double rate, int n) {
+    if (rate == 0.0) return start >= 0.0 && start < n;
+    double t0 = (0.0 - start) / rate, t1 = (n - start) / rate;
+    if (t0 > t1) std::swap(t0, t1);
+    t_enter = std::max(t_enter, t0);
+    t_exit = std::min(t_exit, t1);
+    return true;
+  };
+  if (!clip(u0, du, f.nx) || !clip(v0, dv, f.ny) || !(t_enter < t_exit)) return;
+  // Above the highest column and below the lowest there is nothing to meet.
+  if (direction[2] != 0.0) {
+    double t0 = (f.bottom_m - origin[2]) / direction[2],
+           t1 = (f.ceiling_m - origin[2]) / direction[2];
+    if (t0 > t1) std::swap(t0, t1);
+    t_enter = std::max(t_enter, t0);
+    t_exit = std::min(t_exit, t1);
+    if (!(t_enter < t_exit)) return;
+  } else if (!(origin[2] >= f.bottom_m && origin[2] <= f.ceiling_m)) {
+    return;
+  }
+
+  const auto cell = [](double x, int n) {
+    return std::clamp(static_cast<int>(std::floor(x)), 0, n - 1);
+  };
+  int i = cell(u0 + t_enter * du, f.nx), j = cell(v0 + t_enter * dv, f.ny);
+  const double inf = std::numeric_limits<double>::infinity();
+  const int step_i = du > 0.0 ? 1 : -1, step_j = dv > 0.0 ? 1 : -1;
+  const double delta_i = du != 0.0 ? 1.0 / std::abs(du) : inf;
+  const double delta_j = dv != 0.0 ? 1.0 / std::abs(dv) : inf;
+  double next_i = du > 0.0 ? (i + 1 - u0) / du : du < 0.0 ? (i - u0) / du : inf;
+  double next_j = dv > 0.0 ? (j + 1 - v0) / dv : dv < 0.0 ? (j - v0) / dv : inf;
+
+  ReferenceEmitter emit{spans, spans.size(), f.material, extinction_per_density, depth};
+  const std::vector<double>& edges = f.z_edges_m;
+  const std::size_t columns = static_cast<std::size_t>(f.nx) * f.ny;
+  const double oz = origin[2], dz = direction[2];
+  for (double t_a = t_enter;;) {
+    const double t_b = std::min({next_i, next_j, t_exit});
+    const std::size_t column = static_cast<std::size_t>(j) * f.nx + i;
+    const double ground = f.ground_m[column];
+    if (t_b > t_a && std::isfinite(ground)) {
+      const float* pad = f.pad.data() + column;
+      if (dz == 0.0) {
+        const double h = oz - ground;
+        const auto above = std::upper_bound(edges.begin(), edges.end(), h);
+        if (above != edges.begin() && above != edges.end()) {
+          const std::size_t k = static_cast<std::size_t>(above - edges.begin()) - 1;
+          if (!emit.add(t_a, t_b, pad[k * columns])) return;
+        }
+      } else {
+        // Heights above this column's ground at the stretch's ends; the layers between them in
+        // the order the ray crosses them.
+        const double h_a = oz + t_a * dz - ground, h_b = oz + t_b * dz - ground;
+        const double low = std::min(h_a, h_b), high = std::max(h_a, h_b);
+        if (high > edges.front() && low < edges.back()) {
+          int k_low =
+              static_cast<int>(std::upper_bound(edges.begin(), edges.end(), low) - edges.begin()) -
+              1;
+          int k_high =
+              static_cast<int>(std::lower_bound(edges.begin(), edges.end(), high) - edges.begin()) -
+              1;
+          k_low = std::max(k_low, 0);
+          k_high = std::min(k_high, f.nz - 1);
+          const int k_step = dz > 0.0 ? 1 : -1;
+          const int k_first = dz > 0.0 ? k_low : k_high, k_last = dz > 0.0 ? k_high : k_low;
+          for (int k = k_first;; k += k_step) {
+            double t0 = (ground + edges[k] - oz) / dz, t1 = (ground + edges[k + 1] - oz) / dz;
+            if (t0 > t1) std::swap(t0, t1);
+            if (!emit.add(std::max(t0, t_a), std::min(t1, t_b), pad[k * columns])) return;
+            if (k == k_last) break;
+          }
+        }
+      }
+    }
+    if (t_b >= t_exit) return;
+    if (next_i <= next_j) {
+      i += step_i;
+      next_i += delta_i;
+      if (i < 0 || i >= f.nx) return;
+    } else {
+      j += step_j;
+      next_j += delta_j;
+      if (j < 0 || j >= f.ny) return;
+    }
+    t_a = t_b;
+  }
+}
+
+bool same_bits(const std::vector<VolumeSpan>& a, const std::vector<VolumeSpan>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t n = 0; n < a.size(); ++n)
+    if (a[n].start_m != b[n].start_m || a[n].end_m != b[n].end_m ||
+        a[n].area_density_m2_m3 != b[n].area_density_m2_m3 || a[n].material != b[n].material ||
+        a[n].crown != b[n].crown)
+      return false;
+  return true;
+}
+
+// Packed or not, the traversal gives the spans the former one gave, every bit of them, with
+// and without a free path's end: over fields with runs of equal density (merged), empty
+// columns and stretches, a column without ground, level and sloping ground; rays from above,
+// inside, level, vertical, along column edges and layer heights.
+TEST(VoxelSpans, PackedAndLayeredGiveTheFormerTraversalsBits) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), unit(0.0, 1.0);
+  const std::vector<double> extinction{0.5};
+  for (int field = 0; field < 12; ++field) {
+    VoxelField f;
+    f.origin_m = {-20.0 + u(rng), -15.0 + u(rng)};
+    f.axis_i_m = field % 3 == 0 ? std::array<double, 2>{1.0, 0.0} : std::array<double, 2>{1.1, 0.2};
+    f.axis_j_m =
+        field % 3 == 0 ? std::array<double, 2>{0.0, 1.0} : std::array<double, 2>{-0.1, 0.9};
+    f.nx = 40;
+    f.ny = 30;
+    f.nz = 25;
+    for (int k = 0; k <= f.nz; ++k) f.z_edges_m.push_back(field % 2 ? k : 0.5 * k + 0.01 * k * k);
+    const double slope = field % 4 == 1 ? 0.3 : 0.0;
+    for (int j = 0; j < f.ny; ++j)
+      for (int i = 0; i < f.nx; ++i) f.ground_m.push_back(slope * (i - j) * 0.5);
+    f.ground_m[7] = std::numeric_limits<double>::quiet_NaN();
+    // Columns of crowns: a stretch of equal density with ragged ends, some columns empty.
+    f.pad.assign(static_cast<std::size_t>(f.nx) * f.ny * f.nz, 0.0f);
+    for (int j = 0; j < f.ny; ++j)
+      for (int i = 0; i < f.nx; ++i) {
+        if (unit(rng) < 0.3) continue;
+        const int bottom = static_cast<int>(unit(rng) * 10), top = bottom + 1 + int(unit(rng) * 14);
+        const float inside = unit(rng) < 0.5 ? 0.4f : static_cast<float>(unit(rng));
+        for (int k = bottom; k < top && k < f.nz; ++k)
+          f.pad[(static_cast<std::size_t>(k) * f.ny + j) * f.nx + i] =
+              k == bottom || k == top - 1 || unit(rng) < 0.1 ? static_cast<float>(unit(rng))
+              : unit(rng) < 0.1                              ? 0.0f
+                                                             : inside;
+      }
+    f.bottom_m = -1.0 + (slope > 0 ? -20.0 : 0.0);
+    f.ceiling_m = f.z_edges_m.back() + (slope > 0 ? 20.0 : 0.0);
+    VoxelField packed = f;
+    packed.pack();
+    ASSERT_TRUE(packed.packed());
+    EXPECT_TRUE(packed.pad.empty());
+    EXPECT_EQ(packed.top_m(), f.top_m());
+    for (int ray = 0; ray < 3000; ++ray) {
+      Vec3 origin{18.0 * u(rng), 12.0 * u(rng), 30.0 + 5.0 * u(rng)};
+      Vec3 direction = normalized(Vec3{u(rng), u(rng), -0.2 - unit(rng)});
+      if (ray % 5 == 0) direction = normalized(Vec3{u(rng), u(rng), u(rng)});
+      if (ray % 7 == 0) origin[2] = f.z_edges_m.back() * unit(rng);          // inside
+      if (ray % 11 == 0) direction = {0.0, 0.0, ray % 2 ? -1.0 : 1.0};       // a column
+      if (ray % 13 == 0) direction = normalized(Vec3{u(rng), u(rng), 0.0});  // level
+      if (ray % 17 == 0) origin[2] = f.z_edges_m[ray % f.nz];                // on a layer's edge
+      if (ray % 19 == 0) origin[0] = f.origin_m[0] + 3.0;                    // on a column's edge
+      const double length = 80.0 * unit(rng), depth = 3.0 * unit(rng);
+      for (const std::vector<double>* e :
+           {static_cast<const std::vector<double>*>(nullptr), &extinction}) {
+        std::vector<VolumeSpan> expected, layered, packed_spans;
+        reference_spans(f, origin, direction, length, expected, depth, e);
+        voxel_spans(f, origin, direction, length, layered, depth, e);
+        voxel_spans(packed, origin, direction, length, packed_spans, depth, e);
+        EXPECT_TRUE(same_bits(layered, expected)) << "field " << field << " ray " << ray;
+        EXPECT_TRUE(same_bits(packed_spans, expected)) << "field " << field << " ray " << ray;
+      }
+    }
+  }
 }
 
 TEST(VoxelSpans, OpticalDepthMatchesABruteForceMarch) {
