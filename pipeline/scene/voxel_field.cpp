@@ -40,43 +40,52 @@ double VoxelField::top_m() const {
 void VoxelField::pack() {
   const std::size_t columns_n = static_cast<std::size_t>(nx) * ny;
   if (columns_n == 0 || nz <= 0 || packed()) return;
-  // Each column's non-empty stretch, the layers read in memory order, without a branch (the
-  // compiler vectorises it), by tiles of columns that stay in cache across the layers.
-  std::vector<std::int32_t> first(columns_n, nz), end(columns_n, 0);
-  constexpr std::size_t tile = 2048;
+  // By tiles of columns: a tile's row of a layer is a page of floats (read whole, in memory
+  // order), and what the tile's columns need stays in cache across the layers.
+  constexpr std::size_t tile = 1024;
+  // Each column's non-empty stretch [first, end), without a branch (the compiler vectorises it).
+  std::vector<std::int32_t> first(columns_n), end(columns_n);
   for (std::size_t c0 = 0; c0 < columns_n; c0 += tile) {
-    const std::size_t c1 = std::min(columns_n, c0 + tile);
+    const std::size_t n = std::min(columns_n - c0, tile);
+    std::int32_t lo[tile], hi[tile];
+    std::fill(lo, lo + n, nz);
+    std::fill(hi, hi + n, 0);
     for (int k = 0; k < nz; ++k) {
-      const float* layer = pad.data() + k * columns_n;
-      for (std::size_t c = c0; c < c1; ++c) {
+      const float* __restrict layer = pad.data() + k * columns_n + c0;
+      for (std::size_t c = 0; c < n; ++c) {
         const bool filled = layer[c] > 0.0f;
-        first[c] = std::min(first[c], filled ? k : nz);
-        end[c] = filled ? k + 1 : end[c];
+        lo[c] = std::min(lo[c], filled ? k : nz);
+        hi[c] = filled ? k + 1 : hi[c];
       }
+    }
+    for (std::size_t c = 0; c < n; ++c) {
+      first[c0 + c] = hi[c] > 0 ? lo[c] : 0;
+      end[c0 + c] = hi[c];
     }
   }
   std::size_t packed_n = 0;
-  for (std::size_t c = 0; c < columns_n; ++c) packed_n += std::max(0, end[c] - first[c]);
+  for (std::size_t c = 0; c < columns_n; ++c)
+    packed_n += static_cast<std::size_t>(end[c] - first[c]);
   if (packed_n > std::numeric_limits<std::uint32_t>::max()) return;  // the traversal reads `pad`
   columns.resize(columns_n);
   column_pad.resize(packed_n);
-  // The stretches: a small tile of columns turned column by column in a buffer that stays in
-  // the first-level cache, then each column's stretch copied out.
-  constexpr std::size_t turn = 128;
-  std::vector<float> turned(turn * static_cast<std::size_t>(nz));
+  // The stretches: a tile turned column by column in a buffer that stays in cache, then each
+  // column's stretch copied out.
+  std::vector<float> turned(tile * static_cast<std::size_t>(nz));
   std::size_t offset = 0;
-  for (std::size_t c0 = 0; c0 < columns_n; c0 += turn) {
-    const std::size_t c1 = std::min(columns_n, c0 + turn);
+  for (std::size_t c0 = 0; c0 < columns_n; c0 += tile) {
+    const std::size_t n = std::min(columns_n - c0, tile);
     for (int k = 0; k < nz; ++k) {
-      const float* layer = pad.data() + k * columns_n;
-      for (std::size_t c = c0; c < c1; ++c) turned[(c - c0) * nz + k] = layer[c];
+      const float* layer = pad.data() + k * columns_n + c0;
+      float* to = turned.data() + k;
+      for (std::size_t c = 0; c < n; ++c) to[c * nz] = layer[c];
     }
-    for (std::size_t c = c0; c < c1; ++c) {
-      Column& column = columns[c];
+    for (std::size_t c = 0; c < n; ++c) {
+      Column& column = columns[c0 + c];
       column.offset = static_cast<std::uint32_t>(offset);
-      column.first = end[c] > 0 ? first[c] : 0;
-      column.end = end[c];
-      const float* from = turned.data() + (c - c0) * nz;
+      column.first = first[c0 + c];
+      column.end = end[c0 + c];
+      const float* from = turned.data() + c * nz;
       std::copy(from + column.first, from + column.end, column_pad.data() + offset);
       offset += static_cast<std::size_t>(column.end - column.first);
     }
