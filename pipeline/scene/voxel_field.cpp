@@ -40,39 +40,16 @@ double VoxelField::top_m() const {
 void VoxelField::pack() {
   const std::size_t columns_n = static_cast<std::size_t>(nx) * ny;
   if (columns_n == 0 || nz <= 0 || packed()) return;
-  // By tiles of columns: a tile's row of a layer is a page of floats (read whole, in memory
-  // order), and what the tile's columns need stays in cache across the layers.
+  if (pad.size() > std::numeric_limits<std::uint32_t>::max()) return;  // the traversal reads `pad`
+  // One pass over `pad`, by tiles of columns: a tile's row of a layer is a page of floats (read
+  // whole, in memory order), turned column by column in a buffer that stays in cache; then each
+  // column's stretch is found in it and copied out. At most all of `pad`: reserved, and only
+  // the pages written become resident.
   constexpr std::size_t tile = 1024;
-  // Each column's non-empty stretch [first, end), without a branch (the compiler vectorises it).
-  std::vector<std::int32_t> first(columns_n), end(columns_n);
-  for (std::size_t c0 = 0; c0 < columns_n; c0 += tile) {
-    const std::size_t n = std::min(columns_n - c0, tile);
-    std::int32_t lo[tile], hi[tile];
-    std::fill(lo, lo + n, nz);
-    std::fill(hi, hi + n, 0);
-    for (int k = 0; k < nz; ++k) {
-      const float* __restrict layer = pad.data() + k * columns_n + c0;
-      for (std::size_t c = 0; c < n; ++c) {
-        const bool filled = layer[c] > 0.0f;
-        lo[c] = std::min(lo[c], filled ? k : nz);
-        hi[c] = filled ? k + 1 : hi[c];
-      }
-    }
-    for (std::size_t c = 0; c < n; ++c) {
-      first[c0 + c] = hi[c] > 0 ? lo[c] : 0;
-      end[c0 + c] = hi[c];
-    }
-  }
-  std::size_t packed_n = 0;
-  for (std::size_t c = 0; c < columns_n; ++c)
-    packed_n += static_cast<std::size_t>(end[c] - first[c]);
-  if (packed_n > std::numeric_limits<std::uint32_t>::max()) return;  // the traversal reads `pad`
   columns.resize(columns_n);
-  column_pad.resize(packed_n);
-  // The stretches: a tile turned column by column in a buffer that stays in cache, then each
-  // column's stretch copied out.
+  column_pad.clear();
+  column_pad.reserve(pad.size());
   std::vector<float> turned(tile * static_cast<std::size_t>(nz));
-  std::size_t offset = 0;
   for (std::size_t c0 = 0; c0 < columns_n; c0 += tile) {
     const std::size_t n = std::min(columns_n - c0, tile);
     for (int k = 0; k < nz; ++k) {
@@ -81,13 +58,15 @@ void VoxelField::pack() {
       for (std::size_t c = 0; c < n; ++c) to[c * nz] = layer[c];
     }
     for (std::size_t c = 0; c < n; ++c) {
-      Column& column = columns[c0 + c];
-      column.offset = static_cast<std::uint32_t>(offset);
-      column.first = first[c0 + c];
-      column.end = end[c0 + c];
       const float* from = turned.data() + c * nz;
-      std::copy(from + column.first, from + column.end, column_pad.data() + offset);
-      offset += static_cast<std::size_t>(column.end - column.first);
+      int first = 0, end = nz;
+      while (first < nz && !(from[first] > 0.0f)) ++first;
+      if (first == nz)
+        first = end = 0;  // an empty column
+      else
+        while (!(from[end - 1] > 0.0f)) --end;
+      columns[c0 + c] = {static_cast<std::uint32_t>(column_pad.size()), first, end};
+      column_pad.insert(column_pad.end(), from + first, from + end);
     }
   }
   std::vector<float>().swap(pad);
