@@ -57,19 +57,20 @@ void check_layers(const std::vector<double>& edges, const std::string& place) {
 
 // The first bad value among [from, to): an input error naming its voxel.
 void check_each_value(const VoxelBlock& block, const std::string& place, double fill,
-                      std::size_t from, std::size_t to) {
+                      std::size_t from, std::size_t to, int i0, int j0) {
   for (std::size_t n = from; n < to; ++n) {
     const float v = block.pad[n];
     if (!(v >= 0.0f) || !std::isfinite(v) || (std::isfinite(fill) && v == fill)) {
-      const std::size_t i = n % block.nx, j = n / block.nx % block.ny, k = n / block.nx / block.ny;
+      const std::size_t i = n % block.nx + i0, j = n / block.nx % block.ny + j0,
+                        k = n / block.nx / block.ny;
       throw input_error(place, "plant area density at voxel (x " + std::to_string(i) + ", y " +
                                    std::to_string(j) + ", z " + std::to_string(k) +
-                                   " of the window) is negative, missing or not finite");
+                                   " of the grid) is negative, missing or not finite");
     }
   }
 }
 
-void check_values(const VoxelBlock& block, const std::string& place, double fill) {
+void check_values(const VoxelBlock& block, const std::string& place, double fill, int i0, int j0) {
   // Every window of every shot is checked: blocks of values without a branch (the compiler
   // vectorises them), each value again only in a block that holds a bad one. A float equals
   // the fill value only if that is a float.
@@ -87,7 +88,7 @@ void check_values(const VoxelBlock& block, const std::string& place, double fill
              static_cast<unsigned>(!(v <= std::numeric_limits<float>::max())) |
              static_cast<unsigned>(fill_is_float && v == fill_f);
     }
-    if (bad) check_each_value(block, place, fill, n0, n1);
+    if (bad) check_each_value(block, place, fill, n0, n1, i0, j0);
   }
 }
 
@@ -328,7 +329,29 @@ bool VoxelGridFile::netcdf() const { return impl_->netcdf; }
 
 std::size_t VoxelGridFile::read_cache_bytes() const { return impl_->cache_bytes; }
 
+void VoxelGridFile::window_columns(double x_min, double x_max, double y_min, double y_max, int& i0,
+                                   int& ni, int& j0, int& nj) const {
+  const VoxelBlock& s = impl_->shape;
+  axis_window(s.x0, s.dx, s.nx, x_min, x_max, i0, ni);
+  axis_window(s.y0, s.dy, s.ny, y_min, y_max, j0, nj);
+  if (ni == 0 || nj == 0) {
+    i0 = ni = j0 = nj = 0;
+    return;
+  }
+  const std::size_t voxels = std::size_t(ni) * nj * s.nz;
+  if (voxels > max_window_voxels)
+    throw input_error(impl_->place, "a window of " + std::to_string(voxels) +
+                                        " voxels is more than the limit of " +
+                                        std::to_string(max_window_voxels));
+}
+
 VoxelBlock VoxelGridFile::window(double x_min, double x_max, double y_min, double y_max) const {
+  int i0 = 0, ni = 0, j0 = 0, nj = 0;
+  window_columns(x_min, x_max, y_min, y_max, i0, ni, j0, nj);
+  return columns(i0, ni, j0, nj);
+}
+
+VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
   const VoxelBlock& s = impl_->shape;
   VoxelBlock block;
   block.crs_wkt = s.crs_wkt;
@@ -336,15 +359,8 @@ VoxelBlock VoxelGridFile::window(double x_min, double x_max, double y_min, doubl
   block.nz = s.nz;
   block.dx = s.dx;
   block.dy = s.dy;
-  int i0 = 0, ni = 0, j0 = 0, nj = 0;
-  axis_window(s.x0, s.dx, s.nx, x_min, x_max, i0, ni);
-  axis_window(s.y0, s.dy, s.ny, y_min, y_max, j0, nj);
-  if (ni == 0 || nj == 0) return block;
+  if (ni <= 0 || nj <= 0) return block;
   const std::size_t voxels = std::size_t(ni) * nj * s.nz;
-  if (voxels > max_window_voxels)
-    throw input_error(impl_->place, "a window of " + std::to_string(voxels) +
-                                        " voxels is more than the limit of " +
-                                        std::to_string(max_window_voxels));
   block.nx = ni;
   block.ny = nj;
   block.x0 = s.x0 + i0 * s.dx;
@@ -376,7 +392,7 @@ VoxelBlock VoxelGridFile::window(double x_min, double x_max, double y_min, doubl
                                             " (truncated or corrupt)");
     }
   }
-  check_values(block, impl_->place, impl_->fill);
+  check_values(block, impl_->place, impl_->fill, i0, j0);
   return block;
 }
 

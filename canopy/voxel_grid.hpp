@@ -68,6 +68,12 @@ class VoxelGridFile {
   // from the file. Empty (nx = 0) when the rectangle misses the grid. Negative, NaN or fill PAD
   // values are an input error naming the file and the voxel. Thread-safe.
   VoxelBlock window(double x_min, double x_max, double y_min, double y_max) const;
+  // The same window in two steps: its columns, [i0, i0 + ni) x [j0, j0 + nj) of the grid (all 0
+  // when it misses; an input error when it is over max_window_voxels), then any block of them
+  // read (a window read by bands of rows need not be held whole). Thread-safe.
+  void window_columns(double x_min, double x_max, double y_min, double y_max, int& i0, int& ni,
+                      int& j0, int& nj) const;
+  VoxelBlock columns(int i0, int ni, int j0, int nj) const;
 
  private:
   struct Impl;

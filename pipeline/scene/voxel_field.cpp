@@ -41,19 +41,23 @@ void VoxelField::pack() {
   const std::size_t columns_n = static_cast<std::size_t>(nx) * ny;
   if (columns_n == 0 || nz <= 0 || packed()) return;
   if (pad.size() > std::numeric_limits<std::uint32_t>::max()) return;  // the traversal reads `pad`
-  // One pass over `pad`, by tiles of columns: a tile's row of a layer is a page of floats (read
-  // whole, in memory order), turned column by column in a buffer that stays in cache; then each
-  // column's stretch is found in it and copied out. At most all of `pad`: reserved, and only
-  // the pages written become resident.
-  constexpr std::size_t tile = 1024;
-  columns.resize(columns_n);
+  columns.clear();
   column_pad.clear();
-  column_pad.reserve(pad.size());
+  column_pad.reserve(pad.size());  // at most all of it: only the pages written become resident
+  pack_columns(pad.data(), columns_n);
+  std::vector<float>().swap(pad);
+}
+
+void VoxelField::pack_columns(const float* layers, std::size_t count) {
+  // By tiles of columns: a tile's row of a layer is a page of floats (read whole, in memory
+  // order), turned column by column in a buffer that stays in cache; then each column's
+  // stretch is found in it and copied out.
+  constexpr std::size_t tile = 1024;
   std::vector<float> turned(tile * static_cast<std::size_t>(nz));
-  for (std::size_t c0 = 0; c0 < columns_n; c0 += tile) {
-    const std::size_t n = std::min(columns_n - c0, tile);
+  for (std::size_t c0 = 0; c0 < count; c0 += tile) {
+    const std::size_t n = std::min(count - c0, tile);
     for (int k = 0; k < nz; ++k) {
-      const float* layer = pad.data() + k * columns_n + c0;
+      const float* layer = layers + k * count + c0;
       float* to = turned.data() + k;
       for (std::size_t c = 0; c < n; ++c) to[c * nz] = layer[c];
     }
@@ -65,11 +69,10 @@ void VoxelField::pack() {
         first = end = 0;  // an empty column
       else
         while (!(from[end - 1] > 0.0f)) --end;
-      columns[c0 + c] = {static_cast<std::uint32_t>(column_pad.size()), first, end};
+      columns.push_back({static_cast<std::uint32_t>(column_pad.size()), first, end});
       column_pad.insert(column_pad.end(), from + first, from + end);
     }
   }
-  std::vector<float>().swap(pad);
 }
 
 namespace {
@@ -354,18 +357,29 @@ std::shared_ptr<const VoxelField> VoxelFieldSource::field(const LocalFrame& fram
   if (!(cell_i_m > 0.0 && cell_j_m > 0.0)) return field;
   const double hx = half_size_m / cell_i_m * std::abs(shape.dx);
   const double hy = half_size_m / cell_j_m * std::abs(shape.dy);
-  VoxelBlock block = impl_->grid->window(cx - hx, cx + hx, cy - hy, cy + hy);
-  if (block.nx == 0) return field;
-  const double ci = (block.x0 - cx) / shape.dx, cj = (block.y0 - cy) / shape.dy;
+  int i0 = 0, ni = 0, j0 = 0, nj = 0;
+  impl_->grid->window_columns(cx - hx, cx + hx, cy - hy, cy + hy, i0, ni, j0, nj);
+  if (ni == 0) return field;
+  // The window's corner as VoxelGridFile::window gives it.
+  const double x0 = shape.x0 + i0 * shape.dx, y0 = shape.y0 + j0 * shape.dy;
+  const double ci = (x0 - cx) / shape.dx, cj = (y0 - cy) / shape.dy;
   field->origin_m = {local[0][0] + ci * field->axis_i_m[0] + cj * field->axis_j_m[0],
                      local[0][1] + ci * field->axis_i_m[1] + cj * field->axis_j_m[1]};
-  field->nx = block.nx;
-  field->ny = block.ny;
-  field->nz = block.nz;
-  field->z_edges_m = std::move(block.z_edges_m);
-  field->pad = std::move(block.pad);
+  field->nx = ni;
+  field->ny = nj;
+  field->nz = shape.nz;
+  field->z_edges_m = shape.z_edges_m;
   fill_ground(*field, frame, terrain, std::min(cell_i_m, cell_j_m));
-  field->pack();
+  // Read and packed by bands of rows of about a MiB, which stay in cache between the two: the
+  // window is never held whole, layer by layer.
+  const std::size_t row_floats = static_cast<std::size_t>(ni) * shape.nz;
+  const int band = static_cast<int>(std::max<std::size_t>(1, (std::size_t{1} << 18) / row_floats));
+  field->columns.reserve(static_cast<std::size_t>(ni) * nj);
+  field->column_pad.reserve(row_floats * nj);  // at most: only the pages written are resident
+  for (int j = 0; j < nj; j += band) {
+    const VoxelBlock rows = impl_->grid->columns(i0, ni, j0 + j, std::min(band, nj - j));
+    field->pack_columns(rows.pad.data(), static_cast<std::size_t>(rows.nx) * rows.ny);
+  }
   return field;
 }
 

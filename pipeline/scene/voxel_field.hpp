@@ -58,6 +58,10 @@ struct VoxelField {
   // same values, to the bit, packed or not.
   void pack();
   bool packed() const { return !columns.empty(); }
+  // Packs `count` more columns (the next in [j * nx + i] order) from their layers given layer by
+  // layer (layer k of the c-th at layers[k * count + c]): a field packed by bands of rows,
+  // without `pad`.
+  void pack_columns(const float* layers, std::size_t count);
 };
 
 // Appends to `spans` every stretch of origin + t * direction, t in [0, max_distance_m], inside a

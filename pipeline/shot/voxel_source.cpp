@@ -97,10 +97,11 @@ GridShape grid_shape(const VegetationSettings& settings) {
 double VoxelSource::region_bytes(const VegetationSettings& settings, double side_m) {
   const GridShape g = grid_shape(settings);
   const double columns = (side_m / g.cell_x_m + 1.0) * (side_m / g.cell_y_m + 1.0);
-  // The window as read, and its columns packed from it (at most as many floats) while both are
-  // held; the ground and the packed columns' index.
+  // The window's columns packed (at most all its floats: it is read by bands of a MiB, never
+  // held whole), the ground and the packed columns' index.
   return std::min(columns, g.columns > 0.0 ? g.columns : columns) *
-         (2.0 * g.layers * sizeof(float) + sizeof(double) + sizeof(VoxelField::Column));
+             (g.layers * sizeof(float) + sizeof(double) + sizeof(VoxelField::Column)) +
+         double(std::size_t{1} << 20);
 }
 
 double VoxelSource::source_bytes(const VegetationSettings& settings) {

@@ -28,8 +28,8 @@ class VoxelSource : public VegetationSource {
   const VoxelGridFile& grid() const { return *grid_; }
 
   // A region `side_m` across: its columns (of the grid's size, as the file's header gives it)
-  // of the grid's layers of 4 bytes, twice (the window read, and the columns packed from it:
-  // VoxelField::pack), and the ground under each (a double) and its packed column's index.
+  // of the grid's layers of 4 bytes (packed: VoxelField::pack_columns, from a band of rows of a
+  // MiB read at a time), the ground under each (a double) and its packed column's index.
   static double region_bytes(const VegetationSettings& settings, double side_m);
   // What the source holds once: a NetCDF grid's decompressed chunks (VoxelGridFile::
   // read_cache_bytes); a point cloud's voxelisation when the run starts (its peak: the ground
