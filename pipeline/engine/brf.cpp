@@ -58,25 +58,6 @@ nlohmann::json brf_document(const Config& config, const BrfResult& result) {
 
 }  // namespace
 
-void check_brf_tile(const Config& config, const Terrain& terrain, const Footprint& footprint) {
-  if (config.terrain.plane) return;  // a plane is everywhere, and its tile periodic
-  const double pixels = std::ceil(config.brf.scene_size_m / config.brf.image_resolution_m);
-  const double tile_half_size_m = 0.5 * pixels * config.brf.image_resolution_m;
-  const auto off = tile_off_terrain(terrain, LocalFrame(footprint.ground), tile_half_size_m);
-  if (!off) return;
-  char where[96];
-  std::snprintf(where, sizeof where, "%.0f m %s and %.0f m %s of it", std::abs((*off)[0]),
-                (*off)[0] < 0.0 ? "west" : "east", std::abs((*off)[1]),
-                (*off)[1] < 0.0 ? "south" : "north");
-  throw config_error("/brf/scene_size_m",
-                     "the tile of " + format_number(2.0 * tile_half_size_m) +
-                         " m around the track's first footprint reaches beyond the terrain's "
-                         "data (none at " +
-                         where +
-                         "): the sunlight falling there would be lost, not reflected; a smaller "
-                         "tile, or a terrain that covers it");
-}
-
 BrfSummary run_brf(const Config& config, const BrfRequest& request,
                    const ProgressCallback& progress) {
   const auto started = std::chrono::steady_clock::now();

@@ -8,10 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "footprints/track.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/engine/run.hpp"
-#include "terrain/terrain.hpp"
 
 namespace glaswave {
 
@@ -27,12 +25,6 @@ struct BrfSummary {
   double wall_s = 0.0;
   std::string crs;  // of scene.tif
 };
-
-// Over a DEM (a plane's tile is periodic, and the plane everywhere), a tile of brf.scene_size_m
-// about the first footprint must lie on the terrain's data: a config error at /brf/scene_size_m
-// otherwise, since the sunlight falling where there is no ground would be lost (a 300 m tile
-// over a 200 m point cloud's ground gave albedo 0.112 for 0.251). run_brf calls it.
-void check_brf_tile(const Config& config, const Terrain& terrain, const Footprint& footprint);
 
 // Traces the photons and writes brf.json and scene.tif under request.out_dir. The result is the
 // same bits for any thread count. On failure nothing is left under a product's final name.

@@ -6,7 +6,9 @@
 
 #include <string>
 
+#include "footprints/track.hpp"
 #include "pipeline/config/config.hpp"
+#include "terrain/terrain.hpp"
 
 namespace glaswave {
 
@@ -57,5 +59,12 @@ BrfMemory estimate_brf_memory(const Config& config);
 // memory than this process may have (estimate_brf_memory), at the key that makes it large.
 // `check` asks the same.
 void check_brf(const Config& config);
+
+// Over a DEM (a plane's tile is periodic, and the plane everywhere), brf's tile of
+// brf.scene_size_m about the first footprint must lie on the terrain's data: a config error at
+// /brf/scene_size_m otherwise, since the sunlight falling where there is no ground would be lost
+// (a 300 m tile over a 200 m point cloud's ground gave albedo 0.112 for 0.251). brf refuses it;
+// check, whose configuration may be meant for run alone, warns.
+void check_brf_tile(const Config& config, const Terrain& terrain, const Footprint& footprint);
 
 }  // namespace glaswave

@@ -280,6 +280,25 @@ std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track
   return ray_queries;
 }
 
+namespace {
+
+// brf refuses a tile beyond a DEM's data (check_brf_tile); check only warns, since a
+// configuration may be meant for run alone.
+std::optional<std::string> brf_tile_off_terrain(const Config& config, const Terrain& terrain,
+                                                const Track& track) {
+  if (track.size() == 0) return std::nullopt;
+  const Footprint first = track.footprint(0);
+  if (!first.on_terrain) return std::nullopt;
+  try {
+    check_brf_tile(config, terrain, first);
+  } catch (const Error& e) {
+    return std::string("brf would refuse this configuration: ") + e.what();
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 CheckSummary check_inputs(const Config& config) {
   check_run(config);  // what run refuses before simulating
   check_brf(config);  // ... and brf
@@ -299,6 +318,8 @@ CheckSummary check_inputs(const Config& config) {
       centres.push_back({footprint.ground.lat_deg, footprint.ground.lon_deg});
   }
   if (const auto warning = stands_off_track(config, centres)) summary.warnings.push_back(*warning);
+  if (const auto warning = brf_tile_off_terrain(config, *terrain, *track))
+    summary.warnings.push_back(*warning);
   if (const auto warning = crowns_off_track(config, vegetation.get(), centres))
     summary.warnings.push_back(*warning);
   // Roughness too fine to mesh under the beam is refused where a shot builds its ground: the

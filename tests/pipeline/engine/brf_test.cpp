@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "core/error.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
@@ -104,8 +106,21 @@ TEST(Brf, OverADemTheTileMustLieOnTheTerrainsData) {
   document["brf"]["scene_size_m"] = 100.0;
   const BrfSummary inside = run_brf(parse_config(document), {}, nullptr);
   EXPECT_NEAR(inside.document["bands"][0]["albedo"].get<double>(), 0.3, 1e-9);
+  // check, whose configuration may be meant for run alone, warns where brf refuses.
+  const auto brf_warnings = [&] {
+    nlohmann::json for_run = document;  // check asks run's products too
+    for_run["output"]["netcdf"] = true;
+    std::vector<std::string> found;
+    for (const std::string& warning : check_inputs(parse_config(for_run)).warnings)
+      if (warning.starts_with("brf would refuse")) found.push_back(warning);
+    return found;
+  };
+  EXPECT_THAT(brf_warnings(), ::testing::IsEmpty());
 
   document["brf"]["scene_size_m"] = 300.0;
+  EXPECT_THAT(brf_warnings(),
+              ::testing::ElementsAre(::testing::StartsWith(
+                  "brf would refuse this configuration: /brf/scene_size_m: the tile of 300 m")));
   try {
     const BrfSummary beyond = run_brf(parse_config(document), {}, nullptr);
     ADD_FAILURE() << "a 300 m tile over a 200 m DEM was traced: albedo "
