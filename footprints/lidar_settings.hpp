@@ -4,6 +4,7 @@
 // setting is copied from one struct into another. The defaults are the `north2010` preset's.
 #pragma once
 
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,6 +29,12 @@ struct LidarSettings {
   int bins = 544;
   std::vector<LidarBand> bands;
 };
+
+// The pulse kernel's half-width in bins (6 sigma): the transport's tallies reach this far beyond
+// the window on each side, and the memory estimate counts those bins.
+inline int pulse_margin_bins(const LidarSettings& lidar) {
+  return static_cast<int>(std::ceil(6.0 * lidar.pulse_sigma_ns / lidar.bin_ns));
+}
 
 // The detector and digitiser between the received light and the recorded waveform
 // (`"detector"`). Off by default: the waveform is then the noise-free received power. Every level

@@ -561,7 +561,7 @@ ShotSize shot_size(const Config& c) {
   ShotSize size;
   size.bands = static_cast<double>(c.sensor.bands.size());
   size.window_bins = c.sensor.bins;
-  size.margin_bins = 2.0 * std::ceil(6.0 * c.sensor.pulse_sigma_ns / c.sensor.bin_ns);
+  size.margin_bins = 2.0 * pulse_margin_bins(c.sensor);
   size.waveforms = 3.0 + (c.output.per_order ? c.simulation.max_order : 0);
   size.bytes = size.bands * (size.window_bins + size.margin_bins) * size.waveforms * 8.0;
   return size;

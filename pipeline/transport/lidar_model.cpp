@@ -16,7 +16,7 @@ LidarModel::LidarModel(const LidarSettings& sensor) : sensor_(sensor) {
   // The reference return sits at the centre of a bin two thirds into the window: canopy comes
   // before the ground, and a level surface's return is not shifted by half a bin.
   lead_ns_ = std::floor(2.0 * sensor.bins / 3.0) * sensor.bin_ns;
-  margin_bins_ = static_cast<int>(std::ceil(6.0 * sensor.pulse_sigma_ns / sensor.bin_ns));
+  margin_bins_ = pulse_margin_bins(sensor);
   double sum = 0.0;
   for (int k = -margin_bins_; k <= margin_bins_; ++k) {
     const double t = k * sensor.bin_ns / sensor.pulse_sigma_ns;
