@@ -2,6 +2,7 @@
 // ranges checked. Every error names its JSON path; the transport never sees JSON.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -70,6 +71,11 @@ struct BrfSettings {
   std::int64_t photons = 1000000;
   double image_resolution_m = 1.0;
   double scene_size_m = 300.0;  // tile side: 100 m (one draw of ~50 crowns) was 4.7 % off
+
+  // The tile's side in whole pixels (scene_size_m rounded up), as scene.tif and the traced tile
+  // have it, and its half-size in m.
+  double pixels() const { return std::ceil(scene_size_m / image_resolution_m); }
+  double tile_half_size_m() const { return 0.5 * pixels() * image_resolution_m; }
 };
 
 // The sensor preset that gives the sensor's defaults.

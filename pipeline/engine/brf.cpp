@@ -62,8 +62,7 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
                    const ProgressCallback& progress) {
   const auto started = std::chrono::steady_clock::now();
   check_brf(config);  // first, as check_inputs does: check and brf refuse alike
-  const int pixels =
-      static_cast<int>(std::ceil(config.brf.scene_size_m / config.brf.image_resolution_m));
+  const int pixels = static_cast<int>(config.brf.pixels());
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
   const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
@@ -71,8 +70,8 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
   if (!footprint.on_terrain)
     throw config_error("/track",
                        "the track's first footprint misses the terrain: no scene for brf");
-  const double tile_half_size_m = 0.5 * pixels * config.brf.image_resolution_m;
-  check_brf_tile(config, *terrain, footprint);
+  const double tile_half_size_m = config.brf.tile_half_size_m();
+  if (const auto refused = brf_tile_error(config, *terrain, footprint)) throw *refused;
 
   std::optional<OutputDirectory> directory;
   if (!request.out_dir.empty()) directory.emplace(request.out_dir);

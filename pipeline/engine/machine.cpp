@@ -19,6 +19,7 @@
 
 #include "core/error.hpp"
 #include "footprints/ephemeris.hpp"
+#include "footprints/track.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/products/ogr_writer.hpp"
@@ -26,6 +27,7 @@
 #include "pipeline/shot/footprint_geometry.hpp"
 #include "pipeline/shot/forest_source.hpp"
 #include "pipeline/shot/vegetation_source.hpp"
+#include "terrain/terrain.hpp"
 
 namespace glaswave {
 namespace {
@@ -180,7 +182,7 @@ void check_run(const Config& config) {
 
 BrfMemory estimate_brf_memory(const Config& c) {
   BrfMemory m;
-  m.pixels = std::ceil(c.brf.scene_size_m / c.brf.image_resolution_m);
+  m.pixels = c.brf.pixels();
   const double tile_m = m.pixels * c.brf.image_resolution_m;
   m.scene_side_m = 2.0 * brf_scene_half_size_m(0.5 * tile_m, c.terrain.plane.has_value());
   const VegetationMemory vegetation = vegetation_memory(c, m.scene_side_m);
@@ -201,7 +203,7 @@ BrfMemory estimate_brf_memory(const Config& c) {
 
 void check_brf(const Config& config) {
   const BrfSettings& b = config.brf;
-  const double pixels = std::ceil(b.scene_size_m / b.image_resolution_m);
+  const double pixels = b.pixels();
   if (pixels > run_limits::brf_image_pixels)
     throw config_error("/brf/image_resolution_m",
                        "scene.tif would be " + format_number(pixels) + " pixels across (" +
@@ -220,23 +222,23 @@ void check_brf(const Config& config) {
   throw config_error(memory.place, why.str());
 }
 
-void check_brf_tile(const Config& config, const Terrain& terrain, const Footprint& footprint) {
-  if (config.terrain.plane) return;  // a plane is everywhere, and its tile periodic
-  const double pixels = std::ceil(config.brf.scene_size_m / config.brf.image_resolution_m);
-  const double tile_half_size_m = 0.5 * pixels * config.brf.image_resolution_m;
+std::optional<Error> brf_tile_error(const Config& config, const Terrain& terrain,
+                                    const Footprint& footprint) {
+  if (config.terrain.plane) return std::nullopt;  // a plane is everywhere, and its tile periodic
+  const double tile_half_size_m = config.brf.tile_half_size_m();
   const auto off = tile_off_terrain(terrain, LocalFrame(footprint.ground), tile_half_size_m);
-  if (!off) return;
+  if (!off) return std::nullopt;
   char where[96];
   std::snprintf(where, sizeof where, "%.0f m %s and %.0f m %s of it", std::abs((*off)[0]),
                 (*off)[0] < 0.0 ? "west" : "east", std::abs((*off)[1]),
                 (*off)[1] < 0.0 ? "south" : "north");
-  throw config_error("/brf/scene_size_m",
-                     "the tile of " + format_number(2.0 * tile_half_size_m) +
-                         " m around the track's first footprint reaches beyond the terrain's "
-                         "data (none at " +
-                         where +
-                         "): the sunlight falling there would be lost, not reflected; a smaller "
-                         "tile, or a terrain that covers it");
+  return config_error("/brf/scene_size_m",
+                      "the tile of " + format_number(2.0 * tile_half_size_m) +
+                          " m around the track's first footprint reaches beyond the terrain's "
+                          "data (none at " +
+                          where +
+                          "): the sunlight falling there would be lost, not reflected; a smaller "
+                          "tile, or a terrain that covers it");
 }
 
 }  // namespace glaswave

@@ -4,13 +4,16 @@
 // makes it large.
 #pragma once
 
+#include <optional>
 #include <string>
 
-#include "footprints/track.hpp"
+#include "core/error.hpp"
 #include "pipeline/config/config.hpp"
-#include "terrain/terrain.hpp"
 
 namespace glaswave {
+
+class Terrain;
+struct Footprint;
 
 // Threads of this process: `threads` (0: its share of the machine's cores, the cores divided
 // among the run's processes on this machine), never more than the cores.
@@ -61,10 +64,11 @@ BrfMemory estimate_brf_memory(const Config& config);
 void check_brf(const Config& config);
 
 // Over a DEM (a plane's tile is periodic, and the plane everywhere), brf's tile of
-// brf.scene_size_m about the first footprint must lie on the terrain's data: a config error at
-// /brf/scene_size_m otherwise, since the sunlight falling where there is no ground would be lost
-// (a 300 m tile over a 200 m point cloud's ground gave albedo 0.112 for 0.251). brf refuses it;
-// check, whose configuration may be meant for run alone, warns.
-void check_brf_tile(const Config& config, const Terrain& terrain, const Footprint& footprint);
+// brf.scene_size_m about the first footprint must lie on the terrain's data: the config error at
+// /brf/scene_size_m where it does not, since the sunlight falling where there is no ground would
+// be lost (a 300 m tile over a 200 m point cloud's ground gave albedo 0.112 for 0.251); nothing
+// where it does. brf throws it; check, whose configuration may be meant for run alone, warns.
+std::optional<Error> brf_tile_error(const Config& config, const Terrain& terrain,
+                                    const Footprint& footprint);
 
 }  // namespace glaswave

@@ -282,19 +282,16 @@ std::int64_t simulate_records(const ShotSimulator& simulator, const Track& track
 
 namespace {
 
-// brf refuses a tile beyond a DEM's data (check_brf_tile); check only warns, since a
+// brf refuses a tile beyond a DEM's data (brf_tile_error); check only warns, since a
 // configuration may be meant for run alone.
 std::optional<std::string> brf_tile_off_terrain(const Config& config, const Terrain& terrain,
                                                 const Track& track) {
   if (track.size() == 0) return std::nullopt;
   const Footprint first = track.footprint(0);
   if (!first.on_terrain) return std::nullopt;
-  try {
-    check_brf_tile(config, terrain, first);
-  } catch (const Error& e) {
-    return std::string("brf would refuse this configuration: ") + e.what();
-  }
-  return std::nullopt;
+  const auto refused = brf_tile_error(config, terrain, first);
+  if (!refused) return std::nullopt;
+  return std::string("brf would refuse this configuration: ") + refused->what();
 }
 
 }  // namespace
