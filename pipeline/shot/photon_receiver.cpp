@@ -12,56 +12,51 @@
 namespace glaswave {
 namespace {
 
-// The bins [begin, end) that hold the shot's signal: outside them neither the canopy's nor the
-// ground's power is above 0, so no expected photon is either (all of them are 0 there).
-struct SignalBins {
-  std::size_t begin = 0, end = 0;
+// The expected photons of a shot's truth classes and scattering orders in its scored bins:
+// top of canopy (the canopy's bins up to the one by which a tenth of its expected photons has
+// arrived), the rest of the canopy, the ground; each split by order in proportion to the bin's
+// per-order energy when the transport keeps orders (it keeps them for this receiver).
+struct ShotSources {
+  std::vector<std::vector<double>> means;
+  std::vector<PhotonSource> sources;
 };
 
-SignalBins signal_bins(const std::vector<double>& canopy_W, const std::vector<double>& ground_W) {
-  SignalBins span{canopy_W.size(), 0};
-  for (std::size_t bin = 0; bin < canopy_W.size(); ++bin)
-    if (!(canopy_W[bin] <= 0.0) || !(ground_W[bin] <= 0.0)) {  // NaN counts as signal
-      span.begin = std::min(span.begin, bin);
-      span.end = bin + 1;
+ShotSources shot_sources(const ScoredReturns& scored, double wavelength_nm, double efficiency) {
+  const std::size_t bins = scored.size();
+  const std::vector<double> canopy =
+      expected_photons(scored.canopy_J[0], wavelength_nm, efficiency);
+  const std::vector<double> ground =
+      expected_photons(scored.ground_J[0], wavelength_nm, efficiency);
+  // The canopy's top: its bins up to the one by which a tenth of its photons has arrived.
+  double canopy_photons = 0.0;
+  for (const double n : canopy) canopy_photons += n;
+  std::size_t top_end = 0;  // the top's bins are [0, top_end)
+  for (double sum = 0.0; top_end < bins && canopy_photons > 0.0;) {
+    sum += canopy[top_end++];
+    if (sum >= 0.1 * canopy_photons) break;
+  }
+  const std::vector<std::vector<double>> whole{scored.total_J[0]};
+  const std::vector<std::vector<double>>& orders =
+      scored.order_J.empty() ? whole : scored.order_J[0];
+  ShotSources shot;
+  auto add = [&](const std::vector<double>& photons, PhotonTruth truth, std::size_t from,
+                 std::size_t to) {
+    for (std::size_t order = 0; order < orders.size(); ++order) {
+      std::vector<double>& mean = shot.means.emplace_back(bins, 0.0);
+      for (std::size_t bin = from; bin < to; ++bin) {
+        const double total_J = scored.total_J[0][bin];
+        if (total_J > 0.0)
+          mean[bin] = photons[bin] * std::clamp(orders[order][bin] / total_J, 0.0, 1.0);
+      }
+      shot.sources.push_back({{}, truth, static_cast<std::uint8_t>(order + 1)});
     }
-  if (span.end == 0) span.begin = 0;
-  return span;
-}
-
-// The sources of one truth class: its expected photons, split by scattering order in proportion
-// to the bin's per-order power when there is one (0 outside the signal's bins).
-void add_sources(std::vector<std::vector<double>>& means, std::vector<PhotonSource>& sources,
-                 const std::vector<double>& photons, PhotonTruth truth,
-                 const std::vector<std::vector<double>>& order_W,
-                 const std::vector<double>& total_W, SignalBins signal) {
-  if (order_W.empty()) {
-    means.push_back(photons);
-    sources.push_back({{}, truth, 1});
-    return;
-  }
-  for (std::size_t order = 0; order < order_W.size(); ++order) {
-    std::vector<double> part(photons.size(), 0.0);
-    for (std::size_t bin = signal.begin; bin < signal.end; ++bin)
-      if (total_W[bin] > 0.0)
-        part[bin] = photons[bin] * std::clamp(order_W[order][bin] / total_W[bin], 0.0, 1.0);
-    means.push_back(std::move(part));
-    sources.push_back({{}, truth, static_cast<std::uint8_t>(order + 1)});
-  }
-}
-
-// The time (bins' clock) by which a tenth of the canopy's expected photons has arrived (all of
-// them in the signal's bins).
-double canopy_top_ns(const std::vector<double>& canopy, const std::vector<double>& times_ns,
-                     SignalBins signal) {
-  double total = 0.0;
-  for (std::size_t bin = signal.begin; bin < signal.end; ++bin) total += canopy[bin];
-  double sum = 0.0;
-  for (std::size_t bin = signal.begin; bin < signal.end; ++bin) {
-    sum += canopy[bin];
-    if (sum >= 0.1 * total && total > 0.0) return times_ns[bin];
-  }
-  return -std::numeric_limits<double>::infinity();
+  };
+  add(canopy, PhotonTruth::top_of_canopy, 0, top_end);
+  add(canopy, PhotonTruth::canopy, top_end, bins);
+  add(ground, PhotonTruth::ground, 0, bins);
+  for (std::size_t k = 0; k < shot.sources.size(); ++k)
+    shot.sources[k].mean_per_bin = shot.means[k];
+  return shot;
 }
 
 }  // namespace
@@ -78,16 +73,14 @@ const PhotonCountingSettings& PhotonCountingReceiver::beam_settings(int beam) co
 }
 
 double PhotonCountingReceiver::background_rate_Hz(const PhotonCountingSettings& p,
-                                                  const ShotRecord& record,
-                                                  const ShotWaveforms& waveforms,
+                                                  const ShotRecord& record, double received_J,
                                                   double range_m) const {
   if (p.background == BackgroundSource::none) return 0.0;
   if (p.background == BackgroundSource::rate) return p.background_rate_Hz;
   const LidarBand& band = settings_.lidar.bands[0];
   // The scene's reflectance from the shot's own return, the seed's eq. (1).
-  const double energy_J = waveforms.energy_J[0];
   const double reflectance =
-      std::numbers::pi * energy_J * range_m * range_m /
+      std::numbers::pi * received_J * range_m * range_m /
       (band.pulse_energy_mJ * 1e-3 * p.energy_ratio * settings_.lidar.telescope_area_m2 *
        band.atmos_transmission_roundtrip);
   const SunPosition sun = sun_position(record.time_s, record.lat_deg, record.lon_deg);
@@ -107,34 +100,25 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
   const PhotonCountingSettings& p = beam_settings(returns.beam);
   // The returns are the power of the band's pulse energy; a weak beam carries a part of it.
   scale_pulse_energy(returns.waveforms, p.energy_ratio);
-  const ShotWaveforms& w = returns.waveforms;
-  const double bin_ns = settings_.lidar.bin_ns;
-  const double wavelength_nm = settings_.lidar.bands[0].wavelength_nm;
-  const double efficiency = p.efficiency;
-  const std::vector<double> canopy =
-      expected_photons(w.canopy_W[0], bin_ns, wavelength_nm, efficiency);
-  const std::vector<double> ground =
-      expected_photons(w.ground_W[0], bin_ns, wavelength_nm, efficiency);
-  const std::vector<std::vector<double>> no_orders;
-  const auto& orders = w.order_W.empty() ? no_orders : w.order_W[0];
-  const SignalBins signal = signal_bins(w.canopy_W[0], w.ground_W[0]);
-  std::vector<std::vector<double>> means;
-  std::vector<PhotonSource> sources;
-  add_sources(means, sources, canopy, PhotonTruth::canopy, orders, w.total_W[0], signal);
-  add_sources(means, sources, ground, PhotonTruth::ground, orders, w.total_W[0], signal);
-  for (std::size_t k = 0; k < sources.size(); ++k) sources[k].mean_per_bin = means[k];
-
-  const std::vector<double> times_ns = lidar_.bin_time_ns();
-  PhotonDraw draw{settings_.seed, returns.shot_number,
-                  p.beam,         bin_ns,
-                  canopy.size(),  background_rate_Hz(p, record, w, returns.range_m),
+  const ScoredReturns& scored = returns.waveforms.scored;
+  const LidarSettings& lidar = settings_.lidar;
+  const ShotSources shot = shot_sources(scored, lidar.bands[0].wavelength_nm, p.efficiency);
+  double received_J = 0.0;
+  for (const double e : scored.total_J[0]) received_J += e;
+  PhotonDraw draw{settings_.seed,
+                  returns.shot_number,
+                  p.beam,
+                  lidar.bin_ns,
+                  static_cast<std::size_t>(lidar.bins),
+                  background_rate_Hz(p, record, received_J, returns.range_m),
                   p.channels};
-  draw.signal_begin = signal.begin;
-  draw.signal_end = signal.end;
+  // The scored bins are the tally's, which begins its pulse margin before the window.
+  draw.first_bin = static_cast<std::size_t>(scored.first_bin);
+  draw.grid_offset_bins = -lidar_.margin_bins();
+  draw.pulse_sigma_ns = lidar.pulse_sigma_ns;
   const std::vector<PhotonEvent> events =
-      apply_dead_time(draw_photons(draw, sources), p.dead_time_ns);
-  const double top_ns = canopy_top_ns(canopy, times_ns, signal);
-  const double window_start_ns = times_ns.front() - 0.5 * bin_ns;
+      apply_dead_time(draw_photons(draw, shot.sources), p.dead_time_ns);
+  const double window_start_ns = lidar_.bin_time_ns().front() - 0.5 * lidar.bin_ns;
   const std::function<Geodetic(double)> position_at = returns.position_at;
   waveform_.receive(std::move(returns), record);
   // Eq. (1)'s reflectance divides by the band's pulse energy, not the beam's.
@@ -144,13 +128,11 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
   for (const PhotonEvent& e : events) {
     const double time_ns = window_start_ns + e.time_ns;
     const Geodetic at = position_at(time_ns);
-    PhotonTruth truth = e.truth_class;
-    if (truth == PhotonTruth::canopy && time_ns <= top_ns) truth = PhotonTruth::top_of_canopy;
     record.photon_time_ns.push_back(time_ns);
     record.photon_lat_deg.push_back(at.lat_deg);
     record.photon_lon_deg.push_back(at.lon_deg);
     record.photon_h_m.push_back(at.h_m);
-    record.photon_class.push_back(static_cast<std::int32_t>(truth));
+    record.photon_class.push_back(static_cast<std::int32_t>(e.truth_class));
     record.photon_order.push_back(e.order);
   }
 }

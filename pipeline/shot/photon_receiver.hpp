@@ -14,20 +14,23 @@ class PhotonCountingReceiver : public Receiver {
  public:
   explicit PhotonCountingReceiver(const ReceiverSettings& settings);
 
-  // Band 0's returns: the canopy's and the ground's expected photons, each split by scattering
-  // order in proportion to the bin's per-order power when the transport tallies it; the
-  // background's rate from the sun (SolarBackground) over a Lambertian scene of the shot's
-  // eq. (1) reflectance, or the settings' fixed rate, or none; the events drawn by (seed, shot,
-  // beam, bin), the dead time applied. Canopy photons earlier than the time by which a tenth of
-  // the canopy's expected return has arrived are top of canopy.
+  // Band 0's returns as the transport scored them, before the pulse: the expected photons of
+  // the top of the canopy (its bins up to the one by which a tenth of the canopy's energy has
+  // arrived), the rest of the canopy and the ground, each split by scattering order in
+  // proportion to the bin's per-order energy; the background's rate from the sun
+  // (SolarBackground) over a Lambertian scene of the shot's eq. (1) reflectance, or the
+  // settings' fixed rate, or none; the events drawn by (seed, shot, beam, bin), each spread by
+  // the pulse, the dead time applied. The record's waveform fields are the waveform receiver's.
   void receive(ShotReturns returns, ShotRecord& record) const override;
   bool photon_events() const override { return true; }
+  // The power only when the record's waveform fields are read (settings.metrics_read).
+  ReturnsForm returns_form() const override { return {settings_.metrics_read, true}; }
 
  private:
   // The settings of the beam that fired the shot.
   const PhotonCountingSettings& beam_settings(int beam) const;
   double background_rate_Hz(const PhotonCountingSettings& p, const ShotRecord& record,
-                            const ShotWaveforms& waveforms, double range_m) const;
+                            double received_J, double range_m) const;
 
   ReceiverSettings settings_;
   WaveformReceiver waveform_;

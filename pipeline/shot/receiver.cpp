@@ -38,6 +38,10 @@ void scale_pulse_energy(ShotWaveforms& w, double scale) {
   for (auto& band : w.total_variance_W2) times(band, scale * scale);
   for (auto& band : w.order_W)
     for (auto& order : band) times(order, scale);
+  for (auto* set : {&w.scored.total_J, &w.scored.canopy_J, &w.scored.ground_J})
+    for (auto& band : *set) times(band, scale);
+  for (auto& band : w.scored.order_J)
+    for (auto& order : band) times(order, scale);
   times(w.energy_J, scale);
   times(w.canopy_energy_J, scale);
   times(w.ground_energy_J, scale);

@@ -58,6 +58,16 @@ class Receiver {
   // Whether records carry photon events: the products then hold the `photon` dimension and
   // the ragged photon_* fields, which are left out otherwise.
   virtual bool photon_events() const { return false; }
+
+  // The form of the returns it takes (ShotReturns::waveforms): the power in the window's bins,
+  // pulse-shaped, and the energies scored before the pulse (ShotWaveforms::scored), from which a
+  // photon-counting receiver draws. Without power the waveforms and their integrals' fields are
+  // the scored energies' sums alone.
+  struct ReturnsForm {
+    bool power = true;
+    bool scored = false;
+  };
+  virtual ReturnsForm returns_form() const { return {}; }
 };
 
 // What a receiver is made from.

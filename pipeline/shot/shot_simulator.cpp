@@ -47,7 +47,11 @@ ShotSimulator::ShotSimulator(const ShotSettings& settings, const Terrain& terrai
       vegetation_(std::move(vegetation)),
       receiver_(std::move(receiver)),
       scenes_(terrain, settings.roughness, settings.transport.seed, settings.soil_reflectance,
-              vegetation_.get(), lidar_.band_count()) {}
+              vegetation_.get(), lidar_.band_count()) {
+  const Receiver::ReturnsForm form = receiver_->returns_form();
+  settings_.transport.power_waveforms = form.power;
+  settings_.transport.scored_energies = form.scored;
+}
 
 ShotSimulator::~ShotSimulator() = default;
 

@@ -1,6 +1,7 @@
 // The analog detector and the waveform processing of a shot's returns.
 #include "pipeline/shot/waveform_receiver.hpp"
 
+#include <algorithm>
 #include <numbers>
 
 #include "pipeline/products/product_fields.hpp"
@@ -13,6 +14,10 @@ WaveformReceiver::WaveformReceiver(const ReceiverSettings& settings) : settings_
 }
 
 void WaveformReceiver::receive(ShotReturns returns, ShotRecord& record) const {
+  if (returns.waveforms.total_W.empty()) {
+    receive_energies(returns, record);
+    return;
+  }
   // The Monte Carlo variance weighs the decomposition's tests; it is not a product.
   const std::vector<std::vector<double>> mc_variance_W2 =
       std::move(returns.waveforms.total_variance_W2);
@@ -28,6 +33,24 @@ void WaveformReceiver::receive(ShotReturns returns, ShotRecord& record) const {
     flag_shot_signal(record, settings_.lidar.bin_ns, processing);
   } else {  // as a flagged shot's: fill
     fill_fields(record, FieldSource::metrics, ProductShape{.bands = settings_.lidar.bands.size()});
+  }
+  record.reflectance = surface_reflectance(record, returns.range_m);
+}
+
+// Without power waveforms (a receiver whose returns form has none: nothing reads them) the
+// record keeps the energies alone, the metrics fill; a shot with no energy in any band is
+// flagged no signal, as the processing of its all-zero noise-free waveform would flag it.
+void WaveformReceiver::receive_energies(const ShotReturns& returns, ShotRecord& record) const {
+  const ShotWaveforms& w = returns.waveforms;
+  record.rx_energy_J = w.energy_J;
+  record.rx_energy_canopy_J = w.canopy_energy_J;
+  record.rx_energy_ground_J = w.ground_energy_J;
+  fill_fields(record, FieldSource::metrics, ProductShape{.bands = w.energy_J.size()});
+  const bool signal =
+      std::any_of(w.energy_J.begin(), w.energy_J.end(), [](double e) { return e > 0.0; });
+  if (record.quality_flag == quality_good && !w.energy_J.empty() && !signal) {
+    record.quality_flag = quality_invalid;
+    record.quality_reason = reason_no_signal;
   }
   record.reflectance = surface_reflectance(record, returns.range_m);
 }

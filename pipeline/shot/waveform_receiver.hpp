@@ -17,6 +17,7 @@ class WaveformReceiver : public Receiver {
   void receive(ShotReturns returns, ShotRecord& record) const override;
 
  private:
+  void receive_energies(const ShotReturns& returns, ShotRecord& record) const;
   void record_waveforms(ShotRecord& record, ShotWaveforms waveforms,
                         std::int64_t shot_number) const;
   std::vector<double> surface_reflectance(const ShotRecord& record, double range_m) const;

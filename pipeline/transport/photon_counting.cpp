@@ -48,32 +48,42 @@ std::uint8_t draw_channel(RandomStream& random, int channels) {
       std::min(channels - 1, static_cast<int>(random.uniform() * channels)));
 }
 
-void check(const PhotonDraw& draw, std::span<const PhotonSource> sources) {
-  if (draw.beam >= 256 || draw.bins >= background_key || draw.channels < 1 || draw.channels > 255 ||
-      !(draw.bin_ns > 0.0) || !(draw.background_rate_Hz >= 0.0))
+// The sources' bins: their common length, checked with the draw's other inputs.
+std::size_t checked_bins(const PhotonDraw& draw, std::span<const PhotonSource> sources) {
+  const std::size_t bins = sources.empty() ? 0 : sources.front().mean_per_bin.size();
+  if (draw.beam >= 256 || draw.bins >= background_key || draw.first_bin >= background_key ||
+      bins >= background_key - draw.first_bin || draw.channels < 1 || draw.channels > 255 ||
+      !(draw.bin_ns > 0.0) || !(draw.background_rate_Hz >= 0.0) || !(draw.pulse_sigma_ns >= 0.0))
     throw std::invalid_argument(
-        "draw_photons: beam < 256, bins < 2^24 - 1, 1..255 channels, bin_ns > 0 and a "
-        "background rate >= 0");
+        "draw_photons: beam < 256, bins < 2^24 - 1, 1..255 channels, bin_ns > 0, a background "
+        "rate >= 0 and a pulse sigma >= 0");
   for (const PhotonSource& source : sources)
-    if (source.mean_per_bin.size() != draw.bins)
+    if (source.mean_per_bin.size() != bins)
       throw std::invalid_argument("draw_photons: every source has one mean per bin");
+  return bins;
 }
 
-// The signal photons of one bin, `total` being the sum of the sources' means there.
-void draw_bin(const PhotonDraw& draw, std::span<const PhotonSource> sources, std::size_t bin,
+// The signal photons of the sources' bin `entry` (the grid's first_bin + entry), `total` being
+// the sum of the sources' means there; those the pulse moves out of the window are lost.
+void draw_bin(const PhotonDraw& draw, std::span<const PhotonSource> sources, std::size_t entry,
               double total, BinStreams& streams, std::vector<PhotonEvent>& events) {
+  const std::size_t bin = draw.first_bin + entry;
   RandomStream random = streams.at(bin);
   const double count = poisson(random, total);
+  const double window_ns = static_cast<double>(draw.bins) * draw.bin_ns;
+  const double grid_bin = static_cast<double>(draw.grid_offset_bins) + static_cast<double>(bin);
   for (double k = 0.0; k < count; k += 1.0) {
     double pick = random.uniform() * total;
     std::size_t source = 0;
-    while (source + 1 < sources.size() && pick >= sources[source].mean_per_bin[bin]) {
-      pick -= sources[source].mean_per_bin[bin];
+    while (source + 1 < sources.size() && pick >= sources[source].mean_per_bin[entry]) {
+      pick -= sources[source].mean_per_bin[entry];
       ++source;
     }
-    const double time_ns = (static_cast<double>(bin) + random.uniform()) * draw.bin_ns;
-    events.push_back({time_ns, sources[source].truth_class, sources[source].order,
-                      draw_channel(random, draw.channels)});
+    double time_ns = (grid_bin + random.uniform()) * draw.bin_ns;
+    if (draw.pulse_sigma_ns > 0.0) time_ns += draw.pulse_sigma_ns * standard_normal(random);
+    const std::uint8_t channel = draw_channel(random, draw.channels);
+    if (time_ns >= 0.0 && time_ns < window_ns)
+      events.push_back({time_ns, sources[source].truth_class, sources[source].order, channel});
   }
 }
 
@@ -83,12 +93,12 @@ double photon_energy_J(double wavelength_nm) {
   return planck_J_s * light_m_s / (wavelength_nm * 1e-9);
 }
 
-std::vector<double> expected_photons(std::span<const double> power_W, double bin_ns,
-                                     double wavelength_nm, double efficiency) {
-  const double per_W = bin_ns * 1e-9 * efficiency / photon_energy_J(wavelength_nm);
-  std::vector<double> photons(power_W.size());
-  std::transform(power_W.begin(), power_W.end(), photons.begin(),
-                 [per_W](double p) { return std::max(p, 0.0) * per_W; });
+std::vector<double> expected_photons(std::span<const double> energy_J, double wavelength_nm,
+                                     double efficiency) {
+  const double per_J = efficiency / photon_energy_J(wavelength_nm);
+  std::vector<double> photons(energy_J.size());
+  std::transform(energy_J.begin(), energy_J.end(), photons.begin(),
+                 [per_J](double e) { return std::max(e, 0.0) * per_J; });
   return photons;
 }
 
@@ -105,13 +115,13 @@ double background_rate_Hz(const SolarBackground& b) {
 
 std::vector<PhotonEvent> draw_photons(const PhotonDraw& draw,
                                       std::span<const PhotonSource> sources) {
-  check(draw, sources);
+  const std::size_t bins = checked_bins(draw, sources);
   std::vector<PhotonEvent> events;
   BinStreams streams(draw);
-  for (std::size_t bin = draw.signal_begin; bin < std::min(draw.bins, draw.signal_end); ++bin) {
+  for (std::size_t entry = 0; entry < bins; ++entry) {
     double total = 0.0;
-    for (const PhotonSource& source : sources) total += std::max(source.mean_per_bin[bin], 0.0);
-    if (total > negligible_mean) draw_bin(draw, sources, bin, total, streams, events);
+    for (const PhotonSource& source : sources) total += std::max(source.mean_per_bin[entry], 0.0);
+    if (total > negligible_mean) draw_bin(draw, sources, entry, total, streams, events);
   }
   const double window_ns = static_cast<double>(draw.bins) * draw.bin_ns;
   if (draw.background_rate_Hz > 0.0) {

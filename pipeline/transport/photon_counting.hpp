@@ -15,11 +15,11 @@ namespace glaswave {
 // Energy of one photon, h c / lambda (CODATA 2018 exact constants), J.
 double photon_energy_J(double wavelength_nm);
 
-// The photons detected on average in each bin from the received power in it:
-// power_W[bin] * bin_ns / (h c / lambda) * efficiency, the efficiency being the receiver's
-// optical throughput times the detector's photon detection efficiency.
-std::vector<double> expected_photons(std::span<const double> power_W, double bin_ns,
-                                     double wavelength_nm, double efficiency);
+// The photons detected on average from the energy received in each bin: energy_J[bin] /
+// (h c / lambda) * efficiency, the efficiency being the receiver's optical throughput times the
+// detector's photon detection efficiency.
+std::vector<double> expected_photons(std::span<const double> energy_J, double wavelength_nm,
+                                     double efficiency);
 
 // Top-of-atmosphere solar spectral irradiance at 532 nm at the mean Sun-Earth distance,
 // W m^-2 nm^-1: the ASTM E-490 (2000) air mass zero spectrum, 1.87 within the 1 nm around 532 nm.
@@ -68,8 +68,8 @@ struct PhotonCountingSettings {
 // Truth classes of photon events, the coding of ATL08's classed_pc_flag.
 enum class PhotonTruth : std::uint8_t { background = 0, ground = 1, canopy = 2, top_of_canopy = 3 };
 
-// One source of signal photons: its expected photons per bin (all sources of a shot share the
-// bins) and what its photons are in truth.
+// One source of signal photons: its expected photons in each of the signal's bins (all sources
+// of a shot share them: PhotonDraw's first_bin on) and what its photons are in truth.
 struct PhotonSource {
   std::span<const double> mean_per_bin;
   PhotonTruth truth_class = PhotonTruth::ground;
@@ -87,27 +87,34 @@ struct PhotonEvent {
   bool operator==(const PhotonEvent&) const = default;
 };
 
-// Which shot and beam the draws belong to, and the range window.
+// Which shot and beam the draws belong to, the range window, and the signal's bins.
 struct PhotonDraw {
   std::uint64_t seed = 0;
   std::int64_t shot = 0;
   std::uint32_t beam = 0;  // < 256
   double bin_ns = 0.0;
-  std::size_t bins = 0;  // the window is bins * bin_ns long; < 2^24 - 1
+  std::size_t bins = 0;  // the window is bins * bin_ns long
   double background_rate_Hz = 0.0;
   int channels = 1;  // detector channels the beam's photons fall on, uniformly (1..255)
-  // The bins [signal_begin, signal_end) outside which every source's mean is 0, as the caller
-  // knows them (a shot's return fills a few hundred of its thousands of bins): no bin outside is
-  // looked at. The whole window by default.
-  std::size_t signal_begin = 0;
-  std::size_t signal_end = std::numeric_limits<std::size_t>::max();
+  // The signal's bins are a grid of bin_ns beginning `grid_offset_bins` bins after the window's
+  // start (a transport tally's begins its pulse margin before it: negative); the sources' means
+  // start at its bin `first_bin` (a shot's return fills a few hundred of the grid's thousands of
+  // bins: the caller passes those), each bin keyed by its index in the grid, < 2^24 - 1.
+  std::size_t first_bin = 0;
+  int grid_offset_bins = 0;
+  // The pulse that spreads each signal photon's time: a Gaussian of this standard deviation
+  // (the sources' means being the energies scored before the pulse), photons it moves out of
+  // the window being lost. 0: the means are the pulse-shaped ones already.
+  double pulse_sigma_ns = 0.0;
 };
 
 // The photon events of one shot and beam, in time order, before dead time:
 // - signal: in each bin expecting more than 1e-12 photons (fewer than 2e-5 a shot are left out
 //   over the longest window), Poisson(sum of the sources' means) photons from the stream
 //   (seed, shot, beam, bin), each given a source with probability proportional to its mean (so
-//   each source's counts are Poisson of its own mean), a time uniform within the bin and a channel;
+//   each source's counts are Poisson of its own mean), a time uniform within the bin, then the
+//   pulse's spread (a Poisson process whose points are each moved by an independent draw is the
+//   Poisson process of the intensity convolved with the draw's density), and a channel;
 // - background: a Poisson process of `background_rate_Hz` over the whole window, from the one
 //   stream (seed, shot, beam, 2^24 - 1): Poisson(rate * window) events at uniform times.
 // A shot's events therefore depend only on the seed, its shot number and its beam.

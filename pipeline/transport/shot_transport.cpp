@@ -458,13 +458,36 @@ void PathTracer::emit(RayEventKind kind, const Path& path, const Vec3& position,
   if (observer_) (*observer_)(event_at(kind, path, position, vertex));
 }
 
-// The shot's waveforms from its tally of normalised returns: each band's scale (section 1 of
-// PHYSICS.md: E_t T A_T f_fov / (pi R^2), shared by the rays), the pulse, the energies.
+// The energies of a tally's rows (scaled) over the bins [first, last], each row's span.
+std::vector<std::vector<double>> scored_rows(const std::vector<double>& flat, std::size_t size,
+                                             std::size_t first_row, std::size_t rows, int first,
+                                             int last, double scale) {
+  std::vector<std::vector<double>> spans;
+  for (std::size_t row = first_row; row < first_row + rows; ++row) {
+    const double* begin = flat.data() + row * size;
+    std::vector<double>& span = spans.emplace_back(begin + first, begin + last + 1);
+    for (double& value : span) value *= scale;
+  }
+  return spans;
+}
+
+// The shot's returns from its tally of normalised returns: each band's scale (section 1 of
+// PHYSICS.md: E_t T A_T f_fov / (pi R^2), shared by the rays), then the power through the
+// pulse and its integrals, and/or the energies scored before the pulse.
 ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double range_m,
-                             std::int64_t rays) {
+                             const TransportOptions& options) {
   ShotWaveforms waveforms;
   waveforms.ray_queries = tally.ray_queries;
   const double bin_s = lidar.sensor().bin_ns * 1e-9;
+  const auto rays = static_cast<double>(options.rays);
+  // The span of bins scored into (empty: first past last).
+  int first = static_cast<int>(tally.size), last = -1;
+  for (const int bin : tally.bins) {
+    first = std::min(first, bin);
+    last = std::max(last, bin);
+  }
+  if (last < first) first = last + 1;
+  waveforms.scored.first_bin = first;
   auto slice = [&](const std::vector<double>& flat, std::size_t row, double scale) {
     std::vector<double> energy_J(flat.begin() + row * tally.size,
                                  flat.begin() + (row + 1) * tally.size);
@@ -476,11 +499,33 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
     for (double value : power_W) sum += value * bin_s;
     return sum;
   };
+  auto scored_J = [&](const std::vector<double>& flat, std::size_t band, double scale) {
+    double sum = 0.0;
+    for (int bin = first; bin <= last; ++bin) sum += flat[band * tally.size + bin];
+    return sum * scale;
+  };
   for (std::size_t band = 0; band < lidar.band_count(); ++band) {
     const LidarBand& b = lidar.sensor().bands[band];
     const double scale = b.pulse_energy_mJ * 1e-3 * b.atmos_transmission_roundtrip *
                          lidar.sensor().telescope_area_m2 * lidar.fov_fraction() /
-                         (std::numbers::pi * range_m * range_m) / static_cast<double>(rays);
+                         (std::numbers::pi * range_m * range_m) / rays;
+    if (options.scored_energies) {
+      ScoredReturns& scored = waveforms.scored;
+      for (auto [part, flat] : {std::pair{&scored.total_J, &tally.total},
+                                {&scored.canopy_J, &tally.canopy},
+                                {&scored.ground_J, &tally.ground}})
+        part->push_back(scored_rows(*flat, tally.size, band, 1, first, last, scale).front());
+      if (tally.orders > 0)
+        scored.order_J.push_back(
+            scored_rows(tally.order, tally.size, band * static_cast<std::size_t>(tally.orders),
+                        static_cast<std::size_t>(tally.orders), first, last, scale));
+    }
+    if (!options.power_waveforms) {
+      waveforms.energy_J.push_back(scored_J(tally.total, band, scale));
+      waveforms.canopy_energy_J.push_back(scored_J(tally.canopy, band, scale));
+      waveforms.ground_energy_J.push_back(scored_J(tally.ground, band, scale));
+      continue;
+    }
     waveforms.total_W.push_back(slice(tally.total, band, scale));
     // Variance of the mean of `rays` scores, (sum w^2 - (sum w)^2 / N) / N^2 per bin (scale
     // holds the 1 / N), carried through the pulse like the power.
@@ -488,9 +533,7 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
     for (std::size_t i = 0; i < tally.size; ++i) {
       const double sum = tally.total[band * tally.size + i];
       variance_J2[i] =
-          scale * scale *
-          std::max(tally.squares[band * tally.size + i] - sum * sum / static_cast<double>(rays),
-                   0.0);
+          scale * scale * std::max(tally.squares[band * tally.size + i] - sum * sum / rays, 0.0);
     }
     waveforms.total_variance_W2.push_back(lidar.power_variance_W2(variance_J2));
     // Where no return came from one part, the other's is the total, bit for bit (the same
@@ -575,7 +618,7 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
       tally += group_tally;
       group_tally.clear();
     }
-    return shot_waveforms(tally, lidar, geometry.range_m, options.rays);
+    return shot_waveforms(tally, lidar, geometry.range_m, options);
   }
   std::vector<Tally> group_tallies(groups, Tally(lidar.band_count(), lidar.tally_size(), orders));
   tbb::parallel_for(std::int64_t{0}, groups, [&](std::int64_t group) {
@@ -584,7 +627,7 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
       tracer.trace_ray(ray, group_tallies[group]);
   });
   for (const Tally& group : group_tallies) tally += group;
-  return shot_waveforms(tally, lidar, geometry.range_m, options.rays);
+  return shot_waveforms(tally, lidar, geometry.range_m, options);
 }
 
 ShotWaveforms simulate_ray(const Scene& scene, const LidarModel& lidar,
@@ -595,7 +638,7 @@ ShotWaveforms simulate_ray(const Scene& scene, const LidarModel& lidar,
   PathTracer tracer(scene, lidar, geometry, optics, options, shot_number,
                     observer ? &observer : nullptr);
   tracer.trace_ray(ray, tally);
-  return shot_waveforms(tally, lidar, geometry.range_m, options.rays);
+  return shot_waveforms(tally, lidar, geometry.range_m, options);
 }
 
 }  // namespace glaswave

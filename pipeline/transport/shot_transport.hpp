@@ -23,6 +23,17 @@ struct ShotGeometry {
   double range_m = 0.0;  // to the footprint centre: times are relative to 2 * range_m / c
 };
 
+// A shot's returns before the pulse shapes them: the energy (J) scored in each tally bin
+// (LidarModel::tally_index) from first_bin on, over the span from the first bin scored into to
+// the last. A photon-counting receiver draws its photons from these and spreads each by the
+// pulse, which is the same Poisson process as drawing from the pulse-shaped power.
+struct ScoredReturns {
+  int first_bin = 0;
+  std::vector<std::vector<double>> total_J, canopy_J, ground_J;  // [band][bin - first_bin]
+  std::vector<std::vector<std::vector<double>>> order_J;         // [band][order - 1][...]
+  std::size_t size() const { return total_J.empty() ? 0 : total_J.front().size(); }
+};
+
 // The received signal of one shot: [band][bin] power (W) and [band] energy (J).
 struct ShotWaveforms {
   std::vector<std::vector<double>> total_W, canopy_W, ground_W;
@@ -30,7 +41,10 @@ struct ShotWaveforms {
   // (bins taken as independent: a ray's scores in different bins are not correlated with it).
   std::vector<std::vector<double>> total_variance_W2;
   std::vector<std::vector<std::vector<double>>> order_W;  // [band][order - 1][bin] when asked for
+  // The integrals of the power; without power waveforms, the scored energies' sums (the same
+  // but for the pulse's tails beyond the window).
   std::vector<double> energy_J, canopy_energy_J, ground_energy_J;
+  ScoredReturns scored;  // when TransportOptions::scored_energies
   std::int64_t ray_queries = 0;
 };
 
@@ -45,6 +59,11 @@ struct TransportOptions {
   // the rays; off by default, as plain Monte Carlo's n^-1/2 law (PHYSICS.md section 6) and the
   // per-ray variance the processing weighs its fits with hold only for independent rays.
   bool quasi_random = false;
+  // What the shot's returns are given as: the power in the window's bins, pulse-shaped (the
+  // waveform receiver's, and every product's but the ICESat-2 granules'), and the energies
+  // scored before the pulse (ShotWaveforms::scored, the photon-counting receiver's).
+  bool power_waveforms = true;
+  bool scored_energies = false;
 };
 
 // Simulates shot `shot_number`. The result depends only on the inputs, never on how many

@@ -37,10 +37,12 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // One strong beam over a level plane at 10 N, the sun 10 degrees from the zenith.
-glaswave::Config atlas_config(int shots, int rays, bool forest, std::uint64_t seed) {
+glaswave::Config atlas_config(int shots, int rays, bool forest, std::uint64_t seed,
+                              bool sobol = false) {
   nlohmann::json pass = glaswave::test_support::atlas_pass(shots, rays, seed);
   pass["sensor"]["beams"] = {"gt2l"};
   if (!forest) pass["canopy"] = nullptr;
+  if (sobol) pass["simulation"]["sampling"] = "sobol";
   return glaswave::parse_config(pass);
 }
 
@@ -104,8 +106,8 @@ Speed shot_speed(const glaswave::Config& config, bool shared, bool every_field =
 
 // Var_MC / mu of a strong beam's expected signal photons a shot over the forest at `rays`: one
 // forest, the transport's rays drawn with two seeds.
-double monte_carlo_over_poisson(int shots, int rays) {
-  const glaswave::Config one = atlas_config(shots, rays, true, 1);
+double monte_carlo_over_poisson(int shots, int rays, bool sobol) {
+  const glaswave::Config one = atlas_config(shots, rays, true, 1, sobol);
   const auto terrain = glaswave::make_terrain(one.terrain);
   const glaswave::Track track(one.track, *terrain);
   const auto first = glaswave::make_shot_simulator(one, *terrain);
@@ -126,8 +128,8 @@ double monte_carlo_over_poisson(int shots, int rays) {
   }
   mean /= shots;
   const double variance = squares / (2.0 * shots);
-  std::printf("  %5d rays: mu %.2f photons a shot, Var_MC %.3f, Var_MC / mu %.3f\n", rays, mean,
-              variance, variance / mean);
+  std::printf("  %5d rays %-6s: mu %.2f photons a shot, Var_MC %.3f, Var_MC / mu %.3f\n", rays,
+              sobol ? "sobol" : "random", mean, variance, variance / mean);
   return variance / mean;
 }
 
@@ -191,7 +193,9 @@ int main(int argc, char** argv) {
   }
   std::printf("Monte Carlo noise of the expected photons (forest, %d shots, two seeds):\n",
               mc_shots);
-  for (const int rays : {30, 100, 300}) figures.push_back(monte_carlo_over_poisson(mc_shots, rays));
+  for (const bool sobol : {false, true})
+    for (const int rays : {10, 20, 30, 100, 300})
+      figures.push_back(monte_carlo_over_poisson(mc_shots, rays, sobol));
   std::printf("peak resident memory of this process: %.0f MiB\n", peak_resident_MiB());
   bool all = true;
   for (const double f : figures) all = all && std::isfinite(f);

@@ -1,8 +1,10 @@
 // Tests of the photon-counting physics against numbers computed here, independently of the code:
-// signal photons over flat Lambertian ground at nadir (the transport's received power turned into
-// counts) against E T A_T rho f_fov eta / (pi R^2 h nu), Poisson in their variance; the sun's
-// background against the radiometric closed form; the recorded rate under dead time against the
-// non-paralysable law r / (1 + r tau); the keying by (seed, shot, beam); and ATLAS's strong and
+// signal photons over flat Lambertian ground at nadir (the transport's energies, scored before the
+// pulse, turned into counts and each photon spread by the pulse, as the photon-counting receiver
+// draws them) against E T A_T rho f_fov eta / (pi R^2 h nu), Poisson in their variance, their
+// times spread as the pulse; photons spread out of the window lost; Gardner's slope width; the
+// sun's background against the radiometric closed form; the recorded rate under dead time against
+// the non-paralysable law r / (1 + r tau); the keying by (seed, shot, beam); and ATLAS's strong and
 // weak beams over a surface of reflectance 0.9 against the mission's published range.
 #include "pipeline/transport/photon_counting.hpp"
 
@@ -46,55 +48,130 @@ LidarSettings atlas_sensor(double energy_mJ, double transmission) {
   return s;
 }
 
-// The received power over level Lambertian ground of reflectance rho at nadir from 496 km.
-std::vector<double> flat_ground_power_W(double rho, double energy_mJ, double transmission) {
+// A shot's expected photons as the photon-counting receiver takes them: band 0's energies as the
+// transport scored them before the pulse (the tally's bins from first_bin on, the tally beginning
+// its pulse margin before the window), and the draw that spreads each photon by the pulse.
+struct ScoredPhotons {
+  std::vector<double> photons;
+  PhotonDraw draw;
+};
+
+ScoredPhotons scored_photons(const Scene& scene, const ShotGeometry& geometry,
+                             const SceneOptics& optics, const LidarSettings& sensor, int rays,
+                             std::int64_t shot) {
+  const LidarModel lidar(sensor);
+  TransportOptions options;
+  options.rays = rays;
+  options.max_order = 1;
+  options.power_waveforms = false;
+  options.scored_energies = true;
+  const ShotWaveforms w = simulate_shot(scene, lidar, geometry, optics, options, shot);
+  ScoredPhotons s;
+  s.photons = expected_photons(w.scored.total_J[0], 532.0, kEfficiency);
+  s.draw.bin_ns = sensor.bin_ns;
+  s.draw.bins = static_cast<std::size_t>(sensor.bins);
+  s.draw.channels = 16;
+  s.draw.first_bin = static_cast<std::size_t>(w.scored.first_bin);
+  s.draw.grid_offset_bins = -lidar.margin_bins();
+  s.draw.pulse_sigma_ns = sensor.pulse_sigma_ns;
+  return s;
+}
+
+// Over level Lambertian ground of reflectance rho at nadir from 496 km.
+ScoredPhotons flat_ground_photons(double rho, double energy_mJ, double transmission) {
   test_support::CrownScene scene({}, {}, {rho});
   scene.geometry.sensor_m = {0.0, 0.0, kRangeM};
   scene.geometry.range_m = kRangeM;
-  const LidarModel lidar(atlas_sensor(energy_mJ, transmission));
-  TransportOptions options;
-  options.rays = 2000;
-  options.max_order = 1;
-  return simulate_shot(*scene.scene, lidar, scene.geometry, scene.optics, options, 5).total_W[0];
+  return scored_photons(*scene.scene, scene.geometry, scene.optics,
+                        atlas_sensor(energy_mJ, transmission), 2000, 5);
 }
 
 // E T A_T rho cos(0) f_fov eta / (pi R^2 h nu), f_fov = 1 - exp(-ifov^2 / (8 sigma^2)).
-double flat_ground_photons(double rho, double energy_J, double transmission) {
+double flat_ground_closed_form(double rho, double energy_J, double transmission) {
   const double f_fov = 1.0 - std::exp(-kIfovRad * kIfovRad / (8.0 * kSigmaRad * kSigmaRad));
   return energy_J * transmission * kAreaM2 * rho * f_fov * kEfficiency /
          (std::numbers::pi * kRangeM * kRangeM * kPhoton532J);
 }
 
+// The counts' moments over many shots, and the photons' times' (each shot's window clock).
 struct CountMoments {
   double mean = 0.0, variance = 0.0;
+  double time_mean_ns = 0.0, time_rms_ns = 0.0;
 };
 
-CountMoments signal_counts(std::span<const double> photons, int shots, std::uint32_t beam) {
-  const PhotonSource ground{photons, PhotonTruth::ground, 1};
+CountMoments signal_counts(const ScoredPhotons& scored, int shots, std::uint32_t beam,
+                           std::uint64_t seed = 7) {
+  const PhotonSource ground{scored.photons, PhotonTruth::ground, 1};
   std::vector<double> counts;
+  double n = 0.0, sum = 0.0, sum2 = 0.0;
   for (int shot = 0; shot < shots; ++shot) {
-    PhotonDraw draw{7, shot, beam, 0.1, photons.size(), 0.0, 16};
-    counts.push_back(static_cast<double>(draw_photons(draw, {&ground, 1}).size()));
+    PhotonDraw draw = scored.draw;
+    draw.seed = seed;
+    draw.shot = shot;
+    draw.beam = beam;
+    const std::vector<PhotonEvent> events = draw_photons(draw, {&ground, 1});
+    counts.push_back(static_cast<double>(events.size()));
+    for (const PhotonEvent& e : events) {
+      n += 1.0;
+      sum += e.time_ns;
+      sum2 += e.time_ns * e.time_ns;
+    }
   }
   CountMoments m;
   for (double c : counts) m.mean += c;
   m.mean /= shots;
   for (double c : counts) m.variance += (c - m.mean) * (c - m.mean);
   m.variance /= shots - 1;
+  m.time_mean_ns = sum / n;
+  m.time_rms_ns = std::sqrt(sum2 / n - m.time_mean_ns * m.time_mean_ns);
   return m;
 }
 
 // 20 000 shots of a strong beam over rho = 0.3 through a clear atmosphere (T = 0.64 both ways):
 // the mean count to 3 standard errors, and its variance equal to the mean to 3 standard errors
-// of a Poisson sample variance, sqrt((mu + 2 mu^2) / N).
+// of a Poisson sample variance, sqrt((mu + 2 mu^2) / N). The photons' times spread as the pulse
+// (sigma 0.637 ns) and the bin (0.1 ns, uniform) add, sqrt(sigma^2 + bin^2 / 12) = 0.638 ns
+// (the footprint's curvature adds 1e-4 ns), to 2 % (about 53 000 photons: the RMS's standard
+// error is 0.3 %), about the reference return 2/3 into the window.
 TEST(PhotonCounting, SignalOverFlatLambertianGroundAtNadir) {
-  const std::vector<double> photons =
-      expected_photons(flat_ground_power_W(0.3, 0.175, 0.64), 0.1, 532.0, kEfficiency);
-  const double mu = flat_ground_photons(0.3, 175e-6, 0.64);
+  const ScoredPhotons scored = flat_ground_photons(0.3, 0.175, 0.64);
+  const double mu = flat_ground_closed_form(0.3, 175e-6, 0.64);
   const int shots = 20000;
-  const CountMoments m = signal_counts(photons, shots, 0);
+  const CountMoments m = signal_counts(scored, shots, 0);
   EXPECT_NEAR(m.mean, mu, 3.0 * std::sqrt(mu / shots));
   EXPECT_NEAR(m.variance, mu, 3.0 * std::sqrt((mu + 2.0 * mu * mu) / shots));
+  const double sigma_tx_ns = 1.5 / (2.0 * std::sqrt(2.0 * std::log(2.0)));
+  EXPECT_NEAR(m.time_rms_ns / std::sqrt(sigma_tx_ns * sigma_tx_ns + 0.01 / 12.0), 1.0, 0.02);
+  // Bin 100 of 150 is centred on the return, which the window's clock puts at 10.05 ns.
+  EXPECT_NEAR(m.time_mean_ns, 10.05, 0.01);
+}
+
+// The pulse moves photons out of the window, and they are lost: one bin's photons at the
+// window's very start, spread by a 1 ns pulse, are kept with probability
+// P(u bin + sigma z >= 0) = integral over u in [0, 1) of Phi(u bin / sigma), for a 0.1 ns bin by
+// Phi's series 1/2 + phi(0) (x - x^3 / 6): 1/2 + 0.05 phi(0) - 0.001 phi(0) / 24 = 0.519930;
+// 40 000 shots of one photon each on average, to 3 standard errors.
+TEST(PhotonCounting, ThePulseSpreadsPhotonsOutOfTheWindowAndTheyAreLost) {
+  const std::vector<double> photons{1.0};
+  const PhotonSource ground{photons, PhotonTruth::ground, 1};
+  double kept = 0.0;
+  const int shots = 40000;
+  for (int shot = 0; shot < shots; ++shot) {
+    PhotonDraw draw{3, shot, 0, 0.1, 50, 0.0, 16};
+    draw.first_bin = 20;
+    draw.grid_offset_bins = -20;  // the grid's bin 20 is the window's first
+    draw.pulse_sigma_ns = 1.0;
+    for (const PhotonEvent& e : draw_photons(draw, {&ground, 1})) {
+      EXPECT_GE(e.time_ns, 0.0);
+      EXPECT_LT(e.time_ns, 5.0);
+      kept += 1.0;
+    }
+  }
+  double expected = 0.0;  // the integral by the midpoint rule over 10 000 steps
+  for (int k = 0; k < 10000; ++k)
+    expected += 0.5 * std::erfc(-((k + 0.5) / 10000.0) * 0.1 / 1.0 / std::sqrt(2.0)) / 10000.0;
+  EXPECT_NEAR(expected, 0.519930, 2e-6);
+  EXPECT_NEAR(kept / shots, expected, 3.0 * std::sqrt(expected / shots));
 }
 
 // The background rate over a bright (0.9) and a dark (0.05) surface under a sun 30 degrees from
@@ -272,25 +349,26 @@ TEST(PhotonCounting, BinStreamsAreTheKeyedStreams) {
   EXPECT_GT(photons, 1000u);
 }
 
-// The signal's bins, when the caller knows them, give the same events as the whole window: the
-// bins outside, whose means are all 0, draw nothing either way.
-TEST(PhotonCounting, TheSignalsBinsDrawWhatTheWholeWindowDraws) {
+// The signal's bins, when the caller passes those alone (the sources' means from the grid's bin
+// first_bin on), give the same events as the whole grid: the bins outside, whose means are all 0,
+// draw nothing either way, and each bin keeps its key.
+TEST(PhotonCounting, TheSignalsBinsDrawWhatTheWholeGridDraws) {
   std::vector<double> ground(100, 0.0), canopy(100, 0.0);
   for (std::size_t bin = 40; bin < 60; ++bin) ground[bin] = 0.5;
   for (std::size_t bin = 10; bin < 30; ++bin) canopy[bin] = 0.3;
-  const PhotonSource sources[] = {{ground, PhotonTruth::ground, 1},
-                                  {canopy, PhotonTruth::canopy, 2}};
+  const PhotonSource whole_sources[] = {{ground, PhotonTruth::ground, 1},
+                                        {canopy, PhotonTruth::canopy, 2}};
+  const PhotonSource signal_sources[] = {
+      {std::span(ground).subspan(10, 50), PhotonTruth::ground, 1},
+      {std::span(canopy).subspan(10, 50), PhotonTruth::canopy, 2}};
   for (const std::int64_t shot : {1, 2, 3}) {
-    const PhotonDraw whole{5, shot, 1, 0.5, 100, 2e8, 16};
+    PhotonDraw whole{5, shot, 1, 0.5, 100, 2e8, 16};
+    whole.pulse_sigma_ns = 0.6;
     PhotonDraw signal = whole;
-    signal.signal_begin = 10;
-    signal.signal_end = 60;
-    const std::vector<PhotonEvent> a = draw_photons(whole, sources);
+    signal.first_bin = 10;
+    const std::vector<PhotonEvent> a = draw_photons(whole, whole_sources);
     ASSERT_FALSE(a.empty());
-    EXPECT_EQ(draw_photons(signal, sources), a);
-    // Beyond the window's end the span is cut at it.
-    signal.signal_end = 1000;
-    EXPECT_EQ(draw_photons(signal, sources), a);
+    EXPECT_EQ(draw_photons(signal, signal_sources), a);
   }
 }
 
@@ -313,32 +391,16 @@ TEST(PhotonCounting, GroundPhotonsOnASlopeSpreadAsGardner) {
   optics.soil_reflectance = {0.9};
   LidarSettings sensor = atlas_sensor(0.175, 0.64);
   sensor.bins = 1000;
-  const LidarModel lidar(sensor);
-  TransportOptions options;
-  options.rays = 20000;
-  options.max_order = 1;
-  const std::vector<double> photons =
-      expected_photons(simulate_shot(scene, lidar, geometry, optics, options, 9).total_W[0], 0.1,
-                       532.0, kEfficiency);
-  const PhotonSource ground{photons, PhotonTruth::ground, 1};
-  double n = 0.0, sum = 0.0, sum2 = 0.0;
-  for (int shot = 0; shot < 3000; ++shot)
-    for (const PhotonEvent& e :
-         draw_photons({13, shot, 0, 0.1, photons.size(), 0.0, 16}, {&ground, 1})) {
-      n += 1.0;
-      sum += e.time_ns;
-      sum2 += e.time_ns * e.time_ns;
-    }
-  const double mean = sum / n;
-  const double rms_ns = std::sqrt(sum2 / n - mean * mean);
+  const CountMoments m =
+      signal_counts(scored_photons(scene, geometry, optics, sensor, 20000, 9), 3000, 0, 13);
   const double sigma_tx_ns = 1.5 / (2.0 * std::sqrt(2.0 * std::log(2.0)));
   const double slope_ns =
       2.0 * kRangeM * kSigmaRad * std::tan(slope_deg * std::numbers::pi / 180.0) / 0.299792458;
   const double gardner_ns =
       std::sqrt(sigma_tx_ns * sigma_tx_ns + slope_ns * slope_ns + 0.01 / 12.0);
   EXPECT_NEAR(gardner_ns, 6.71, 0.01);
-  EXPECT_GT(n, 20000.0);
-  EXPECT_NEAR(rms_ns / gardner_ns, 1.0, 0.02);
+  EXPECT_GT(m.mean * 3000.0, 20000.0);
+  EXPECT_NEAR(m.time_rms_ns / gardner_ns, 1.0, 0.02);
 }
 
 // ICESat-2's specification gives about 1.6-12 signal photons a shot for a strong beam and
@@ -347,14 +409,8 @@ TEST(PhotonCounting, GroundPhotonsOnASlopeSpreadAsGardner) {
 // 0.5, T = 0.25) both fall in the range, the clear one near its top.
 TEST(PhotonCounting, StrongAndWeakBeamsOverIceFallInTheMissionsRange) {
   for (const double t : {0.64, 0.25}) {
-    const double strong =
-        signal_counts(expected_photons(flat_ground_power_W(0.9, 0.175, t), 0.1, 532.0, kEfficiency),
-                      4000, 0)
-            .mean;
-    const double weak =
-        signal_counts(expected_photons(flat_ground_power_W(0.9, 0.045, t), 0.1, 532.0, kEfficiency),
-                      4000, 1)
-            .mean;
+    const double strong = signal_counts(flat_ground_photons(0.9, 0.175, t), 4000, 0).mean;
+    const double weak = signal_counts(flat_ground_photons(0.9, 0.045, t), 4000, 1).mean;
     EXPECT_GT(strong, 1.6) << "T " << t;
     EXPECT_LT(strong, 12.0) << "T " << t;
     EXPECT_GT(weak, 0.4) << "T " << t;
