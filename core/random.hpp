@@ -79,9 +79,14 @@ class RandomStream {
 // bits as RandomStream(seed, shot, ray, purpose). Keying a ray advances the engine by ray << 32
 // draws (up to 59 squarings of the multiplier); consecutive rays' streams are 2^32 draws apart,
 // one affine step A s + C of the last one's state (an LCG's advance composes), so a run of
-// consecutive rays costs a multiplication each. The photon draw asks its bins in order.
+// consecutive rays, or a short gap, costs a multiplication a ray. The photon draw asks its bins in
+// order.
 class RandomStreams {
  public:
+  // A ray up to this many on from the last is stepped to (a multiplication a ray), one further
+  // keyed afresh (up to 59 squarings).
+  static constexpr std::uint64_t most_steps = 32;
+
   RandomStreams(std::uint64_t seed, std::uint64_t shot, RandomPurpose purpose)
       : base_(RandomStream::keyed(seed ^ static_cast<std::uint64_t>(purpose), shot)), last_(base_) {
     // The step's A and C from the engine's own advance: f(0) = C, f(1) = A + C.
@@ -95,8 +100,9 @@ class RandomStreams {
   }
 
   RandomStream at(std::uint64_t ray) {
-    if (have_last_ && ray == last_ray_ + 1) {
-      last_.set_state(step_mult_ * last_.state() + step_plus_);
+    if (have_last_ && ray > last_ray_ && ray - last_ray_ <= most_steps) {
+      for (std::uint64_t step = last_ray_; step < ray; ++step)
+        last_.set_state(step_mult_ * last_.state() + step_plus_);
     } else {
       last_ = base_;
       last_.advance(ray << RandomStream::ray_bits);

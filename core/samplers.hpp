@@ -24,8 +24,11 @@ template <typename Random>
 double poisson(Random& random, double mean) {
   if (!(mean > 0.0)) return 0.0;
   if (mean < 10.0) {
-    const double limit = std::exp(-mean);
     double product = random.uniform();
+    // 0 when the first uniform is at most exp(-mean) (which is above 1 - 2 mean by more than a
+    // rounding): most draws of a small mean end here, without the exponential, to the same bit.
+    if (product <= 1.0 - 2.0 * mean) return 0.0;
+    const double limit = std::exp(-mean);
     double k = 0.0;
     while (product > limit) {
       product *= random.uniform();

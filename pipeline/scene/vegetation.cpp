@@ -46,8 +46,11 @@ struct TruthSums {
   double weights = 0.0;
 
   void add(const VerticalLine& line, double r_sq, double sigma_m) {
+    if (line.ground) add(line, std::exp(-r_sq / (2.0 * sigma_m * sigma_m)), r_sq, sigma_m);
+  }
+  // With the line's weight given.
+  void add(const VerticalLine& line, double weight, double r_sq, double sigma_m) {
     if (!line.ground) return;
-    const double weight = std::exp(-r_sq / (2.0 * sigma_m * sigma_m));
     weights += weight;
     truth.pai += weight * line.plant_area;
     truth.cover += line.covered ? weight : 0.0;
@@ -122,11 +125,22 @@ VegetationTruth TruthGrid::measure(const BeamSpot& spot) const {
   const auto tile_of = [](std::int64_t node) {
     return node >= 0 ? node / Tile::kTile : -((-node - 1) / Tile::kTile) - 1;
   };
+  // The beam's weight is separable, exp(-x^2 / 2 sigma^2) exp(-y^2 / 2 sigma^2): one
+  // exponential a column and a row, not one a line.
+  const double two_sigma_sq = 2.0 * spot.sigma_m * spot.sigma_m;
+  const std::int64_t i0 = first(spot.x_m), j0 = first(spot.y_m);
+  std::vector<double> column_weight;
+  for (std::int64_t i = i0; i <= last(spot.x_m); ++i) {
+    const double x = static_cast<double>(i) * step_m_ - spot.x_m;
+    column_weight.push_back(std::exp(-x * x / two_sigma_sq));
+  }
   TruthSums sums;
   const Tile* held = nullptr;
   std::int64_t held_ti = 0, held_tj = 0;
-  for (std::int64_t j = first(spot.y_m); j <= last(spot.y_m); ++j) {
-    for (std::int64_t i = first(spot.x_m); i <= last(spot.x_m); ++i) {
+  for (std::int64_t j = j0; j <= last(spot.y_m); ++j) {
+    const double y = static_cast<double>(j) * step_m_ - spot.y_m;
+    const double row_weight = std::exp(-y * y / two_sigma_sq);
+    for (std::int64_t i = i0; i <= last(spot.x_m); ++i) {
       const std::int64_t ti = tile_of(i), tj = tile_of(j);
       if (!held || ti != held_ti || tj != held_tj) {
         held = &tile(ti, tj);  // a lock a tile, not a line
@@ -136,8 +150,8 @@ VegetationTruth TruthGrid::measure(const BeamSpot& spot) const {
       const VerticalLine& line =
           held->lines[(j - tj * Tile::kTile) * Tile::kTile + (i - ti * Tile::kTile)];
       const double x = static_cast<double>(i) * step_m_ - spot.x_m;
-      const double y = static_cast<double>(j) * step_m_ - spot.y_m;
-      sums.add(line, x * x + y * y, spot.sigma_m);
+      sums.add(line, row_weight * column_weight[static_cast<std::size_t>(i - i0)], x * x + y * y,
+               spot.sigma_m);
     }
   }
   return sums.mean();

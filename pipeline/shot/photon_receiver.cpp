@@ -118,7 +118,7 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
   draw.pulse_sigma_ns = lidar.pulse_sigma_ns;
   const std::vector<PhotonEvent> events =
       apply_dead_time(draw_photons(draw, shot.sources), p.dead_time_ns);
-  const double window_start_ns = lidar_.bin_time_ns().front() - 0.5 * lidar.bin_ns;
+  const double window_start_ns = lidar_.bin_time_ns(0) - 0.5 * lidar.bin_ns;
   const std::function<Geodetic(double)> position_at = returns.position_at;
   waveform_.receive(std::move(returns), record);
   // Eq. (1)'s reflectance divides by the band's pulse energy, not the beam's.

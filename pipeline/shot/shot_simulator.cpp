@@ -163,12 +163,11 @@ void ShotSimulator::locate(ShotRecord& record, const Footprint& footprint,
   record.range_m = footprint.range_m;
   record.slope_deg = shot.orientation.slope_deg;
   record.aspect_deg = shot.orientation.aspect_deg;
-  const std::vector<double> bin_time_ns = lidar_.bin_time_ns();
   auto elevation_at = [&](double time_ns) {
     return shot.on_axis(0.5 * speed_of_light_m_s * time_ns * 1e-9).h_m;
   };
-  record.elev_bin0_m = elevation_at(bin_time_ns.front());
-  record.elev_lastbin_m = elevation_at(bin_time_ns.back());
+  record.elev_bin0_m = elevation_at(lidar_.bin_time_ns(0));
+  record.elev_lastbin_m = elevation_at(lidar_.bin_time_ns(lidar_.bins() - 1));
 }
 
 std::optional<ShotWaveforms> ShotSimulator::simulate_ray(const Footprint& footprint,

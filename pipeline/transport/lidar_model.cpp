@@ -36,7 +36,7 @@ double LidarModel::fov_solid_angle_sr() const {
 
 std::vector<double> LidarModel::bin_time_ns() const {
   std::vector<double> times(sensor_.bins);
-  for (int i = 0; i < sensor_.bins; ++i) times[i] = i * sensor_.bin_ns - lead_ns_;
+  for (int i = 0; i < sensor_.bins; ++i) times[i] = bin_time_ns(i);
   return times;
 }
 

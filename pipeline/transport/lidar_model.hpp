@@ -30,6 +30,7 @@ class LidarModel {
   // Time bins: bin i is centred at bin_time_ns()[i] after the return from the reference range.
   int bins() const { return sensor_.bins; }
   std::vector<double> bin_time_ns() const;
+  double bin_time_ns(int bin) const { return bin * sensor_.bin_ns - lead_ns_; }
 
   // Tallies cover the bins plus a margin of pulse width on each side, so that light just
   // outside the window still spreads into it. Index for a two-way time after the reference

@@ -118,11 +118,15 @@ std::vector<PhotonEvent> draw_photons(const PhotonDraw& draw,
   const std::size_t bins = checked_bins(draw, sources);
   std::vector<PhotonEvent> events;
   BinStreams streams(draw);
-  for (std::size_t entry = 0; entry < bins; ++entry) {
-    double total = 0.0;
-    for (const PhotonSource& source : sources) total += std::max(source.mean_per_bin[entry], 0.0);
-    if (total > negligible_mean) draw_bin(draw, sources, entry, total, streams, events);
-  }
+  // Each bin's sum of the sources' means, added source after source in the order a bin's loop
+  // would add them (the same bits), over contiguous memory.
+  std::vector<double> totals(bins, 0.0);
+  for (const PhotonSource& source : sources)
+    for (std::size_t entry = 0; entry < bins; ++entry)
+      totals[entry] += std::max(source.mean_per_bin[entry], 0.0);
+  for (std::size_t entry = 0; entry < bins; ++entry)
+    if (totals[entry] > negligible_mean)
+      draw_bin(draw, sources, entry, totals[entry], streams, events);
   const double window_ns = static_cast<double>(draw.bins) * draw.bin_ns;
   if (draw.background_rate_Hz > 0.0) {
     RandomStream random = photon_stream(draw, background_key);

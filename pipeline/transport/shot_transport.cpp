@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <optional>
 
@@ -92,6 +93,49 @@ struct Tally {
   std::int64_t ray_queries = 0;
   std::vector<char> marked;  // per bin: scored into
   std::vector<int> bins;     // those bins, in the order first scored
+};
+
+// A thread's two tallies for its shots of few rays, kept between its shots and handed back zero
+// (clear() zeroes only where the shot scored): a photon-counting pass's 10,000 shots a second
+// would otherwise allocate and zero some 300 kB each. A shot of another shape, or one begun
+// while the thread's pair is out, gets its own.
+class ThreadTallies {
+ public:
+  ThreadTallies(std::size_t bands, int size, int orders) {
+    thread_local std::unique_ptr<Pair> kept;
+    thread_local bool out = false;
+    if (out) {
+      own_ = std::make_unique<Pair>(bands, size, orders);
+      pair_ = own_.get();
+      return;
+    }
+    if (!kept || kept->total.total.size() != bands * static_cast<std::size_t>(size) ||
+        kept->total.size != static_cast<std::size_t>(size) || kept->total.orders != orders)
+      kept = std::make_unique<Pair>(bands, size, orders);
+    pair_ = kept.get();
+    out_ = &out;
+    out = true;
+  }
+  ~ThreadTallies() {
+    pair_->total.clear();
+    pair_->group.clear();
+    if (out_) *out_ = false;
+  }
+  ThreadTallies(const ThreadTallies&) = delete;
+  ThreadTallies& operator=(const ThreadTallies&) = delete;
+
+  Tally& total() const { return pair_->total; }
+  Tally& group() const { return pair_->group; }
+
+ private:
+  struct Pair {
+    Pair(std::size_t bands, int size, int orders)
+        : total(bands, size, orders), group(bands, size, orders) {}
+    Tally total, group;
+  };
+  std::unique_ptr<Pair> own_;
+  Pair* pair_ = nullptr;
+  bool* out_ = nullptr;
 };
 
 // One path of a ray, between two interactions.
@@ -606,11 +650,11 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
   const int orders = options.per_order ? options.max_order : 0;
   const std::int64_t groups = std::min(ray_groups, options.rays);
   auto first_ray = [&](std::int64_t group) { return group * options.rays / groups; };
-  Tally tally(lidar.band_count(), lidar.tally_size(), orders);
   if (options.rays < parallel_rays) {
     // The groups one after the other through one scratch tally, each added as it ends: the
     // same sums in the same order as below, without a tally a group.
-    Tally group_tally(lidar.band_count(), lidar.tally_size(), orders);
+    const ThreadTallies tallies(lidar.band_count(), lidar.tally_size(), orders);
+    Tally &tally = tallies.total(), &group_tally = tallies.group();
     PathTracer tracer(scene, lidar, geometry, optics, options, shot_number, nullptr);
     for (std::int64_t group = 0; group < groups; ++group) {
       for (std::int64_t ray = first_ray(group); ray < first_ray(group + 1); ++ray)
@@ -620,6 +664,7 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
     }
     return shot_waveforms(tally, lidar, geometry.range_m, options);
   }
+  Tally tally(lidar.band_count(), lidar.tally_size(), orders);
   std::vector<Tally> group_tallies(groups, Tally(lidar.band_count(), lidar.tally_size(), orders));
   tbb::parallel_for(std::int64_t{0}, groups, [&](std::int64_t group) {
     PathTracer tracer(scene, lidar, geometry, optics, options, shot_number, nullptr);

@@ -72,8 +72,8 @@ TEST(RandomStream, UniformsHaveTheMomentsOfU01) {
 }
 
 // RandomStreams steps from a ray's stream to the next's: each the same draws as RandomStream keyed
-// afresh, over consecutive rays, gaps, a ray asked again, and rays whose shift reaches the top
-// bits.
+// afresh, over consecutive rays, gaps stepped over and gaps keyed afresh, a ray asked again, and
+// rays whose shift reaches the top bits.
 TEST(RandomStreams, AreTheKeyedStreams) {
   const std::uint64_t rays[] = {0,
                                 1,
@@ -86,6 +86,8 @@ TEST(RandomStreams, AreTheKeyedStreams) {
                                 65535,
                                 65536,
                                 65537,  // runs, gaps, a ray asked again
+                                65569,
+                                65602,  // gaps of RandomStreams::most_steps and one more
                                 (1ull << 31) - 1,
                                 1ull << 31,
                                 (1ull << 32) - 2,
