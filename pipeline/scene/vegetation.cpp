@@ -85,7 +85,7 @@ VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot) {
 
 // The lines of a tile of kTile x kTile nodes, measured by the first footprint that weighs one.
 struct TruthGrid::Tile {
-  static constexpr int kTile = 16;
+  static constexpr int kTile = 8;
   std::once_flag measured;
   std::array<VerticalLine, kTile * kTile> lines;
 };
@@ -94,23 +94,31 @@ TruthGrid::TruthGrid(const Scene& scene, double step_m) : scene_(scene), step_m_
 
 TruthGrid::~TruthGrid() = default;
 
-const TruthGrid::Tile& TruthGrid::tile(std::int64_t ti, std::int64_t tj) const {
-  Tile* found = nullptr;
+void TruthGrid::tiles(std::int64_t ti0, std::int64_t ti1, std::int64_t tj0, std::int64_t tj1,
+                      std::vector<Tile*>& found) const {
+  found.clear();
   {
-    const std::lock_guard lock(mutex_);
-    std::unique_ptr<Tile>& held = tiles_[{ti, tj}];
-    if (!held) held = std::make_unique<Tile>();
-    found = held.get();
+    const std::lock_guard lock(mutex_);  // one lock a footprint, not a tile
+    for (std::int64_t tj = tj0; tj <= tj1; ++tj)
+      for (std::int64_t ti = ti0; ti <= ti1; ++ti) {
+        std::unique_ptr<Tile>& held = tiles_[{ti, tj}];
+        if (!held) held = std::make_unique<Tile>();
+        found.push_back(held.get());
+      }
   }
-  std::call_once(found->measured, [&] {
-    std::vector<VolumeSpan> spans;
-    for (int b = 0; b < Tile::kTile; ++b)
-      for (int a = 0; a < Tile::kTile; ++a)
-        found->lines[b * Tile::kTile + a] =
-            measure_line(scene_, static_cast<double>(ti * Tile::kTile + a) * step_m_,
-                         static_cast<double>(tj * Tile::kTile + b) * step_m_, spans);
-  });
-  return *found;
+  std::size_t k = 0;
+  for (std::int64_t tj = tj0; tj <= tj1; ++tj)
+    for (std::int64_t ti = ti0; ti <= ti1; ++ti) {
+      Tile* tile = found[k++];
+      std::call_once(tile->measured, [&] {
+        std::vector<VolumeSpan> spans;
+        for (int b = 0; b < Tile::kTile; ++b)
+          for (int a = 0; a < Tile::kTile; ++a)
+            tile->lines[b * Tile::kTile + a] =
+                measure_line(scene_, static_cast<double>(ti * Tile::kTile + a) * step_m_,
+                             static_cast<double>(tj * Tile::kTile + b) * step_m_, spans);
+      });
+    }
 }
 
 VegetationTruth TruthGrid::measure(const BeamSpot& spot) const {
@@ -125,30 +133,31 @@ VegetationTruth TruthGrid::measure(const BeamSpot& spot) const {
   const auto tile_of = [](std::int64_t node) {
     return node >= 0 ? node / Tile::kTile : -((-node - 1) / Tile::kTile) - 1;
   };
+  const std::int64_t i0 = first(spot.x_m), i1 = last(spot.x_m);
+  const std::int64_t j0 = first(spot.y_m), j1 = last(spot.y_m);
+  if (i1 < i0 || j1 < j0) return TruthSums{}.mean();
+  const std::int64_t ti0 = tile_of(i0), tj0 = tile_of(j0);
+  const std::int64_t tiles_across = tile_of(i1) - ti0 + 1;
+  std::vector<Tile*> held;
+  tiles(ti0, tile_of(i1), tj0, tile_of(j1), held);
   // The beam's weight is separable, exp(-x^2 / 2 sigma^2) exp(-y^2 / 2 sigma^2): one
   // exponential a column and a row, not one a line.
   const double two_sigma_sq = 2.0 * spot.sigma_m * spot.sigma_m;
-  const std::int64_t i0 = first(spot.x_m), j0 = first(spot.y_m);
   std::vector<double> column_weight;
-  for (std::int64_t i = i0; i <= last(spot.x_m); ++i) {
+  for (std::int64_t i = i0; i <= i1; ++i) {
     const double x = static_cast<double>(i) * step_m_ - spot.x_m;
     column_weight.push_back(std::exp(-x * x / two_sigma_sq));
   }
   TruthSums sums;
-  const Tile* held = nullptr;
-  std::int64_t held_ti = 0, held_tj = 0;
-  for (std::int64_t j = j0; j <= last(spot.y_m); ++j) {
+  for (std::int64_t j = j0; j <= j1; ++j) {
     const double y = static_cast<double>(j) * step_m_ - spot.y_m;
     const double row_weight = std::exp(-y * y / two_sigma_sq);
-    for (std::int64_t i = i0; i <= last(spot.x_m); ++i) {
-      const std::int64_t ti = tile_of(i), tj = tile_of(j);
-      if (!held || ti != held_ti || tj != held_tj) {
-        held = &tile(ti, tj);  // a lock a tile, not a line
-        held_ti = ti;
-        held_tj = tj;
-      }
+    const std::int64_t tj = tile_of(j);
+    for (std::int64_t i = i0; i <= i1; ++i) {
+      const std::int64_t ti = tile_of(i);
+      const Tile& tile = *held[static_cast<std::size_t>((tj - tj0) * tiles_across + (ti - ti0))];
       const VerticalLine& line =
-          held->lines[(j - tj * Tile::kTile) * Tile::kTile + (i - ti * Tile::kTile)];
+          tile.lines[(j - tj * Tile::kTile) * Tile::kTile + (i - ti * Tile::kTile)];
       const double x = static_cast<double>(i) * step_m_ - spot.x_m;
       sums.add(line, row_weight * column_weight[static_cast<std::size_t>(i - i0)], x * x + y * y,
                spot.sigma_m);

@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 #include <utility>
+#include <vector>
 
 #include "pipeline/scene/scene.hpp"
 
@@ -44,7 +45,9 @@ class TruthGrid {
 
  private:
   struct Tile;
-  const Tile& tile(std::int64_t ti, std::int64_t tj) const;
+  // Tiles [ti0, ti1] x [tj0, tj1], row after row, each measured.
+  void tiles(std::int64_t ti0, std::int64_t ti1, std::int64_t tj0, std::int64_t tj1,
+             std::vector<Tile*>& found) const;
 
   const Scene& scene_;
   double step_m_;
