@@ -27,7 +27,8 @@ ShotSources shot_sources(const ScoredReturns& scored, double wavelength_nm, doub
       expected_photons(scored.canopy_J[0], wavelength_nm, efficiency);
   const std::vector<double> ground =
       expected_photons(scored.ground_J[0], wavelength_nm, efficiency);
-  // The canopy's top: its bins up to the one by which a tenth of its photons has arrived.
+  // The canopy's top: its bins (in time order) up to the one by which a tenth of its photons has
+  // arrived.
   double canopy_photons = 0.0;
   for (const double n : canopy) canopy_photons += n;
   std::size_t top_end = 0;  // the top's bins are [0, top_end)
@@ -113,7 +114,7 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
                   background_rate_Hz(p, record, received_J, returns.range_m),
                   p.channels};
   // The scored bins are the tally's, which begins its pulse margin before the window.
-  draw.first_bin = static_cast<std::size_t>(scored.first_bin);
+  draw.signal_bins = scored.bins;
   draw.grid_offset_bins = -lidar_.margin_bins();
   draw.pulse_sigma_ns = lidar.pulse_sigma_ns;
   const std::vector<PhotonEvent> events =

@@ -51,23 +51,29 @@ std::uint8_t draw_channel(RandomStream& random, int channels) {
 // The sources' bins: their common length, checked with the draw's other inputs.
 std::size_t checked_bins(const PhotonDraw& draw, std::span<const PhotonSource> sources) {
   const std::size_t bins = sources.empty() ? 0 : sources.front().mean_per_bin.size();
-  if (draw.beam >= 256 || draw.bins >= background_key || draw.first_bin >= background_key ||
-      bins >= background_key - draw.first_bin || draw.channels < 1 || draw.channels > 255 ||
-      !(draw.bin_ns > 0.0) || !(draw.background_rate_Hz >= 0.0) || !(draw.pulse_sigma_ns >= 0.0))
+  const bool listed = !draw.signal_bins.empty();
+  const bool keys = listed ? draw.signal_bins.size() == bins &&
+                                 std::is_sorted(draw.signal_bins.begin(), draw.signal_bins.end()) &&
+                                 draw.signal_bins.back() < background_key
+                           : bins < background_key;
+  if (draw.beam >= 256 || draw.bins >= background_key || !keys || draw.channels < 1 ||
+      draw.channels > 255 || !(draw.bin_ns > 0.0) || !(draw.background_rate_Hz >= 0.0) ||
+      !(draw.pulse_sigma_ns >= 0.0))
     throw std::invalid_argument(
-        "draw_photons: beam < 256, bins < 2^24 - 1, 1..255 channels, bin_ns > 0, a background "
-        "rate >= 0 and a pulse sigma >= 0");
+        "draw_photons: beam < 256, bins < 2^24 - 1 (the signal's listed in increasing order, one "
+        "a mean), 1..255 channels, bin_ns > 0, a background rate >= 0 and a pulse sigma >= 0");
   for (const PhotonSource& source : sources)
     if (source.mean_per_bin.size() != bins)
       throw std::invalid_argument("draw_photons: every source has one mean per bin");
   return bins;
 }
 
-// The signal photons of the sources' bin `entry` (the grid's first_bin + entry), `total` being
-// the sum of the sources' means there; those the pulse moves out of the window are lost.
+// The signal photons of the sources' entry `entry` (the grid's bin signal_bins[entry], or
+// `entry`), `total` being the sum of the sources' means there; those the pulse moves out of the
+// window are lost.
 void draw_bin(const PhotonDraw& draw, std::span<const PhotonSource> sources, std::size_t entry,
               double total, BinStreams& streams, std::vector<PhotonEvent>& events) {
-  const std::size_t bin = draw.first_bin + entry;
+  const std::size_t bin = draw.signal_bins.empty() ? entry : draw.signal_bins[entry];
   RandomStream random = streams.at(bin);
   const double count = poisson(random, total);
   const double window_ns = static_cast<double>(draw.bins) * draw.bin_ns;

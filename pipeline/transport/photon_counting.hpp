@@ -69,7 +69,7 @@ struct PhotonCountingSettings {
 enum class PhotonTruth : std::uint8_t { background = 0, ground = 1, canopy = 2, top_of_canopy = 3 };
 
 // One source of signal photons: its expected photons in each of the signal's bins (all sources
-// of a shot share them: PhotonDraw's first_bin on) and what its photons are in truth.
+// of a shot share them: PhotonDraw's signal_bins) and what its photons are in truth.
 struct PhotonSource {
   std::span<const double> mean_per_bin;
   PhotonTruth truth_class = PhotonTruth::ground;
@@ -97,10 +97,11 @@ struct PhotonDraw {
   double background_rate_Hz = 0.0;
   int channels = 1;  // detector channels the beam's photons fall on, uniformly (1..255)
   // The signal's bins are a grid of bin_ns beginning `grid_offset_bins` bins after the window's
-  // start (a transport tally's begins its pulse margin before it: negative); the sources' means
-  // start at its bin `first_bin` (a shot's return fills a few hundred of the grid's thousands of
-  // bins: the caller passes those), each bin keyed by its index in the grid, < 2^24 - 1.
-  std::size_t first_bin = 0;
+  // start (a transport tally's begins its pulse margin before it: negative), each keyed by its
+  // index in the grid (< 2^24 - 1). The sources' means are given for the grid's bins
+  // `signal_bins` (increasing: a shot's return scores a few dozen of the grid's thousands of
+  // bins, and the caller passes those), or for its bins from 0 on when there are none.
+  std::span<const std::uint32_t> signal_bins;
   int grid_offset_bins = 0;
   // The pulse that spreads each signal photon's time: a Gaussian of this standard deviation
   // (the sources' means being the energies scored before the pulse), photons it moves out of

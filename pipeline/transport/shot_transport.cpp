@@ -502,17 +502,13 @@ void PathTracer::emit(RayEventKind kind, const Path& path, const Vec3& position,
   if (observer_) (*observer_)(event_at(kind, path, position, vertex));
 }
 
-// The energies of a tally's rows (scaled) over the bins [first, last], each row's span.
-std::vector<std::vector<double>> scored_rows(const std::vector<double>& flat, std::size_t size,
-                                             std::size_t first_row, std::size_t rows, int first,
-                                             int last, double scale) {
-  std::vector<std::vector<double>> spans;
-  for (std::size_t row = first_row; row < first_row + rows; ++row) {
-    const double* begin = flat.data() + row * size;
-    std::vector<double>& span = spans.emplace_back(begin + first, begin + last + 1);
-    for (double& value : span) value *= scale;
-  }
-  return spans;
+// Row `row` of a tally's `size`-bin rows at the bins `bins`, scaled.
+std::vector<double> scored_row(const std::vector<double>& flat, std::size_t size, std::size_t row,
+                               const std::vector<std::uint32_t>& bins, double scale) {
+  std::vector<double> values;
+  values.reserve(bins.size());
+  for (const std::uint32_t bin : bins) values.push_back(flat[row * size + bin] * scale);
+  return values;
 }
 
 // The shot's returns from its tally of normalised returns: each band's scale (section 1 of
@@ -524,14 +520,10 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
   waveforms.ray_queries = tally.ray_queries;
   const double bin_s = lidar.sensor().bin_ns * 1e-9;
   const auto rays = static_cast<double>(options.rays);
-  // The span of bins scored into (empty: first past last).
-  int first = static_cast<int>(tally.size), last = -1;
-  for (const int bin : tally.bins) {
-    first = std::min(first, bin);
-    last = std::max(last, bin);
-  }
-  if (last < first) first = last + 1;
-  waveforms.scored.first_bin = first;
+  // The bins scored into, in increasing order.
+  std::vector<std::uint32_t> scored_bins(tally.bins.begin(), tally.bins.end());
+  std::sort(scored_bins.begin(), scored_bins.end());
+  ScoredReturns& scored = waveforms.scored;
   auto slice = [&](const std::vector<double>& flat, std::size_t row, double scale) {
     std::vector<double> energy_J(flat.begin() + row * tally.size,
                                  flat.begin() + (row + 1) * tally.size);
@@ -545,7 +537,7 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
   };
   auto scored_J = [&](const std::vector<double>& flat, std::size_t band, double scale) {
     double sum = 0.0;
-    for (int bin = first; bin <= last; ++bin) sum += flat[band * tally.size + bin];
+    for (const std::uint32_t bin : scored_bins) sum += flat[band * tally.size + bin];
     return sum * scale;
   };
   for (std::size_t band = 0; band < lidar.band_count(); ++band) {
@@ -554,15 +546,18 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
                          lidar.sensor().telescope_area_m2 * lidar.fov_fraction() /
                          (std::numbers::pi * range_m * range_m) / rays;
     if (options.scored_energies) {
-      ScoredReturns& scored = waveforms.scored;
-      for (auto [part, flat] : {std::pair{&scored.total_J, &tally.total},
-                                {&scored.canopy_J, &tally.canopy},
-                                {&scored.ground_J, &tally.ground}})
-        part->push_back(scored_rows(*flat, tally.size, band, 1, first, last, scale).front());
-      if (tally.orders > 0)
-        scored.order_J.push_back(
-            scored_rows(tally.order, tally.size, band * static_cast<std::size_t>(tally.orders),
-                        static_cast<std::size_t>(tally.orders), first, last, scale));
+      scored.bins = scored_bins;
+      scored.total_J.push_back(scored_row(tally.total, tally.size, band, scored_bins, scale));
+      scored.canopy_J.push_back(scored_row(tally.canopy, tally.size, band, scored_bins, scale));
+      scored.ground_J.push_back(scored_row(tally.ground, tally.size, band, scored_bins, scale));
+      if (tally.orders > 0) {
+        std::vector<std::vector<double>>& orders = scored.order_J.emplace_back();
+        for (int k = 0; k < tally.orders; ++k)
+          orders.push_back(scored_row(
+              tally.order, tally.size,
+              band * static_cast<std::size_t>(tally.orders) + static_cast<std::size_t>(k),
+              scored_bins, scale));
+      }
     }
     if (!options.power_waveforms) {
       waveforms.energy_J.push_back(scored_J(tally.total, band, scale));

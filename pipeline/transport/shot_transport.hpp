@@ -24,14 +24,14 @@ struct ShotGeometry {
 };
 
 // A shot's returns before the pulse shapes them: the energy (J) scored in each tally bin
-// (LidarModel::tally_index) from first_bin on, over the span from the first bin scored into to
-// the last. A photon-counting receiver draws its photons from these and spreads each by the
-// pulse, which is the same Poisson process as drawing from the pulse-shaped power.
+// (LidarModel::tally_index) that was scored into, those bins in increasing order. A photon-
+// counting receiver draws its photons from these and spreads each by the pulse, which is the same
+// Poisson process as drawing from the pulse-shaped power.
 struct ScoredReturns {
-  int first_bin = 0;
-  std::vector<std::vector<double>> total_J, canopy_J, ground_J;  // [band][bin - first_bin]
-  std::vector<std::vector<std::vector<double>>> order_J;         // [band][order - 1][...]
-  std::size_t size() const { return total_J.empty() ? 0 : total_J.front().size(); }
+  std::vector<std::uint32_t> bins;
+  std::vector<std::vector<double>> total_J, canopy_J, ground_J;  // [band][entry]
+  std::vector<std::vector<std::vector<double>>> order_J;         // [band][order - 1][entry]
+  std::size_t size() const { return bins.size(); }
 };
 
 // The received signal of one shot: [band][bin] power (W) and [band] energy (J).

@@ -53,7 +53,8 @@ LidarSettings atlas_sensor(double energy_mJ, double transmission) {
 // its pulse margin before the window), and the draw that spreads each photon by the pulse.
 struct ScoredPhotons {
   std::vector<double> photons;
-  PhotonDraw draw;
+  std::vector<std::uint32_t> bins;  // the tally's bins scored into
+  PhotonDraw draw;                  // all but its signal_bins, which are `bins`
 };
 
 ScoredPhotons scored_photons(const Scene& scene, const ShotGeometry& geometry,
@@ -71,7 +72,7 @@ ScoredPhotons scored_photons(const Scene& scene, const ShotGeometry& geometry,
   s.draw.bin_ns = sensor.bin_ns;
   s.draw.bins = static_cast<std::size_t>(sensor.bins);
   s.draw.channels = 16;
-  s.draw.first_bin = static_cast<std::size_t>(w.scored.first_bin);
+  s.bins = w.scored.bins;
   s.draw.grid_offset_bins = -lidar.margin_bins();
   s.draw.pulse_sigma_ns = sensor.pulse_sigma_ns;
   return s;
@@ -106,6 +107,7 @@ CountMoments signal_counts(const ScoredPhotons& scored, int shots, std::uint32_t
   double n = 0.0, sum = 0.0, sum2 = 0.0;
   for (int shot = 0; shot < shots; ++shot) {
     PhotonDraw draw = scored.draw;
+    draw.signal_bins = scored.bins;
     draw.seed = seed;
     draw.shot = shot;
     draw.beam = beam;
@@ -153,12 +155,13 @@ TEST(PhotonCounting, SignalOverFlatLambertianGroundAtNadir) {
 // 40 000 shots of one photon each on average, to 3 standard errors.
 TEST(PhotonCounting, ThePulseSpreadsPhotonsOutOfTheWindowAndTheyAreLost) {
   const std::vector<double> photons{1.0};
+  const std::uint32_t bin[] = {20};
   const PhotonSource ground{photons, PhotonTruth::ground, 1};
   double kept = 0.0;
   const int shots = 40000;
   for (int shot = 0; shot < shots; ++shot) {
     PhotonDraw draw{3, shot, 0, 0.1, 50, 0.0, 16};
-    draw.first_bin = 20;
+    draw.signal_bins = bin;
     draw.grid_offset_bins = -20;  // the grid's bin 20 is the window's first
     draw.pulse_sigma_ns = 1.0;
     for (const PhotonEvent& e : draw_photons(draw, {&ground, 1})) {
@@ -349,27 +352,43 @@ TEST(PhotonCounting, BinStreamsAreTheKeyedStreams) {
   EXPECT_GT(photons, 1000u);
 }
 
-// The signal's bins, when the caller passes those alone (the sources' means from the grid's bin
-// first_bin on), give the same events as the whole grid: the bins outside, whose means are all 0,
-// draw nothing either way, and each bin keeps its key.
+// The signal's bins, when the caller lists those alone (the sources' means at the grid's bins
+// signal_bins), give the same events as the whole grid: the bins left out, whose means are all 0,
+// draw nothing either way, and each bin keeps its key. Listed bins must increase and match the
+// means one for one.
 TEST(PhotonCounting, TheSignalsBinsDrawWhatTheWholeGridDraws) {
   std::vector<double> ground(100, 0.0), canopy(100, 0.0);
   for (std::size_t bin = 40; bin < 60; ++bin) ground[bin] = 0.5;
   for (std::size_t bin = 10; bin < 30; ++bin) canopy[bin] = 0.3;
+  std::vector<std::uint32_t> listed;
+  std::vector<double> listed_ground, listed_canopy;
+  for (std::uint32_t bin = 0; bin < 100; ++bin)
+    if (ground[bin] > 0.0 || canopy[bin] > 0.0) {
+      listed.push_back(bin);
+      listed_ground.push_back(ground[bin]);
+      listed_canopy.push_back(canopy[bin]);
+    }
+  ASSERT_EQ(listed.size(), 40u);
   const PhotonSource whole_sources[] = {{ground, PhotonTruth::ground, 1},
                                         {canopy, PhotonTruth::canopy, 2}};
-  const PhotonSource signal_sources[] = {
-      {std::span(ground).subspan(10, 50), PhotonTruth::ground, 1},
-      {std::span(canopy).subspan(10, 50), PhotonTruth::canopy, 2}};
+  const PhotonSource listed_sources[] = {{listed_ground, PhotonTruth::ground, 1},
+                                         {listed_canopy, PhotonTruth::canopy, 2}};
   for (const std::int64_t shot : {1, 2, 3}) {
     PhotonDraw whole{5, shot, 1, 0.5, 100, 2e8, 16};
     whole.pulse_sigma_ns = 0.6;
     PhotonDraw signal = whole;
-    signal.first_bin = 10;
+    signal.signal_bins = listed;
     const std::vector<PhotonEvent> a = draw_photons(whole, whole_sources);
     ASSERT_FALSE(a.empty());
-    EXPECT_EQ(draw_photons(signal, signal_sources), a);
+    EXPECT_EQ(draw_photons(signal, listed_sources), a);
   }
+  PhotonDraw unsorted{5, 1, 1, 0.5, 100, 0.0, 16};
+  std::vector<std::uint32_t> swapped = listed;
+  std::swap(swapped[0], swapped[1]);
+  unsorted.signal_bins = swapped;
+  EXPECT_THROW(draw_photons(unsorted, listed_sources), std::invalid_argument);
+  unsorted.signal_bins = std::span(listed).first(39);
+  EXPECT_THROW(draw_photons(unsorted, listed_sources), std::invalid_argument);
 }
 
 // PHYSICS.md section 2 (Gardner 1992) with ATLAS's pulse and beam: the ground photons' times on a
