@@ -37,15 +37,17 @@ bool is_part(const fs::directory_entry& entry) { return entry.path().extension()
 std::vector<ShotRecord> simulate_range(const ShotSimulator& simulator, const Track& track,
                                        std::int64_t a, std::int64_t b, tbb::task_arena& arena,
                                        std::int64_t& queries) {
+  b = std::min(b, track.size());
   if (a >= b) return {};
-  const std::vector<Footprint> footprints = track.footprints(a, b);
-  std::vector<ShotRecord> records(footprints.size());
+  std::vector<ShotRecord> records(static_cast<std::size_t>(b - a));
   std::atomic<std::int64_t> ray_queries{0};
   arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, footprints.size(), [&](std::size_t i) {
+    tbb::parallel_for(std::size_t{0}, records.size(), [&](std::size_t i) {
       std::int64_t n = 0;
+      // Each thread places its own shots on the track (Track::footprints, one at a time).
+      const Footprint footprint = track.footprint(a + static_cast<std::int64_t>(i));
       // Roughness too fine to mesh under this beam is refused there, named in /terrain.
-      records[i] = at_section("/terrain", [&] { return simulator.simulate(footprints[i], &n); });
+      records[i] = at_section("/terrain", [&] { return simulator.simulate(footprint, &n); });
       ray_queries += n;
     });
   });

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 
 namespace glaswave {
@@ -86,7 +88,10 @@ VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot) {
 // The lines of a tile of kTile x kTile nodes, measured by the first footprint that weighs one.
 struct TruthGrid::Tile {
   static constexpr int kTile = 8;
-  std::once_flag measured;
+  // Measured once, by the first footprint that weighs it (a flag and a lock rather than
+  // std::call_once, whose every first call ends in a futex wake: a system call a tile).
+  std::atomic<bool> measured{false};
+  std::mutex measuring;
   std::array<VerticalLine, kTile * kTile> lines;
 };
 
@@ -110,14 +115,16 @@ void TruthGrid::tiles(std::int64_t ti0, std::int64_t ti1, std::int64_t tj0, std:
   for (std::int64_t tj = tj0; tj <= tj1; ++tj)
     for (std::int64_t ti = ti0; ti <= ti1; ++ti) {
       Tile* tile = found[k++];
-      std::call_once(tile->measured, [&] {
-        std::vector<VolumeSpan> spans;
-        for (int b = 0; b < Tile::kTile; ++b)
-          for (int a = 0; a < Tile::kTile; ++a)
-            tile->lines[b * Tile::kTile + a] =
-                measure_line(scene_, static_cast<double>(ti * Tile::kTile + a) * step_m_,
-                             static_cast<double>(tj * Tile::kTile + b) * step_m_, spans);
-      });
+      if (tile->measured.load(std::memory_order_acquire)) continue;
+      const std::lock_guard measuring(tile->measuring);
+      if (tile->measured.load(std::memory_order_relaxed)) continue;
+      std::vector<VolumeSpan> spans;
+      for (int b = 0; b < Tile::kTile; ++b)
+        for (int a = 0; a < Tile::kTile; ++a)
+          tile->lines[b * Tile::kTile + a] =
+              measure_line(scene_, static_cast<double>(ti * Tile::kTile + a) * step_m_,
+                           static_cast<double>(tj * Tile::kTile + b) * step_m_, spans);
+      tile->measured.store(true, std::memory_order_release);
     }
 }
 

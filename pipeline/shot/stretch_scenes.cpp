@@ -2,6 +2,7 @@
 #include "pipeline/shot/stretch_scenes.hpp"
 
 #include <tbb/collaborative_call_once.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -62,6 +63,22 @@ StretchScenes::StretchScenes(const SceneBuilder& scenes, const LidarModel& lidar
 std::shared_ptr<const StretchScene> StretchScenes::find(const Footprint& footprint) const {
   const int beam_index = track_.beam_index(footprint.beam);
   const std::int64_t stretch = footprint.shot_number / shots_;
+  std::shared_ptr<const StretchScene> scene = find(beam_index, stretch);
+  // Halfway through a stretch its shot builds the next one, while the other threads go on with
+  // this stretch's shots: when they reach the next, none waits for its build. A build that fails
+  // keeps its failure for the next stretch's own shots.
+  if (footprint.shot_number % shots_ == shots_ / 2 &&
+      (stretch + 1) * shots_ < track_.sequence_length()) {
+    try {
+      find(beam_index, stretch + 1);
+    } catch (...) {
+    }
+  }
+  return scene;
+}
+
+std::shared_ptr<const StretchScene> StretchScenes::find(int beam_index,
+                                                        std::int64_t stretch) const {
   std::shared_ptr<Entry> entry;
   {
     const std::lock_guard lock(mutex_);
@@ -75,7 +92,7 @@ std::shared_ptr<const StretchScene> StretchScenes::find(const Footprint& footpri
       entry = std::make_shared<Entry>();
       entry->beam_index = beam_index;
       entry->stretch = stretch;
-      const auto kept = static_cast<std::size_t>(2 * track_.beams_per_shot() + 2);
+      const auto kept = static_cast<std::size_t>(3 * track_.beams_per_shot() + 2);
       if (recent_.size() >= kept) recent_.erase(recent_.begin());
     }
     recent_.push_back(entry);
@@ -98,12 +115,20 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
   const Terrain& terrain = scenes_.terrain();
   const std::int64_t first = stretch * shots_;
   const std::int64_t last = std::min(first + shots_, track_.sequence_length());
+  // The shots placed in parallel: the threads waiting for this stretch help (find's
+  // collaborative call), where they would otherwise wait for one to place 256 shots.
+  const auto count = static_cast<std::size_t>(std::max<std::int64_t>(last - first, 0));
+  std::vector<Footprint> placed(count);
+  std::vector<char> placed_on_data(count, 0);
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t k) {
+    placed[k] = track_.locate_shot(first + static_cast<std::int64_t>(k), beam_index);
+    placed_on_data[k] = beam_on_terrain_data(terrain, lidar_, placed[k]) ? 1 : 0;
+  });
   std::vector<Footprint> held;  // the footprints whose beams fall on the terrain's data
   std::vector<bool> on_data;
-  for (std::int64_t shot = first; shot < last; ++shot) {
-    Footprint footprint = track_.locate_shot(shot, beam_index);
-    on_data.push_back(beam_on_terrain_data(terrain, lidar_, footprint));
-    if (on_data.back()) held.push_back(std::move(footprint));
+  for (std::size_t k = 0; k < count; ++k) {
+    on_data.push_back(placed_on_data[k] != 0);
+    if (on_data.back()) held.push_back(std::move(placed[k]));
   }
   if (held.empty()) return nullptr;
   const Footprint& middle = held[held.size() / 2];

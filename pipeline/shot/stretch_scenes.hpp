@@ -68,15 +68,17 @@ class StretchScenes {
   StretchScenes(const SceneBuilder& scenes, const LidarModel& lidar, const Track& track,
                 double margin_m, std::int64_t shots = stretch_shots);
 
-  // The scene of the footprint's stretch, built at its first use and kept while the run is near
-  // it; null when the stretch shares none (its footprints spread too far). Thread-safe; a
-  // footprint the stretch's scene holds is on the terrain's data (beam_on_terrain_data).
+  // The scene of the footprint's stretch, built at its first use (or ahead, by its predecessor's
+  // middle shot) and kept while the run is near it; null when the stretch shares none (its
+  // footprints spread too far). Thread-safe; a footprint the stretch's scene holds is on the
+  // terrain's data (beam_on_terrain_data).
   std::shared_ptr<const StretchScene> find(const Footprint& footprint) const;
 
   std::int64_t shots() const { return shots_; }
 
  private:
   struct Entry;
+  std::shared_ptr<const StretchScene> find(int beam_index, std::int64_t stretch) const;
   std::shared_ptr<const StretchScene> build(int beam_index, std::int64_t stretch) const;
 
   const SceneBuilder& scenes_;
@@ -84,8 +86,9 @@ class StretchScenes {
   const Track& track_;
   double margin_m_;
   std::int64_t shots_;
-  // The stretches met last, the most recent last: a run walks the track in order, so two a beam
-  // (the one a batch ends in, the one it starts) are all it meets again.
+  // The stretches met last, the most recent last: a run walks the track in order, so three a
+  // beam (the one a batch ends in, the one it starts, the next one built ahead) are all it meets
+  // again.
   mutable std::mutex mutex_;
   mutable std::vector<std::shared_ptr<Entry>> recent_;
 };
