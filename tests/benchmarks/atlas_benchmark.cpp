@@ -10,9 +10,9 @@
 // outline, as shots.nc needs them).
 // Beside the wall-clock rates, the process's CPU time a shot (every thread's), which other loads
 // on the machine disturb less. Last, the Monte Carlo noise of a shot's expected photons at each
-// ray count: the same footprints traced with two seeds give Var_MC = <(mu_1 - mu_2)^2> / 2,
-// compared with the Poisson variance mu that the photon draw adds (Var_MC / mu < 0.1: the rays
-// add under a tenth to the counts' variance).
+// ray count, with plain and Sobol' sampling: the same footprints traced with two seeds give
+// Var_MC = <(mu_1 - mu_2)^2> / 2, compared with the Poisson variance mu that the photon draw adds
+// (Var_MC / mu < 0.1: the rays add under a tenth to the counts' variance).
 // Not a test: `--quick` is the short mode that ctest runs.
 #include <sys/resource.h>
 #include <unistd.h>
