@@ -1,12 +1,14 @@
 // End to end: an ATLAS pass (the atlas preset, its photon-counting receiver) over a forest on a
 // plane writes atl03.h5 and atl08.h5 beside shots.nc; the photons a shot are the few the
 // mission reports, the sun at noon adds background, and the granules hold the same values for
-// one thread and two, and for a run split inside a stretch of shots sharing one scene.
+// one thread and two, for a run split inside a stretch of shots sharing one scene, and for a run
+// killed half way and resumed.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -14,8 +16,10 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "tests/pipeline/app/run_control.hpp"
 #include "tests/pipeline/atlas_pass.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -241,6 +245,56 @@ TEST(Icesat2Run, SixBeamsEachOnItsOwnTrackTheSameForAnyThreadsAndSplit) {
     EXPECT_NEAR(recorded, n * p, 3.0 * std::sqrt(n * p * (1.0 - p) / 180.0))
         << (strong ? "strong" : "weak");
   }
+}
+
+// A pass killed half way and resumed writes the uninterrupted run's granules: a stretch's scene
+// (built by the middle shot of the stretch before it, while the other thread goes on) depends on
+// the stretch alone, and the journal keeps each finished shot's photons.
+TEST(Icesat2Run, AKilledPassResumesToTheSameGranules) {
+  const test_support::ScratchDir dir("glaswave_icesat2_resume");
+  nlohmann::json pass = test_support::atlas_pass(3000, 30, 4);
+  pass["sensor"]["beams"] = {"gt2l"};
+  const fs::path config = dir.path() / "pass.json";
+  std::ofstream(config) << pass.dump(2);
+  const auto arguments = [&](const std::string& run) {
+    return "run '" + config.string() + "' --quiet --threads 2 --out '" +
+           (dir.path() / run).string() + "'";
+  };
+  // The uninterrupted run, and the size its journal reached (it is removed at the end).
+  const pid_t pid = test_support::start_glaswave(arguments("whole"));
+  std::uintmax_t journal_whole = 0;
+  int status = 0;
+  while (waitpid(pid, &status, WNOHANG) != pid) {
+    journal_whole = std::max(journal_whole,
+                             test_support::size_or_zero(dir.path() / "whole" / "glaswave.journal"));
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  ASSERT_GT(journal_whole, 0u);
+  const fs::path killed = dir.path() / "killed";
+  ASSERT_TRUE(test_support::kill_when(test_support::start_glaswave(arguments("killed")),
+                                      killed / "glaswave.journal", journal_whole / 2))
+      << "the run ended first";
+  EXPECT_FALSE(fs::exists(killed / "atl03.h5"));
+  ASSERT_EQ(run_glaswave(config, killed, "--threads 2 --resume", dir.path() / "resumed.txt"), 0)
+      << bytes(dir.path() / "resumed.txt");
+  const auto values = [&](const std::string& run, const std::string& granule,
+                          const std::string& path) {
+    const hid_t f = H5Fopen((dir.path() / run / granule).c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    std::vector<double> v = read<double>(f, path, H5T_NATIVE_DOUBLE);
+    H5Fclose(f);
+    return v;
+  };
+  for (const char* field : {"h_ph", "lat_ph", "lon_ph", "delta_time", "glaswave_truth_class"}) {
+    const std::string path = std::string("/gt2l/heights/") + field;
+    const std::vector<double> whole = values("whole", "atl03.h5", path);
+    EXPECT_GT(whole.size(), 3000u) << path;
+    EXPECT_EQ(values("killed", "atl03.h5", path), whole) << path;
+  }
+  for (const char* path :
+       {"/gt2l/land_segments/terrain/h_te_best_fit", "/gt2l/land_segments/canopy/h_canopy",
+        "/gt2l/signal_photons/classed_pc_flag"})
+    EXPECT_EQ(values("killed", "atl08.h5", path), values("whole", "atl08.h5", path)) << path;
 }
 
 }  // namespace
