@@ -2,7 +2,6 @@
 #include "pipeline/shot/stretch_scenes.hpp"
 
 #include <tbb/collaborative_call_once.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -115,20 +114,12 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
   const Terrain& terrain = scenes_.terrain();
   const std::int64_t first = stretch * shots_;
   const std::int64_t last = std::min(first + shots_, track_.sequence_length());
-  // The shots placed in parallel: the threads waiting for this stretch help (find's
-  // collaborative call), where they would otherwise wait for one to place 256 shots.
-  const auto count = static_cast<std::size_t>(std::max<std::int64_t>(last - first, 0));
-  std::vector<Footprint> placed(count);
-  std::vector<char> placed_on_data(count, 0);
-  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t k) {
-    placed[k] = track_.locate_shot(first + static_cast<std::int64_t>(k), beam_index);
-    placed_on_data[k] = beam_on_terrain_data(terrain, lidar_, placed[k]) ? 1 : 0;
-  });
   std::vector<Footprint> held;  // the footprints whose beams fall on the terrain's data
   std::vector<bool> on_data;
-  for (std::size_t k = 0; k < count; ++k) {
-    on_data.push_back(placed_on_data[k] != 0);
-    if (on_data.back()) held.push_back(std::move(placed[k]));
+  for (std::int64_t shot = first; shot < last; ++shot) {
+    Footprint footprint = track_.locate_shot(shot, beam_index);
+    on_data.push_back(beam_on_terrain_data(terrain, lidar_, footprint));
+    if (on_data.back()) held.push_back(std::move(footprint));
   }
   if (held.empty()) return nullptr;
   const Footprint& middle = held[held.size() / 2];
