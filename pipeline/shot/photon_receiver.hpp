@@ -1,8 +1,10 @@
 // The photon-counting receiver (ICESat-2's ATLAS), the Receiver interface's second
-// implementation, registered as "photon_counting": the shot's received power becomes photon
-// events (pipeline/transport/photon_counting.hpp) with the sun's background at the shot's time
-// and place and the detector's dead time; each event is geolocated on the beam's axis and
-// carries its truth. The record keeps the waveform receiver's fields too (the expected return).
+// implementation, registered as "photon_counting": the energy the transport scored in each bin
+// before the pulse becomes photon events, each spread by the pulse
+// (pipeline/transport/photon_counting.hpp), with the sun's background at the shot's time and
+// place and the detector's dead time; each event is geolocated on the beam's axis and carries
+// its truth. The record keeps the waveform receiver's fields too (the expected return, or its
+// energies alone when nothing reads the waveforms).
 #pragma once
 
 #include "pipeline/shot/receiver.hpp"

@@ -1,8 +1,9 @@
-// The physics of a photon-counting receiver (ICESat-2's ATLAS): the simulated received power
+// The physics of a photon-counting receiver (ICESat-2's ATLAS): the simulated received energy
 // becomes expected photon counts, the sun adds a background rate, photon events are drawn as
-// Poisson counts keyed by (seed, shot, beam, bin), and each detector channel's dead time removes
-// events as a non-paralysable counter does. Pure functions: the receiver of pipeline/shot/ feeds
-// them a shot's binned returns and geolocates the events they give back.
+// Poisson counts keyed by (seed, shot, beam, bin) and spread by the pulse, and each detector
+// channel's dead time removes events as a non-paralysable counter does. Pure functions: the
+// receiver of pipeline/shot/ feeds them a shot's binned returns and geolocates the events they give
+// back.
 #pragma once
 
 #include <cstdint>
@@ -101,7 +102,7 @@ struct PhotonDraw {
   // index in the grid (< 2^24 - 1). The sources' means are given for the grid's bins
   // `signal_bins` (increasing: a shot's return scores a few dozen of the grid's thousands of
   // bins, and the caller passes those), or for its bins from 0 on when there are none.
-  std::span<const std::uint32_t> signal_bins;
+  std::span<const std::uint32_t> signal_bins{};
   int grid_offset_bins = 0;
   // The pulse that spreads each signal photon's time: a Gaussian of this standard deviation
   // (the sources' means being the energies scored before the pulse), photons it moves out of
