@@ -524,6 +524,7 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
   std::vector<std::uint32_t> scored_bins(tally.bins.begin(), tally.bins.end());
   std::sort(scored_bins.begin(), scored_bins.end());
   ScoredReturns& scored = waveforms.scored;
+  if (options.scored_energies) scored.bins = scored_bins;
   auto slice = [&](const std::vector<double>& flat, std::size_t row, double scale) {
     std::vector<double> energy_J(flat.begin() + row * tally.size,
                                  flat.begin() + (row + 1) * tally.size);
@@ -546,7 +547,6 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
                          lidar.sensor().telescope_area_m2 * lidar.fov_fraction() /
                          (std::numbers::pi * range_m * range_m) / rays;
     if (options.scored_energies) {
-      scored.bins = scored_bins;
       scored.total_J.push_back(scored_row(tally.total, tally.size, band, scored_bins, scale));
       scored.canopy_J.push_back(scored_row(tally.canopy, tally.size, band, scored_bins, scale));
       scored.ground_J.push_back(scored_row(tally.ground, tally.size, band, scored_bins, scale));
