@@ -48,6 +48,9 @@ std::uint8_t draw_channel(RandomStream& random, int channels) {
       std::min(channels - 1, static_cast<int>(random.uniform() * channels)));
 }
 
+// The range window's length.
+double window_ns(const PhotonDraw& draw) { return static_cast<double>(draw.bins) * draw.bin_ns; }
+
 // The sources' bins: their common length, checked with the draw's other inputs.
 std::size_t checked_bins(const PhotonDraw& draw, std::span<const PhotonSource> sources) {
   const std::size_t bins = sources.empty() ? 0 : sources.front().mean_per_bin.size();
@@ -76,7 +79,7 @@ void draw_bin(const PhotonDraw& draw, std::span<const PhotonSource> sources, std
   const std::size_t bin = draw.signal_bins.empty() ? entry : draw.signal_bins[entry];
   RandomStream random = streams.at(bin);
   const double count = poisson(random, total);
-  const double window_ns = static_cast<double>(draw.bins) * draw.bin_ns;
+  const double window_length_ns = window_ns(draw);
   const double grid_bin = static_cast<double>(draw.grid_offset_bins) + static_cast<double>(bin);
   for (double k = 0.0; k < count; k += 1.0) {
     double pick = random.uniform() * total;
@@ -88,7 +91,7 @@ void draw_bin(const PhotonDraw& draw, std::span<const PhotonSource> sources, std
     double time_ns = (grid_bin + random.uniform()) * draw.bin_ns;
     if (draw.pulse_sigma_ns > 0.0) time_ns += draw.pulse_sigma_ns * standard_normal(random);
     const std::uint8_t channel = draw_channel(random, draw.channels);
-    if (time_ns >= 0.0 && time_ns < window_ns)
+    if (time_ns >= 0.0 && time_ns < window_length_ns)
       events.push_back({time_ns, sources[source].truth_class, sources[source].order, channel});
   }
 }
@@ -133,12 +136,12 @@ std::vector<PhotonEvent> draw_photons(const PhotonDraw& draw,
   for (std::size_t entry = 0; entry < bins; ++entry)
     if (totals[entry] > negligible_mean)
       draw_bin(draw, sources, entry, totals[entry], streams, events);
-  const double window_ns = static_cast<double>(draw.bins) * draw.bin_ns;
+  const double window_length_ns = window_ns(draw);
   if (draw.background_rate_Hz > 0.0) {
     RandomStream random = photon_stream(draw, background_key);
-    const double count = poisson(random, draw.background_rate_Hz * window_ns * 1e-9);
+    const double count = poisson(random, draw.background_rate_Hz * window_length_ns * 1e-9);
     for (double k = 0.0; k < count; k += 1.0) {
-      const double time_ns = random.uniform() * window_ns;
+      const double time_ns = random.uniform() * window_length_ns;
       events.push_back({time_ns, PhotonTruth::background, 0, draw_channel(random, draw.channels)});
     }
   }
