@@ -15,9 +15,14 @@
 namespace glaswave {
 
 FacetModel::FacetModel(FacetMesh mesh, std::vector<int> triangle_materials)
-    : vertices_m_(std::move(mesh.vertices_m)),
-      triangles_(std::move(mesh.triangles)),
-      materials_(std::move(triangle_materials)) {
+    : vertices_m_(std::move(mesh.vertices_m)), triangles_(std::move(mesh.triangles)) {
+  if (triangle_materials.size() != triangles())
+    throw run_error("facet model", "a material for each of its " + std::to_string(triangles()) +
+                                       " triangles is needed, " +
+                                       std::to_string(triangle_materials.size()) + " were given");
+  for (std::size_t t = 0; t < triangle_materials.size(); ++t)
+    if (material_runs_.empty() || material_runs_.back().material != triangle_materials[t])
+      material_runs_.push_back({static_cast<unsigned>(t), triangle_materials[t]});
   top_m_ = -std::numeric_limits<double>::infinity();
   bottom_m_ = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i + 2 < vertices_m_.size(); i += 3) {
@@ -34,17 +39,30 @@ FacetModel::FacetModel(FacetMesh mesh, std::vector<int> triangle_materials)
       low[axis] = std::min(low[axis], double{vertices_m_[i + axis]});
       high[axis] = std::max(high[axis], double{vertices_m_[i + axis]});
     }
-  cell_m_ = std::max({min_area_cell_m, (high[0] - low[0]) / 512.0, (high[1] - low[1]) / 512.0});
+  AreaGrid& grid = area_grid_;
+  grid.cell_m = std::max({min_area_cell_m, (high[0] - low[0]) / 512.0, (high[1] - low[1]) / 512.0});
+  std::int64_t first[2] = {0, 0};
+  for (int axis = 0; axis < 2 && !triangles_.empty(); ++axis) {
+    first[axis] = static_cast<std::int64_t>(std::floor(low[axis] / grid.cell_m));
+    grid.first_centre_m[axis] = (static_cast<double>(first[axis]) + 0.5) * grid.cell_m;
+  }
   // Cells keyed by their indices, in the order first met: the same cells for the same mesh.
+  // Every centroid lies within the vertices' bounds, so that at most 514 columns and rows hold
+  // them; the clamp only guards a rounding at the last one.
   std::unordered_map<std::int64_t, std::size_t> cells;
   auto add = [&](const Vec3& point, double area) {
-    const auto i = static_cast<std::int64_t>(std::floor(point[0] / cell_m_));
-    const auto j = static_cast<std::int64_t>(std::floor(point[1] / cell_m_));
-    const auto [entry, added] = cells.emplace((i << 32) ^ (j & 0xffffffff), area_cells_.size());
-    if (added)
-      area_cells_.push_back(
-          {static_cast<float>((i + 0.5) * cell_m_), static_cast<float>((j + 0.5) * cell_m_), 0.0f});
-    area_cells_[entry->second].area_m2 += static_cast<float>(area);
+    std::int64_t index[2];
+    for (int axis = 0; axis < 2; ++axis)
+      index[axis] = std::clamp<std::int64_t>(
+          static_cast<std::int64_t>(std::floor(point[axis] / grid.cell_m)) - first[axis], 0, 513);
+    const auto [entry, added] = cells.emplace(index[0] * 1024 + index[1], grid.cells.size());
+    if (added) {
+      grid.cells.push_back(
+          {static_cast<std::uint16_t>(index[0]), static_cast<std::uint16_t>(index[1]), 0.0f});
+      grid.columns = std::max(grid.columns, static_cast<int>(index[0]) + 1);
+      grid.rows = std::max(grid.rows, static_cast<int>(index[1]) + 1);
+    }
+    grid.cells[entry->second].area_m2 += static_cast<float>(area);
   };
   for (std::size_t t = 0; t + 2 < triangles_.size(); t += 3) {
     Vec3 p[3];
@@ -58,7 +76,7 @@ FacetModel::FacetModel(FacetMesh mesh, std::vector<int> triangle_materials)
     // A triangle wider than a cell is cut into n^2 equal ones (n along each edge), each
     // gathered at its centroid.
     const double longest = std::max({norm(e1), norm(e2), norm(p[2] - p[1])});
-    const int n = std::max(1, static_cast<int>(std::ceil(longest / cell_m_)));
+    const int n = std::max(1, static_cast<int>(std::ceil(longest / grid.cell_m)));
     const double part = area / (double(n) * n);
     for (int i = 0; i < n; ++i)
       for (int j = 0; i + j < n; ++j) {
@@ -106,7 +124,8 @@ RTCSceneTy* FacetModel::scene_on(const RayDevice& device) const {
 double FacetModel::bytes() const {
   // Embree's BVH of triangles takes about 100 bytes a triangle at medium quality.
   return vertices_m_.size() * sizeof(float) + triangles_.size() * sizeof(std::uint32_t) +
-         materials_.size() * (sizeof(int) + 100.0) + area_cells_.size() * sizeof(AreaCell);
+         material_runs_.size() * sizeof(MaterialRun) + triangles() * 100.0 +
+         area_grid_.cells.size() * sizeof(AreaCell);
 }
 
 }  // namespace glaswave

@@ -4,6 +4,8 @@
 // trees of one model holds the model's triangles and their BVH once.
 #pragma once
 
+#include <algorithm>
+#include <iterator>
 #include <map>
 #include <mutex>
 #include <vector>
@@ -29,8 +31,15 @@ class FacetModel {
   // the same scene after.
   RTCSceneTy* scene_on(const RayDevice& device) const;
 
-  std::size_t triangles() const { return materials_.size(); }
-  int material(unsigned triangle) const { return materials_[triangle]; }
+  std::size_t triangles() const { return triangles_.size() / 3; }
+  // A mesh's triangles come grouped by material (a mesh of the file each): the runs are few and
+  // in cache, where a table of 10^5 materials missed it on nearly every hit.
+  int material(unsigned triangle) const {
+    const auto run =
+        std::upper_bound(material_runs_.begin(), material_runs_.end(), triangle,
+                         [](unsigned t, const MaterialRun& r) { return t < r.first_triangle; });
+    return std::prev(run)->material;
+  }
   double reach_m() const { return reach_m_; }  // farthest vertex from the vertical axis
   double top_m() const { return top_m_; }
   double bottom_m() const { return bottom_m_; }
@@ -38,11 +47,21 @@ class FacetModel {
   // The one-sided area of the model's triangles gathered on a horizontal grid of cells (0.25 m,
   // or 1/512 of the model's width when larger) by their centroids, a triangle wider than a cell
   // cut into smaller ones: the truth's plant area under a beam without a look at every triangle.
+  // A cell is its column and row of the grid, whose cell (0, 0) has its centre at
+  // (first_centre_m, first_centre_m), so that a weight separable in x and y costs one value a
+  // column and a row.
   struct AreaCell {
-    float x_m, y_m, area_m2;
+    std::uint16_t column, row;
+    float area_m2;
+  };
+  struct AreaGrid {
+    double cell_m = min_area_cell_m;
+    double first_centre_m[2] = {0.0, 0.0};
+    int columns = 0, rows = 0;
+    std::vector<AreaCell> cells;
   };
   static constexpr double min_area_cell_m = 0.25;
-  const std::vector<AreaCell>& area_cells() const { return area_cells_; }
+  const AreaGrid& area_grid() const { return area_grid_; }
   double area_m2() const { return area_m2_; }
 
   // Bytes the model holds (its mesh, and an estimate of one BVH).
@@ -51,10 +70,13 @@ class FacetModel {
  private:
   std::vector<float> vertices_m_;  // Embree reads them in place: one float of padding at the end
   std::vector<std::uint32_t> triangles_;
-  std::vector<int> materials_;
-  std::vector<AreaCell> area_cells_;
+  struct MaterialRun {
+    unsigned first_triangle;
+    int material;
+  };
+  std::vector<MaterialRun> material_runs_;  // by first triangle; the first run starts at 0
+  AreaGrid area_grid_;
   double area_m2_ = 0.0;
-  double cell_m_ = min_area_cell_m;
   double reach_m_ = 0.0, top_m_ = 0.0, bottom_m_ = 0.0;
   mutable std::mutex mutex_;
   mutable std::map<RTCDeviceTy*, RTCSceneTy*> scenes_;  // each device retained while held

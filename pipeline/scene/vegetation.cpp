@@ -178,14 +178,30 @@ VegetationTruth measure_facets(const Scene& scene, const BeamSpot& spot) {
   VegetationTruth truth;
   if (scene.facets().empty()) return truth;
   const double two_sigma_sq = 2.0 * sigma_m * sigma_m;
+  // The beam's weight at a cell is a Gaussian of the cell's distance from the spot, which a
+  // rotation leaves: taken in the model's frame, about the spot turned into it, it is separable
+  // along the model's grid, one exponential a column and a row where it was one a cell.
+  std::vector<double> column_weight, row_weight;
   for (const FacetInstance& tree : scene.facets()) {
     const double c = std::cos(tree.rotation_rad), s = std::sin(tree.rotation_rad);
     const double scale_sq = tree.scale * tree.scale;
-    for (const FacetModel::AreaCell& cell : tree.model->area_cells()) {
-      const double x = tree.foot_m[0] + tree.scale * (c * cell.x_m + s * cell.y_m) - spot.x_m;
-      const double y = tree.foot_m[1] + tree.scale * (-s * cell.x_m + c * cell.y_m) - spot.y_m;
-      truth.pai += cell.area_m2 * scale_sq * std::exp(-(x * x + y * y) / two_sigma_sq);
-    }
+    // The model places its point q at foot + scale (c qx + s qy, -s qx + c qy).
+    const double dx = spot.x_m - tree.foot_m[0], dy = spot.y_m - tree.foot_m[1];
+    const double spot_model[2] = {(c * dx - s * dy) / tree.scale, (s * dx + c * dy) / tree.scale};
+    const FacetModel::AreaGrid& grid = tree.model->area_grid();
+    const auto weights = [&](int axis, int count, std::vector<double>& weight) {
+      weight.resize(static_cast<std::size_t>(count));
+      for (int k = 0; k < count; ++k) {
+        const double u = grid.first_centre_m[axis] + k * grid.cell_m - spot_model[axis];
+        weight[static_cast<std::size_t>(k)] = std::exp(-scale_sq * u * u / two_sigma_sq);
+      }
+    };
+    weights(0, grid.columns, column_weight);
+    weights(1, grid.rows, row_weight);
+    double area_m2 = 0.0;
+    for (const FacetModel::AreaCell& cell : grid.cells)
+      area_m2 += cell.area_m2 * column_weight[cell.column] * row_weight[cell.row];
+    truth.pai += scale_sq * area_m2;
   }
   truth.pai /= std::numbers::pi * two_sigma_sq;
   constexpr int max_crossings = 100000;

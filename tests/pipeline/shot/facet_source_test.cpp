@@ -11,6 +11,8 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "pipeline/scene/scene.hpp"
+#include "pipeline/scene/vegetation.hpp"
 #include "tests/pipeline/shot/shot_test_support.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -147,6 +149,34 @@ TEST(FacetSource, TreesFromCsvAndAnyOgrLayerStandWhereTheySay) {
   EXPECT_NEAR(utm.foot_m[1], 0.0, 0.01);
   EXPECT_NEAR(utm.rotation_rad, std::numbers::pi / 4, 1e-12);
   EXPECT_EQ(utm.scale, 1.5);
+}
+
+// The truth's plant area of one small plate, turned and scaled, away from the beam's centre:
+// a 0.5 m square centred 2 m east and 10 m north of its model's origin (0.25 m^2), a tree at
+// (3, -4) turned 90 degrees (north to east) at scale 2, puts 1 m^2 of plate at (23, -8). Under
+// a beam of RMS radius 10 m centred at (13, 1), the PAI is 1 m^2 exp(-181 / 200) /
+// (2 pi 10^2) = 6.44e-4; the plate turned the other way (at -17, 0) or not at all (at 7, 16)
+// would give 1.8e-5 or 4.3e-4. To 0.5 %: the area is gathered at 0.25 m cells' centres, which
+// the plate's own centre lies between.
+TEST(FacetSource, TruthWeighsATurnedScaledTreeWhereItStands) {
+  test_support::ScratchDir dir;
+  write(dir.path() / "plate.mtl", "newmtl leaf\n");
+  write(dir.path() / "plate.obj",
+        "mtllib plate.mtl\nv 1.75 9.75 1\nv 2.25 9.75 1\nv 2.25 10.25 1\nv 1.75 10.25 1\n"
+        "usemtl leaf\nf 1 2 3\nf 1 3 4\n");
+  VegetationSettings settings = plate_settings(dir.path());
+  write(dir.path() / "trees.csv", "x,y,model,rotation_deg,scale\n3,-4,plate,90,2\n");
+  const std::unique_ptr<VegetationSource> source = make_vegetation_source(settings);
+  const std::unique_ptr<Terrain> terrain = plane_terrain(0.0);
+  const LocalFrame frame({kLat0, kLon0, 0.0});
+  const RegionVegetation grown = source->grow({*terrain, frame, 50.0, {}, 1});
+  ASSERT_EQ(grown.geometry.facets.size(), 1u);
+  const RayDevice device;
+  const Scene scene(device, GroundMesh{}, grown.geometry);
+  const double sigma_m = 10.0;
+  const VegetationTruth truth = source->truth(scene, {13.0, 1.0, sigma_m});
+  const double expected = std::exp(-0.905) / (2.0 * std::numbers::pi * sigma_m * sigma_m);
+  EXPECT_NEAR(truth.pai / expected, 1.0, 0.005) << truth.pai;
 }
 
 std::string refusal(const VegetationSettings& settings) {
