@@ -17,6 +17,9 @@ namespace {
 constexpr unsigned ground_geometry = 0;
 // Trunks are geometry 1; facet tree k is instance geometry first_facet + k.
 constexpr unsigned first_facet = 2;
+// Ray masks: the ground's bit, and every other surface's; a ray for the ground alone skips the
+// trees at the instances' level.
+constexpr unsigned ground_mask = 1u, vegetation_mask = 2u;
 
 void check_device(RTCDevice device, const char* what) {
   const RTCError code = rtcGetDeviceError(device);
@@ -35,6 +38,7 @@ void attach_mesh(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsig
   check_device(device, "allocating a mesh");
   std::memcpy(vertices, mesh.vertices_m.data(), mesh.vertices_m.size() * sizeof(float));
   std::memcpy(triangles, mesh.triangles.data(), mesh.triangles.size() * sizeof(unsigned));
+  rtcSetGeometryMask(geometry, id == ground_geometry ? ground_mask : vegetation_mask);
   rtcCommitGeometry(geometry);
   rtcAttachGeometryByID(scene, geometry, id);
   rtcReleaseGeometry(geometry);
@@ -60,6 +64,7 @@ void attach_facet(const RayDevice& device, RTCScene scene, const FacetInstance& 
                                static_cast<float>(tree.foot_m[1]),
                                static_cast<float>(tree.foot_m[2])};
   rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
+  rtcSetGeometryMask(geometry, vegetation_mask);
   rtcCommitGeometry(geometry);
   rtcAttachGeometryByID(scene, geometry, id);
   rtcReleaseGeometry(geometry);
@@ -204,7 +209,7 @@ Scene::~Scene() {
 namespace {
 
 RTCRay make_ray(const Vec3& origin, const Vec3& direction, double min_distance_m,
-                double max_distance_m) {
+                double max_distance_m, unsigned mask = std::numeric_limits<unsigned>::max()) {
   RTCRay ray{};
   ray.org_x = static_cast<float>(origin[0]);
   ray.org_y = static_cast<float>(origin[1]);
@@ -214,7 +219,7 @@ RTCRay make_ray(const Vec3& origin, const Vec3& direction, double min_distance_m
   ray.dir_z = static_cast<float>(direction[2]);
   ray.tnear = static_cast<float>(min_distance_m);
   ray.tfar = static_cast<float>(max_distance_m);
-  ray.mask = std::numeric_limits<unsigned>::max();
+  ray.mask = mask;
   return ray;
 }
 
@@ -222,10 +227,21 @@ RTCRay make_ray(const Vec3& origin, const Vec3& direction, double min_distance_m
 
 SurfaceHit Scene::intersect(const Vec3& origin, const Vec3& direction, double max_distance_m,
                             double min_distance_m) const {
+  return nearest(origin, direction, max_distance_m, min_distance_m,
+                 std::numeric_limits<unsigned>::max());
+}
+
+SurfaceHit Scene::ground_hit(const Vec3& origin, const Vec3& direction,
+                             double max_distance_m) const {
+  return nearest(origin, direction, max_distance_m, 0.0, ground_mask);
+}
+
+SurfaceHit Scene::nearest(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                          double min_distance_m, unsigned mask) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit query{};
-  query.ray = make_ray(origin, direction, min_distance_m, max_distance_m);
+  query.ray = make_ray(origin, direction, min_distance_m, max_distance_m, mask);
   query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(surfaces_, &context, &query);

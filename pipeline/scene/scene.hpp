@@ -94,6 +94,10 @@ class Scene {
   SurfaceHit intersect(const Vec3& origin, const Vec3& direction, double max_distance_m,
                        double min_distance_m = 0.0) const;
 
+  // The ground alone along the ray within (0, max_distance_m]: what lies above it is passed
+  // without a look.
+  SurfaceHit ground_hit(const Vec3& origin, const Vec3& direction, double max_distance_m) const;
+
   // Whether any surface lies along the ray within (min_distance_m, max_distance_m).
   bool occluded(const Vec3& origin, const Vec3& direction, double max_distance_m,
                 double min_distance_m) const;
@@ -116,6 +120,8 @@ class Scene {
   const std::vector<FacetInstance>& facets() const { return facets_; }
 
  private:
+  SurfaceHit nearest(const Vec3& origin, const Vec3& direction, double max_distance_m,
+                     double min_distance_m, unsigned mask) const;
   void collect_spans(const Vec3& origin, const Vec3& direction, double max_distance_m,
                      std::vector<VolumeSpan>& spans, double depth,
                      const std::vector<double>* extinction_per_density) const;

@@ -204,7 +204,6 @@ VegetationTruth measure_facets(const Scene& scene, const BeamSpot& spot) {
     truth.pai += scale_sq * area_m2;
   }
   truth.pai /= std::numbers::pi * two_sigma_sq;
-  constexpr int max_crossings = 100000;
   const double step_m = 3.0 * sigma_m / half_nodes;
   const double start_m = scene.top_m() + 1.0;
   const Vec3 down{0.0, 0.0, -1.0};
@@ -220,12 +219,8 @@ VegetationTruth measure_facets(const Scene& scene, const BeamSpot& spot) {
       if (first.kind == SurfaceKind::ground) continue;
       truth.cover += weight;
       if (r_sq > 4.0 * sigma_m * sigma_m) continue;
-      // Down through the facets to the ground, for the height of the first above it.
-      SurfaceHit below = first;
-      for (int k = 0; k < max_crossings && below.kind != SurfaceKind::none &&
-                      below.kind != SurfaceKind::ground;
-           ++k)
-        below = scene.intersect(origin, down, 1.0e5, below.distance_m + 1e-4);
+      // The ground under the first facet, for the facet's height above it.
+      const SurfaceHit below = scene.ground_hit(origin, down, 1.0e5);
       if (below.kind == SurfaceKind::ground)
         truth.canopy_height_m =
             std::max(truth.canopy_height_m, below.distance_m - first.distance_m);
