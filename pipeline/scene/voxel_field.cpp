@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <mutex>
 
 #include "canopy/voxel_grid.hpp"
 #include "core/error.hpp"
@@ -42,13 +44,15 @@ void VoxelField::pack() {
   if (columns_n == 0 || nz <= 0 || packed()) return;
   if (pad.size() > std::numeric_limits<std::uint32_t>::max()) return;  // the traversal reads `pad`
   columns.clear();
-  column_pad.clear();
-  column_pad.reserve(pad.size());  // at most all of it: only the pages written become resident
-  pack_columns(pad.data(), columns_n);
+  auto block = std::make_shared<std::vector<float>>();
+  block->reserve(pad.size());  // at most all of it: only the pages written become resident
+  pack_columns(pad.data(), columns_n, nz, 0, columns, *block);
+  blocks = {std::move(block)};
   std::vector<float>().swap(pad);
 }
 
-void VoxelField::pack_columns(const float* layers, std::size_t count) {
+void VoxelField::pack_columns(const float* layers, std::size_t count, int nz, std::uint32_t block,
+                              std::vector<Column>& columns, std::vector<float>& block_pad) {
   // By tiles of columns: a tile's row of a layer is a page of floats (read whole, in memory
   // order), turned column by column in a buffer that stays in cache; then each column's
   // stretch is found in it and copied out.
@@ -69,8 +73,8 @@ void VoxelField::pack_columns(const float* layers, std::size_t count) {
         first = end = 0;  // an empty column
       else
         while (!(from[end - 1] > 0.0f)) --end;
-      columns.push_back({static_cast<std::uint32_t>(column_pad.size()), first, end});
-      column_pad.insert(column_pad.end(), from + first, from + end);
+      columns.push_back({static_cast<std::uint32_t>(block_pad.size()), first, end, block});
+      block_pad.insert(block_pad.end(), from + first, from + end);
     }
   }
 }
@@ -112,7 +116,7 @@ struct PackedColumns {
   const VoxelField& f;
   ColumnView operator()(std::size_t column) const {
     const VoxelField::Column& c = f.columns[column];
-    return {f.column_pad.data() + c.offset, 1, c.first, c.first, c.end};
+    return {f.blocks[c.block]->data() + c.offset, 1, c.first, c.first, c.end};
   }
 };
 
@@ -317,14 +321,105 @@ void fill_ground(VoxelField& f, const LocalFrame& frame, const Terrain& terrain,
   }
 }
 
+// A tile of the grid, packed: its columns (row by row, tile-local offsets into `pad`).
+struct PackedTile {
+  int ni = 0, nj = 0;
+  std::vector<VoxelField::Column> columns;
+  std::shared_ptr<const std::vector<float>> pad;
+  std::size_t bytes() const {
+    return columns.size() * sizeof(VoxelField::Column) + pad->size() * sizeof(float);
+  }
+};
+
 struct VoxelFieldSource::Impl {
   const VoxelGridFile* grid;
   std::string place;
   std::unique_ptr<CrsTransform> crs;
+
+  // A tile's place in the cache: loaded once, by the first field that needs it (the others that
+  // need it meanwhile wait on `loading`); dropped from the cache when least recently used.
+  struct Slot {
+    std::mutex loading;
+    std::shared_ptr<const PackedTile> tile;  // set once loaded
+    std::uint64_t last_used = 0;             // under the cache's mutex, as the two below
+    bool cached = true;
+    std::size_t bytes = 0;
+  };
+  std::mutex mutex;
+  std::map<std::pair<int, int>, std::shared_ptr<Slot>> slots;
+  std::uint64_t uses = 0;
+  std::size_t cached_bytes = 0, max_cached_bytes = max_tile_cache_bytes;
+
+  std::shared_ptr<const PackedTile> load(int ti, int tj) const {
+    const VoxelBlock& shape = grid->shape();
+    const int i0 = ti * tile_columns, j0 = tj * tile_columns;
+    const int ni = std::min(tile_columns, shape.nx - i0),
+              nj = std::min(tile_columns, shape.ny - j0);
+    const VoxelBlock block = grid->columns(i0, ni, j0, nj);
+    auto tile = std::make_shared<PackedTile>();
+    tile->ni = ni;
+    tile->nj = nj;
+    auto pad = std::make_shared<std::vector<float>>();
+    VoxelField::pack_columns(block.pad.data(), static_cast<std::size_t>(ni) * nj, shape.nz, 0,
+                             tile->columns, *pad);
+    pad->shrink_to_fit();
+    tile->pad = std::move(pad);
+    return tile;
+  }
+
+  // The tiles (ti0..ti1) x (tj0..tj1), row by row, each loaded once and kept while the cache
+  // holds it. Thread-safe.
+  std::vector<std::shared_ptr<const PackedTile>> tiles(int ti0, int ti1, int tj0, int tj1) {
+    std::vector<std::shared_ptr<Slot>> held;
+    {
+      const std::lock_guard lock(mutex);
+      for (int tj = tj0; tj <= tj1; ++tj)
+        for (int ti = ti0; ti <= ti1; ++ti) {
+          std::shared_ptr<Slot>& slot = slots[{ti, tj}];
+          if (!slot) slot = std::make_shared<Slot>();
+          slot->last_used = ++uses;
+          held.push_back(slot);
+        }
+    }
+    std::vector<std::shared_ptr<const PackedTile>> found;
+    for (std::size_t k = 0; k < held.size(); ++k) {
+      Slot& slot = *held[k];
+      const std::lock_guard loading(slot.loading);
+      if (!slot.tile) {
+        const int ti = ti0 + static_cast<int>(k) % (ti1 - ti0 + 1);
+        const int tj = tj0 + static_cast<int>(k) / (ti1 - ti0 + 1);
+        slot.tile = load(ti, tj);
+        const std::lock_guard lock(mutex);
+        if (slot.cached) {
+          slot.bytes = slot.tile->bytes();
+          cached_bytes += slot.bytes;
+        }
+      }
+      found.push_back(slot.tile);
+    }
+    evict();
+    return found;
+  }
+
+  // The least recently used tiles out of the cache while it holds more than its bytes (the
+  // fields that hold them keep them until they end).
+  void evict() {
+    const std::lock_guard lock(mutex);
+    while (cached_bytes > max_cached_bytes && !slots.empty()) {
+      auto oldest = slots.begin();
+      for (auto slot = slots.begin(); slot != slots.end(); ++slot)
+        if (slot->second->last_used < oldest->second->last_used) oldest = slot;
+      oldest->second->cached = false;
+      cached_bytes -= oldest->second->bytes;
+      slots.erase(oldest);
+    }
+  }
 };
 
-VoxelFieldSource::VoxelFieldSource(const VoxelGridFile& grid, const std::string& place)
+VoxelFieldSource::VoxelFieldSource(const VoxelGridFile& grid, const std::string& place,
+                                   std::size_t tile_cache_bytes)
     : impl_(std::make_unique<Impl>()) {
+  impl_->max_cached_bytes = tile_cache_bytes;
   impl_->grid = &grid;
   impl_->place = place;
   impl_->crs = std::make_unique<CrsTransform>(grid.shape().crs_wkt, "ellipsoid", place);
@@ -370,15 +465,23 @@ std::shared_ptr<const VoxelField> VoxelFieldSource::field(const LocalFrame& fram
   field->nz = shape.nz;
   field->z_edges_m = shape.z_edges_m;
   fill_ground(*field, frame, terrain, std::min(cell_i_m, cell_j_m));
-  // Read and packed by bands of rows of about a MiB, which stay in cache between the two: the
-  // window is never held whole, layer by layer.
-  const std::size_t row_floats = static_cast<std::size_t>(ni) * shape.nz;
-  const int band = static_cast<int>(std::max<std::size_t>(1, (std::size_t{1} << 18) / row_floats));
-  field->columns.reserve(static_cast<std::size_t>(ni) * nj);
-  field->column_pad.reserve(row_floats * nj);  // at most: only the pages written are resident
-  for (int j = 0; j < nj; j += band) {
-    const VoxelBlock rows = impl_->grid->columns(i0, ni, j0 + j, std::min(band, nj - j));
-    field->pack_columns(rows.pad.data(), static_cast<std::size_t>(rows.nx) * rows.ny);
+  // The window's columns from the grid's packed tiles, which the field shares.
+  const int t = tile_columns;
+  const int ti0 = i0 / t, ti1 = (i0 + ni - 1) / t, tj0 = j0 / t, tj1 = (j0 + nj - 1) / t;
+  const std::vector<std::shared_ptr<const PackedTile>> tiles = impl_->tiles(ti0, ti1, tj0, tj1);
+  const int tiles_across = ti1 - ti0 + 1;
+  for (const auto& tile : tiles) field->blocks.push_back(tile->pad);
+  field->columns.resize(static_cast<std::size_t>(ni) * nj);
+  for (int j = 0; j < nj; ++j) {
+    const int tj = (j0 + j) / t, b = (j0 + j) % t;
+    for (int i = 0; i < ni; ++i) {
+      const int ti = (i0 + i) / t, a = (i0 + i) % t;
+      const auto block = static_cast<std::size_t>((tj - tj0) * tiles_across + (ti - ti0));
+      const PackedTile& tile = *tiles[block];
+      VoxelField::Column column = tile.columns[static_cast<std::size_t>(b) * tile.ni + a];
+      column.block = static_cast<std::uint32_t>(block);
+      field->columns[static_cast<std::size_t>(j) * ni + i] = column;
+    }
   }
   return field;
 }

@@ -36,16 +36,19 @@ struct VoxelField {
   std::vector<double> ground_m;   // local height of the ground under each column, [j * nx + i]
   std::vector<float> pad;         // m^2/m^3 at [(k * ny + j) * nx + i]; empty once packed
   int material = 0;               // the foliage of every voxel
-  // The grid column by column, once pack() has run: column c's layers from its lowest non-empty
-  // one to its highest, [first, end) (first == end: an empty column), at column_pad[offset] on.
+  // The grid column by column, once packed: column c's layers from its lowest non-empty one to
+  // its highest, [first, end) (first == end: an empty column), at (*blocks[block])[offset] on.
   // A ray down a column then reads consecutive floats where the layers of `pad` lie nx * ny
-  // floats apart (a cache miss a voxel, most of a shot's time), and skips the empty layers.
+  // floats apart (a cache miss a voxel, most of a shot's time), and skips the empty layers. A
+  // field packed from its own `pad` holds one block; the fields a grid file serves share its
+  // tiles' blocks (VoxelFieldSource), so that a shot packs only the columns no shot has before.
   struct Column {
     std::uint32_t offset = 0;
     std::int32_t first = 0, end = 0;
+    std::uint32_t block = 0;
   };
   std::vector<Column> columns;
-  std::vector<float> column_pad;
+  std::vector<std::shared_ptr<const std::vector<float>>> blocks;
   // The lowest bottom and highest top of any column (local frame), set with the ground by
   // fill_ground: a ray is traversed only between them (unbounded when not set).
   double bottom_m = -std::numeric_limits<double>::infinity();
@@ -54,14 +57,14 @@ struct VoxelField {
   // Highest point of any non-empty voxel (local frame); -infinity for an empty field.
   double top_m() const;
 
-  // Moves `pad` into `columns` and `column_pad` (and frees it): the traversal and top_m give the
+  // Moves `pad` into `columns` and one block (and frees it): the traversal and top_m give the
   // same values, to the bit, packed or not.
   void pack();
   bool packed() const { return !columns.empty(); }
-  // Packs `count` more columns (the next in [j * nx + i] order) from their layers given layer by
-  // layer (layer k of the c-th at layers[k * count + c]): a field packed by bands of rows,
-  // without `pad`.
-  void pack_columns(const float* layers, std::size_t count);
+  // Packs `count` columns of `nz` layers, given layer by layer (layer k of the c-th at
+  // layers[k * count + c]), onto `columns` (each of block `block`) and `block_pad`.
+  static void pack_columns(const float* layers, std::size_t count, int nz, std::uint32_t block,
+                           std::vector<Column>& columns, std::vector<float>& block_pad);
 };
 
 // Appends to `spans` every stretch of origin + t * direction, t in [0, max_distance_m], inside a
@@ -81,12 +84,19 @@ void fill_ground(VoxelField& field, const LocalFrame& frame, const Terrain& terr
 
 // A voxel grid file placed under shots: for each shot, the window of the grid within
 // `half_size_m` of the footprint, carried into the shot's frame, each column standing on the
-// terrain under its centre.
+// terrain under its centre. The grid is read and packed by tiles of tile_columns x tile_columns
+// columns, kept (the least recently used dropped beyond max_tile_cache_bytes) and shared by the
+// shots' fields: consecutive shots' windows overlap, and a 1 m grid's window is 10^7 voxels,
+// which every shot read and packed anew (nearly all of a shot's fixed cost).
 class VoxelFieldSource {
  public:
   // `grid` must outlive this. Its CRS is read with PROJ; an input error naming `place` when PROJ
   // cannot use it.
-  VoxelFieldSource(const VoxelGridFile& grid, const std::string& place);
+  // `tile_cache_bytes`: the packed tiles kept between shots, at most (tests make it small).
+  static constexpr int tile_columns = 64;
+  static constexpr std::size_t max_tile_cache_bytes = std::size_t{256} << 20;
+  VoxelFieldSource(const VoxelGridFile& grid, const std::string& place,
+                   std::size_t tile_cache_bytes = max_tile_cache_bytes);
   ~VoxelFieldSource();
 
   // The field around the frame's origin (empty, nx = 0, when the grid does not reach it).

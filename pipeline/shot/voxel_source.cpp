@@ -96,23 +96,34 @@ GridShape grid_shape(const VegetationSettings& settings) {
 
 double VoxelSource::region_bytes(const VegetationSettings& settings, double side_m) {
   const GridShape g = grid_shape(settings);
-  const double columns = (side_m / g.cell_x_m + 1.0) * (side_m / g.cell_y_m + 1.0);
-  // The window's columns packed (at most all its floats: it is read by bands of a MiB, never
-  // held whole), the ground and the packed columns' index.
-  return std::min(columns, g.columns > 0.0 ? g.columns : columns) *
-             (g.layers * sizeof(float) + sizeof(double) + sizeof(VoxelField::Column)) +
-         double(std::size_t{1} << 20);
+  // The packed tiles the window meets (n columns meet at most ceil((n - 1) / t) + 1 tiles of t),
+  // all their layers at most, each with its columns' index; the window's ground under each
+  // column and its columns' index; one tile as read. A thread holds its window's tiles while
+  // its shot runs, even once the cache has dropped them.
+  const double t = VoxelFieldSource::tile_columns;
+  const double across_i = side_m / g.cell_x_m + 1.0, across_j = side_m / g.cell_y_m + 1.0;
+  const double tiles =
+      (std::ceil((across_i - 1.0) / t) + 1.0) * (std::ceil((across_j - 1.0) / t) + 1.0);
+  const double column_bytes = g.layers * sizeof(float) + sizeof(VoxelField::Column);
+  const double tile_columns = std::min(tiles * t * t, g.columns > 0.0 ? g.columns : tiles * t * t);
+  return tile_columns * column_bytes +
+         across_i * across_j * (sizeof(double) + sizeof(VoxelField::Column)) +
+         t * t * g.layers * sizeof(float);
 }
 
 double VoxelSource::source_bytes(const VegetationSettings& settings) {
   const GridShape g = grid_shape(settings);
-  if (settings.canopy.kind != "point_cloud") return g.cache_bytes;
+  // The packed tiles kept between shots: the whole grid, up to the cache's bytes.
+  const double tiles =
+      std::min(static_cast<double>(VoxelFieldSource::max_tile_cache_bytes),
+               g.columns * (g.layers * sizeof(float) + sizeof(VoxelField::Column)));
+  if (settings.canopy.kind != "point_cloud") return g.cache_bytes + tiles;
   // Reading: the ground points (three doubles each, at most every point) and a window of a
   // million points. Inverting: each voxel's weight (a double) and density (a float) at once.
   const double reading = g.points * 3.0 * sizeof(double) + (1 << 20) * sizeof(LasPoint);
   const double inverting = g.columns * ((g.inversion_layers + 1.0) * sizeof(double) +
                                         g.inversion_layers * sizeof(float) + 3.0 * sizeof(double));
-  return std::max(reading, inverting);
+  return std::max(reading, inverting) + tiles;
 }
 
 }  // namespace glaswave

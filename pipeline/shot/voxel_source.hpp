@@ -27,13 +27,14 @@ class VoxelSource : public VegetationSource {
 
   const VoxelGridFile& grid() const { return *grid_; }
 
-  // A region `side_m` across: its columns (of the grid's size, as the file's header gives it)
-  // of the grid's layers of 4 bytes (packed: VoxelField::pack_columns, from a band of rows of a
-  // MiB read at a time), the ground under each (a double) and its packed column's index.
+  // A region `side_m` across: the grid's packed tiles it meets (VoxelFieldSource, all the grid's
+  // layers of 4 bytes a column at most, as the file's header gives them), the ground under each
+  // column (a double) and the columns' index.
   static double region_bytes(const VegetationSettings& settings, double side_m);
   // What the source holds once: a NetCDF grid's decompressed chunks (VoxelGridFile::
   // read_cache_bytes); a point cloud's voxelisation when the run starts (its peak: the ground
-  // points, or each voxel's weight and density; the grid it leaves is less).
+  // points, or each voxel's weight and density; the grid it leaves is less); and the packed
+  // tiles kept between shots (the whole grid, up to VoxelFieldSource::max_tile_cache_bytes).
   static double source_bytes(const VegetationSettings& settings);
 
  private:

@@ -99,14 +99,26 @@ TEST(RunMemory, CountsTheVoxelGridsWindowEachThreadHolds) {
   const LocalFrame frame({45.0, 7.0, 0.0});
   const auto field = source.grow({*terrain, frame, m.scene_half_size_m, {}, 1}).geometry.voxels;
   ASSERT_TRUE(field);
-  // The window's columns packed (here every layer), read by bands of a MiB.
-  const double window_bytes = field->column_pad.size() * 4.0 + field->ground_m.size() * 8.0 +
-                              field->columns.size() * sizeof(VoxelField::Column) + (1 << 20);
-  EXPECT_NEAR(m.scene_bytes / window_bytes, 1.0, 0.02) << field->nx << " x " << field->ny;
+  // The packed tiles the window meets (here every layer of each column, and the tiles' index),
+  // the window's ground and index, and a tile as read. The estimate takes the tiles a window
+  // of its width meets at worst: one more across and along than this window's.
+  double tile_bytes = 0.0;
+  for (const auto& block : field->blocks) tile_bytes += block->size() * 4.0;
+  const double tiles_index = tile_bytes / (30 * 4.0) * sizeof(VoxelField::Column);
+  const double window_bytes = tile_bytes + tiles_index + field->ground_m.size() * 8.0 +
+                              field->columns.size() * sizeof(VoxelField::Column) +
+                              64.0 * 64 * 30 * 4;
+  const double t = VoxelFieldSource::tile_columns;
+  const double tiles_across = std::sqrt(static_cast<double>(field->blocks.size()));
+  const double worst = (tiles_across + 1.0) * (tiles_across + 1.0) / (tiles_across * tiles_across);
+  EXPECT_GE(m.scene_bytes, window_bytes) << field->nx << " x " << field->ny;
+  EXPECT_LE(m.scene_bytes, worst * window_bytes) << field->nx << " x " << field->ny << ", " << t;
   EXPECT_EQ(m.trees, 0.0);
   // Once for the run: the grid's decompressed chunks NetCDF keeps, here all of them: 10 x 10
-  // chunks of 64 x 64 columns (those at the far edges whole), 47 MiB.
-  EXPECT_EQ(m.source_bytes, 640.0 * 640 * 30 * 4);
+  // chunks of 64 x 64 columns (those at the far edges whole), 47 MiB; and the packed tiles
+  // kept between shots, here the whole grid (600 x 600 columns of 30 floats and an index).
+  EXPECT_EQ(m.source_bytes,
+            640.0 * 640 * 30 * 4 + 600.0 * 600 * (30 * 4 + sizeof(VoxelField::Column)));
   EXPECT_NEAR(m.bytes, m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes), 1.0);
   EXPECT_NO_THROW(check_run(c));
 }
@@ -134,12 +146,15 @@ TEST(RunMemory, APointCloudsVoxelisationIsRefusedAtItsVoxelSize) {
   const RunMemory m = estimate_run_memory(c);
   const double columns = (20000.0 / 0.05 + 1) * (20000.0 / 0.05 + 1);
   EXPECT_NEAR(m.source_bytes / (columns * (2401 * 8.0 + 2400 * 4.0 + 24.0)), 1.0, 1e-5);
-  // Each thread's window: 31 m of heights in 5 cm layers (the header's z range and one more),
-  // packed, the ground and the packed columns' index, and the band being read.
-  const double side_m = 2.0 * m.scene_half_size_m;
-  EXPECT_NEAR(m.scene_bytes,
-              (side_m / 0.05 + 1) * (side_m / 0.05 + 1) * (601 * 4.0 + 8.0 + 12.0) + (1 << 20),
-              1e-6 * m.scene_bytes);
+  // Each thread's window: the packed tiles of 64 x 64 columns it meets at worst (one more each
+  // way than its columns fill), 31 m of heights in 5 cm layers (the header's z range and one
+  // more) and an index entry a column; the window's ground and index; a tile as read.
+  const double side_m = 2.0 * m.scene_half_size_m, across = side_m / 0.05 + 1;
+  const double tiles = std::pow(std::ceil((across - 1) / 64) + 1, 2);
+  EXPECT_NEAR(
+      m.scene_bytes,
+      tiles * 64 * 64 * (601 * 4.0 + 16.0) + across * across * (8.0 + 16.0) + 64 * 64 * 601 * 4.0,
+      1e-6 * m.scene_bytes);
   try {
     check_run(c);
     FAIL() << "no error";

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "canopy/voxel_grid.hpp"
@@ -388,6 +389,74 @@ TEST(VoxelFieldSource, CarriesAWindowOfTheGridIntoTheShotsFrame) {
   // The axes: 2 m cells, turned by the meridian convergence at the zone's centre (0 here).
   EXPECT_NEAR(field->axis_i_m[0], 2.0, 2.0 * 1e-3);
   EXPECT_NEAR(field->axis_i_m[1], 0.0, 1e-3);
+}
+
+// A grid of 300 x 300 columns (PAD in the upper layer = column number east + 1000 x row north,
+// exact in float) is 5 x 5 tiles: every field's columns follow on from their neighbours across
+// the tiles' seams, and a field keeps its tiles while a source caching none serves fields
+// elsewhere, from one thread or four at once; the same columns as a source caching the whole
+// grid serves.
+TEST(VoxelFieldSource, FieldsKeepTheirTilesAcrossSeamsEvictionsAndThreads) {
+  test_support::ScratchDir dir;
+  VoxelBlock b;
+  b.crs_wkt = "EPSG:32633";
+  b.nx = b.ny = 300;
+  b.nz = 2;
+  b.dx = b.dy = 2.0;
+  // UTM 33N of (45 N, 15 E) by gdaltransform: 500000.00, 4982950.40.
+  b.x0 = 500000.0 - 300.0;
+  b.y0 = 4982950.4 - 300.0;
+  b.z_edges_m = {0.0, 5.0, 20.0};
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 300; ++j)
+      for (int i = 0; i < 300; ++i) b.pad.push_back(k == 0 ? 0.0f : i + 1000.0f * j);
+  write_voxel_netcdf(dir.path() / "pad.nc", b);
+  const VoxelGridFile grid(dir.path() / "pad.nc");
+  const VoxelFieldSource none_kept(grid, "pad.nc", 0), all_kept(grid, "pad.nc");
+  const PlaneTerrain plane({45.0, 15.0, 300.0, 0.0, 0.0});
+  const auto value = [](const VoxelField& f, int i, int j) {
+    const VoxelField::Column& c = f.columns[static_cast<std::size_t>(j) * f.nx + i];
+    EXPECT_EQ(c.first, 1);
+    EXPECT_EQ(c.end, 2);
+    return (*f.blocks[c.block])[c.offset];
+  };
+  const auto follow_on = [&](const VoxelField& f) {
+    for (int j = 0; j < f.ny; ++j)
+      for (int i = 0; i < f.nx; ++i) {
+        if (i + 1 < f.nx) {
+          ASSERT_EQ(value(f, i + 1, j) - value(f, i, j), 1.0f) << i << ", " << j;
+        }
+        if (j + 1 < f.ny) {
+          ASSERT_EQ(value(f, i, j + 1) - value(f, i, j), 1000.0f) << i << ", " << j;
+        }
+      }
+  };
+  const LocalFrame centre({45.0, 15.0, 300.0});
+  const auto held = none_kept.field(centre, plane, 200.0, 0);
+  ASSERT_GT(held->nx, 150);
+  EXPECT_GT(held->blocks.size(), 9u);
+  for (const double lat : {44.9995, 45.0005, 45.001})
+    follow_on(*none_kept.field(LocalFrame({lat, 15.0005, 300.0}), plane, 100.0, 0));
+  follow_on(*held);
+  const auto kept = all_kept.field(centre, plane, 200.0, 0);
+  ASSERT_EQ(kept->nx, held->nx);
+  ASSERT_EQ(kept->ny, held->ny);
+  for (int j = 0; j < held->ny; ++j)
+    for (int i = 0; i < held->nx; ++i) ASSERT_EQ(value(*held, i, j), value(*kept, i, j));
+  // Four threads at once, each loading and dropping tiles the others need: the same columns.
+  std::vector<std::thread> threads;
+  std::vector<std::shared_ptr<const VoxelField>> fields(4);
+  for (int k = 0; k < 4; ++k)
+    threads.emplace_back([&, k] {
+      for (int round = 0; round < 20; ++round)
+        fields[k] = none_kept.field(LocalFrame({45.0 + 0.0002 * ((k + round) % 5), 15.0, 300.0}),
+                                    plane, 150.0, 0);
+      fields[k] = none_kept.field(centre, plane, 200.0, 0);
+    });
+  for (std::thread& thread : threads) thread.join();
+  for (const auto& field : fields)
+    for (int j = 0; j < held->ny; ++j)
+      for (int i = 0; i < held->nx; ++i) ASSERT_EQ(value(*field, i, j), value(*kept, i, j));
 }
 
 }  // namespace
