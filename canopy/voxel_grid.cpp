@@ -203,20 +203,22 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
   if (shape.dx < 0.0) throw input_error(place, "x must increase");
   shape.x0 = coords[2][0] - shape.dx / 2;
   shape.y0 = coords[1][0] - shape.dy / 2;
-  // Windows of consecutive shots overlap: their chunks stay decompressed (a NetCDF-3 or
-  // contiguous variable has no chunk cache: the call then changes nothing).
-  // The cache holds whole chunks: those at the grid's far edges count in full (a 560-column
-  // grid of 64-column chunks needs 576 columns' worth). A cache short of the grid's chunks
-  // evicts, least recently used first, the very chunks the next shot's window reads first, and
-  // every window inflated its chunks again.
+  // The chunks that 2 x 2 read blocks meet, whole (a chunk at the grid's far edge counts in
+  // full): along x and y, 2 blocks' columns meet at most ceil(2 b / c) + 1 chunks of c, and
+  // never more than the grid's; every layer. A contiguous or NetCDF-3 variable has no chunk
+  // cache: the call then changes nothing.
   int storage = NC_CONTIGUOUS;
   std::size_t chunk[3] = {0, 0, 0};
-  double chunk_bytes = double(sizes[0]) * sizes[1] * sizes[2] * sizeof(float);
+  double chunk_bytes = 0.0;
   if (nc_inq_var_chunking(ncid, pad_var, &storage, chunk) == NC_NOERR && storage == NC_CHUNKED &&
       chunk[0] > 0 && chunk[1] > 0 && chunk[2] > 0) {
-    chunk_bytes = sizeof(float);
-    for (int d = 0; d < 3; ++d)
-      chunk_bytes *= double((sizes[d] + chunk[d] - 1) / chunk[d] * chunk[d]);
+    const double blocks = 2.0 * VoxelGridFile::read_block_columns;
+    chunk_bytes = sizeof(float) * double((sizes[0] + chunk[0] - 1) / chunk[0] * chunk[0]);
+    for (int d = 1; d < 3; ++d) {
+      const double c = double(chunk[d]);
+      const double whole = std::ceil(double(sizes[d]) / c) * c;
+      chunk_bytes *= std::min(whole, (std::ceil(blocks / c) + 1.0) * c);
+    }
   }
   cache_bytes =
       static_cast<std::size_t>(std::min(chunk_bytes, double(VoxelGridFile::max_read_cache_bytes)));

@@ -56,10 +56,14 @@ class VoxelGridFile {
   // The whole grid's extent and layers (its pad is empty but for a grid held in memory).
   const VoxelBlock& shape() const;
 
-  // The decompressed chunks of a NetCDF grid kept between windows: all the grid's chunks (whole
-  // chunks, those at its edges included), up to max_read_cache_bytes (consecutive shots'
-  // windows overlap; the library's default holds less than one window of a 1 m grid, which
-  // every shot then inflated again); 0 for a grid not read through NetCDF.
+  // A grid is read by blocks of read_block_columns x read_block_columns columns, at multiples of
+  // it from the grid's corner (VoxelFieldSource's tiles, each read once and kept packed), one
+  // row of blocks after another: `voxelize` writes chunks of that many columns, each inflated
+  // once. The decompressed chunks of a NetCDF grid kept between reads are those 2 x 2 blocks
+  // meet at most (whole chunks, every layer: a file chunked otherwise inflates a chunk shared
+  // by neighbouring blocks again only when the next row of blocks comes), up to
+  // max_read_cache_bytes; 0 for a grid not read through NetCDF's chunks.
+  static constexpr int read_block_columns = 64;
   static constexpr std::size_t max_read_cache_bytes = std::size_t{128} << 20;
   std::size_t read_cache_bytes() const;
   bool netcdf() const;  // read through NetCDF (else GDAL, or held in memory)

@@ -18,13 +18,13 @@
 #include <string>
 #include <vector>
 
+#include "canopy/voxel_grid.hpp"
 #include "core/vec3.hpp"
 
 namespace glaswave {
 
 class Terrain;
 class LocalFrame;
-class VoxelGridFile;
 struct VolumeSpan;
 
 struct VoxelField {
@@ -93,7 +93,7 @@ class VoxelFieldSource {
   // `grid` must outlive this. Its CRS is read with PROJ; an input error naming `place` when PROJ
   // cannot use it.
   // `tile_cache_bytes`: the packed tiles kept between shots, at most (tests make it small).
-  static constexpr int tile_columns = 64;
+  static constexpr int tile_columns = VoxelGridFile::read_block_columns;
   static constexpr std::size_t max_tile_cache_bytes = std::size_t{256} << 20;
   VoxelFieldSource(const VoxelGridFile& grid, const std::string& place,
                    std::size_t tile_cache_bytes = max_tile_cache_bytes);

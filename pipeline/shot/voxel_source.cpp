@@ -96,19 +96,22 @@ GridShape grid_shape(const VegetationSettings& settings) {
 
 double VoxelSource::region_bytes(const VegetationSettings& settings, double side_m) {
   const GridShape g = grid_shape(settings);
-  // The packed tiles the window meets (n columns meet at most ceil((n - 1) / t) + 1 tiles of t),
-  // all their layers at most, each with its columns' index; the window's ground under each
-  // column and its columns' index; one tile as read. A thread holds its window's tiles while
-  // its shot runs, even once the cache has dropped them.
+  // The window's ground under each column (a double) and its columns' index; one tile as read;
+  // and, where the whole grid is more than the tile cache keeps (else source_bytes counts every
+  // tile once), the packed tiles the window meets (n columns meet at most ceil((n - 1) / t) + 1
+  // tiles of t), all their layers at most: a thread holds them while its shot runs, even once
+  // the cache has dropped them.
   const double t = VoxelFieldSource::tile_columns;
   const double across_i = side_m / g.cell_x_m + 1.0, across_j = side_m / g.cell_y_m + 1.0;
-  const double tiles =
-      (std::ceil((across_i - 1.0) / t) + 1.0) * (std::ceil((across_j - 1.0) / t) + 1.0);
   const double column_bytes = g.layers * sizeof(float) + sizeof(VoxelField::Column);
-  const double tile_columns = std::min(tiles * t * t, g.columns > 0.0 ? g.columns : tiles * t * t);
-  return tile_columns * column_bytes +
-         across_i * across_j * (sizeof(double) + sizeof(VoxelField::Column)) +
-         t * t * g.layers * sizeof(float);
+  double bytes = across_i * across_j * (sizeof(double) + sizeof(VoxelField::Column)) +
+                 t * t * g.layers * sizeof(float);
+  if (!(g.columns > 0.0 && g.columns * column_bytes <= VoxelFieldSource::max_tile_cache_bytes)) {
+    const double tiles =
+        (std::ceil((across_i - 1.0) / t) + 1.0) * (std::ceil((across_j - 1.0) / t) + 1.0);
+    bytes += std::min(tiles * t * t, g.columns > 0.0 ? g.columns : tiles * t * t) * column_bytes;
+  }
+  return bytes;
 }
 
 double VoxelSource::source_bytes(const VegetationSettings& settings) {

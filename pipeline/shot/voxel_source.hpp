@@ -27,9 +27,10 @@ class VoxelSource : public VegetationSource {
 
   const VoxelGridFile& grid() const { return *grid_; }
 
-  // A region `side_m` across: the grid's packed tiles it meets (VoxelFieldSource, all the grid's
-  // layers of 4 bytes a column at most, as the file's header gives them), the ground under each
-  // column (a double) and the columns' index.
+  // A region `side_m` across: the ground under each column (a double), the columns' index, a
+  // tile as read, and the grid's packed tiles it meets (VoxelFieldSource, all the grid's layers
+  // of 4 bytes a column at most, as the file's header gives them) where the whole grid is more
+  // than the tile cache keeps.
   static double region_bytes(const VegetationSettings& settings, double side_m);
   // What the source holds once: a NetCDF grid's decompressed chunks (VoxelGridFile::
   // read_cache_bytes); a point cloud's voxelisation when the run starts (its peak: the ground

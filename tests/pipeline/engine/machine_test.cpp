@@ -99,26 +99,18 @@ TEST(RunMemory, CountsTheVoxelGridsWindowEachThreadHolds) {
   const LocalFrame frame({45.0, 7.0, 0.0});
   const auto field = source.grow({*terrain, frame, m.scene_half_size_m, {}, 1}).geometry.voxels;
   ASSERT_TRUE(field);
-  // The packed tiles the window meets (here every layer of each column, and the tiles' index),
-  // the window's ground and index, and a tile as read. The estimate takes the tiles a window
-  // of its width meets at worst: one more across and along than this window's.
-  double tile_bytes = 0.0;
-  for (const auto& block : field->blocks) tile_bytes += block->size() * 4.0;
-  const double tiles_index = tile_bytes / (30 * 4.0) * sizeof(VoxelField::Column);
-  const double window_bytes = tile_bytes + tiles_index + field->ground_m.size() * 8.0 +
+  // The window's ground and index, and a tile as read: the whole grid (600 x 600 columns of 30
+  // floats and an index, 47 MiB) fits the tile cache, which source_bytes counts once.
+  const double window_bytes = field->ground_m.size() * 8.0 +
                               field->columns.size() * sizeof(VoxelField::Column) +
                               64.0 * 64 * 30 * 4;
-  const double t = VoxelFieldSource::tile_columns;
-  const double tiles_across = std::sqrt(static_cast<double>(field->blocks.size()));
-  const double worst = (tiles_across + 1.0) * (tiles_across + 1.0) / (tiles_across * tiles_across);
-  EXPECT_GE(m.scene_bytes, window_bytes) << field->nx << " x " << field->ny;
-  EXPECT_LE(m.scene_bytes, worst * window_bytes) << field->nx << " x " << field->ny << ", " << t;
+  EXPECT_NEAR(m.scene_bytes / window_bytes, 1.0, 0.02) << field->nx << " x " << field->ny;
   EXPECT_EQ(m.trees, 0.0);
-  // Once for the run: the grid's decompressed chunks NetCDF keeps, here all of them: 10 x 10
-  // chunks of 64 x 64 columns (those at the far edges whole), 47 MiB; and the packed tiles
+  // Once for the run: the grid's decompressed chunks NetCDF keeps, those 2 x 2 tiles of 64
+  // columns meet at worst: 3 x 3 chunks of 64 x 64 columns, 4.2 MiB; and the packed tiles
   // kept between shots, here the whole grid (600 x 600 columns of 30 floats and an index).
   EXPECT_EQ(m.source_bytes,
-            640.0 * 640 * 30 * 4 + 600.0 * 600 * (30 * 4 + sizeof(VoxelField::Column)));
+            192.0 * 192 * 30 * 4 + 600.0 * 600 * (30 * 4 + sizeof(VoxelField::Column)));
   EXPECT_NEAR(m.bytes, m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes), 1.0);
   EXPECT_NO_THROW(check_run(c));
 }
