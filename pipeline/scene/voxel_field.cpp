@@ -321,9 +321,9 @@ void fill_ground(VoxelField& f, const LocalFrame& frame, const Terrain& terrain,
   }
 }
 
-// A tile of the grid, packed: its columns (row by row, tile-local offsets into `pad`).
+// A tile of the grid, packed: its columns (ni a row, row by row, tile-local offsets into `pad`).
 struct PackedTile {
-  int ni = 0, nj = 0;
+  int ni = 0;
   std::vector<VoxelField::Column> columns;
   std::shared_ptr<const std::vector<float>> pad;
   std::size_t bytes() const {
@@ -358,7 +358,6 @@ struct VoxelFieldSource::Impl {
     const VoxelBlock block = grid->columns(i0, ni, j0, nj);
     auto tile = std::make_shared<PackedTile>();
     tile->ni = ni;
-    tile->nj = nj;
     auto pad = std::make_shared<std::vector<float>>();
     VoxelField::pack_columns(block.pad.data(), static_cast<std::size_t>(ni) * nj, shape.nz, 0,
                              tile->columns, *pad);
