@@ -63,6 +63,18 @@ struct GridShape {
   double columns = 0.0, points = 0.0;  // the whole grid's, a cloud's
   double inversion_layers = 0.0;       // a cloud's layers while it is voxelised
   double cache_bytes = 0.0;            // a NetCDF file's decompressed chunks kept between windows
+
+  // A column packed at most: every layer, and its index entry.
+  double packed_column_bytes() const { return layers * sizeof(float) + sizeof(VoxelField::Column); }
+  // The packed tiles the cache keeps over a run: the whole grid, up to the cache's bytes.
+  double cached_tile_bytes() const {
+    return std::min(static_cast<double>(VoxelFieldSource::max_tile_cache_bytes),
+                    columns * packed_column_bytes());
+  }
+  bool cache_keeps_whole_grid() const {
+    return columns > 0.0 &&
+           columns * packed_column_bytes() <= VoxelFieldSource::max_tile_cache_bytes;
+  }
 };
 
 GridShape grid_shape(const VegetationSettings& settings) {
@@ -103,23 +115,20 @@ double VoxelSource::region_bytes(const VegetationSettings& settings, double side
   // the cache has dropped them.
   const double t = VoxelFieldSource::tile_columns;
   const double across_i = side_m / g.cell_x_m + 1.0, across_j = side_m / g.cell_y_m + 1.0;
-  const double column_bytes = g.layers * sizeof(float) + sizeof(VoxelField::Column);
   double bytes = across_i * across_j * (sizeof(double) + sizeof(VoxelField::Column)) +
                  t * t * g.layers * sizeof(float);
-  if (!(g.columns > 0.0 && g.columns * column_bytes <= VoxelFieldSource::max_tile_cache_bytes)) {
+  if (!g.cache_keeps_whole_grid()) {
     const double tiles =
         (std::ceil((across_i - 1.0) / t) + 1.0) * (std::ceil((across_j - 1.0) / t) + 1.0);
-    bytes += std::min(tiles * t * t, g.columns > 0.0 ? g.columns : tiles * t * t) * column_bytes;
+    bytes += std::min(tiles * t * t, g.columns > 0.0 ? g.columns : tiles * t * t) *
+             g.packed_column_bytes();
   }
   return bytes;
 }
 
 double VoxelSource::source_bytes(const VegetationSettings& settings) {
   const GridShape g = grid_shape(settings);
-  // The packed tiles kept between shots: the whole grid, up to the cache's bytes.
-  const double tiles =
-      std::min(static_cast<double>(VoxelFieldSource::max_tile_cache_bytes),
-               g.columns * (g.layers * sizeof(float) + sizeof(VoxelField::Column)));
+  const double tiles = g.cached_tile_bytes();
   if (settings.canopy.kind != "point_cloud") return g.cache_bytes + tiles;
   // Reading: the ground points (three doubles each, at most every point) and a window of a
   // million points. Inverting: each voxel's weight (a double) and density (a float) at once.
