@@ -3,9 +3,11 @@
 #include "core/glas_time.hpp"
 
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "core/excerpt.hpp"
@@ -168,6 +170,31 @@ std::string format_iso8601_utc_microseconds(double seconds_since_glas_epoch) {
     micro -= 1000000;
   }
   return write_utc(static_cast<std::int64_t>(whole_s), micro, false);
+}
+
+CreationTime product_creation_time() {
+  const char* epoch = std::getenv("SOURCE_DATE_EPOCH");
+  if (epoch) {
+    const std::string text(epoch);
+    std::int64_t unix_s = -1;
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), unix_s);
+    const double glas_s = static_cast<double>(unix_s - glas_epoch_unix_s);
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos ||
+        error != std::errc() || end != text.data() + text.size() ||
+        !time_out_of_range(glas_s).empty())
+      throw std::invalid_argument(
+          "must be whole seconds since "
+          "1970-01-01T00:00:00Z, digits only (as `date +%s` writes), "
+          "got '" +
+          excerpt(text) + "'");
+    return {format_iso8601_utc_microseconds(glas_s), true};
+  }
+  const auto now = std::chrono::system_clock::now();
+  const auto micro =
+      std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count();
+  return {format_iso8601_utc_microseconds(static_cast<double>(micro / 1000000 - glas_epoch_unix_s) +
+                                          static_cast<double>(micro % 1000000) * 1e-6),
+          false};
 }
 
 }  // namespace glaswave

@@ -40,4 +40,15 @@ std::string format_iso8601_utc(double seconds_since_glas_epoch);
 // rounded to the microsecond. Throws std::invalid_argument as format_iso8601_utc does.
 std::string format_iso8601_utc_microseconds(double seconds_since_glas_epoch);
 
+// When a product says it was made, as format_iso8601_utc_microseconds writes it: the
+// SOURCE_DATE_EPOCH environment variable's time where it is set (reproducible-builds.org's
+// convention: whole seconds since 1970-01-01T00:00:00Z, digits only), so that two identical runs
+// write identical files; else the clock's. `reproducible` says which. Throws
+// std::invalid_argument saying what the variable must be when it is set to anything else.
+struct CreationTime {
+  std::string iso8601;
+  bool reproducible = false;
+};
+CreationTime product_creation_time();
+
 }  // namespace glaswave

@@ -1,7 +1,6 @@
-// Reading GEDI L2A and GLAH14 granules with the HDF5 C API.
+// Reading GEDI L2A and GLAH14 granules through the one HDF5 layer (core/hdf5_file.hpp).
 #include "footprints/granule.hpp"
 
-#include <hdf5.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,39 +18,12 @@
 
 #include "core/error.hpp"
 #include "core/glas_time.hpp"
+#include "core/hdf5_file.hpp"
 #include "core/input_file.hpp"
 #include "core/netcdf_lock.hpp"
 
 namespace glaswave {
 namespace {
-
-// An HDF5 identifier closed with its own function.
-class Handle {
- public:
-  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-  ~Handle() {
-    if (id_ >= 0) close_(id_);
-  }
-  hid_t get() const { return id_; }
-  bool valid() const { return id_ >= 0; }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
-
-bool has_link(hid_t location, const std::string& path) {
-  // Every part of the path must exist before H5Lexists may be asked about the next.
-  std::size_t slash = 0;
-  while (true) {
-    slash = path.find('/', slash + 1);
-    const std::string part = path.substr(0, slash);
-    if (H5Lexists(location, part.c_str(), H5P_DEFAULT) <= 0) return false;
-    if (slash == std::string::npos) return true;
-  }
-}
 
 // Where a dataset lives, for messages: "FILE: GROUP".
 struct Place {
@@ -60,61 +32,48 @@ struct Place {
   std::string text() const { return file + ": " + group; }
 };
 
-// A one-dimensional dataset of at most kMostGranuleShots values, opened; its length and the
-// class (integer, float) and sign of its stored type.
-struct Dataset {
-  std::unique_ptr<Handle> handle;
-  std::size_t size = 0;
-  H5T_class_t type_class = H5T_NO_CLASS;
-  bool is_signed = false;
-};
-
-Dataset open_dataset(hid_t group, const std::string& name, const Place& place) {
-  if (!has_link(group, name)) throw input_error(place.text(), "no dataset \"" + name + "\"");
-  Dataset d;
-  d.handle = std::make_unique<Handle>(H5Dopen2(group, name.c_str(), H5P_DEFAULT), H5Dclose);
-  if (!d.handle->valid()) throw input_error(place.text(), "\"" + name + "\" is not a dataset");
-  Handle space(H5Dget_space(d.handle->get()), H5Sclose);
-  const int rank = space.valid() ? H5Sget_simple_extent_ndims(space.get()) : -1;
-  if (rank != 1) throw input_error(place.text(), "\"" + name + "\" is not one-dimensional");
-  hsize_t size = 0;
-  H5Sget_simple_extent_dims(space.get(), &size, nullptr);
+// A one-dimensional numeric dataset of at most kMostGranuleShots values: its shape, checked.
+Hdf5DatasetShape checked_shape(const Hdf5Reader& h5, const std::string& path,
+                               const std::string& name, const Place& place) {
+  if (!h5.has(path)) throw input_error(place.text(), "no dataset \"" + name + "\"");
+  const std::optional<Hdf5DatasetShape> shape = h5.shape(path);
+  if (!shape) throw input_error(place.text(), "\"" + name + "\" is not a dataset");
+  if (shape->dims.size() != 1)
+    throw input_error(place.text(), "\"" + name + "\" is not one-dimensional");
   // The declared length decides the allocation: it is checked before anything is read.
-  if (size > static_cast<hsize_t>(kMostGranuleShots))
-    throw input_error(place.text(), "\"" + name + "\" declares " + std::to_string(size) +
+  if (shape->dims[0] > static_cast<std::uint64_t>(kMostGranuleShots))
+    throw input_error(place.text(), "\"" + name + "\" declares " + std::to_string(shape->dims[0]) +
                                         " values, more than the " +
                                         std::to_string(kMostGranuleShots) +
                                         " shots a beam of a granule may hold");
-  d.size = static_cast<std::size_t>(size);
-  Handle type(H5Dget_type(d.handle->get()), H5Tclose);
-  d.type_class = type.valid() ? H5Tget_class(type.get()) : H5T_NO_CLASS;
-  d.is_signed = d.type_class == H5T_INTEGER && H5Tget_sign(type.get()) == H5T_SGN_2;
-  if (d.type_class != H5T_INTEGER && d.type_class != H5T_FLOAT)
-    throw input_error(place.text(), "\"" + name + "\" does not hold numbers");
-  return d;
+  if (!shape->numeric) throw input_error(place.text(), "\"" + name + "\" does not hold numbers");
+  return *shape;
 }
 
 template <typename T>
-std::vector<T> read_values(const Dataset& d, hid_t memory_type, const std::string& name,
+std::vector<T> read_values(const Hdf5Reader& h5, const std::string& path, const std::string& name,
                            const Place& place) {
-  std::vector<T> values(d.size);
-  if (d.size > 0 &&
-      H5Dread(d.handle->get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0)
+  std::vector<T> values;
+  if (!h5.read(path, values))
     throw input_error(place.text(), "cannot read \"" + name + "\" (truncated or corrupt)");
   return values;
 }
 
-std::vector<double> read_doubles(hid_t group, const std::string& name, const Place& place) {
-  const Dataset d = open_dataset(group, name, place);
-  return read_values<double>(d, H5T_NATIVE_DOUBLE, name, place);
+std::vector<double> read_doubles(const Hdf5Reader& h5, const std::string& group,
+                                 const std::string& name, const Place& place) {
+  const std::string path = group + "/" + name;
+  checked_shape(h5, path, name, place);
+  return read_values<double>(h5, path, name, place);
 }
 
 // An integer dataset read exactly, each value checked to lie in [low, high]: HDF5 would round
 // floating point and clip what does not fit, silently.
-std::vector<std::int64_t> read_integers(hid_t group, const std::string& name, std::int64_t low,
+std::vector<std::int64_t> read_integers(const Hdf5Reader& h5, const std::string& group,
+                                        const std::string& name, std::int64_t low,
                                         std::int64_t high, const Place& place) {
-  const Dataset d = open_dataset(group, name, place);
-  if (d.type_class != H5T_INTEGER)
+  const std::string path = group + "/" + name;
+  const Hdf5DatasetShape shape = checked_shape(h5, path, name, place);
+  if (!shape.integer)
     throw input_error(place.text(), "\"" + name +
                                         "\" is stored as floating point: it must hold integers, "
                                         "and is not rounded");
@@ -123,12 +82,12 @@ std::vector<std::int64_t> read_integers(hid_t group, const std::string& name, st
                                          std::to_string(low) + ".." + std::to_string(high));
   };
   std::vector<std::int64_t> values;
-  if (d.is_signed) {
-    values = read_values<std::int64_t>(d, H5T_NATIVE_INT64, name, place);
+  if (shape.is_signed) {
+    values = read_values<std::int64_t>(h5, path, name, place);
     for (std::int64_t v : values)
       if (v < low || v > high) throw out_of_range(std::to_string(v));
   } else {
-    const auto raw = read_values<std::uint64_t>(d, H5T_NATIVE_UINT64, name, place);
+    const auto raw = read_values<std::uint64_t>(h5, path, name, place);
     values.reserve(raw.size());
     for (std::uint64_t v : raw) {
       if (v > static_cast<std::uint64_t>(high) || static_cast<std::int64_t>(v) < low)
@@ -168,20 +127,19 @@ int beam_number(const std::string& name) {
   return number;
 }
 
-void read_gedi_beam(hid_t file, const std::string& beam, const std::string& path,
+void read_gedi_beam(const Hdf5Reader& h5, const std::string& beam, const std::string& path,
                     std::vector<GranuleShot>& shots, Skipped& skipped) {
   const Place place{path, beam};
-  Handle group(H5Gopen2(file, beam.c_str(), H5P_DEFAULT), H5Gclose);
-  if (!group.valid()) throw input_error(place.text(), "is not a group");
+  if (!h5.is_group(beam)) throw input_error(place.text(), "is not a group");
   const auto numbers =
-      read_integers(group.get(), "shot_number", 0, std::numeric_limits<std::int64_t>::max(), place);
-  const auto lat = read_doubles(group.get(), "lat_lowestmode", place);
-  const auto lon = read_doubles(group.get(), "lon_lowestmode", place);
-  const auto time = read_doubles(group.get(), "delta_time", place);
+      read_integers(h5, beam, "shot_number", 0, std::numeric_limits<std::int64_t>::max(), place);
+  const auto lat = read_doubles(h5, beam, "lat_lowestmode", place);
+  const auto lon = read_doubles(h5, beam, "lon_lowestmode", place);
+  const auto time = read_doubles(h5, beam, "delta_time", place);
   check_lengths(numbers.size(), {lat.size(), lon.size(), time.size()}, place);
   std::vector<std::int64_t> degrade;
-  if (has_link(group.get(), "degrade_flag")) {
-    degrade = read_integers(group.get(), "degrade_flag", 0, 255, place);
+  if (h5.has(beam + "/degrade_flag")) {
+    degrade = read_integers(h5, beam, "degrade_flag", 0, 255, place);
     check_lengths(numbers.size(), {degrade.size()}, place);
   }
   static const double gedi_epoch_s = parse_iso8601_utc("2018-01-01T00:00:00Z");
@@ -202,19 +160,18 @@ void read_gedi_beam(hid_t file, const std::string& beam, const std::string& path
   }
 }
 
-void read_glah14(hid_t file, const std::string& path, std::vector<GranuleShot>& shots,
+void read_glah14(const Hdf5Reader& h5, const std::string& path, std::vector<GranuleShot>& shots,
                  Skipped& skipped) {
   const std::string beam = "Data_40HZ";
   const Place place{path, beam};
-  Handle group(H5Gopen2(file, beam.c_str(), H5P_DEFAULT), H5Gclose);
-  if (!group.valid()) throw input_error(place.text(), "is not a group");
-  const auto lat = read_doubles(group.get(), "Geolocation/d_lat", place);
-  const auto lon = read_doubles(group.get(), "Geolocation/d_lon", place);
-  const auto time = read_doubles(group.get(), "Time/d_UTCTime_40", place);
+  if (!h5.is_group(beam)) throw input_error(place.text(), "is not a group");
+  const auto lat = read_doubles(h5, beam, "Geolocation/d_lat", place);
+  const auto lon = read_doubles(h5, beam, "Geolocation/d_lon", place);
+  const auto time = read_doubles(h5, beam, "Time/d_UTCTime_40", place);
   // i_rec_ndx * 40 + 39 must fit a shot number.
-  const auto record = read_integers(group.get(), "Time/i_rec_ndx", 0,
+  const auto record = read_integers(h5, beam, "Time/i_rec_ndx", 0,
                                     (std::numeric_limits<std::int64_t>::max() - 39) / 40, place);
-  const auto count = read_integers(group.get(), "Time/i_shot_count", 1, 40, place);
+  const auto count = read_integers(h5, beam, "Time/i_shot_count", 1, 40, place);
   check_lengths(lat.size(), {lon.size(), time.size(), record.size(), count.size()}, place);
   for (std::size_t i = 0; i < lat.size(); ++i) {
     const std::int64_t number = record[i] * 40 + count[i] - 1;
@@ -236,16 +193,10 @@ void read_glah14(hid_t file, const std::string& path, std::vector<GranuleShot>& 
 }
 
 // The root's groups named BEAM..., in name order.
-std::vector<std::string> gedi_beams(hid_t file) {
+std::vector<std::string> gedi_beams(const Hdf5Reader& h5) {
   std::vector<std::string> names;
-  H5Literate(
-      file, H5_INDEX_NAME, H5_ITER_INC, nullptr,
-      [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
-        if (std::string(name).rfind("BEAM", 0) == 0)
-          static_cast<std::vector<std::string>*>(data)->push_back(name);
-        return 0;
-      },
-      &names);
+  for (std::string& name : h5.children("/"))
+    if (name.rfind("BEAM", 0) == 0) names.push_back(std::move(name));
   return names;
 }
 
@@ -256,12 +207,10 @@ std::vector<GranuleShot> read_in_process(const std::filesystem::path& file,
   // HDF5 (Debian's, not built thread-safe) is the library under libnetcdf: one lock for both,
   // held until every handle below is closed.
   const std::lock_guard lock(netcdf_library_mutex());
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are ours to report
   require_input_file(path, "the granule");
-  if (H5Fis_hdf5(path.c_str()) <= 0)
+  if (!Hdf5Reader::is_hdf5(file))
     throw input_error(path, "the granule is not an HDF5 file (GEDI L2A or GLAH14)");
-  Handle h5(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (!h5.valid()) throw input_error(path, "cannot open the granule");
+  const Hdf5Reader h5(file);
   for (std::size_t i = 0; i < beams.size(); ++i)
     if (std::find(beams.begin(), beams.begin() + static_cast<std::ptrdiff_t>(i), beams[i]) !=
         beams.begin() + static_cast<std::ptrdiff_t>(i))
@@ -271,7 +220,7 @@ std::vector<GranuleShot> read_in_process(const std::filesystem::path& file,
 
   std::vector<GranuleShot> shots;
   Skipped skipped;
-  const std::vector<std::string> all_beams = gedi_beams(h5.get());
+  const std::vector<std::string> all_beams = gedi_beams(h5);
   if (!all_beams.empty()) {
     for (const std::string& beam : beams)
       if (std::find(all_beams.begin(), all_beams.end(), beam) == all_beams.end())
@@ -279,17 +228,17 @@ std::vector<GranuleShot> read_in_process(const std::filesystem::path& file,
                                                   std::to_string(all_beams.size()) +
                                                   " BEAM groups, from " + all_beams.front() + ")");
     for (const std::string& beam : beams.empty() ? all_beams : beams) {
-      read_gedi_beam(h5.get(), beam, path, shots, skipped);
+      read_gedi_beam(h5, beam, path, shots, skipped);
       if (shots.size() > static_cast<std::size_t>(kMostGranuleShots))
         throw input_error(path, "the beams hold more than " + std::to_string(kMostGranuleShots) +
                                     " shots together: name fewer in track.beams");
     }
-  } else if (has_link(h5.get(), "Data_40HZ")) {
+  } else if (h5.has("Data_40HZ")) {
     for (const std::string& beam : beams)
       if (beam != "Data_40HZ")
         throw input_error(path + ": " + beam,
                           "no such beam in the GLAH14 granule (its one beam is Data_40HZ)");
-    read_glah14(h5.get(), path, shots, skipped);
+    read_glah14(h5, path, shots, skipped);
   } else {
     throw input_error(path,
                       "neither a GEDI L2A granule (no BEAMxxxx group) nor a GLAH14 granule (no "

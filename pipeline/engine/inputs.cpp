@@ -113,6 +113,11 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
   const LidarModel& lidar = simulator.lidar();
   RunInfo info;
   info.command_line = command_line;
+  try {
+    info.created = product_creation_time();
+  } catch (const std::invalid_argument& e) {
+    throw config_error("SOURCE_DATE_EPOCH", e.what());
+  }
   info.config_json = config.resolved.dump();
   info.seed = config.seed;
   info.shots = shots;

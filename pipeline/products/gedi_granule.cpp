@@ -112,13 +112,13 @@ void GediGranuleWriter::keep(std::int64_t index, const ShotRecord& r) {
   }
 }
 
-void GediGranuleWriter::write_file(Hdf5File& file) {
+void GediGranuleWriter::write_file(Hdf5Writer& file) {
   // Beam groups in the order of their numbers, each with its shots in record (shot) order.
   std::map<std::uint16_t, std::vector<const Shot*>> beams;
   for (const Shot& s : shots_) beams[s.beam].push_back(&s);
   for (const auto& [beam, shots] : beams) {
     const std::string group = gedi_beam_group(beam);
-    file.group(group, beam < 4 ? "Coverage beam" : "Full power beam");
+    described_group(file, group, beam < 4 ? "Coverage beam" : "Full power beam");
     if (level_ == GediLevel::l1b)
       write_l1b_beam(file, group, shots);
     else
@@ -138,17 +138,19 @@ std::vector<T> of(const std::vector<const Shot*>& shots, F get) {
 
 }  // namespace
 
-void GediGranuleWriter::write_shot_ids(Hdf5File& f, const std::string& g,
+void GediGranuleWriter::write_shot_ids(Hdf5Writer& f, const std::string& g,
                                        const std::vector<const Shot*>& shots,
                                        const char* delta_time_meaning) {
-  f.write(g + "/shot_number", of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
-          {"counter", "Unique shot ID."});
-  f.write(g + "/delta_time", of<double>(shots, [](const Shot& s) { return s.delta_time; }),
-          {"seconds since 2018-01-01", delta_time_meaning});
-  f.write(g + "/beam", of<std::uint16_t>(shots, [](const Shot& s) { return s.beam; }),
-          {"counter", "Beam number"});
-  f.write(g + "/channel", of<std::uint8_t>(shots, [](const Shot& s) { return channel_of(s.beam); }),
-          {"counter", "Channel number (the beam's place among the eight)"});
+  write_dataset(f, g + "/shot_number",
+                of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
+                {"counter", "Unique shot ID."});
+  write_dataset(f, g + "/delta_time", of<double>(shots, [](const Shot& s) { return s.delta_time; }),
+                {"seconds since 2018-01-01", delta_time_meaning});
+  write_dataset(f, g + "/beam", of<std::uint16_t>(shots, [](const Shot& s) { return s.beam; }),
+                {"counter", "Beam number"});
+  write_dataset(f, g + "/channel",
+                of<std::uint8_t>(shots, [](const Shot& s) { return channel_of(s.beam); }),
+                {"counter", "Channel number (the beam's place among the eight)"});
 }
 
 namespace {
@@ -186,161 +188,179 @@ Concatenated concatenate(const std::vector<const Shot*>& shots,
 
 // L1B's waveform datasets, the energy and the noise.
 template <typename Shot>
-void write_l1b_waveforms(Hdf5File& f, const std::string& g, const std::vector<const Shot*>& shots,
+void write_l1b_waveforms(Hdf5Writer& f, const std::string& g, const std::vector<const Shot*>& shots,
                          const Concatenated& w) {
-  f.write(g + "/rxwaveform", w.rx,
-          {"counts",
-           "The corrected receive (RX) waveforms, concatenated; a shot's are "
-           "rx_sample_count samples from rx_sample_start_index (1-based)"});
-  f.write(g + "/rx_sample_start_index", w.rx_start,
-          {"counter", "The index in rxwaveform of each RX waveform's first sample, from 1"});
-  f.write(g + "/rx_sample_count", w.rx_count,
-          {"counter", "The number of samples of each RX waveform"});
-  f.write(g + "/txwaveform", w.tx, {"counts", "The transmitted (TX) waveforms, concatenated"});
-  f.write(g + "/tx_sample_start_index", w.tx_start,
-          {"counter", "The index in txwaveform of each TX waveform's first sample, from 1"});
-  f.write(g + "/tx_sample_count", w.tx_count,
-          {"counter", "The number of samples of each TX waveform"});
-  f.write(g + "/rx_energy", of<float>(shots, [](const Shot& s) { return s.rx_energy; }),
-          {"counts", "Integrated energy in the RX waveform after subtracting the noise mean"});
-  f.write(g + "/noise_mean_corrected", of<float>(shots, [](const Shot& s) { return s.noise_mean; }),
-          {"counts", "Noise mean (the samples before the signal begins)"});
-  f.write(g + "/noise_stddev_corrected",
-          of<float>(shots, [](const Shot& s) { return s.noise_stddev; }),
-          {"counts", "Noise standard deviation (the samples before the signal begins)"});
+  write_dataset(f, g + "/rxwaveform", w.rx,
+                {"counts",
+                 "The corrected receive (RX) waveforms, concatenated; a shot's are "
+                 "rx_sample_count samples from rx_sample_start_index (1-based)"});
+  write_dataset(f, g + "/rx_sample_start_index", w.rx_start,
+                {"counter", "The index in rxwaveform of each RX waveform's first sample, from 1"});
+  write_dataset(f, g + "/rx_sample_count", w.rx_count,
+                {"counter", "The number of samples of each RX waveform"});
+  write_dataset(f, g + "/txwaveform", w.tx,
+                {"counts", "The transmitted (TX) waveforms, concatenated"});
+  write_dataset(f, g + "/tx_sample_start_index", w.tx_start,
+                {"counter", "The index in txwaveform of each TX waveform's first sample, from 1"});
+  write_dataset(f, g + "/tx_sample_count", w.tx_count,
+                {"counter", "The number of samples of each TX waveform"});
+  write_dataset(
+      f, g + "/rx_energy", of<float>(shots, [](const Shot& s) { return s.rx_energy; }),
+      {"counts", "Integrated energy in the RX waveform after subtracting the noise mean"});
+  write_dataset(f, g + "/noise_mean_corrected",
+                of<float>(shots, [](const Shot& s) { return s.noise_mean; }),
+                {"counts", "Noise mean (the samples before the signal begins)"});
+  write_dataset(f, g + "/noise_stddev_corrected",
+                of<float>(shots, [](const Shot& s) { return s.noise_stddev; }),
+                {"counts", "Noise standard deviation (the samples before the signal begins)"});
 }
 
 // L1B's ancillary epoch and geolocation group.
 template <typename Shot>
-void write_l1b_geolocation(Hdf5File& f, const std::string& g,
+void write_l1b_geolocation(Hdf5Writer& f, const std::string& g,
                            const std::vector<const Shot*>& shots) {
   const std::string geo = g + "/geolocation/";
-  f.write(g + "/ancillary/master_time_epoch", std::vector<double>{kGediMasterTimeEpoch},
-          {"seconds", "GPS seconds of 2018-01-01T00:00:00Z, the epoch of delta_time"});
-  f.write(geo + "shot_number",
-          of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
-          {"counter", "Unique shot ID."});
-  f.write(geo + "delta_time", of<double>(shots, [](const Shot& s) { return s.delta_time; }),
-          {"seconds since 2018-01-01", "Transmit time of the shot"});
-  f.write(geo + "elevation_bin0", of<double>(shots, [](const Shot& s) { return s.elev_bin0; }),
-          {"meters", "Elevation of the first RX sample above the WGS84 ellipsoid"});
-  f.write(geo + "elevation_lastbin",
-          of<double>(shots, [](const Shot& s) { return s.elev_lastbin; }),
-          {"meters", "Elevation of the last RX sample above the WGS84 ellipsoid"});
-  f.write(geo + "latitude_bin0", of<double>(shots, [](const Shot& s) { return s.bin0.lat_deg; }),
-          {"degrees", "Latitude of the first RX sample"});
-  f.write(geo + "longitude_bin0", of<double>(shots, [](const Shot& s) { return s.bin0.lon_deg; }),
-          {"degrees", "Longitude of the first RX sample"});
-  f.write(geo + "latitude_lastbin",
-          of<double>(shots, [](const Shot& s) { return s.lastbin.lat_deg; }),
-          {"degrees", "Latitude of the last RX sample"});
-  f.write(geo + "longitude_lastbin",
-          of<double>(shots, [](const Shot& s) { return s.lastbin.lon_deg; }),
-          {"degrees", "Longitude of the last RX sample"});
-  f.write(
-      geo + "digital_elevation_model",
+  write_dataset(f, g + "/ancillary/master_time_epoch", std::vector<double>{kGediMasterTimeEpoch},
+                {"seconds", "GPS seconds of 2018-01-01T00:00:00Z, the epoch of delta_time"});
+  write_dataset(f, geo + "shot_number",
+                of<std::uint64_t>(shots, [](const Shot& s) { return s.shot_number; }),
+                {"counter", "Unique shot ID."});
+  write_dataset(f, geo + "delta_time",
+                of<double>(shots, [](const Shot& s) { return s.delta_time; }),
+                {"seconds since 2018-01-01", "Transmit time of the shot"});
+  write_dataset(f, geo + "elevation_bin0",
+                of<double>(shots, [](const Shot& s) { return s.elev_bin0; }),
+                {"meters", "Elevation of the first RX sample above the WGS84 ellipsoid"});
+  write_dataset(f, geo + "elevation_lastbin",
+                of<double>(shots, [](const Shot& s) { return s.elev_lastbin; }),
+                {"meters", "Elevation of the last RX sample above the WGS84 ellipsoid"});
+  write_dataset(f, geo + "latitude_bin0",
+                of<double>(shots, [](const Shot& s) { return s.bin0.lat_deg; }),
+                {"degrees", "Latitude of the first RX sample"});
+  write_dataset(f, geo + "longitude_bin0",
+                of<double>(shots, [](const Shot& s) { return s.bin0.lon_deg; }),
+                {"degrees", "Longitude of the first RX sample"});
+  write_dataset(f, geo + "latitude_lastbin",
+                of<double>(shots, [](const Shot& s) { return s.lastbin.lat_deg; }),
+                {"degrees", "Latitude of the last RX sample"});
+  write_dataset(f, geo + "longitude_lastbin",
+                of<double>(shots, [](const Shot& s) { return s.lastbin.lon_deg; }),
+                {"degrees", "Longitude of the last RX sample"});
+  write_dataset(
+      f, geo + "digital_elevation_model",
       of<float>(shots, [](const Shot& s) { return or_fill(s.dem); }),
       {"meters", "The simulation's terrain under the footprint centre, above WGS84", kGediFill});
-  f.write(geo + "solar_elevation",
-          of<float>(shots, [](const Shot& s) { return s.solar_elevation; }),
-          {"degrees", "The sun's elevation at the footprint (geometric, ERFA)"});
-  f.write(geo + "solar_azimuth", of<float>(shots, [](const Shot& s) { return s.solar_azimuth; }),
-          {"degrees", "The sun's azimuth at the footprint, east of north (ERFA)"});
-  f.write(geo + "degrade_flag", of<std::uint8_t>(shots, [](const Shot& s) { return s.degrade; }),
-          {"counter", "The granule track's degrade_flag, 0 for a synthetic track"});
+  write_dataset(f, geo + "solar_elevation",
+                of<float>(shots, [](const Shot& s) { return s.solar_elevation; }),
+                {"degrees", "The sun's elevation at the footprint (geometric, ERFA)"});
+  write_dataset(f, geo + "solar_azimuth",
+                of<float>(shots, [](const Shot& s) { return s.solar_azimuth; }),
+                {"degrees", "The sun's azimuth at the footprint, east of north (ERFA)"});
+  write_dataset(f, geo + "degrade_flag",
+                of<std::uint8_t>(shots, [](const Shot& s) { return s.degrade; }),
+                {"counter", "The granule track's degrade_flag, 0 for a synthetic track"});
 }
 
 // The footprint's truth both levels end their glaswave_truth group with.
 template <typename Shot>
-void write_footprint_truth(Hdf5File& f, const std::string& truth,
+void write_footprint_truth(Hdf5Writer& f, const std::string& truth,
                            const std::vector<const Shot*>& shots) {
-  f.write(truth + "cover", of<float>(shots, [](const Shot& s) { return or_fill(s.cover); }),
-          {"1", "Crown cover over the footprint, beam-weighted", kGediFill});
-  f.write(truth + "pai", of<float>(shots, [](const Shot& s) { return or_fill(s.pai); }),
-          {"1", "Plant area index over the footprint, beam-weighted", kGediFill});
-  f.write(truth + "canopy_height",
-          of<float>(shots, [](const Shot& s) { return or_fill(s.height); }),
-          {"meters", "Canopy height over the footprint, beam-weighted", kGediFill});
+  write_dataset(f, truth + "cover",
+                of<float>(shots, [](const Shot& s) { return or_fill(s.cover); }),
+                {"1", "Crown cover over the footprint, beam-weighted", kGediFill});
+  write_dataset(f, truth + "pai", of<float>(shots, [](const Shot& s) { return or_fill(s.pai); }),
+                {"1", "Plant area index over the footprint, beam-weighted", kGediFill});
+  write_dataset(f, truth + "canopy_height",
+                of<float>(shots, [](const Shot& s) { return or_fill(s.height); }),
+                {"meters", "Canopy height over the footprint, beam-weighted", kGediFill});
 }
 
 }  // namespace
 
-void GediGranuleWriter::write_l1b_beam(Hdf5File& f, const std::string& g,
+void GediGranuleWriter::write_l1b_beam(Hdf5Writer& f, const std::string& g,
                                        const std::vector<const Shot*>& shots) {
   write_shot_ids(f, g, shots, "Transmit time of the shot, since master_time_epoch");
   const Concatenated w = concatenate(shots, tx_counts_);
   write_l1b_waveforms(f, g, shots, w);
   write_l1b_geolocation(f, g, shots);
   const std::string truth = g + "/glaswave_truth/";
-  f.group(g + "/glaswave_truth",
-          "The simulation's truth, not a GEDI product field: the parts of rxwaveform last "
-          "scattered by vegetation and by the ground, and the footprint's cover, PAI and height");
-  f.write(
-      truth + "rxwaveform_canopy", w.canopy,
+  described_group(
+      f, g + "/glaswave_truth",
+      "The simulation's truth, not a GEDI product field: the parts of rxwaveform last "
+      "scattered by vegetation and by the ground, and the footprint's cover, PAI and height");
+  write_dataset(
+      f, truth + "rxwaveform_canopy", w.canopy,
       {"counts", "The part of rxwaveform last scattered by vegetation (same indices)", kGediFill});
-  f.write(
-      truth + "rxwaveform_ground", w.ground,
+  write_dataset(
+      f, truth + "rxwaveform_ground", w.ground,
       {"counts", "The part of rxwaveform last scattered by the ground (same indices)", kGediFill});
-  f.write(truth + "rx_energy_canopy",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.energy_canopy_J); }),
-          {"J", "Received energy last scattered by vegetation", kGediFill});
-  f.write(truth + "rx_energy_ground",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.energy_ground_J); }),
-          {"J", "Received energy last scattered by the ground", kGediFill});
+  write_dataset(f, truth + "rx_energy_canopy",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.energy_canopy_J); }),
+                {"J", "Received energy last scattered by vegetation", kGediFill});
+  write_dataset(f, truth + "rx_energy_ground",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.energy_ground_J); }),
+                {"J", "Received energy last scattered by the ground", kGediFill});
   write_footprint_truth(f, truth, shots);
 }
 
-void GediGranuleWriter::write_l2a_beam(Hdf5File& f, const std::string& g,
+void GediGranuleWriter::write_l2a_beam(Hdf5Writer& f, const std::string& g,
                                        const std::vector<const Shot*>& shots) {
   write_shot_ids(f, g, shots, "Transmit time of the shot since 2018-01-01T00:00:00Z");
-  f.write(g + "/lat_lowestmode",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.lowest.lat_deg); }),
-          {"degrees", "Latitude of the center of the lowest mode", kGediFill});
-  f.write(g + "/lon_lowestmode",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.lowest.lon_deg); }),
-          {"degrees", "Longitude of the center of the lowest mode", kGediFill});
-  f.write(g + "/elev_lowestmode",
-          of<float>(shots, [](const Shot& s) { return or_fill(s.elev_lowest); }),
-          {"meters", "Elevation of the center of the lowest mode above the WGS84 ellipsoid",
-           kGediFill});
-  f.write(g + "/lat_highestreturn",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.highest.lat_deg); }),
-          {"degrees", "Latitude of the highest detected return", kGediFill});
-  f.write(g + "/lon_highestreturn",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.highest.lon_deg); }),
-          {"degrees", "Longitude of the highest detected return", kGediFill});
-  f.write(
-      g + "/elev_highestreturn",
+  write_dataset(f, g + "/lat_lowestmode",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.lowest.lat_deg); }),
+                {"degrees", "Latitude of the center of the lowest mode", kGediFill});
+  write_dataset(f, g + "/lon_lowestmode",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.lowest.lon_deg); }),
+                {"degrees", "Longitude of the center of the lowest mode", kGediFill});
+  write_dataset(f, g + "/elev_lowestmode",
+                of<float>(shots, [](const Shot& s) { return or_fill(s.elev_lowest); }),
+                {"meters", "Elevation of the center of the lowest mode above the WGS84 ellipsoid",
+                 kGediFill});
+  write_dataset(f, g + "/lat_highestreturn",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.highest.lat_deg); }),
+                {"degrees", "Latitude of the highest detected return", kGediFill});
+  write_dataset(f, g + "/lon_highestreturn",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.highest.lon_deg); }),
+                {"degrees", "Longitude of the highest detected return", kGediFill});
+  write_dataset(
+      f, g + "/elev_highestreturn",
       of<float>(shots, [](const Shot& s) { return or_fill(s.elev_highest); }),
       {"meters", "Elevation of the highest detected return above the WGS84 ellipsoid", kGediFill});
   std::vector<float> rh;
   for (const Shot* s : shots) rh.insert(rh.end(), s->rh.begin(), s->rh.end());
-  f.write(g + "/rh", rh,
-          {"meters", "Relative height metrics rh0..rh100 above the lowest mode", kGediFill},
-          {shots.size(), 101});
-  f.write(g + "/num_detectedmodes", of<std::uint8_t>(shots, [](const Shot& s) { return s.modes; }),
-          {"counter", "Number of detected modes in the waveform"});
-  f.write(g + "/quality_flag", of<std::uint8_t>(shots, [](const Shot& s) { return s.quality; }),
-          {"counter", "1 for a valid waveform, 0 for none"});
-  f.write(g + "/degrade_flag", of<std::uint8_t>(shots, [](const Shot& s) { return s.degrade; }),
-          {"counter", "The granule track's degrade_flag, 0 for a synthetic track"});
-  f.write(g + "/sensitivity", of<float>(shots, [](const Shot& s) { return s.sensitivity; }),
-          {"1",
-           "Largest canopy cover whose ground return stays detectable (glaswave's "
-           "definition, docs/granules.md)",
-           kGediFill});
-  f.write(g + "/solar_elevation", of<float>(shots, [](const Shot& s) { return s.solar_elevation; }),
-          {"degrees", "The sun's elevation at the footprint (geometric, ERFA)"});
-  f.write(g + "/solar_azimuth", of<float>(shots, [](const Shot& s) { return s.solar_azimuth; }),
-          {"degrees", "The sun's azimuth at the footprint, east of north (ERFA)"});
-  f.write(
-      g + "/digital_elevation_model",
+  write_dataset(f, g + "/rh", rh,
+                {"meters", "Relative height metrics rh0..rh100 above the lowest mode", kGediFill},
+                {shots.size(), 101});
+  write_dataset(f, g + "/num_detectedmodes",
+                of<std::uint8_t>(shots, [](const Shot& s) { return s.modes; }),
+                {"counter", "Number of detected modes in the waveform"});
+  write_dataset(f, g + "/quality_flag",
+                of<std::uint8_t>(shots, [](const Shot& s) { return s.quality; }),
+                {"counter", "1 for a valid waveform, 0 for none"});
+  write_dataset(f, g + "/degrade_flag",
+                of<std::uint8_t>(shots, [](const Shot& s) { return s.degrade; }),
+                {"counter", "The granule track's degrade_flag, 0 for a synthetic track"});
+  write_dataset(f, g + "/sensitivity",
+                of<float>(shots, [](const Shot& s) { return s.sensitivity; }),
+                {"1",
+                 "Largest canopy cover whose ground return stays detectable (glaswave's "
+                 "definition, docs/granules.md)",
+                 kGediFill});
+  write_dataset(f, g + "/solar_elevation",
+                of<float>(shots, [](const Shot& s) { return s.solar_elevation; }),
+                {"degrees", "The sun's elevation at the footprint (geometric, ERFA)"});
+  write_dataset(f, g + "/solar_azimuth",
+                of<float>(shots, [](const Shot& s) { return s.solar_azimuth; }),
+                {"degrees", "The sun's azimuth at the footprint, east of north (ERFA)"});
+  write_dataset(
+      f, g + "/digital_elevation_model",
       of<float>(shots, [](const Shot& s) { return or_fill(s.dem); }),
       {"meters", "The simulation's terrain under the footprint centre, above WGS84", kGediFill});
   const std::string truth = g + "/glaswave_truth/";
-  f.group(g + "/glaswave_truth",
-          "The simulation's truth, not a GEDI product field: the footprint's cover, PAI and "
-          "canopy height, beam-weighted");
+  described_group(
+      f, g + "/glaswave_truth",
+      "The simulation's truth, not a GEDI product field: the footprint's cover, PAI and "
+      "canopy height, beam-weighted");
   write_footprint_truth(f, truth, shots);
 }
 

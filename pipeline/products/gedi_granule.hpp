@@ -43,13 +43,13 @@ class GediGranuleWriter : public Hdf5GranuleWriter {
     std::vector<float> rx, rx_canopy, rx_ground, rh;
   };
   void keep(std::int64_t index, const ShotRecord& shot) override;
-  void write_file(Hdf5File& file) override;
+  void write_file(Hdf5Writer& file) override;
   // What both levels' beam groups begin with: shot_number, delta_time, beam, channel.
-  static void write_shot_ids(Hdf5File& file, const std::string& group,
+  static void write_shot_ids(Hdf5Writer& file, const std::string& group,
                              const std::vector<const Shot*>& shots, const char* delta_time_meaning);
-  void write_l1b_beam(Hdf5File& file, const std::string& group,
+  void write_l1b_beam(Hdf5Writer& file, const std::string& group,
                       const std::vector<const Shot*>& shots);
-  void write_l2a_beam(Hdf5File& file, const std::string& group,
+  void write_l2a_beam(Hdf5Writer& file, const std::string& group,
                       const std::vector<const Shot*>& shots);
 
   GediLevel level_;

@@ -146,113 +146,127 @@ namespace {
 
 // GLAH01: the received and transmitted waveforms, and their truth.
 template <typename Shot>
-void write_glah01(Hdf5File& f, const std::string& d, const std::vector<Shot>& shots,
+void write_glah01(Hdf5Writer& f, const std::string& d, const std::vector<Shot>& shots,
                   std::size_t bins, const std::vector<float>& tx) {
-  const hsize_t n = shots.size();
-  f.write(d + "Waveform/RecWaveform/r_rng_wf",
-          rows(shots, bins, [](const Shot& s) -> const std::vector<float>& { return s.rx; }),
-          {"counts", "Received waveform, in digitiser counts (bin 0 first in time)"}, {n, bins});
+  const std::uint64_t n = shots.size();
+  write_dataset(f, d + "Waveform/RecWaveform/r_rng_wf",
+                rows(shots, bins, [](const Shot& s) -> const std::vector<float>& { return s.rx; }),
+                {"counts", "Received waveform, in digitiser counts (bin 0 first in time)"},
+                {n, bins});
   std::vector<float> all_tx;
-  for (hsize_t i = 0; i < n; ++i) all_tx.insert(all_tx.end(), tx.begin(), tx.end());
-  f.write(d + "Waveform/TransmitWaveform/r_tx_wf", all_tx,
-          {"counts", "Transmitted waveform, in digitiser counts"}, {n, tx.size()});
-  f.group(d + "glaswave_truth",
-          "The simulation's truth, not a GLAS product field: the parts of r_rng_wf last "
-          "scattered by vegetation and by the ground");
-  f.write(d + "glaswave_truth/r_rng_wf_canopy",
-          rows(shots, bins, [](const Shot& s) -> const std::vector<float>& { return s.rx_canopy; }),
-          {"counts", "The part of r_rng_wf last scattered by vegetation"}, {n, bins});
-  f.write(d + "glaswave_truth/r_rng_wf_ground",
-          rows(shots, bins, [](const Shot& s) -> const std::vector<float>& { return s.rx_ground; }),
-          {"counts", "The part of r_rng_wf last scattered by the ground"}, {n, bins});
+  for (std::uint64_t i = 0; i < n; ++i) all_tx.insert(all_tx.end(), tx.begin(), tx.end());
+  write_dataset(f, d + "Waveform/TransmitWaveform/r_tx_wf", all_tx,
+                {"counts", "Transmitted waveform, in digitiser counts"}, {n, tx.size()});
+  described_group(f, d + "glaswave_truth",
+                  "The simulation's truth, not a GLAS product field: the parts of r_rng_wf last "
+                  "scattered by vegetation and by the ground");
+  write_dataset(
+      f, d + "glaswave_truth/r_rng_wf_canopy",
+      rows(shots, bins, [](const Shot& s) -> const std::vector<float>& { return s.rx_canopy; }),
+      {"counts", "The part of r_rng_wf last scattered by vegetation"}, {n, bins});
+  write_dataset(
+      f, d + "glaswave_truth/r_rng_wf_ground",
+      rows(shots, bins, [](const Shot& s) -> const std::vector<float>& { return s.rx_ground; }),
+      {"counts", "The part of r_rng_wf last scattered by the ground"}, {n, bins});
 }
 
 // GLAH14: where the footprint is, its elevations, reflectivity and peak count.
 template <typename Shot>
-void write_glah14_surfaces(Hdf5File& f, const std::string& d, const std::vector<Shot>& shots,
+void write_glah14_surfaces(Hdf5Writer& f, const std::string& d, const std::vector<Shot>& shots,
                            const char* heights) {
   const Hdf5Attributes deg_n{"degrees_north", "Latitude of the footprint centre", kGlasFill};
-  f.write(d + "Geolocation/d_lat", of<double>(shots, [](const Shot& s) { return or_fill(s.lat); }),
-          deg_n);
-  f.write(d + "Geolocation/d_lon", of<double>(shots, [](const Shot& s) { return or_fill(s.lon); }),
-          {"degrees_east", "Longitude of the footprint centre, 0 to 360 east", kGlasFill});
-  f.write(d + "Elevation_Surfaces/d_elev",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.elev); }),
-          {heights, "Land surface elevation: the waveform's centroid between signal begin and end",
-           kGlasFill});
-  f.write(d + "Geophysical/d_DEM_elv",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.dem); }),
-          {heights, "The simulation's terrain under the footprint centre", kGlasFill});
-  f.write(d + "Geophysical/d_deltaEllip",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.delta_ellip); }),
-          {"meters", "WGS84 height less TOPEX/Poseidon height of the footprint", kGlasFill});
-  f.write(
-      d + "Reflectivity/d_reflctUC",
+  write_dataset(f, d + "Geolocation/d_lat",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.lat); }), deg_n);
+  write_dataset(f, d + "Geolocation/d_lon",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.lon); }),
+                {"degrees_east", "Longitude of the footprint centre, 0 to 360 east", kGlasFill});
+  write_dataset(
+      f, d + "Elevation_Surfaces/d_elev",
+      of<double>(shots, [](const Shot& s) { return or_fill(s.elev); }),
+      {heights, "Land surface elevation: the waveform's centroid between signal begin and end",
+       kGlasFill});
+  write_dataset(f, d + "Geophysical/d_DEM_elv",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.dem); }),
+                {heights, "The simulation's terrain under the footprint centre", kGlasFill});
+  write_dataset(f, d + "Geophysical/d_deltaEllip",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.delta_ellip); }),
+                {"meters", "WGS84 height less TOPEX/Poseidon height of the footprint", kGlasFill});
+  write_dataset(
+      f, d + "Reflectivity/d_reflctUC",
       of<double>(shots, [](const Shot& s) { return or_fill(s.reflectance_uc); }),
       {"1", "Reflectivity not corrected for the atmosphere: pi E_rec R^2 / (E_t A_t)", kGlasFill});
-  f.write(d + "Waveform/i_numPk", of<std::int32_t>(shots, [](const Shot& s) { return s.peaks; }),
-          {"counter", "Number of Gaussian peaks fitted"});
+  write_dataset(f, d + "Waveform/i_numPk",
+                of<std::int32_t>(shots, [](const Shot& s) { return s.peaks; }),
+                {"counter", "Number of Gaussian peaks fitted"});
 }
 
 // GLAH14: the Gaussians (six a shot, the first the lowest) and the signal's offsets.
 template <typename Shot>
-void write_glah14_offsets(Hdf5File& f, const std::string& d, const std::vector<Shot>& shots) {
-  const hsize_t n = shots.size();
+void write_glah14_offsets(Hdf5Writer& f, const std::string& d, const std::vector<Shot>& shots) {
+  const std::uint64_t n = shots.size();
   auto six = [&](auto member) {
     std::vector<double> values;
     for (const Shot& s : shots)
       for (int i = 0; i < 6; ++i) values.push_back(or_fill((s.*member)[i]));
     return values;
   };
-  f.write(d + "Waveform/d_Gamp", six(&Shot::amp),
-          {"counts", "Amplitude of each Gaussian, the first the last (lowest) peak", kGlasFill},
-          {n, 6});
-  f.write(d + "Waveform/d_Garea", six(&Shot::area),
-          {"counts ns", "Area of each Gaussian", kGlasFill}, {n, 6});
-  f.write(d + "Waveform/d_Gsigma", six(&Shot::sigma),
-          {"ns", "Standard deviation of each Gaussian", kGlasFill}, {n, 6});
-  f.write(d + "Elevation_Offsets/d_SigBegOff",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.begin_off); }),
-          {"meters", "Signal begin range offset: its elevation is d_elev less it", kGlasFill});
-  f.write(d + "Elevation_Offsets/d_SigEndOff",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.end_off); }),
-          {"meters", "Signal end range offset: its elevation is d_elev less it", kGlasFill});
-  f.write(d + "Elevation_Offsets/d_gpCntRngOff", six(&Shot::center_off),
-          {"meters", "Range offset of each Gaussian's centre: its elevation is d_elev less it",
-           kGlasFill},
-          {n, 6});
+  write_dataset(
+      f, d + "Waveform/d_Gamp", six(&Shot::amp),
+      {"counts", "Amplitude of each Gaussian, the first the last (lowest) peak", kGlasFill},
+      {n, 6});
+  write_dataset(f, d + "Waveform/d_Garea", six(&Shot::area),
+                {"counts ns", "Area of each Gaussian", kGlasFill}, {n, 6});
+  write_dataset(f, d + "Waveform/d_Gsigma", six(&Shot::sigma),
+                {"ns", "Standard deviation of each Gaussian", kGlasFill}, {n, 6});
+  write_dataset(
+      f, d + "Elevation_Offsets/d_SigBegOff",
+      of<double>(shots, [](const Shot& s) { return or_fill(s.begin_off); }),
+      {"meters", "Signal begin range offset: its elevation is d_elev less it", kGlasFill});
+  write_dataset(f, d + "Elevation_Offsets/d_SigEndOff",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.end_off); }),
+                {"meters", "Signal end range offset: its elevation is d_elev less it", kGlasFill});
+  write_dataset(
+      f, d + "Elevation_Offsets/d_gpCntRngOff", six(&Shot::center_off),
+      {"meters", "Range offset of each Gaussian's centre: its elevation is d_elev less it",
+       kGlasFill},
+      {n, 6});
 }
 
 // GLAH14: the footprint's truth.
 template <typename Shot>
-void write_glah14_truth(Hdf5File& f, const std::string& d, const std::vector<Shot>& shots) {
-  f.group(d + "glaswave_truth",
-          "The simulation's truth, not a GLAS product field: the footprint's cover, PAI and "
-          "canopy height, beam-weighted");
-  f.write(d + "glaswave_truth/cover",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.cover); }),
-          {"1", "Crown cover over the footprint, beam-weighted", kGlasFill});
-  f.write(d + "glaswave_truth/pai", of<double>(shots, [](const Shot& s) { return or_fill(s.pai); }),
-          {"1", "Plant area index over the footprint, beam-weighted", kGlasFill});
-  f.write(d + "glaswave_truth/canopy_height",
-          of<double>(shots, [](const Shot& s) { return or_fill(s.height); }),
-          {"meters", "Canopy height over the footprint, beam-weighted", kGlasFill});
+void write_glah14_truth(Hdf5Writer& f, const std::string& d, const std::vector<Shot>& shots) {
+  described_group(
+      f, d + "glaswave_truth",
+      "The simulation's truth, not a GLAS product field: the footprint's cover, PAI and "
+      "canopy height, beam-weighted");
+  write_dataset(f, d + "glaswave_truth/cover",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.cover); }),
+                {"1", "Crown cover over the footprint, beam-weighted", kGlasFill});
+  write_dataset(f, d + "glaswave_truth/pai",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.pai); }),
+                {"1", "Plant area index over the footprint, beam-weighted", kGlasFill});
+  write_dataset(f, d + "glaswave_truth/canopy_height",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.height); }),
+                {"meters", "Canopy height over the footprint, beam-weighted", kGlasFill});
 }
 
 }  // namespace
 
-void GlasGranuleWriter::write_file(Hdf5File& f) {
+void GlasGranuleWriter::write_file(Hdf5Writer& f) {
   const std::string d = "Data_40HZ/";
   const char* heights =
       topex_ ? "meters above the TOPEX/Poseidon ellipsoid" : "meters above the WGS84 ellipsoid";
-  f.group("Data_40HZ");
-  f.string_attribute("Data_40HZ", "glaswave_ellipsoid", topex_ ? "topex" : "wgs84");
-  f.write(d + "Time/d_UTCTime_40", of<double>(shots_, [](const Shot& s) { return s.time; }),
-          {"seconds since 2000-01-01 12:00:00 UTC", "Transmit time of each 40 Hz shot"});
-  f.write(d + "Time/i_rec_ndx", of<std::int32_t>(shots_, [](const Shot& s) { return s.record; }),
-          {"counter", "Record index: the 1 s record of the shot"});
-  f.write(d + "Time/i_shot_count", of<std::int16_t>(shots_, [](const Shot& s) { return s.count; }),
-          {"counter", "The shot within its record, 1 to 40"});
+  described_group(f, "Data_40HZ");
+  f.text_attribute("Data_40HZ", "glaswave_ellipsoid", topex_ ? "topex" : "wgs84");
+  write_dataset(f, d + "Time/d_UTCTime_40",
+                of<double>(shots_, [](const Shot& s) { return s.time; }),
+                {"seconds since 2000-01-01 12:00:00 UTC", "Transmit time of each 40 Hz shot"});
+  write_dataset(f, d + "Time/i_rec_ndx",
+                of<std::int32_t>(shots_, [](const Shot& s) { return s.record; }),
+                {"counter", "Record index: the 1 s record of the shot"});
+  write_dataset(f, d + "Time/i_shot_count",
+                of<std::int16_t>(shots_, [](const Shot& s) { return s.count; }),
+                {"counter", "The shot within its record, 1 to 40"});
   if (level_ == GlasLevel::glah01) {
     std::vector<float> tx;
     if (band_ < info().tx_waveform_W.size())

@@ -43,7 +43,7 @@ class GlasGranuleWriter : public Hdf5GranuleWriter {
     std::vector<float> rx, rx_canopy, rx_ground;
   };
   void keep(std::int64_t index, const ShotRecord& shot) override;
-  void write_file(Hdf5File& file) override;
+  void write_file(Hdf5Writer& file) override;
 
   GlasLevel level_;
   bool topex_;

@@ -1,11 +1,9 @@
-// What the HDF5 granule writers (GEDI L1B/L2A-style, GLAS GLAH01/GLAH14-style) share: a small
-// RAII writer of whole datasets with their attributes, and a ProductWriter that keeps each
+// What the HDF5 granule writers (GEDI L1B/L2A-style, GLAS GLAH01/GLAH14-style) share: their
+// datasets' attributes as the dictionaries give them, and a ProductWriter that keeps each
 // shot's few values (a waveform as float32) until finish(), then writes the file under
 // FINAL.part and renames it (core/atomic_file.hpp). Records reach writers in shot order, so
 // the granule of a resumed or an MPI run is the same bits as an uninterrupted one's.
 #pragma once
-
-#include <hdf5.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -15,6 +13,7 @@
 #include <vector>
 
 #include "core/atomic_file.hpp"
+#include "core/hdf5_file.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/shot_record.hpp"
 
@@ -30,35 +29,21 @@ struct Hdf5Attributes {
   std::optional<double> fill;  // _FillValue, in the dataset's own type
 };
 
-// A new HDF5 file, written one whole dataset at a time; groups on a path are made as needed.
-// Arrays of more than a few thousand values are chunked and deflated. Throws a run Error naming
-// the file on any failure.
-class Hdf5File {
- public:
-  explicit Hdf5File(const std::filesystem::path& path);
-  ~Hdf5File();
-  Hdf5File(const Hdf5File&) = delete;
-  Hdf5File& operator=(const Hdf5File&) = delete;
+// Writes a dataset with the GEDI and GLAS dictionaries' attributes through the one HDF5 layer
+// (core/hdf5_file.hpp). T: double, float, uint64, int32, uint16, int16, uint8.
+template <typename T>
+void write_dataset(Hdf5Writer& file, const std::string& path, const std::vector<T>& values,
+                   const Hdf5Attributes& attrs, const std::vector<std::uint64_t>& dims = {}) {
+  std::vector<Hdf5Attribute> text;
+  if (attrs.units) text.push_back({"units", attrs.units});
+  if (attrs.description) text.push_back({"description", attrs.description});
+  std::optional<T> fill;
+  if (attrs.fill) fill = static_cast<T>(*attrs.fill);
+  file.write(path, values, text, dims, fill);
+}
 
-  // `values` laid out C-order over `dims` (one dimension of values.size() when empty).
-  // T: double, float, uint64, int32, uint16, int16, uint8.
-  template <typename T>
-  void write(const std::string& path, const std::vector<T>& values, const Hdf5Attributes& attrs,
-             std::vector<hsize_t> dims = {});
-  void group(const std::string& path, const char* description = nullptr);
-  void string_attribute(const std::string& object, const char* name, const std::string& value);
-  void double_attribute(const std::string& object, const char* name, double value);
-  // Flushes and closes; throws when the file cannot be completed.
-  void close();
-
- private:
-  void write_raw(const std::string& path, hid_t file_type, hid_t memory_type, const void* data,
-                 std::size_t count, std::vector<hsize_t> dims, const Hdf5Attributes& attrs);
-  void check(bool ok, const std::string& what) const;
-  std::string path_;
-  hid_t file_ = -1;
-  hid_t link_ = -1;
-};
+// A group with its description.
+void described_group(Hdf5Writer& file, const std::string& path, const char* description = nullptr);
 
 // The band a single-band product takes from a run: the one nearest `wavelength_nm`.
 std::size_t nearest_band(const RunInfo& info, double wavelength_nm);
@@ -98,7 +83,7 @@ class Hdf5GranuleWriter : public ProductWriter {
   // What the granule keeps of a shot (a copy of its record, its waveforms as float32 counts).
   virtual void keep(std::int64_t index, const ShotRecord& shot) = 0;
   // Writes every dataset; `file` is closed and renamed after.
-  virtual void write_file(Hdf5File& file) = 0;
+  virtual void write_file(Hdf5Writer& file) = 0;
 
   const RunInfo& info() const { return info_; }
 

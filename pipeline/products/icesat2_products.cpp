@@ -1,8 +1,6 @@
-// The ATL03- and ATL08-like granules, written with the HDF5 C library: no object time stamps, so
-// that the same photons give the same bytes.
+// The ATL03- and ATL08-like granules, written through the one HDF5 layer (core/hdf5_file.hpp): no
+// object time stamps, so that the same photons give the same bytes.
 #include "pipeline/products/icesat2_products.hpp"
-
-#include <hdf5.h>
 
 #include <algorithm>
 #include <array>
@@ -15,6 +13,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/glas_time.hpp"
+#include "core/hdf5_file.hpp"
 #include "core/netcdf_lock.hpp"
 
 namespace glaswave {
@@ -23,51 +22,6 @@ namespace {
 constexpr float fill_float = std::numeric_limits<float>::max();  // ATL08's 3.4028235e+38
 constexpr double segment_20m = 20.0;
 
-// An HDF5 identifier closed with its own close function when it goes.
-class Handle {
- public:
-  Handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(id), close_(close) {
-    if (id_ < 0) throw run_error(what, "HDF5 could not create it");
-  }
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-  ~Handle() {
-    if (id_ >= 0) close_(id_);
-  }
-  hid_t get() const { return id_; }
-  void close(const std::string& what) {
-    const herr_t status = close_(id_);
-    id_ = -1;
-    if (status < 0) throw run_error(what, "HDF5 could not complete it");
-  }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
-
-template <typename T>
-hid_t memory_type() {
-  if constexpr (std::is_same_v<T, double>) return H5T_NATIVE_DOUBLE;
-  if constexpr (std::is_same_v<T, float>) return H5T_NATIVE_FLOAT;
-  if constexpr (std::is_same_v<T, std::int64_t>) return H5T_NATIVE_INT64;
-  if constexpr (std::is_same_v<T, std::int32_t>) return H5T_NATIVE_INT32;
-  if constexpr (std::is_same_v<T, std::int16_t>) return H5T_NATIVE_INT16;
-  if constexpr (std::is_same_v<T, std::int8_t>) return H5T_NATIVE_INT8;
-  if constexpr (std::is_same_v<T, std::uint8_t>) return H5T_NATIVE_UINT8;
-}
-
-template <typename T>
-hid_t file_type() {
-  if constexpr (std::is_same_v<T, double>) return H5T_IEEE_F64LE;
-  if constexpr (std::is_same_v<T, float>) return H5T_IEEE_F32LE;
-  if constexpr (std::is_same_v<T, std::int64_t>) return H5T_STD_I64LE;
-  if constexpr (std::is_same_v<T, std::int32_t>) return H5T_STD_I32LE;
-  if constexpr (std::is_same_v<T, std::int16_t>) return H5T_STD_I16LE;
-  if constexpr (std::is_same_v<T, std::int8_t>) return H5T_STD_I8LE;
-  if constexpr (std::is_same_v<T, std::uint8_t>) return H5T_STD_U8LE;
-}
-
 // A dataset's attributes, as the data dictionaries give them: units, long_name, contentType
 // (physicalMeasurement, referenceInformation, modelResult, qualityInformation,
 // auxiliaryInformation) and a description (where the simulation's value comes from).
@@ -75,95 +29,57 @@ struct Meta {
   std::string units, long_name, content_type, description;
 };
 
+// A group of the granule, named by its path.
+class Group {
+ public:
+  explicit Group(std::string path) : path_(std::move(path)) {}
+  const std::string& get() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+// A granule written under FINAL.part through the one HDF5 layer (core/hdf5_file.hpp), renamed
+// when finished.
 class Granule {
  public:
-  explicit Granule(const std::filesystem::path& path)
-      : file_(path),
-        where_(path.string()),
-        id_(H5Fcreate(file_.part_path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
-            where_) {}
+  explicit Granule(const std::filesystem::path& path) : file_(path), h5_(file_.part_path()) {}
 
-  hid_t file() const { return id_.get(); }
+  const std::string& file() const { return root_; }
 
-  Handle group(hid_t parent, const std::string& name) const {
-    Handle properties(H5Pcreate(H5P_GROUP_CREATE), H5Pclose, where_);
-    H5Pset_obj_track_times(properties.get(), false);
-    return Handle(H5Gcreate2(parent, name.c_str(), H5P_DEFAULT, properties.get(), H5P_DEFAULT),
-                  H5Gclose, where_ + ": " + name);
+  Group group(const std::string& parent, const std::string& name) {
+    Group g(parent == "/" ? "/" + name : parent + "/" + name);
+    h5_.group(g.get());
+    return g;
   }
 
-  // A dataset of `rows` x `columns` (columns 0: one dimension), chunked and compressed when
-  // large, with its attributes; with `fill`, the type's largest value is its _FillValue (the
-  // products' 3.4028235e+38 for float32, 127 for int8).
+  // A dataset of `rows` x `columns` (columns 0: one dimension) with its attributes; with
+  // `fill`, the type's largest value is its _FillValue (the products' 3.4028235e+38 for
+  // float32, 127 for int8).
   template <typename T>
-  void dataset(hid_t parent, const std::string& name, const std::vector<T>& values,
-               const Meta& meta, std::size_t columns = 0, bool fill = false) const {
-    const std::string what = where_ + ": " + name;
-    const hsize_t rows = columns ? values.size() / columns : values.size();
-    const hsize_t dims[2] = {rows, static_cast<hsize_t>(columns)};
-    Handle space(H5Screate_simple(columns ? 2 : 1, dims, nullptr), H5Sclose, what);
-    Handle properties(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, what);
-    H5Pset_obj_track_times(properties.get(), false);
-    if (rows >= 1024) {
-      const hsize_t chunk[2] = {std::min<hsize_t>(rows, 10000), static_cast<hsize_t>(columns)};
-      H5Pset_chunk(properties.get(), columns ? 2 : 1, chunk);
-      H5Pset_shuffle(properties.get());
-      H5Pset_deflate(properties.get(), 4);
-    }
-    const T fill_value = std::numeric_limits<T>::max();
-    if (fill) H5Pset_fill_value(properties.get(), memory_type<T>(), &fill_value);
-    Handle set(H5Dcreate2(parent, name.c_str(), file_type<T>(), space.get(), H5P_DEFAULT,
-                          properties.get(), H5P_DEFAULT),
-               H5Dclose, what);
-    if (!values.empty() &&
-        H5Dwrite(set.get(), memory_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0)
-      throw run_error(what, "HDF5 could not write it");
-    attributes(set.get(), meta);
-    if (fill) {
-      Handle scalar(H5Screate(H5S_SCALAR), H5Sclose, what);
-      Handle attribute(H5Acreate2(set.get(), "_FillValue", file_type<T>(), scalar.get(),
-                                  H5P_DEFAULT, H5P_DEFAULT),
-                       H5Aclose, what);
-      H5Awrite(attribute.get(), memory_type<T>(), &fill_value);
-    }
+  void dataset(const std::string& parent, const std::string& name, const std::vector<T>& values,
+               const Meta& meta, std::size_t columns = 0, bool fill = false) {
+    std::vector<std::uint64_t> dims;
+    if (columns) dims = {values.size() / columns, columns};
+    std::optional<T> fill_value;
+    if (fill) fill_value = std::numeric_limits<T>::max();
+    h5_.write(parent + "/" + name, values, attributes(meta), dims, fill_value);
   }
 
   // A one-element dataset of fixed-length text (ancillary_data's UTC times).
-  void text_dataset(hid_t parent, const std::string& name, const std::string& text,
-                    const Meta& meta) const {
-    const std::string what = where_ + ": " + name;
-    Handle type(H5Tcopy(H5T_C_S1), H5Tclose, what);
-    H5Tset_size(type.get(), std::max<std::size_t>(text.size(), 1));
-    H5Tset_strpad(type.get(), H5T_STR_NULLTERM);
-    const hsize_t one = 1;
-    Handle space(H5Screate_simple(1, &one, nullptr), H5Sclose, what);
-    Handle properties(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, what);
-    H5Pset_obj_track_times(properties.get(), false);
-    Handle set(H5Dcreate2(parent, name.c_str(), type.get(), space.get(), H5P_DEFAULT,
-                          properties.get(), H5P_DEFAULT),
-               H5Dclose, what);
-    if (H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, text.c_str()) < 0)
-      throw run_error(what, "HDF5 could not write it");
-    attributes(set.get(), meta);
+  void text_dataset(const std::string& parent, const std::string& name, const std::string& text,
+                    const Meta& meta) {
+    h5_.write_text(parent + "/" + name, text, attributes(meta));
   }
 
-  void text_attribute(hid_t object, const std::string& name, const std::string& text) const {
-    const std::string what = where_ + ": attribute " + name;
-    Handle type(H5Tcopy(H5T_C_S1), H5Tclose, what);
-    H5Tset_size(type.get(), std::max<std::size_t>(text.size(), 1));
-    H5Tset_strpad(type.get(), H5T_STR_NULLTERM);
-    Handle scalar(H5Screate(H5S_SCALAR), H5Sclose, what);
-    Handle attribute(
-        H5Acreate2(object, name.c_str(), type.get(), scalar.get(), H5P_DEFAULT, H5P_DEFAULT),
-        H5Aclose, what);
-    if (H5Awrite(attribute.get(), type.get(), text.c_str()) < 0)
-      throw run_error(what, "HDF5 could not write it");
+  void text_attribute(const std::string& object, const std::string& name, const std::string& text) {
+    h5_.text_attribute(object, name, text);
   }
 
   void ancillary(const GranuleInfo& info, const std::string& short_name,
                  const std::vector<BeamTrack>& beams);
 
-  void beam_attributes(hid_t beam_group, const BeamTrack& beam) const {
+  void beam_attributes(const std::string& beam_group, const BeamTrack& beam) {
     text_attribute(beam_group, "atlas_beam_type", beam.strong ? "strong" : "weak");
     text_attribute(beam_group, "atlas_spot_number", std::to_string(beam.spot_number));
     text_attribute(beam_group, "groundtrack_id", beam.name);
@@ -171,21 +87,21 @@ class Granule {
   }
 
   void finish() {
-    id_.close(where_);
+    h5_.close();
     file_.commit();
   }
 
  private:
-  void attributes(hid_t object, const Meta& meta) const {
-    text_attribute(object, "units", meta.units);
-    text_attribute(object, "long_name", meta.long_name);
-    if (!meta.content_type.empty()) text_attribute(object, "contentType", meta.content_type);
-    if (!meta.description.empty()) text_attribute(object, "description", meta.description);
+  static std::vector<Hdf5Attribute> attributes(const Meta& meta) {
+    std::vector<Hdf5Attribute> list{{"units", meta.units}, {"long_name", meta.long_name}};
+    if (!meta.content_type.empty()) list.push_back({"contentType", meta.content_type});
+    if (!meta.description.empty()) list.push_back({"description", meta.description});
+    return list;
   }
 
   AtomicFile file_;
-  std::string where_;
-  Handle id_;
+  Hdf5Writer h5_;
+  std::string root_ = "/";
 };
 
 const Meta delta_time_meta{"seconds since 2018-01-01", "Elapsed GPS seconds",
@@ -225,7 +141,7 @@ void Granule::ancillary(const GranuleInfo& info, const std::string& short_name,
   const auto utc = [](double delta_time_s) {
     return format_iso8601_utc_microseconds(delta_time_s + atlas_epoch_since_glas_epoch_s);
   };
-  const Handle a = group(file(), "ancillary_data");
+  const Group a = group(file(), "ancillary_data");
   dataset(
       a.get(), "atlas_sdp_gps_epoch", std::vector<double>{atlas_sdp_gps_epoch_s},
       {"seconds since 1980-01-06T00:00:00.000000Z", "ATLAS Epoch Offset", "auxiliaryInformation",
@@ -237,7 +153,7 @@ void Granule::ancillary(const GranuleInfo& info, const std::string& short_name,
   text_dataset(a.get(), "data_end_utc", utc(last_s),
                {"1", "End UTC Time of Granule (CCSDS-A, Actual)", "auxiliaryInformation",
                 "UTC of the last shot"});
-  const Handle o = group(file(), "orbit_info");
+  const Group o = group(file(), "orbit_info");
   dataset(o.get(), "sc_orient", std::vector<std::int8_t>{atlas_sc_orient_backward},
           {"1", "Spacecraft Orientation", "modelResult",
            "0 backward, 1 forward, 2 transition: backward, the beams of footprints/atlas_beams "
@@ -347,9 +263,10 @@ std::vector<float> across_track(const BeamTrack& beam, const std::vector<std::si
   return across;
 }
 
-void write_heights(Granule& g, hid_t beam_group, const BeamTrack& beam, const Atl08Classes& c) {
-  const Handle heights = g.group(beam_group, "heights");
-  const hid_t h = heights.get();
+void write_heights(Granule& g, const std::string& beam_group, const BeamTrack& beam,
+                   const Atl08Classes& c) {
+  const Group heights = g.group(beam_group, "heights");
+  const std::string& h = heights.get();
   g.dataset(h, "h_ph", each_photon<float>(beam, [](auto& p) { return p.h_m; }),
             {"meters", "Photon WGS84 Height", "physicalMeasurement",
              "Height above the WGS84 ellipsoid of the point that scattered the photon (the "
@@ -416,11 +333,11 @@ SegmentColumns segment_columns(const BeamTrack& beam, const Segments& s) {
   return c;
 }
 
-void write_geolocation(Granule& g, hid_t beam_group, const BeamTrack& beam) {
+void write_geolocation(Granule& g, const std::string& beam_group, const BeamTrack& beam) {
   const Segments s = segments_of(beam);
   const SegmentColumns c = segment_columns(beam, s);
-  const Handle geolocation = g.group(beam_group, "geolocation");
-  const hid_t h = geolocation.get();
+  const Group geolocation = g.group(beam_group, "geolocation");
+  const std::string& h = geolocation.get();
   g.dataset(h, "segment_id", c.id,
             {"1", "Along-track segment ID number", "referenceInformation",
              "20 m segments counted from 1 at the track's first shot"});
@@ -449,15 +366,15 @@ void write_geolocation(Granule& g, hid_t beam_group, const BeamTrack& beam) {
   g.dataset(h, "sigma_h", std::vector<float>(c.id.size(), 0.0f),
             {"meters", "height uncertainty", "qualityInformation",
              "0: the simulation's photons are placed without geolocation error"});
-  const Handle corrections = g.group(beam_group, "geophys_corr");
+  const Group corrections = g.group(beam_group, "geophys_corr");
   g.dataset(corrections.get(), "dem_h", c.dem_h,
             {"meters", "DEM Height", "referenceInformation",
              "The scene's terrain height above WGS84 at the segment's first shot"});
   g.dataset(corrections.get(), "delta_time", c.time, delta_time_meta);
 }
 
-void write_background(Granule& g, hid_t beam_group, const BeamTrack& beam) {
-  const Handle background = g.group(beam_group, "bckgrd_atlas");
+void write_background(Granule& g, const std::string& beam_group, const BeamTrack& beam) {
+  const Group background = g.group(beam_group, "bckgrd_atlas");
   std::vector<float> rate;
   std::vector<double> time;
   for (const BeamShot& shot : beam.shots) {
@@ -486,7 +403,7 @@ void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>
   Granule g(path);
   g.ancillary(info, "ATL03", beams);
   for (std::size_t b = 0; b < beams.size(); ++b) {
-    const Handle beam_group = g.group(g.file(), beams[b].name);
+    const Group beam_group = g.group(g.file(), beams[b].name);
     g.beam_attributes(beam_group.get(), beams[b]);
     write_heights(g, beam_group.get(), beams[b], classes[b]);
     write_geolocation(g, beam_group.get(), beams[b]);
@@ -585,8 +502,9 @@ std::vector<float> as_float_20m(const std::vector<LandSegment>& s,
 
 // The 20 m sub-segments (ATL08 from version 5): their places and heights; the subset flags,
 // which rate the photons' spread in each, are not assessed (fill).
-void write_20m(Granule& g, hid_t land, hid_t terrain, hid_t canopy,
-               const std::vector<LandSegment>& s, const SegmentTruth& t) {
+void write_20m(Granule& g, const std::string& land, const std::string& terrain,
+               const std::string& canopy, const std::vector<LandSegment>& s,
+               const SegmentTruth& t) {
   g.dataset(land, "latitude_20m", t.lat_20m,
             {"degrees_north", "Latitude of 20m segment", "modelResult",
              "The shot nearest each 20 m sub-segment's centre"},
@@ -626,7 +544,7 @@ struct SegmentField {
   Meta meta;
 };
 
-void write_segment_fields(Granule& g, hid_t h, const std::vector<LandSegment>& s,
+void write_segment_fields(Granule& g, const std::string& h, const std::vector<LandSegment>& s,
                           const std::vector<SegmentField>& fields) {
   for (const SegmentField& f : fields) g.dataset(h, f.name, as_float(s, f.member), f.meta, 0, true);
 }
@@ -639,7 +557,7 @@ std::vector<std::int32_t> as_int(const std::vector<LandSegment>& s,
 }
 
 // land_segments/: where and when, the reference surface, the sun, the flags.
-void write_segment_place(Granule& g, hid_t h, const std::vector<LandSegment>& s,
+void write_segment_place(Granule& g, const std::string& h, const std::vector<LandSegment>& s,
                          const SegmentTruth& t) {
   g.dataset(h, "latitude", t.lat,
             {"degrees_north", "Latitude", "modelResult", "The shot nearest the segment's centre"},
@@ -686,7 +604,7 @@ void write_segment_place(Granule& g, hid_t h, const std::vector<LandSegment>& s,
 // land_segments/ flags of what the simulation does not have: no clouds or blowing snow, no
 // atmospheric multiple scattering, no photons removed between ATL03 and ATL08; saturation is
 // not assessed (fill).
-void write_segment_flags(Granule& g, hid_t h, std::size_t count) {
+void write_segment_flags(Granule& g, const std::string& h, std::size_t count) {
   const std::vector<std::int8_t> zero(count, 0);
   g.dataset(h, "msw_flag", zero,
             {"1", "Multiple Scattering Warning Flag", "qualityInformation",
@@ -702,7 +620,7 @@ void write_segment_flags(Granule& g, hid_t h, std::size_t count) {
             true);
 }
 
-void write_terrain(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
+void write_terrain(Granule& g, const std::string& h, const std::vector<LandSegment>& s) {
   write_segment_fields(
       g, h, s,
       {
@@ -742,7 +660,7 @@ void write_terrain(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
 
 // canopy/'s distribution of the canopy photons' heights above the ground: its least, median and
 // greatest, and canopy_h_metrics (segments x 18: the 10th, 15th, ..., 95th percentiles).
-void write_canopy_distribution(Granule& g, hid_t h, const std::vector<LandSegment>& s,
+void write_canopy_distribution(Granule& g, const std::string& h, const std::vector<LandSegment>& s,
                                const std::string& above) {
   write_segment_fields(
       g, h, s,
@@ -766,7 +684,7 @@ void write_canopy_distribution(Granule& g, hid_t h, const std::vector<LandSegmen
             18, true);
 }
 
-void write_canopy(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
+void write_canopy(Granule& g, const std::string& h, const std::vector<LandSegment>& s) {
   const std::string above =
       " of the canopy and top-of-canopy photons' heights above the fitted "
       "ground";
@@ -799,9 +717,9 @@ void write_canopy(Granule& g, hid_t h, const std::vector<LandSegment>& s) {
              "The segment's top-of-canopy photons"});
 }
 
-void write_segment_truth(Granule& g, hid_t land, const SegmentTruth& t) {
-  const Handle truth = g.group(land, "glaswave_truth");
-  const hid_t h = truth.get();
+void write_segment_truth(Granule& g, const std::string& land, const SegmentTruth& t) {
+  const Group truth = g.group(land, "glaswave_truth");
+  const std::string& h = truth.get();
   g.dataset(h, "h_te", t.h_te,
             truth_meta("meters",
                        "Simulation truth: mean terrain height at the segment's footprint centres"),
@@ -815,7 +733,7 @@ void write_segment_truth(Granule& g, hid_t land, const SegmentTruth& t) {
             true);
 }
 
-void write_land_segments(Granule& g, hid_t beam_group, const BeamTrack& beam,
+void write_land_segments(Granule& g, const std::string& beam_group, const BeamTrack& beam,
                          const Atl08Classes& classes, const Atl08Settings& settings) {
   if (beam.shots.empty()) return;
   const double first_m =
@@ -824,18 +742,18 @@ void write_land_segments(Granule& g, hid_t beam_group, const BeamTrack& beam,
   const std::vector<LandSegment> s =
       land_segments(cloud_of(beam), classes, first_m, end_m, settings);
   const SegmentTruth t = segment_truth(beam, first_m, s.size(), settings.segment_m);
-  const Handle land = g.group(beam_group, "land_segments");
+  const Group land = g.group(beam_group, "land_segments");
   write_segment_place(g, land.get(), s, t);
   write_segment_flags(g, land.get(), s.size());
-  const Handle terrain = g.group(land.get(), "terrain");
-  const Handle canopy = g.group(land.get(), "canopy");
+  const Group terrain = g.group(land.get(), "terrain");
+  const Group canopy = g.group(land.get(), "canopy");
   write_terrain(g, terrain.get(), s);
   write_canopy(g, canopy.get(), s);
   write_20m(g, land.get(), terrain.get(), canopy.get(), s, t);
   write_segment_truth(g, land.get(), t);
 }
 
-void write_signal_photons(Granule& g, hid_t beam_group, const BeamTrack& beam,
+void write_signal_photons(Granule& g, const std::string& beam_group, const BeamTrack& beam,
                           const Atl08Classes& classes) {
   const std::vector<std::size_t> shot = shot_of_photons(beam);
   std::vector<std::int8_t> flag;
@@ -854,8 +772,8 @@ void write_signal_photons(Granule& g, hid_t beam_group, const BeamTrack& beam,
         static_cast<float>(beam.photons[i].h_m - classes.ground_at(beam.shots[shot[i]].along_m)));
     time.push_back(beam.photons[i].delta_time_s);
   }
-  const Handle signal = g.group(beam_group, "signal_photons");
-  const hid_t h = signal.get();
+  const Group signal = g.group(beam_group, "signal_photons");
+  const std::string& h = signal.get();
   g.dataset(h, "classed_pc_flag", flag,
             {"1", "Photon Land Classification", "modelResult",
              "1 ground, 2 canopy, 3 top of canopy (the classification's; noise is left out)"});
@@ -885,7 +803,7 @@ void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>
   Granule g(path);
   g.ancillary(info, "ATL08", beams);
   for (std::size_t b = 0; b < beams.size(); ++b) {
-    const Handle beam_group = g.group(g.file(), beams[b].name);
+    const Group beam_group = g.group(g.file(), beams[b].name);
     g.beam_attributes(beam_group.get(), beams[b]);
     write_land_segments(g, beam_group.get(), beams[b], classes[b], settings);
     write_signal_photons(g, beam_group.get(), beams[b], classes[b]);

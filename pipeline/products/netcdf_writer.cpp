@@ -4,7 +4,6 @@
 // times, the transmitted pulse) are defined here.
 #include "pipeline/products/netcdf_writer.hpp"
 
-#include <hdf5.h>
 #include <netcdf.h>
 #include <sys/resource.h>
 #include <sys/statvfs.h>
@@ -255,7 +254,8 @@ struct NetcdfWriter::Impl {
   int photon_count = -1;
   std::size_t photons_written = 0, next_ragged = 0;
   std::map<std::size_t, RaggedShot> waiting;
-  bool broken = false;  // a chunk's write failed: the file lacks records already taken
+  bool broken = false;        // a chunk's write failed: the file lacks records already taken
+  bool reproducible = false;  // SOURCE_DATE_EPOCH set: no wall-clock measurement written
   // What ACDD's discovery attributes say of the records written.
   Bounds time_s, lat_deg, lon_deg, elev_m;
 
@@ -436,7 +436,8 @@ struct NetcdfWriter::Impl {
     put_text(NC_GLOBAL, "global", "standard_name_vocabulary", "CF Standard Name Table v84");
     put_text(NC_GLOBAL, "global", "processing_level", "simulated L1B/L2A-like waveforms");
     put_text(NC_GLOBAL, "global", "creator_name", "");
-    put_text(NC_GLOBAL, "global", "date_created", now_iso8601());
+    put_text(NC_GLOBAL, "global", "date_created",
+             info.created.iso8601.empty() ? product_creation_time().iso8601 : info.created.iso8601);
     put_text(NC_GLOBAL, "global", "history", info.command_line);
     put_text(NC_GLOBAL, "global", "source", source);
     put_text(
@@ -453,15 +454,6 @@ struct NetcdfWriter::Impl {
     const unsigned long long seed = info.seed;
     check(nc_put_att_ulonglong(nc.id(), NC_GLOBAL, "seed", NC_UINT64, 1, &seed),
           "global attribute 'seed'");
-  }
-
-  static std::string now_iso8601() {
-    const auto now = std::chrono::system_clock::now();
-    const auto micro =
-        std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count();
-    return format_iso8601_utc_microseconds(
-        static_cast<double>(micro / 1000000 - glas_epoch_unix_s) +
-        static_cast<double>(micro % 1000000) * 1e-6);
   }
 
   void define_dims() {
@@ -597,6 +589,7 @@ struct NetcdfWriter::Impl {
   }
 
   void define(const RunInfo& info) {
+    reproducible = info.created.reproducible;
     define_globals(info);
     define_dims();
     const RunVariables run_variables = define_run_variables();
@@ -863,8 +856,9 @@ void NetcdfWriter::finish(const RunStats& stats) {
   const long long shots_flagged = stats.shots_flagged;
   impl.check(nc_put_att_longlong(id, NC_GLOBAL, "stats_ray_queries", NC_INT64, 1, &ray_queries),
              "global attribute 'stats_ray_queries'");
-  impl.check(nc_put_att_double(id, NC_GLOBAL, "stats_wall_s", NC_DOUBLE, 1, &stats.wall_s),
-             "global attribute 'stats_wall_s'");
+  if (!impl.reproducible)
+    impl.check(nc_put_att_double(id, NC_GLOBAL, "stats_wall_s", NC_DOUBLE, 1, &stats.wall_s),
+               "global attribute 'stats_wall_s'");
   impl.check(nc_put_att_longlong(id, NC_GLOBAL, "stats_shots_flagged", NC_INT64, 1, &shots_flagged),
              "global attribute 'stats_shots_flagged'");
   impl.check(nc_enddef(id), "ending definitions");
@@ -880,13 +874,6 @@ void NetcdfWriter::abort() noexcept {
   // A finished product stays: only an unfinished one has a .part to give up.
   const LibraryLock lock;
   if (impl_ && !impl_->ledger.finished()) impl_.reset();
-}
-
-void quiet_hdf5_in_this_thread() {
-  thread_local bool quiet = false;
-  if (quiet) return;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  quiet = true;
 }
 
 }  // namespace glaswave

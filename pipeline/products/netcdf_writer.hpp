@@ -7,18 +7,11 @@
 #include <filesystem>
 #include <memory>
 
+#include "core/hdf5_file.hpp"  // quiet_hdf5_in_this_thread, for the products' readers
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/shot_record.hpp"
 
 namespace glaswave {
-
-// Turns HDF5's printing of its error stack off for the calling thread, once; call it holding
-// libnetcdf's lock (core/netcdf_lock.hpp). Debian's HDF5 keeps that setting per thread and
-// libnetcdf turns it off only in the thread that first calls it: in any other, its probes of
-// optional attributes on opening a file printed a dozen lines each to stderr (two Python threads
-// calling glaswave.run 20 times: 3,300 lines). The writer calls it; so do readers of the
-// products in other threads (the Python module).
-void quiet_hdf5_in_this_thread();
 
 class NetcdfWriter final : public ProductWriter {
  public:

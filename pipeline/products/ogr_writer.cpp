@@ -209,6 +209,11 @@ struct OgrWriter::Impl {
     static std::once_flag registered;
     std::call_once(registered, [] { GDALAllRegister(); });
     const bool gpkg = format == FootprintsFormat::gpkg;
+    // A GeoPackage says when its layer last changed (gpkg_contents.last_change): GDAL takes
+    // that time from OGR_CURRENT_DATE where set, so reproducible runs give it theirs (the
+    // setting is the process's, as SOURCE_DATE_EPOCH is).
+    if (gpkg && info.created.reproducible)
+      CPLSetConfigOption("OGR_CURRENT_DATE", info.created.iso8601.c_str());
     const GdalMessages messages;
     GDALDriver* driver = GetGDALDriverManager()->GetDriverByName(gpkg ? "GPKG" : "GeoJSON");
     if (driver == nullptr)

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "core/glas_time.hpp"
+
 namespace glaswave {
 
 // A band as the products name it.
@@ -119,6 +121,9 @@ struct RunInfo {
   // Digitiser counts per W of recorded power, for the granules' waveforms in counts: the
   // detector's gain x (2^bits - 1) / saturation_W when it digitises, else 1 count per nW.
   double counts_per_W = 1e9;
+  // When the products were made (SOURCE_DATE_EPOCH's time where set: then they hold no wall-clock
+  // measurement, so that identical runs write identical files); empty: the writer's clock.
+  CreationTime created;
 };
 
 struct RunStats {
