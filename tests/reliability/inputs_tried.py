@@ -9,8 +9,8 @@ the first line of stderr and a verdict. A case is a bug when it crashes (a signa
 hangs (killed by the timeout: 124), echoes a file's content (every hostile file holds the
 marker below), leaves a product under its final name after a failure, or fails with more (or
 less) than one `glaswave: error:` line. Cases marked `ok` are meant to succeed. A full disk is a
-small tmpfs when this runs as root (else `ulimit -f`). Not run by ctest: a tool for the issue's
-closing note and for trying new inputs.
+small tmpfs when this runs as root (else `ulimit -f`). ctest runs it on the built command (the
+test inputs_tried, label reliability); by hand, a tool for trying new inputs.
 """
 
 import argparse
@@ -949,6 +949,8 @@ def main():
                 group(t)
         pathlib.Path(arguments.out).write_text(t.table())
     bugs = [r for r in t.rows if is_bug(r[4])]
+    for n, description, status, first, verdict, *_ in bugs:  # in full, for ctest's log
+        print(f"wanting: {n}. {description}: exit {status}, {verdict}; {first[:200]}")
     print(f"{len(t.rows)} inputs, {len(bugs)} found wanting: {arguments.out}")
     return 1 if bugs else 0
 

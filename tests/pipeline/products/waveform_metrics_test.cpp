@@ -269,32 +269,78 @@ TEST(ProcessShotWaveforms, FillsEveryBandAndFillsFlaggedShots) {
   EXPECT_TRUE(std::isnan(record.gauss_center_m[0][0]));
 }
 
-// signal_quality is process_waveform's signal without the rest, on every kind of waveform: empty,
-// fill, one pulse, a tiny one (the noise-free shortcut's limit), negative values, noise.
-TEST(SignalQuality, IsTheProcessingsSignal) {
+// signal_quality and process_waveform's signal against the header's rule worked out by hand,
+// not against each other (both share the threshold): with the smoothed peak P over the noise
+// mean, the threshold mean + max(4 sd, 1 % of P) is crossed exactly when P > 4 sd and P > 0,
+// and the signal is low while P < 8 sd. The inputs' P and sd are known in closed form:
+// - a Gaussian of amplitude A and sigma s smoothed by the pulse's Gaussian (sigma s, unit sum)
+//   peaks at A s / sqrt(s^2 + s^2) = A / sqrt(2) (the discrete sums equal the integrals to 4e-5);
+// - +-a alternating over the window has mean 0 and sample sd a sqrt(60/59) over an end's 60
+//   bins; through the filter, as white noise: sd = a sqrt(60/59) / sqrt(2 sqrt(pi) s). The
+//   filter leaves the alternation ~2e-5 a in the middle, under 0.08 a at the window's ends (the
+//   kernel cut there), far under every pulse below (>= 3.5 sd = 0.84 a).
+// Pulses at 3.5, 4.5, 7.5 and 8.5 sd fall 0.5 sd (6 to 12 %) either side of the 4 and 8 sd
+// bounds, so a threshold or a noise level off by that much changes an answer.
+TEST(SignalQuality, FollowsTheThresholdRuleWorkedByHand) {
+  using Q = SignalQuality;
   WaveformProcessing detected = noise_free();
   detected.noise_free = false;
-  std::mt19937_64 engine(7);
-  std::normal_distribution<double> normal(0.0, 0.01e-6);
-  std::vector<std::vector<double>> waveforms = {
-      std::vector<double>(kBins, 0.0), std::vector<double>(kBins, std::nan("")),
-      gaussians({{1e-6, 250.0, kPulseNs}}), gaussians({{1e-300, 250.0, kPulseNs}}),
-      std::vector<double>(2, 1.0)};
-  std::vector<double> one_bin(kBins, 0.0);
-  one_bin[3] = 1e-9;
-  waveforms.push_back(one_bin);
-  one_bin[5] = -2e-9;
-  waveforms.push_back(one_bin);
-  for (const double amplitude_W : {0.0, 0.02e-6, 0.04e-6}) {
-    auto values = gaussians({{amplitude_W, 200.0, kPulseNs}});
-    for (double& v : values) v += normal(engine);
-    waveforms.push_back(values);
+  const double a_W = 0.01e-6;
+  const double smoothed_sd_W =
+      a_W * std::sqrt(60.0 / 59.0) / std::sqrt(2.0 * std::sqrt(std::numbers::pi) * kPulseNs);
+  auto pulse_over_noise = [&](double peak_sds) {
+    auto values = gaussians({{peak_sds * smoothed_sd_W * std::sqrt(2.0), 200.0, kPulseNs}});
+    for (int i = 0; i < kBins; ++i) values[i] += i % 2 == 0 ? a_W : -a_W;
+    return values;
+  };
+  std::vector<double> one_bin(kBins, 0.0), one_bin_and_negative(kBins, 0.0);
+  one_bin[3] = one_bin_and_negative[3] = 1e-9;
+  // Smoothed, bin i holds (e^(-(i-3)^2/50) - 2 e^(-(i-5)^2/50)) 1e-9 / sum: negative wherever the
+  // kernel reaches (positive only for i < -4.7), 0 beyond: P = 0, no signal.
+  one_bin_and_negative[5] = -2e-9;
+  // A pulse on a negative floor -b. Noise-free, no noise is measured (mean 0, sd 0): P = A/sqrt(2)
+  // - b. Detected, the floor is the noise mean (sd 0): P = A/sqrt(2), signal whatever b is.
+  auto pulse_on_floor = [&](double peak_over_floor) {
+    const double floor_W = 1e-8;
+    auto values = gaussians({{peak_over_floor * floor_W * std::sqrt(2.0), 200.0, kPulseNs}});
+    for (double& v : values) v -= floor_W;
+    return values;
+  };
+  struct Case {
+    const char* name;
+    std::vector<double> power_W;
+    Q noise_free, detected;  // expected with each setting
+  };
+  const std::vector<Case> cases = {
+      {"zeros", std::vector<double>(kBins, 0.0), Q::none, Q::none},  // P = 0, sd = 0
+      {"fill", std::vector<double>(kBins, std::nan("")), Q::none, Q::none},
+      {"two bins", std::vector<double>(2, 1.0), Q::none, Q::none},  // under 3 bins: none
+      // Nothing at the ends (detected, sd 0 or under 1e-170 W): any P > 0 is signal, and good.
+      {"1e-6 W pulse", gaussians({{1e-6, 200.0, kPulseNs}}), Q::good, Q::good},
+      {"1e-300 W pulse", gaussians({{1e-300, 200.0, kPulseNs}}), Q::good, Q::good},
+      // Detected, the head holds the bin (mean 1e-9/60): the tail is the quieter end, mean 0.
+      {"one bin of 1e-9 W", one_bin, Q::good, Q::good},
+      // Detected, the head is the quieter end (mean -1e-9/60, sample sd 2.9e-10, 6.9e-11 smoothed):
+      // P = 0 + 1e-9/60 is under 4 sd.
+      {"one bin and a negative one", one_bin_and_negative, Q::none, Q::none},
+      {"pulse 1.2 x the floor", pulse_on_floor(1.2), Q::good, Q::good},
+      {"pulse 0.8 x the floor", pulse_on_floor(0.8), Q::none, Q::good},
+  };
+  for (const Case& c : cases)
+    for (const WaveformProcessing& settings : {noise_free(), detected}) {
+      const Q expected = settings.noise_free ? c.noise_free : c.detected;
+      const char* mode = settings.noise_free ? ", noise-free" : ", detected";
+      EXPECT_EQ(signal_quality(c.power_W, kAxis, settings), expected) << c.name << mode;
+      EXPECT_EQ(process_waveform(c.power_W, kAxis, settings).signal, expected) << c.name << mode;
+    }
+  // Against the noise (detected only: noise-free, the alternation smoothed is above 0 somewhere).
+  const std::vector<std::pair<double, Q>> noisy = {
+      {0.0, Q::none}, {3.5, Q::none}, {4.5, Q::low}, {7.5, Q::low}, {8.5, Q::good}};
+  for (const auto& [peak_sds, expected] : noisy) {
+    const auto values = pulse_over_noise(peak_sds);
+    EXPECT_EQ(signal_quality(values, kAxis, detected), expected) << peak_sds << " sd";
+    EXPECT_EQ(process_waveform(values, kAxis, detected).signal, expected) << peak_sds << " sd";
   }
-  for (const WaveformProcessing& settings : {noise_free(), detected})
-    for (std::size_t k = 0; k < waveforms.size(); ++k)
-      EXPECT_EQ(signal_quality(waveforms[k], kAxis, settings),
-                process_waveform(waveforms[k], kAxis, settings).signal)
-          << "waveform " << k << (settings.noise_free ? ", noise-free" : ", detected");
 }
 
 // flag_shot_signal flags as process_shot_waveforms does and leaves the metrics fill.
