@@ -12,6 +12,11 @@
 
 namespace glaswave {
 
+// The spacecraft's yaw, ATL03's orbit_info/sc_orient: ICESat-2 flies "backward" or "forward"
+// and turns through 180 degrees about twice a year, which swaps which side of each pair of
+// ground tracks the strong beam falls on.
+enum class AtlasOrientation : int { backward = 0, forward = 1 };
+
 struct AtlasBeam {
   std::string name;     // the product's group: gt1l, gt1r, ..., gt3r
   int spot_number = 0;  // ATLAS's laser spot, 1-6 (strong: 1, 3, 5)
@@ -21,17 +26,30 @@ struct AtlasBeam {
   double energy_ratio = 1.0;  // the beam's pulse energy over a strong beam's (45 / 175 weak)
 };
 
-// The six beams with the spacecraft in its "backward" orientation (ATL03's sc_orient 0): the
-// left beam of each pair strong; the spots 5, 6, 3, 4, 1, 2 from gt1l to gt3r (the forward
-// orientation's 2, 1, 4, 3, 6, 5 turned through 180 degrees, as icepyx's gt2spot has them).
-// Pair centres at -3300, 0 and
-// +3300 m across track, their beams 45 m either side; the weak beam of each pair 2.5 km ahead of
-// the strong one (the sign of that offset is a choice here).
-const std::array<AtlasBeam, 6>& atlas_beams();
+// ATLAS's spot behind a ground track, as real ATL03 granules label it (the attribute
+// atlas_spot_number; icepyx's gt2spot since its fix of October 2023): backward (sc_orient 0)
+// gt1l ... gt3r are spots 1, 2, 3, 4, 5, 6, the left beam of each pair strong; forward
+// (sc_orient 1) 6, 5, 4, 3, 2, 1, the right beam strong. The strong spots are 1, 3 and 5 in
+// both. Throws std::invalid_argument for a name that is not a ground track.
+int atlas_spot_number(const std::string& ground_track, AtlasOrientation orientation);
+
+// The six beams with the spacecraft in `orientation`, gt1l to gt3r: their spots and strengths
+// (atlas_spot_number). Pair centres at -3300, 0 and +3300 m across track, their beams 45 m
+// either side, in either orientation (the ground tracks are numbered from the left of the
+// direction of travel); the weak beam of each pair 2.5 km ahead of the strong one (the sign of
+// that offset is a choice here).
+const std::array<AtlasBeam, 6>& atlas_beams(
+    AtlasOrientation orientation = AtlasOrientation::backward);
 
 // The beams named in `names` (empty: all six), in atlas_beams()'s order. Throws
 // std::invalid_argument naming an unknown beam or one named twice.
-std::vector<AtlasBeam> select_atlas_beams(const std::vector<std::string>& names);
+std::vector<AtlasBeam> select_atlas_beams(
+    const std::vector<std::string>& names,
+    AtlasOrientation orientation = AtlasOrientation::backward);
+
+// "backward" or "forward" (the configuration's sensor.sc_orient) as an orientation; throws
+// std::invalid_argument for other text.
+AtlasOrientation atlas_orientation(const std::string& name);
 
 // A `pass` track for one beam: the reference pass's start point moved `across_m` to the right
 // of the heading and `along_m` along it, on the WGS84 geodesics (GeographicLib), the heading

@@ -29,6 +29,9 @@ struct SensorSettings : LidarSettings {
   // receiver's own settings (ATLAS's by default) and its beams.
   std::string receiver = "waveform";
   std::vector<std::string> beams = {"gt2l"};
+  // The spacecraft's yaw, "backward" or "forward" (footprints/atlas_beams.hpp): which beam of
+  // each pair is strong and each ground track's ATLAS spot.
+  std::string sc_orient = "backward";
   double photon_efficiency = 0.45 * 0.15;
   double filter_bandwidth_nm = 0.038;
   double dead_time_ns = 3.2;

@@ -442,9 +442,14 @@ Key sensor_keys() {
                 "`photon_counting`"),
        s.string_array("beams", &S::beams,
                       "photon counting: which of ATLAS's beams `gt1l gt1r gt2l gt2r gt3l gt3r` to "
-                      "simulate (strong: the `l` beams, weak: the `r` ones at 45/175 of the "
-                      "energy), each on its own ground track about the `pass`'s reference track; "
-                      "several only on a `pass`"),
+                      "simulate (strong: the `l` beams backward, the `r` ones forward; weak: the "
+                      "others, at 45/175 of the energy), each on its own ground track about the "
+                      "`pass`'s reference track; several only on a `pass`"),
+       s.choice("sc_orient", &S::sc_orient, {"backward", "forward"},
+                "photon counting: the spacecraft's orientation (ATL03's `orbit_info/sc_orient` "
+                "0 or 1): `backward` makes the `l` beam of each pair strong and `gt1l` ... "
+                "`gt3r` ATLAS's spots 1 ... 6, `forward` the `r` beams strong and the spots 6 "
+                "... 1"),
        s.number("photon_efficiency", &S::photon_efficiency, open_closed(0, 1), "",
                 "photon counting: the receiver's optical throughput times its detectors' photon "
                 "detection efficiency (ATLAS: 0.45 × 0.15)"),

@@ -39,7 +39,8 @@ ShotSettings shot_settings(const Config& config) {
 // The photon-counting receiver's settings: the configuration's, one for each of its beams.
 std::vector<PhotonCountingSettings> photon_settings(const Config& config) {
   std::vector<PhotonCountingSettings> beams;
-  for (const AtlasBeam& beam : select_atlas_beams(config.sensor.beams)) {
+  for (const AtlasBeam& beam :
+       select_atlas_beams(config.sensor.beams, atlas_orientation(config.sensor.sc_orient))) {
     PhotonCountingSettings p;
     p.efficiency = config.sensor.photon_efficiency;
     p.filter_bandwidth_nm = config.sensor.filter_bandwidth_nm;
@@ -140,7 +141,8 @@ std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain) 
     return at_section("/track", [&] { return std::make_unique<Track>(config.track, terrain); });
   // A photon-counting pass: each beam flies its own ground track about the reference one, its
   // footprints carrying its spot number, the receiver's key for it.
-  const std::vector<AtlasBeam> beams = select_atlas_beams(config.sensor.beams);
+  const std::vector<AtlasBeam> beams =
+      select_atlas_beams(config.sensor.beams, atlas_orientation(config.sensor.sc_orient));
   if (config.track.type != TrackType::pass) {
     if (beams.size() > 1)
       throw config_error("/sensor/beams",

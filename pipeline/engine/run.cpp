@@ -349,8 +349,11 @@ Icesat2ProductSettings icesat2_product_settings(const Config& config) {
   s.beams.clear();
   // A pass's beams fly their own ground tracks about it; another track is the beam's own.
   const bool pass = config.track.type == TrackType::pass;
-  for (const AtlasBeam& beam : select_atlas_beams(config.sensor.beams))
+  const AtlasOrientation orientation = atlas_orientation(config.sensor.sc_orient);
+  for (const AtlasBeam& beam : select_atlas_beams(config.sensor.beams, orientation))
     s.beams.push_back({beam.name, beam.strong, beam.spot_number, pass ? beam.across_m : 0.0});
+  s.sc_orient = static_cast<std::int8_t>(orientation);
+  s.dead_time_ns = config.sensor.dead_time_ns;
   return s;
 }
 

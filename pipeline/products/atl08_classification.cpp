@@ -209,7 +209,18 @@ struct SegmentPhotons {
   std::vector<double> ground_along_m, ground_h_m;  // ground photons
   std::vector<double> canopy_m, canopy_abs_m;      // canopy and top of canopy: above ground, WGS84
   std::vector<double> canopy_along_m;
+  std::vector<double> toc_m;  // top of canopy, above ground
 };
+
+// The sample standard deviation (n - 1), NaN for fewer than two values.
+double standard_deviation(const std::vector<double>& values) {
+  const double n = static_cast<double>(values.size());
+  if (n < 2.0) return std::numeric_limits<double>::quiet_NaN();
+  const double mean = std::accumulate(values.begin(), values.end(), 0.0) / n;
+  double sum2 = 0.0;
+  for (const double v : values) sum2 += (v - mean) * (v - mean);
+  return std::sqrt(sum2 / (n - 1.0));
+}
 
 // h_te_mean, h_te_median, terrain_slope and h_te_uncertainty from the ground photons.
 void terrain_metrics(LandSegment& segment, const SegmentPhotons& p) {
@@ -235,6 +246,7 @@ void terrain_metrics(LandSegment& segment, const SegmentPhotons& p) {
   segment.terrain_slope = slope;
   // The line's two parameters leave n - 2 degrees of freedom.
   segment.h_te_uncertainty = n > 2.0 ? std::sqrt(residual2 / (n - 2.0)) / std::sqrt(n) : nan;
+  segment.h_te_std = standard_deviation(p.ground_h_m);
 }
 
 // h_canopy, canopy_openness, h_mean_canopy and h_mean_canopy_abs from the canopy photons.
@@ -255,6 +267,7 @@ void canopy_metrics(LandSegment& segment, const SegmentPhotons& p) {
     segment.canopy_h_metrics[q] = quantile(heights, 0.10 + 0.05 * static_cast<double>(q));
   segment.h_mean_canopy_abs =
       std::accumulate(p.canopy_abs_m.begin(), p.canopy_abs_m.end(), 0.0) / n;
+  segment.toc_roughness = standard_deviation(p.toc_m);
 }
 
 // The five sub-segments' ground and canopy heights.
@@ -277,7 +290,8 @@ void sub_segment_metrics(LandSegment& segment, const SegmentPhotons& p, const At
 
 void no_canopy(LandSegment& segment) {
   segment.h_canopy = segment.canopy_openness = segment.h_mean_canopy = segment.h_mean_canopy_abs =
-      segment.h_min_canopy = segment.h_median_canopy = segment.h_max_canopy = nan;
+      segment.h_min_canopy = segment.h_median_canopy = segment.h_max_canopy =
+          segment.toc_roughness = nan;
   segment.canopy_h_metrics.fill(nan);
 }
 
@@ -309,6 +323,7 @@ std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
       p.canopy_m.push_back(photons[i].h_m - classes.ground_at(photons[i].along_m));
       p.canopy_abs_m.push_back(photons[i].h_m);
       p.canopy_along_m.push_back(photons[i].along_m);
+      if (c == 3) p.toc_m.push_back(p.canopy_m.back());
     }
   }
   for (std::size_t k = 0; k < count; ++k) {
@@ -322,7 +337,7 @@ std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
       terrain_metrics(segment, members[k]);
     else
       segment.h_te_mean = segment.h_te_median = segment.h_te_min = segment.h_te_max =
-          segment.h_te_uncertainty = segment.terrain_slope = nan;
+          segment.h_te_uncertainty = segment.terrain_slope = segment.h_te_std = nan;
     const double canopy = static_cast<double>(members[k].canopy_m.size());
     const double signal = canopy + segment.n_te_photons;
     if (canopy < settings.min_canopy_photons || canopy < settings.min_canopy_fraction * signal)

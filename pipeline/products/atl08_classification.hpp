@@ -74,10 +74,12 @@ struct LandSegment {
   double h_te_mean = 0.0, h_te_median = 0.0;  // of the ground photons' heights
   double h_te_min = 0.0, h_te_max = 0.0;
   double h_te_uncertainty = 0.0;  // their scatter about the fitted line over sqrt(n_te_photons)
+  double h_te_std = 0.0;          // their heights' standard deviation (n - 1)
   double terrain_slope = 0.0;     // the least-squares line's slope through them (dh / d along)
   double h_canopy = 0.0;         // 98th percentile of canopy and top-of-canopy heights above ground
   double canopy_openness = 0.0;  // their standard deviation
   double h_mean_canopy = 0.0;    // their mean
+  double toc_roughness = 0.0;    // the top-of-canopy photons' heights' standard deviation
   double h_min_canopy = 0.0, h_median_canopy = 0.0, h_max_canopy = 0.0;
   std::array<double, 18> canopy_h_metrics{};  // their 10th, 15th, ..., 95th percentiles
   // Its five sub-segments (ATL08's 20 m with 100 m segments): the fitted ground at each centre

@@ -17,7 +17,7 @@ double or_fill(double value) { return std::isfinite(value) ? value : kGediFill; 
 
 std::uint8_t channel_of(std::uint16_t beam) {
   for (std::uint8_t i = 0; i < 8; ++i)
-    if (kGediBeams[i] == beam) return i;
+    if (kGediBeams[i] == beam) return kGediChannels[i];
   return 0;
 }
 
@@ -150,7 +150,9 @@ void GediGranuleWriter::write_shot_ids(Hdf5Writer& f, const std::string& g,
                 {"counter", "Beam number"});
   write_dataset(f, g + "/channel",
                 of<std::uint8_t>(shots, [](const Shot& s) { return channel_of(s.beam); }),
-                {"counter", "Channel number (the beam's place among the eight)"});
+                {"counter",
+                 "Channel number (as real files number it: 0 0 1 1 2 3 4 5 for BEAM0000 ... "
+                 "BEAM1011)"});
 }
 
 namespace {

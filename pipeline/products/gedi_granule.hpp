@@ -17,8 +17,12 @@ namespace glaswave {
 inline constexpr double kGediEpochS = 568036800.0;
 // ancillary/master_time_epoch: the GPS seconds of GEDI's epoch (18 leap seconds by 2018).
 inline constexpr double kGediMasterTimeEpoch = 1198800018.0;
-// GEDI's eight beams and their channel, in the order of the beam numbers.
+// GEDI's eight beams, in the order of the beam numbers.
 inline constexpr std::uint16_t kGediBeams[8] = {0, 1, 2, 3, 5, 6, 8, 11};
+// Each beam's BEAMxxxx/channel as real L1B files number it: the two coverage beams a laser's
+// dithering splits share a channel (BEAM0000 and BEAM0001 0, BEAM0010 and BEAM0011 1), each
+// full-power beam has its own (BEAM0101 2, BEAM0110 3, BEAM1000 4, BEAM1011 5).
+inline constexpr std::uint8_t kGediChannels[8] = {0, 0, 1, 1, 2, 3, 4, 5};
 // The group of a shot whose track gives no beam (a synthetic track): a full-power beam, as the
 // sensor's pulse energy is a whole laser's.
 inline constexpr std::uint16_t kGediDefaultBeam = 5;

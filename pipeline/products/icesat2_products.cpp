@@ -66,6 +66,13 @@ class Granule {
     h5_.write(parent + "/" + name, values, attributes(meta), dims, fill_value);
   }
 
+  // A one-dimensional dataset whose _FillValue is `fill` (ph_index_beg's 0).
+  template <typename T>
+  void dataset_filled(const std::string& parent, const std::string& name,
+                      const std::vector<T>& values, const Meta& meta, T fill) {
+    h5_.write(parent + "/" + name, values, attributes(meta), {}, std::optional<T>(fill));
+  }
+
   // A one-element dataset of fixed-length text (ancillary_data's UTC times).
   void text_dataset(const std::string& parent, const std::string& name, const std::string& text,
                     const Meta& meta) {
@@ -78,13 +85,6 @@ class Granule {
 
   void ancillary(const GranuleInfo& info, const std::string& short_name,
                  const std::vector<BeamTrack>& beams);
-
-  void beam_attributes(const std::string& beam_group, const BeamTrack& beam) {
-    text_attribute(beam_group, "atlas_beam_type", beam.strong ? "strong" : "weak");
-    text_attribute(beam_group, "atlas_spot_number", std::to_string(beam.spot_number));
-    text_attribute(beam_group, "groundtrack_id", beam.name);
-    text_attribute(beam_group, "sc_orientation", "Backward");
-  }
 
   void finish() {
     h5_.close();
@@ -154,10 +154,10 @@ void Granule::ancillary(const GranuleInfo& info, const std::string& short_name,
                {"1", "End UTC Time of Granule (CCSDS-A, Actual)", "auxiliaryInformation",
                 "UTC of the last shot"});
   const Group o = group(file(), "orbit_info");
-  dataset(o.get(), "sc_orient", std::vector<std::int8_t>{atlas_sc_orient_backward},
+  dataset(o.get(), "sc_orient", std::vector<std::int8_t>{info.sc_orient},
           {"1", "Spacecraft Orientation", "modelResult",
-           "0 backward, 1 forward, 2 transition: backward, the beams of footprints/atlas_beams "
-           "(the left beam of each pair strong)"});
+           "0 backward (the left beam of each pair strong), 1 forward (the right beam strong), "
+           "2 transition: the run's sensor.sc_orient (footprints/atlas_beams)"});
   dataset(o.get(), "sc_orient_time", std::vector<double>{first_s},
           {"seconds since 2018-01-01", "Time of Last Spacecraft Orientation Change",
            "referenceInformation", "The run's first shot: one orientation throughout"});
@@ -201,6 +201,187 @@ Segments segments_of(const BeamTrack& beam) {
   for (std::size_t j = 1; j < count; ++j)
     if (s.first_shot[j] == beam.shots.size()) s.first_shot[j] = s.first_shot[j - 1];
   return s;
+}
+
+// The `coordinates` attribute the data dictionaries give datasets (the datasets a reader pairs
+// each with).
+void add_coordinates(Granule& g, const std::string& parent,
+                     std::initializer_list<const char*> names, const std::string& coordinates) {
+  for (const char* name : names) g.text_attribute(parent + "/" + name, "coordinates", coordinates);
+}
+
+template <typename T>
+constexpr T fill_of() {
+  return std::numeric_limits<T>::max();
+}
+
+// orbit_info/orbit_number: one element, the fill value 65535: a simulation has no orbit count.
+void write_orbit_number(Granule& g, const std::string& orbit_info) {
+  g.dataset(orbit_info, "orbit_number", std::vector<std::uint16_t>{fill_of<std::uint16_t>()},
+            {"1", "Orbit Number", "referenceInformation", "Not simulated: the fill value"}, 0,
+            true);
+}
+
+// A beam group's attributes, as real granules give them: its strength, ATLAS's spot behind it,
+// its name and the spacecraft's orientation.
+void write_beam_attributes(Granule& g, const std::string& beam_group, const BeamTrack& beam,
+                           std::int8_t sc_orient) {
+  g.text_attribute(beam_group, "atlas_beam_type", beam.strong ? "strong" : "weak");
+  g.text_attribute(beam_group, "atlas_spot_number", std::to_string(beam.spot_number));
+  g.text_attribute(beam_group, "groundtrack_id", beam.name);
+  g.text_attribute(beam_group, "sc_orientation",
+                   sc_orient == atlas_sc_orient_forward ? "Forward" : "Backward");
+}
+
+// What the granules' ancillary_data/ and orbit_info/ hold beside Granule::ancillary's, as
+// read-ICESat-2's read_granule reads them (each a one-element array): the GPS week and seconds
+// of week of the first and last shots, the first and last 20 m segments, the granule's UTC span
+// (the data's); the cycle, reference ground track, orbit and region, which a simulation has
+// not, as the fill value; orbit_info/{orbit_number, crossing_time, lan}, fill likewise.
+void write_ancillary_rest(Granule& g, const std::vector<BeamTrack>& beams) {
+  const auto [first_s, last_s] = time_span(beams);
+  std::int32_t first_segment = fill_of<std::int32_t>(), last_segment = fill_of<std::int32_t>();
+  for (const BeamTrack& beam : beams) {
+    if (beam.shots.empty()) continue;
+    const std::int32_t a = segment_of(beam.shots.front().along_m);
+    const std::int32_t b = segment_of(beam.shots.back().along_m);
+    first_segment = first_segment == fill_of<std::int32_t>() ? a : std::min(first_segment, a);
+    last_segment = last_segment == fill_of<std::int32_t>() ? b : std::max(last_segment, b);
+  }
+  const Group a("/ancillary_data");
+  const std::string& h = a.get();
+  const auto utc = [](double delta_time_s) {
+    return format_iso8601_utc_microseconds(delta_time_s + atlas_epoch_since_glas_epoch_s);
+  };
+  constexpr double week_s = 604800.0;
+  for (const auto& [which, t] : {std::pair<std::string, double>{"start", first_s},
+                                 std::pair<std::string, double>{"end", last_s}}) {
+    const std::string shot = which == "start" ? "first" : "last";
+    const double gps_s = atlas_sdp_gps_epoch_s + t;
+    const double week = std::floor(gps_s / week_s);
+    const auto fill = [&](const std::string& name, const std::string& long_name) {
+      g.dataset(h, which + "_" + name, std::vector<std::int32_t>{fill_of<std::int32_t>()},
+                {"1", long_name, "auxiliaryInformation", "Not simulated: the fill value"}, 0, true);
+    };
+    fill("cycle", (which == "start" ? "Starting" : "Ending") + std::string(" Cycle"));
+    g.dataset(
+        h, which + "_geoseg",
+        std::vector<std::int32_t>{which == "start" ? first_segment : last_segment},
+        {"1", (which == "start" ? "Starting" : "Ending") + std::string(" Geolocation Segment"),
+         "auxiliaryInformation",
+         "The " + shot + " 20 m segment of the beams (geolocation/segment_id)"},
+        0, true);
+    g.dataset(h, which + "_gpssow", std::vector<double>{gps_s - week * week_s},
+              {"seconds", (which == "start" ? "Start" : "End") + std::string(" GPS SOW of Granule"),
+               "auxiliaryInformation", "GPS seconds of week of the " + shot + " shot"});
+    g.dataset(h, which + "_gpsweek", std::vector<std::int32_t>{static_cast<std::int32_t>(week)},
+              {"weeks from 1980-01-06",
+               (which == "start" ? "Start" : "End") + std::string(" GPSWeek of Granule"),
+               "auxiliaryInformation", "GPS week of the " + shot + " shot"});
+    fill("orbit", (which == "start" ? "Starting" : "Ending") + std::string(" Orbit Number"));
+    fill("region", (which == "start" ? "Starting" : "Ending") + std::string(" Region"));
+    fill("rgt", (which == "start" ? "Starting" : "Ending") + std::string(" Reference Groundtrack"));
+  }
+  g.text_dataset(h, "granule_start_utc", utc(first_s),
+                 {"1", "Start UTC Time of Granule (CCSDS-A, Requested)", "auxiliaryInformation",
+                  "UTC of the first shot: the granule is the run's shots"});
+  g.text_dataset(h, "granule_end_utc", utc(last_s),
+                 {"1", "End UTC Time of Granule (CCSDS-A, Requested)", "auxiliaryInformation",
+                  "UTC of the last shot: the granule is the run's shots"});
+  g.text_dataset(h, "release", std::string("glaswave ") + GLASWAVE_VERSION,
+                 {"1", "Release Number", "auxiliaryInformation",
+                  "The glaswave version that simulated the granule (no ASAS release)"});
+  g.text_dataset(h, "version", "01",
+                 {"1", "Version", "auxiliaryInformation",
+                  "01: the first (and only) production of these photons"});
+  const Group o("/orbit_info");
+  write_orbit_number(g, o.get());
+  g.dataset(o.get(), "crossing_time", std::vector<double>{fill_of<double>()},
+            {"seconds since 2018-01-01", "Ascending Node Crossing Time", "referenceInformation",
+             "Not simulated: the fill value"},
+            0, true);
+  g.dataset(o.get(), "lan", std::vector<double>{fill_of<double>()},
+            {"degrees_east", "Ascending Node Longitude", "referenceInformation",
+             "Not simulated: the fill value"},
+            0, true);
+}
+
+// ATL03's calibrations and impulse response, as read-ICESat-2's read_granule reads them:
+// ancillary_data/calibrations/dead_time/gtXY/{dead_time (the beam's detector channels, 16 strong,
+// 4 weak, each the sensor's dead time), sigma (0: one value, known)};
+// calibrations/first_photon_bias/gtXY/{dead_time, strength, width, ffb_corr}, fill (no
+// first-photon bias table is computed); ancillary_data/tep/{tep_range_prim, tep_valid_spot} and
+// atlas_impulse_response/pce1_spot1, pce2_spot3/tep_histogram/{tep_hist, tep_hist_time,
+// tep_hist_sum, tep_tod, tep_duration, tep_bckgrd}: the sensor's transmitted pulse, the same
+// for both.
+void write_atl03_calibrations(Granule& g, const GranuleInfo& info,
+                              const std::vector<BeamTrack>& beams) {
+  const Group a("/ancillary_data");
+  const Group calibrations = g.group(a.get(), "calibrations");
+  const Group dead_time = g.group(calibrations.get(), "dead_time");
+  const Group bias = g.group(calibrations.get(), "first_photon_bias");
+  const bool known = std::isfinite(info.dead_time_ns);
+  for (const BeamTrack& beam : beams) {
+    const Group d = g.group(dead_time.get(), beam.name);
+    const std::size_t channels = beam.strong ? 16 : 4;
+    g.dataset(d.get(), "dead_time",
+              std::vector<double>(channels, known ? info.dead_time_ns * 1e-9 : fill_of<double>()),
+              {"seconds", "Dead-time", "auxiliaryInformation",
+               known ? "Each detector channel's non-paralysable dead time: the sensor's "
+                       "(sensor.dead_time_ns), the same for every channel"
+                     : "Not known: the fill value"},
+              0, true);
+    g.dataset(d.get(), "sigma", std::vector<double>(channels, known ? 0.0 : fill_of<double>()),
+              {"seconds", "Dead-time sigma", "auxiliaryInformation",
+               "0: the simulated dead time is exact"},
+              0, true);
+    const Group f = g.group(bias.get(), beam.name);
+    const Meta none{"1", "First photon bias table", "auxiliaryInformation",
+                    "Not computed (no first-photon bias calibration is simulated): the fill value"};
+    for (const char* name : {"dead_time", "strength", "width", "ffb_corr"})
+      g.dataset(f.get(), name, std::vector<double>{fill_of<double>()}, none, 0, true);
+  }
+  // The transmitted pulse as a histogram from its first sample: ATLAS's transmitter echo path.
+  std::vector<double> time_s, hist;
+  double sum = 0.0;
+  for (const double p : info.pulse_power) sum += p;
+  for (std::size_t i = 0; i < info.pulse_time_ns.size() && i < info.pulse_power.size(); ++i) {
+    time_s.push_back((info.pulse_time_ns[i] - info.pulse_time_ns.front()) * 1e-9);
+    hist.push_back(sum > 0.0 ? info.pulse_power[i] / sum : 0.0);
+  }
+  const double span_s = time_s.empty() ? 0.0 : time_s.back();
+  const Group tep = g.group(a.get(), "tep");
+  g.dataset(tep.get(), "tep_range_prim", std::vector<double>{0.0, span_s},
+            {"seconds", "TEP primary range", "auxiliaryInformation",
+             "The times of tep_hist_time that hold the primary TEP: the whole simulated pulse"});
+  g.dataset(tep.get(), "tep_valid_spot", std::vector<std::int8_t>{1, 1, 2, 2, 1, 1},
+            {"1", "Valid TEP spot", "auxiliaryInformation",
+             "For spots 1-6, the TEP to use (1 pce1_spot1, 2 pce2_spot3); both are the sensor's "
+             "pulse here"});
+  const Group response = g.group(g.file(), "atlas_impulse_response");
+  const auto [first_s, last_s] = time_span(beams);
+  for (const char* pce : {"pce1_spot1", "pce2_spot3"}) {
+    const Group p = g.group(response.get(), pce);
+    const Group t = g.group(p.get(), "tep_histogram");
+    g.dataset(t.get(), "tep_hist", hist,
+              {"1", "TEP Histogram", "modelResult",
+               "The sensor's transmitted pulse, its power in each sample over their sum (empty "
+               "when the run has none)"});
+    g.dataset(t.get(), "tep_hist_time", time_s,
+              {"seconds", "TEP Histogram Time", "modelResult",
+               "Each sample's time from the pulse's first sample"});
+    g.dataset(t.get(), "tep_hist_sum", std::vector<std::int64_t>{fill_of<std::int64_t>()},
+              {"counts", "TEP Histogram Sum", "modelResult",
+               "Not counted (the pulse is known, not measured): the fill value"},
+              0, true);
+    g.dataset(t.get(), "tep_tod", std::vector<double>{first_s},
+              {"seconds since 2018-01-01", "TEP Time Of Day", "referenceInformation",
+               "The run's first shot: one pulse shape throughout"});
+    g.dataset(t.get(), "tep_duration", std::vector<double>{last_s - first_s},
+              {"seconds", "TEP Duration", "modelResult", "The run's span of shots"});
+    g.dataset(t.get(), "tep_bckgrd", std::vector<double>{0.0},
+              {"counts", "TEP Background", "modelResult", "0: the pulse is known without noise"});
+  }
 }
 
 // Each photon's shot, in the photons' order.
@@ -297,7 +478,7 @@ void write_heights(Granule& g, const std::string& beam_group, const BeamTrack& b
   std::vector<std::int8_t> confidence(beam.photons.size() * 5, -1);
   for (std::size_t i = 0; i < beam.photons.size(); ++i) confidence[5 * i] = c.confidence[i];
   g.dataset(h, "signal_conf_ph", confidence,
-            {"counts", "Photon Signal Confidence", "modelResult",
+            {"1", "Photon Signal Confidence", "modelResult",
              "Per surface type (land, ocean, sea ice, land ice, inland water): -1 not considered, "
              "0 noise, 2 low, 3 medium, 4 high; the land column from the classification's noise "
              "filter (pipeline/products/atl08_classification.hpp)"},
@@ -307,6 +488,14 @@ void write_heights(Granule& g, const std::string& beam_group, const BeamTrack& b
             truth_meta("1", "Simulation truth: 0 background, 1 ground, 2 canopy, 3 top of canopy"));
   g.dataset(h, "glaswave_order", each_photon<std::uint8_t>(beam, [](auto& p) { return p.order; }),
             truth_meta("1", "Simulation truth: scattering order, 0 for background"));
+  // As the ATL03 data dictionary pairs them: every photon's field with its time and place.
+  add_coordinates(g, h,
+                  {"h_ph", "dist_ph_along", "dist_ph_across", "quality_ph", "signal_conf_ph",
+                   "glaswave_truth_class", "glaswave_order"},
+                  "delta_time lat_ph lon_ph");
+  add_coordinates(g, h, {"lat_ph"}, "delta_time lon_ph");
+  add_coordinates(g, h, {"lon_ph"}, "delta_time lat_ph");
+  add_coordinates(g, h, {"delta_time"}, "lat_ph lon_ph");
 }
 
 // A 20 m segment's reference shot: its first (or the nearest before, for an empty one).
@@ -341,12 +530,22 @@ void write_geolocation(Granule& g, const std::string& beam_group, const BeamTrac
   g.dataset(h, "segment_id", c.id,
             {"1", "Along-track segment ID number", "referenceInformation",
              "20 m segments counted from 1 at the track's first shot"});
-  g.dataset(h, "ph_index_beg", s.ph_index_beg,
-            {"1", "Photon Index Begin", "referenceInformation",
-             "1-based index in heights/ of the segment's first photon (0: none)"});
+  g.dataset_filled(
+      h, "ph_index_beg", s.ph_index_beg,
+      {"counts", "Photon Index Begin", "referenceInformation",
+       "1-based index in heights/ of the segment's first photon (0: none, the fill value)"},
+      std::int64_t{0});
   g.dataset(h, "segment_ph_cnt", s.ph_cnt,
-            {"1", "Number of photons in a given along-track segment", "referenceInformation",
-             "The segment's photons, consecutive in heights/"});
+            {"counts", "Number of photons in a given along-track segment", "referenceInformation",
+             "The segment's photons, consecutive in heights/"},
+            0, true);
+  std::vector<std::int32_t> reference(s.ph_cnt.size());
+  for (std::size_t j = 0; j < reference.size(); ++j) reference[j] = s.ph_cnt[j] > 0 ? 1 : 0;
+  g.dataset(h, "reference_photon_index", reference,
+            {"counts", "Reference Photon Index", "referenceInformation",
+             "1-based index of the segment's reference photon among its photons: 1, its first "
+             "(0: the segment has none)"},
+            0, true);
   g.dataset(h, "segment_dist_x", c.dist,
             {"meters", "Along-track distance", "modelResult",
              "Along-track distance of the segment's start from the track's first shot"});
@@ -365,12 +564,26 @@ void write_geolocation(Granule& g, const std::string& beam_group, const BeamTrac
             0, true);
   g.dataset(h, "sigma_h", std::vector<float>(c.id.size(), 0.0f),
             {"meters", "height uncertainty", "qualityInformation",
-             "0: the simulation's photons are placed without geolocation error"});
+             "0: the simulation's photons are placed without geolocation error"},
+            0, true);
+  add_coordinates(g, h,
+                  {"segment_id", "ph_index_beg", "segment_ph_cnt", "reference_photon_index",
+                   "segment_dist_x", "segment_length", "solar_elevation", "sigma_h"},
+                  "delta_time reference_photon_lat reference_photon_lon");
+  add_coordinates(g, h, {"reference_photon_lat"}, "delta_time reference_photon_lon");
+  add_coordinates(g, h, {"reference_photon_lon"}, "delta_time reference_photon_lat");
+  add_coordinates(g, h, {"delta_time"}, "reference_photon_lat reference_photon_lon");
   const Group corrections = g.group(beam_group, "geophys_corr");
   g.dataset(corrections.get(), "dem_h", c.dem_h,
             {"meters", "DEM Height", "referenceInformation",
-             "The scene's terrain height above WGS84 at the segment's first shot"});
+             "The scene's terrain height above WGS84 at the segment's first shot"},
+            0, true);
   g.dataset(corrections.get(), "delta_time", c.time, delta_time_meta);
+  add_coordinates(g, corrections.get(), {"dem_h"},
+                  "delta_time ../geolocation/reference_photon_lat "
+                  "../geolocation/reference_photon_lon");
+  add_coordinates(g, corrections.get(), {"delta_time"},
+                  "../geolocation/reference_photon_lat ../geolocation/reference_photon_lon");
 }
 
 void write_background(Granule& g, const std::string& beam_group, const BeamTrack& beam) {
@@ -402,9 +615,11 @@ void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>
   const std::lock_guard<std::mutex> hdf5(netcdf_library_mutex());  // HDF5 is not thread-safe
   Granule g(path);
   g.ancillary(info, "ATL03", beams);
+  write_ancillary_rest(g, beams);
+  write_atl03_calibrations(g, info, beams);
   for (std::size_t b = 0; b < beams.size(); ++b) {
     const Group beam_group = g.group(g.file(), beams[b].name);
-    g.beam_attributes(beam_group.get(), beams[b]);
+    write_beam_attributes(g, beam_group.get(), beams[b], info.sc_orient);
     write_heights(g, beam_group.get(), beams[b], classes[b]);
     write_geolocation(g, beam_group.get(), beams[b]);
     write_background(g, beam_group.get(), beams[b]);
@@ -419,7 +634,7 @@ struct SegmentTruth {
   std::vector<float> lat_20m, lon_20m;  // segments x 5: the shot nearest each 20 m's centre
   std::vector<double> time;
   std::vector<std::int32_t> id_beg, id_end;
-  std::vector<std::int8_t> night;
+  std::vector<std::int32_t> night;  // ATL08's night_flag is int32
 };
 
 // The simulation's place and truth at one segment: `middle` its shot nearest the centre (null
@@ -438,8 +653,8 @@ void add_segment_truth(SegmentTruth& t, const BeamShot* middle, double n, double
   const bool sun = middle && std::isfinite(middle->solar_elevation_deg);
   t.solar_elevation.push_back(sun ? static_cast<float>(middle->solar_elevation_deg) : fill_float);
   // ATL08's night_flag: the sun below the horizon.
-  t.night.push_back(sun ? static_cast<std::int8_t>(middle->solar_elevation_deg < 0.0)
-                        : std::numeric_limits<std::int8_t>::max());
+  t.night.push_back(sun ? static_cast<std::int32_t>(middle->solar_elevation_deg < 0.0)
+                        : std::numeric_limits<std::int32_t>::max());
 }
 
 // For each of `pieces` pieces of `width_m` along track from first_m, its shot nearest its
@@ -653,7 +868,16 @@ void write_terrain(Granule& g, const std::string& h, const std::vector<LandSegme
            &LandSegment::terrain_slope,
            {"1", "Terrain slope", "modelResult",
             "Along-track slope of the least-squares line through the ground photons"}},
+          {"h_te_std",
+           &LandSegment::h_te_std,
+           {"meters", "Standard deviation of terrain points", "modelResult",
+            "Standard deviation (n - 1) of the segment's ground photons' heights"}},
       });
+  g.dataset(h, "h_te_mode", std::vector<float>(s.size(), fill_float),
+            {"meters", "Mode of terrain height", "modelResult",
+             "Not computed (the mode needs a histogram bin the data dictionary does not give): "
+             "the fill value"},
+            0, true);
   g.dataset(h, "n_te_photons", as_int(s, &LandSegment::n_te_photons),
             {"1", "Number of ground photons", "modelResult", "The segment's ground photons"});
 }
@@ -715,6 +939,17 @@ void write_canopy(Granule& g, const std::string& h, const std::vector<LandSegmen
   g.dataset(h, "n_toc_photons", as_int(s, &LandSegment::n_toc_photons),
             {"1", "Number of top of canopy photons", "modelResult",
              "The segment's top-of-canopy photons"});
+  write_segment_fields(g, h, s,
+                       {{"toc_roughness",
+                         &LandSegment::toc_roughness,
+                         {"meters", "Top of canopy roughness", "modelResult",
+                          "Standard deviation (n - 1) of the top-of-canopy photons' heights above "
+                          "the fitted ground"}}});
+  g.dataset(h, "canopy_rh_conf",
+            std::vector<std::int8_t>(3 * s.size(), std::numeric_limits<std::int8_t>::max()),
+            {"1", "Canopy relative height confidence", "qualityInformation",
+             "Not assessed (segments x 3): the fill value"},
+            3, true);
 }
 
 void write_segment_truth(Granule& g, const std::string& land, const SegmentTruth& t) {
@@ -749,6 +984,17 @@ void write_land_segments(Granule& g, const std::string& beam_group, const BeamTr
   const Group canopy = g.group(land.get(), "canopy");
   write_terrain(g, terrain.get(), s);
   write_canopy(g, canopy.get(), s);
+  // ATL08 takes segment_cover from a reference map of canopy cover (as dem_h from a reference
+  // DEM); the scene is this one's.
+  std::vector<std::int16_t> cover;
+  for (const float c : t.cover)
+    cover.push_back(c == fill_float ? std::numeric_limits<std::int16_t>::max()
+                                    : static_cast<std::int16_t>(std::lround(100.0 * c)));
+  g.dataset(canopy.get(), "segment_cover", cover,
+            {"percent", "Segment Cover", "referenceInformation",
+             "The scene's crown cover over the segment's footprints (the mean of the "
+             "simulation's), in percent, rounded"},
+            0, true);
   write_20m(g, land.get(), terrain.get(), canopy.get(), s, t);
   write_segment_truth(g, land.get(), t);
 }
@@ -802,9 +1048,10 @@ void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>
   const std::lock_guard<std::mutex> hdf5(netcdf_library_mutex());  // HDF5 is not thread-safe
   Granule g(path);
   g.ancillary(info, "ATL08", beams);
+  write_ancillary_rest(g, beams);
   for (std::size_t b = 0; b < beams.size(); ++b) {
     const Group beam_group = g.group(g.file(), beams[b].name);
-    g.beam_attributes(beam_group.get(), beams[b]);
+    write_beam_attributes(g, beam_group.get(), beams[b], info.sc_orient);
     write_land_segments(g, beam_group.get(), beams[b], classes[b], settings);
     write_signal_photons(g, beam_group.get(), beams[b], classes[b]);
   }

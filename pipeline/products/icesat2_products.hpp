@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -60,9 +61,10 @@ struct GranuleBeam {
   double across_m = 0.0;  // its ground track right of the reference ground track's
 };
 
-// ATL03's orbit_info/sc_orient: glaswave's beams are those of the "backward" orientation
-// (footprints/atlas_beams.hpp), the left beam of each pair strong.
+// ATL03's orbit_info/sc_orient: 0 backward, 1 forward (footprints/atlas_beams.hpp's
+// AtlasOrientation), which decides the beams' strengths and spots.
 inline constexpr std::int8_t atlas_sc_orient_backward = 0;
+inline constexpr std::int8_t atlas_sc_orient_forward = 1;
 
 // Which ICESat-2 granules a run writes, and for which beams (in the granules' order). With
 // several beams a record belongs to the one whose spot number is its ShotRecord::beam; one beam
@@ -71,11 +73,18 @@ struct Icesat2ProductSettings {
   bool atl03 = false;
   bool atl08 = false;
   std::vector<GranuleBeam> beams = {GranuleBeam{}};
+  std::int8_t sc_orient = atlas_sc_orient_backward;
+  double dead_time_ns = 3.2;  // each detector channel's (sensor.dead_time_ns)
 };
 
 struct GranuleInfo {
   std::string history;  // the command line
   std::string config_json;
+  std::int8_t sc_orient = atlas_sc_orient_backward;
+  double dead_time_ns = std::numeric_limits<double>::quiet_NaN();  // NaN: not known, fill
+  // The transmitted pulse, ATL03's transmitter echo path histogram: its times about the peak
+  // (ns) and power (any scale); empty: not known, fill.
+  std::vector<double> pulse_time_ns, pulse_power;
 };
 
 // DIR/atl03.h5. Per beam: heights/{h_ph, lat_ph, lon_ph, delta_time, dist_ph_along,

@@ -34,7 +34,12 @@ Icesat2Writer::Icesat2Writer(const std::filesystem::path& out_dir,
                              const Icesat2ProductSettings& settings, const RunInfo& info)
     : out_dir_(out_dir),
       settings_(settings),
-      info_{info.command_line, info.config_json},
+      info_{info.command_line,
+            info.config_json,
+            settings.sc_orient,
+            settings.dead_time_ns,
+            info.tx_time_ns,
+            info.tx_waveform_W.empty() ? std::vector<double>{} : info.tx_waveform_W.front()},
       shots_(info.shots) {
   if (info.bin_time_ns.size() >= 2) {
     const double bin_ns = info.bin_time_ns[1] - info.bin_time_ns[0];

@@ -23,6 +23,10 @@ import numpy as np
 
 from conftest import glaswave_binary
 
+# BEAMxxxx/channel in real GEDI L1B files (issue 38, from real granules).
+REAL_CHANNEL = {"BEAM0000": 0, "BEAM0001": 0, "BEAM0010": 1, "BEAM0011": 1,
+                "BEAM0101": 2, "BEAM0110": 3, "BEAM1000": 4, "BEAM1011": 5}
+
 GEDI_EPOCH_S = 568036800.0  # 2018-01-01T00:00:00Z after the GLAS epoch
 
 
@@ -100,6 +104,8 @@ def test_gedi_l1b_reads_as_rgedi_reads_it(tmp_path):
                 z = np.linspace(last, bin0, count[i] + 1)[::-1][1:]
                 assert abs(z[0] - shots["elev_bin0"][k]) <= (bin0 - last) / count[i] + 1e-6
                 assert b["beam"][i] == int(g[4:], 2)
+                # The channel as real L1B files number it (two coverage beams a channel).
+                assert b["channel"][i] == REAL_CHANNEL[g]
                 assert abs(b["delta_time"][i] + GEDI_EPOCH_S - shots["time"][k]) < 1e-6
                 assert np.isfinite(b["geolocation/solar_elevation"][i])
                 seen += 1

@@ -299,8 +299,9 @@ def test_land_segments_read_as_spacelidar_reads_them(granules):
                      "terrain/h_te_best_fit", "canopy/h_canopy", "canopy/canopy_openness",
                      "terrain/terrain_slope", "canopy/h_mean_canopy"):
             assert len(dataset(land, name, "f4")) == n, name
-        for name in ("layer_flag", "msw_flag", "sat_flag", "ph_removal_flag", "night_flag"):
+        for name in ("layer_flag", "msw_flag", "sat_flag", "ph_removal_flag"):
             assert len(dataset(land, name, "i1")) == n, name
+        assert len(dataset(land, "night_flag", "i4")) == n  # int32 in real ATL08 (issue 38)
         terrain_flg = dataset(land, "terrain_flg", "i4")
         # Julia's Bool() takes 0 and 1 only.
         for flags in (terrain_flg, land["ph_removal_flag"][()], land["layer_flag"][()]):
@@ -313,7 +314,7 @@ def test_land_segments_read_as_spacelidar_reads_them(granules):
         assert land["sat_flag"].attrs["_FillValue"] == 127
         # The sun is up: night_flag 0, as solar_elevation says.
         sun = land["solar_elevation"][()]
-        assert np.array_equal(land["night_flag"][()], (sun < 0).astype(np.int8))
+        assert np.array_equal(land["night_flag"][()], (sun < 0).astype(np.int32))
         assert np.all(land["night_flag"][()] == 0)
         for name in ("h_canopy", "canopy_openness", "h_te_mean"):
             path = "canopy/" + name if name != "h_te_mean" else "terrain/" + name

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <iterator>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -288,6 +289,280 @@ TEST(Icesat2Granules, Atl08TerrainStatisticsMatchTheCloudsTruth) {
   const auto orient = read<std::int8_t>(file, "/orbit_info/sc_orient", H5T_NATIVE_INT8);
   ASSERT_EQ(orient.size(), 1u);
   EXPECT_EQ(orient[0], 0);  // backward: the left beams strong, as footprints/atlas_beams has them
+  H5Fclose(file);
+}
+
+// ---- the layout the readers open, from the data dictionaries and the readers' sources ----
+
+// Whether `path` is a dataset of exactly `type` (H5Tequal on its stored type).
+bool has_type(hid_t file, const std::string& path, hid_t type) {
+  if (H5Lexists(file, path.c_str(), H5P_DEFAULT) <= 0) return false;
+  const hid_t set = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  if (set < 0) return false;
+  const hid_t stored = H5Dget_type(set);
+  const bool same = H5Tequal(stored, type) > 0;
+  H5Tclose(stored);
+  H5Dclose(set);
+  return same;
+}
+
+// A text attribute of the object at `path` ("" when it has none).
+std::string text_attribute(hid_t file, const std::string& path, const std::string& name) {
+  if (H5Aexists_by_name(file, path.c_str(), name.c_str(), H5P_DEFAULT) <= 0) return "";
+  const hid_t attribute =
+      H5Aopen_by_name(file, path.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+  const hid_t type = H5Aget_type(attribute);
+  std::string text(H5Tget_size(type), '\0');
+  H5Aread(attribute, type, text.data());
+  H5Tclose(type);
+  H5Aclose(attribute);
+  return text.substr(0, text.find('\0'));
+}
+
+// The _FillValue attribute of the dataset at `path`, read as `T` (NaN-free types only).
+template <typename T>
+std::optional<T> fill_value(hid_t file, const std::string& path, hid_t memory) {
+  if (H5Aexists_by_name(file, path.c_str(), "_FillValue", H5P_DEFAULT) <= 0) return std::nullopt;
+  const hid_t attribute =
+      H5Aopen_by_name(file, path.c_str(), "_FillValue", H5P_DEFAULT, H5P_DEFAULT);
+  T value{};
+  H5Aread(attribute, memory, &value);
+  H5Aclose(attribute);
+  return value;
+}
+
+// A transmitted pulse of 1.5 ns FWHM sampled every 0.1 ns over +-3 ns about its peak.
+GranuleInfo forward_info() {
+  GranuleInfo info{"glaswave run test", "{}"};
+  info.sc_orient = atlas_sc_orient_forward;
+  info.dead_time_ns = 3.2;
+  const double sigma_ns = 1.5 / (2.0 * std::sqrt(2.0 * std::log(2.0)));
+  for (int i = -30; i <= 30; ++i) {
+    info.pulse_time_ns.push_back(0.1 * i);
+    info.pulse_power.push_back(std::exp(-0.5 * std::pow(0.1 * i / sigma_ns, 2)));
+  }
+  return info;
+}
+
+// A forward granule's beams: gt1l weak (spot 6), gt1r strong (spot 5), as the ATL03 data
+// dictionary's table has them (tests/footprints/atlas_beams_test.cpp).
+std::vector<BeamTrack> forward_beams() {
+  std::vector<BeamTrack> beams = {synthetic_beam("gt1l", 11), synthetic_beam("gt1r", 12)};
+  beams[0].strong = false, beams[0].spot_number = 6;
+  beams[1].strong = true, beams[1].spot_number = 5;
+  return beams;
+}
+
+// read-ICESat-2's read_granule (icesat2_toolkit/io/ATL03.py), in its order: a beam is one with
+// geolocation/segment_id and heights/delta_time; every dataset of heights/, geolocation/,
+// bckgrd_atlas/ and geophys_corr/ read whole; orbit_info/'s; ancillary_data/'s 21 keys (each
+// read with [:], so one-element arrays, never scalars); every dataset of ancillary_data/tep/;
+// calibrations/{dead_time, first_photon_bias}/gtXY/; atlas_impulse_response/{pce1_spot1,
+// pce2_spot3}/tep_histogram/. ICESat2VegR's ATL03_seg_metadata_dt and the join add
+// geolocation/reference_photon_index and orbit_info/orbit_number.
+TEST(Icesat2Granules, Atl03HasEveryPathReadIcesat2AndIcesat2VegROpen) {
+  const test_support::ScratchDir dir("icesat2_atl03_readers");
+  const std::vector<BeamTrack> beams = forward_beams();
+  write_atl03(dir.path() / "atl03.h5", beams, classify_beams(beams, Atl08Settings{}),
+              forward_info());
+  const hid_t file = H5Fopen((dir.path() / "atl03.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  for (const BeamTrack& beam : beams) {
+    const std::string g = "/" + beam.name;
+    EXPECT_TRUE(has_type(file, g + "/geolocation/segment_id", H5T_STD_I32LE));
+    EXPECT_TRUE(has_type(file, g + "/heights/delta_time", H5T_IEEE_F64LE));
+    for (const char* group : {"heights", "geolocation", "bckgrd_atlas", "geophys_corr"})
+      EXPECT_GT(H5Lexists(file, (g + "/" + group).c_str(), H5P_DEFAULT), 0) << group;
+    EXPECT_TRUE(has_type(file, g + "/geolocation/reference_photon_index", H5T_STD_I32LE));
+    EXPECT_TRUE(has_type(file, g + "/geolocation/ph_index_beg", H5T_STD_I64LE));
+    EXPECT_TRUE(has_type(file, g + "/geolocation/segment_ph_cnt", H5T_STD_I32LE));
+    EXPECT_TRUE(has_type(file, g + "/geolocation/sigma_h", H5T_IEEE_F32LE));
+    EXPECT_TRUE(has_type(file, g + "/geophys_corr/dem_h", H5T_IEEE_F32LE));
+    EXPECT_TRUE(has_type(file, g + "/heights/signal_conf_ph", H5T_STD_I8LE));
+    // The group's attributes in the forward orientation: gt1l weak on spot 6, gt1r strong on 5.
+    EXPECT_EQ(text_attribute(file, g, "atlas_spot_number"), std::to_string(beam.spot_number));
+    EXPECT_EQ(text_attribute(file, g, "atlas_beam_type"), beam.strong ? "strong" : "weak");
+    EXPECT_EQ(text_attribute(file, g, "sc_orientation"), "Forward");
+    // The reference photon: 1-based in its segment, its segment's first (0 for none).
+    const auto reference =
+        read<std::int32_t>(file, g + "/geolocation/reference_photon_index", H5T_NATIVE_INT32);
+    const auto count =
+        read<std::int32_t>(file, g + "/geolocation/segment_ph_cnt", H5T_NATIVE_INT32);
+    ASSERT_EQ(reference.size(), count.size());
+    for (std::size_t j = 0; j < count.size(); ++j) {
+      EXPECT_GE(reference[j], count[j] > 0 ? 1 : 0);
+      EXPECT_LE(reference[j], count[j]);
+    }
+    // read-ICESat-2 reads the channels' dead time and the first-photon bias tables per beam.
+    const std::string cal = "/ancillary_data/calibrations/";
+    const auto dead = read<double>(file, cal + "dead_time" + g + "/dead_time", H5T_NATIVE_DOUBLE);
+    ASSERT_EQ(dead.size(), beam.strong ? 16u : 4u);  // ATLAS's detector channels a beam
+    for (const double d : dead) EXPECT_DOUBLE_EQ(d, 3.2e-9);
+    EXPECT_EQ(read<double>(file, cal + "dead_time" + g + "/sigma", H5T_NATIVE_DOUBLE).size(),
+              dead.size());
+    for (const char* name : {"dead_time", "strength", "width", "ffb_corr"})
+      EXPECT_TRUE(has_type(file, cal + "first_photon_bias" + g + "/" + name, H5T_IEEE_F64LE))
+          << name;
+  }
+  // orbit_info/ as a real granule has it (the ATL03 data dictionary's dtypes).
+  EXPECT_TRUE(has_type(file, "/orbit_info/sc_orient", H5T_STD_I8LE));
+  EXPECT_EQ(read<std::int8_t>(file, "/orbit_info/sc_orient", H5T_NATIVE_INT8),
+            std::vector<std::int8_t>{1});
+  EXPECT_TRUE(has_type(file, "/orbit_info/orbit_number", H5T_STD_U16LE));
+  EXPECT_EQ(fill_value<std::uint16_t>(file, "/orbit_info/orbit_number", H5T_NATIVE_UINT16),
+            std::optional<std::uint16_t>{65535});
+  EXPECT_TRUE(has_type(file, "/orbit_info/rgt", H5T_STD_I16LE));
+  EXPECT_TRUE(has_type(file, "/orbit_info/cycle_number", H5T_STD_I8LE));
+  for (const char* name : {"sc_orient_time", "crossing_time", "lan"})
+    EXPECT_TRUE(has_type(file, std::string("/orbit_info/") + name, H5T_IEEE_F64LE)) << name;
+  // read_granule's ancillary_keys, in its order, each a one-element array.
+  for (const char* key : {"atlas_sdp_gps_epoch",
+                          "data_end_utc",
+                          "data_start_utc",
+                          "end_cycle",
+                          "end_geoseg",
+                          "end_gpssow",
+                          "end_gpsweek",
+                          "end_orbit",
+                          "end_region",
+                          "end_rgt",
+                          "granule_end_utc",
+                          "granule_start_utc",
+                          "release",
+                          "start_cycle",
+                          "start_geoseg",
+                          "start_gpssow",
+                          "start_gpsweek",
+                          "start_orbit",
+                          "start_region",
+                          "start_rgt",
+                          "version"}) {
+    const std::string path = std::string("/ancillary_data/") + key;
+    ASSERT_GT(H5Lexists(file, path.c_str(), H5P_DEFAULT), 0) << key;
+    const hid_t set = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+    const hid_t space = H5Dget_space(set);
+    EXPECT_EQ(H5Sget_simple_extent_ndims(space), 1) << key << ": h5py's [:] needs an array";
+    EXPECT_EQ(H5Sget_simple_extent_npoints(space), 1) << key;
+    H5Sclose(space);
+    H5Dclose(set);
+  }
+  // The first shot's GPS week and seconds of week, from the ATLAS epoch's GPS seconds.
+  const double gps_s = 1198800018.0 + 2.5e8;
+  EXPECT_EQ(read<std::int32_t>(file, "/ancillary_data/start_gpsweek", H5T_NATIVE_INT32)[0],
+            static_cast<std::int32_t>(gps_s / 604800.0));
+  EXPECT_NEAR(read<double>(file, "/ancillary_data/start_gpssow", H5T_NATIVE_DOUBLE)[0],
+              gps_s - 604800.0 * std::floor(gps_s / 604800.0), 1e-6);
+  EXPECT_EQ(read<std::int32_t>(file, "/ancillary_data/start_geoseg", H5T_NATIVE_INT32)[0], 1);
+  EXPECT_EQ(read<std::int32_t>(file, "/ancillary_data/end_geoseg", H5T_NATIVE_INT32)[0], 50);
+  EXPECT_EQ(fill_value<std::int32_t>(file, "/ancillary_data/start_rgt", H5T_NATIVE_INT32),
+            std::optional<std::int32_t>{2147483647});
+  // ancillary_data/tep/: the TEP to use for each spot, the primary TEP's range.
+  EXPECT_EQ(read<std::int8_t>(file, "/ancillary_data/tep/tep_valid_spot", H5T_NATIVE_INT8).size(),
+            6u);
+  EXPECT_EQ(read<double>(file, "/ancillary_data/tep/tep_range_prim", H5T_NATIVE_DOUBLE).size(), 2u);
+  // The impulse response: the pulse, normalised, over 6 ns from its first sample.
+  for (const char* pce : {"pce1_spot1", "pce2_spot3"}) {
+    const std::string t = std::string("/atlas_impulse_response/") + pce + "/tep_histogram/";
+    const auto hist = read<double>(file, t + "tep_hist", H5T_NATIVE_DOUBLE);
+    const auto time = read<double>(file, t + "tep_hist_time", H5T_NATIVE_DOUBLE);
+    ASSERT_EQ(hist.size(), 61u);
+    ASSERT_EQ(time.size(), 61u);
+    EXPECT_NEAR(std::accumulate(hist.begin(), hist.end(), 0.0), 1.0, 1e-12);
+    EXPECT_NEAR(time.back() - time.front(), 6e-9, 1e-15);
+    EXPECT_EQ(std::max_element(hist.begin(), hist.end()) - hist.begin(), 30);
+    EXPECT_EQ(read<double>(file, t + "tep_tod", H5T_NATIVE_DOUBLE).size(), 1u);
+  }
+  H5Fclose(file);
+}
+
+// The ATL03 attributes as the data dictionary gives them (a real granule's heights/h_ph:
+// coordinates "delta_time lat_ph lon_ph"): units "counts" on the photon index and count,
+// "1" on signal_conf_ph; _FillValue on ph_index_beg (0, an empty segment's), segment_ph_cnt,
+// sigma_h and geophys_corr/dem_h.
+TEST(Icesat2Granules, Atl03AttributesAsTheDataDictionaryGivesThem) {
+  const test_support::ScratchDir dir("icesat2_atl03_attributes");
+  const std::vector<BeamTrack> beams = {synthetic_beam("gt2l", 13)};
+  write_atl03(dir.path() / "atl03.h5", beams, classify_beams(beams, Atl08Settings{}), {"h", "{}"});
+  const hid_t file = H5Fopen((dir.path() / "atl03.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const std::string h = "/gt2l/heights/", geo = "/gt2l/geolocation/";
+  for (const char* name :
+       {"h_ph", "dist_ph_along", "dist_ph_across", "quality_ph", "signal_conf_ph"})
+    EXPECT_EQ(text_attribute(file, h + name, "coordinates"), "delta_time lat_ph lon_ph") << name;
+  EXPECT_EQ(text_attribute(file, h + "lat_ph", "coordinates"), "delta_time lon_ph");
+  EXPECT_EQ(text_attribute(file, h + "lon_ph", "coordinates"), "delta_time lat_ph");
+  EXPECT_EQ(text_attribute(file, h + "delta_time", "coordinates"), "lat_ph lon_ph");
+  for (const char* name : {"segment_id", "ph_index_beg", "segment_ph_cnt", "sigma_h"})
+    EXPECT_EQ(text_attribute(file, geo + name, "coordinates"),
+              "delta_time reference_photon_lat reference_photon_lon")
+        << name;
+  EXPECT_EQ(text_attribute(file, geo + "ph_index_beg", "units"), "counts");
+  EXPECT_EQ(text_attribute(file, geo + "segment_ph_cnt", "units"), "counts");
+  EXPECT_EQ(text_attribute(file, geo + "reference_photon_index", "units"), "counts");
+  EXPECT_EQ(text_attribute(file, h + "signal_conf_ph", "units"), "1");
+  EXPECT_EQ(fill_value<std::int64_t>(file, geo + "ph_index_beg", H5T_NATIVE_INT64),
+            std::optional<std::int64_t>{0});
+  EXPECT_EQ(fill_value<std::int32_t>(file, geo + "segment_ph_cnt", H5T_NATIVE_INT32),
+            std::optional<std::int32_t>{2147483647});
+  for (const char* path : {"/gt2l/geolocation/sigma_h", "/gt2l/geophys_corr/dem_h"})
+    EXPECT_EQ(fill_value<float>(file, path, H5T_NATIVE_FLOAT), std::optional<float>{3.4028235e+38f})
+        << path;
+  // Backward: the beam group says so, and so does orbit_info.
+  EXPECT_EQ(text_attribute(file, "/gt2l", "sc_orientation"), "Backward");
+  EXPECT_EQ(read<std::int8_t>(file, "/orbit_info/sc_orient", H5T_NATIVE_INT8),
+            std::vector<std::int8_t>{0});
+  H5Fclose(file);
+}
+
+// ATL08 as ICESat2VegR's ATL08_seg_attributes_dt asks for it: land_segments/night_flag int32,
+// terrain/{h_te_mode, h_te_std}, canopy/{toc_roughness, segment_cover, canopy_rh_conf}. h_te_std
+// against the cloud's truth: ground photons 0.15 m RMS about a 0.05 slope over 100 m have a
+// standard deviation of sqrt(0.15^2 + (0.05 * 100)^2 / 12) = 1.451 m.
+TEST(Icesat2Granules, Atl08HasTheSegmentFieldsIcesat2VegRReads) {
+  const test_support::ScratchDir dir("icesat2_atl08_vegr");
+  const std::vector<BeamTrack> beams = {synthetic_beam("gt2l", 14)};
+  const Atl08Settings settings;
+  write_atl08(dir.path() / "atl08.h5", beams, classify_beams(beams, settings), settings,
+              {"h", "{}"});
+  const hid_t file = H5Fopen((dir.path() / "atl08.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const std::string g = "/gt2l/land_segments/";
+  EXPECT_TRUE(has_type(file, g + "night_flag", H5T_STD_I32LE));
+  for (const char* name : {"terrain/h_te_mode", "terrain/h_te_std", "canopy/toc_roughness"})
+    EXPECT_TRUE(has_type(file, g + name, H5T_IEEE_F32LE)) << name;
+  EXPECT_TRUE(has_type(file, g + "canopy/segment_cover", H5T_STD_I16LE));
+  EXPECT_TRUE(has_type(file, g + "canopy/canopy_rh_conf", H5T_STD_I8LE));
+  EXPECT_EQ(read<std::int8_t>(file, g + "canopy/canopy_rh_conf", H5T_NATIVE_INT8).size(), 30u);
+  const auto std_h = read<float>(file, g + "terrain/h_te_std", H5T_NATIVE_FLOAT);
+  ASSERT_EQ(std_h.size(), 10u);
+  // Against the photons drawn on the ground in each segment (the classification keeps about 95 %
+  // of them, Atl08Classification above), and against the formula to three times the sampling
+  // spread of a standard deviation of about 450 photons (1.45 / sqrt(2 * 450) = 0.05 m).
+  std::vector<std::vector<double>> ground(10);
+  for (const BeamShot& shot : beams[0].shots)
+    for (std::uint32_t i = 0; i < shot.photon_count; ++i)
+      if (beams[0].photons[shot.first_photon + i].truth_class == 1)
+        ground[static_cast<std::size_t>(shot.along_m / 100.0)].push_back(
+            beams[0].photons[shot.first_photon + i].h_m);
+  const double expected = std::sqrt(0.15 * 0.15 + 25.0 / 12.0);
+  for (std::size_t k = 0; k < 10; ++k) {
+    const std::vector<double>& h = ground[k];
+    const double mean = std::accumulate(h.begin(), h.end(), 0.0) / h.size();
+    double sum2 = 0.0;
+    for (const double x : h) sum2 += (x - mean) * (x - mean);
+    EXPECT_NEAR(std_h[k], std::sqrt(sum2 / (h.size() - 1.0)), 0.05) << k;
+    EXPECT_NEAR(std_h[k], expected, 0.15) << k;
+  }
+  // The forest's 70 % cover in the segments wholly inside it (300-700 m), none outside.
+  const auto cover = read<std::int16_t>(file, g + "canopy/segment_cover", H5T_NATIVE_INT16);
+  ASSERT_EQ(cover.size(), 10u);
+  EXPECT_EQ(cover[4], 70);
+  EXPECT_EQ(cover[0], 0);
+  // Top-of-canopy roughness in the forest: a finite spread of a few metres, fill outside.
+  const auto roughness = read<float>(file, g + "canopy/toc_roughness", H5T_NATIVE_FLOAT);
+  EXPECT_GT(roughness[4], 0.0f);
+  EXPECT_LT(roughness[4], 10.0f);
+  EXPECT_EQ(roughness[0], 3.4028235e+38f);
   H5Fclose(file);
 }
 
