@@ -308,9 +308,13 @@ int check(const Arguments& arguments) {
   const Config config = load(arguments);
   const CheckSummary summary = check_inputs(config);
   print_warnings(summary.warnings);
-  std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain",
+  std::printf("glaswave: %s is valid: %lld shots, %s%lld off the terrain",
               arguments.config_file.c_str(), static_cast<long long>(summary.shots),
+              summary.shots_located < summary.shots ? "about " : "",
               static_cast<long long>(summary.shots_off_terrain));
+  if (summary.shots_located < summary.shots)
+    std::printf(" (%lld of them located, evenly spread)",
+                static_cast<long long>(summary.shots_located));
   // An orbit keeps only the shots on the terrain: say how many it skipped.
   if (summary.shots < summary.sequence_length)
     std::printf(" (%lld of the orbit's %lld shots fall on it)",
