@@ -1073,6 +1073,31 @@ def round_four_inputs(t):
     t.run("42/2. voxelize onto /dev/null, --force", voxelize + ["/dev/null", "--force"], expect=2,
           says="not a regular file")
 
+    # Sizes check accepted and run then spent minutes on.
+    t.run("42/4. background rate_MHz 1e6 (run)", ["run", t.config(
+        "background.json", sensor={"preset": "atlas"},
+        simulation={"rays_per_shot": 20, "background": {"rate_MHz": 1e6}}), "--quiet", "--out",
+        out], out=out, expect=2, says="/simulation/background/rate_MHz")
+    t.run("42/4. the sun through a filter of 10^4 nm", ["check", t.config(
+        "sun.json", sensor={"preset": "atlas", "filter_bandwidth_nm": 1e4})], expect=2,
+        says="/sensor/filter_bandwidth_nm")
+    done = t.run("42/4. a pass of 10^9 shots (check)", ["check", t.config(
+        "many.json", track__shots=10**9)], expect="ok")
+    if b"1000000 of them located" not in done.stdout:
+        row = list(t.rows[-1])
+        row[4] = "DOES NOT SAY it located a sample"
+        t.rows[-1] = tuple(row)
+    plate = t.write("plate.obj", "v -1 -1 1\nv 1 -1 1\nv 1 1 1\nf 1 2 3\n")
+    materials = {f"m{i}": {"reflectance": 0.3} for i in range(65536)}
+    materials["DefaultMaterial"] = {"reflectance": 0.3}
+    t.run("42/4. 65,537 facet materials (check)", ["check", t.config("materials.json", canopy={
+        "facets": {"trees_file": trees, "models": {"oak": plate}, "materials": materials}})],
+        expect="ok")
+    row = list(t.rows[-1])
+    if row[5] > 5.0:
+        row[4] = f"SLOW ({row[5]:.1f} s)"
+    t.rows[-1] = tuple(row)
+
 
 def journal_frames(journal):
     """The (start, end) byte offsets of a run journal's whole frames (pipeline/engine/journal.cpp:
