@@ -1073,6 +1073,19 @@ def round_four_inputs(t):
     t.run("42/2. voxelize onto /dev/null, --force", voxelize + ["/dev/null", "--force"], expect=2,
           says="not a regular file")
 
+    # One class-2 point 800 m (1.45 km) from an 80 m plot.
+    plot = [(500000.5 + i, 4000000.5 + j, 100.0 + (10.0 if (i + j) % 2 else 0.0),
+             5 if (i + j) % 2 else 2) for i in range(80) for j in range(80)]
+    for far in (800, 1450):
+        stray = write_las(t.path("stray.las"), plot + [(500000.0 + far, 4000040.0, 100.0, 2)])
+        t.run(f"42/4. voxelize a plot with one ground point {far} m away", [
+            "voxelize", stray, "--crs", "EPSG:32633", "--out", str(t.path("stray.nc")),
+            "--force"], expect=3, says="separate patches")
+        t.run(f"42/4. a point cloud run, one ground point {far} m away", ["check", t.config(
+            "stray.json", terrain={"point_cloud": True},
+            canopy={"point_cloud": {"file": stray, "crs": "EPSG:32633"}})], expect=3,
+            says="separate patches")
+
     # Sizes check accepted and run then spent minutes on.
     t.run("42/4. background rate_MHz 1e6 (run)", ["run", t.config(
         "background.json", sensor={"preset": "atlas"},
