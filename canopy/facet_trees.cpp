@@ -11,9 +11,11 @@
 #include <GeographicLib/LocalCartesian.hpp>
 #include <algorithm>
 #include <assimp/Importer.hpp>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -170,12 +172,71 @@ void check_ply_counts(const std::string& place, const std::string& model) {
   }
 }
 
+// glTF's JSON (a .gltf, or a .glb's first chunk) nested deeper than this is refused before
+// Assimp's recursive parser overflows its stack on it (200 000 levels of arrays: a crash). glTF
+// itself nests a few levels; extras may nest more.
+constexpr int max_gltf_depth = 256;
+
+void check_gltf_depth(const std::string& place, const std::string& model) {
+  std::ifstream in(place, std::ios::binary);
+  char magic[12] = {};
+  in.read(magic, 12);
+  std::uint64_t length = std::numeric_limits<std::uint64_t>::max();
+  if (in.gcount() == 12 && std::string_view(magic, 4) == "glTF") {
+    unsigned char chunk[8] = {};
+    in.read(reinterpret_cast<char*>(chunk), 8);
+    if (in.gcount() != 8 || std::string_view(reinterpret_cast<char*>(chunk) + 4, 4) != "JSON")
+      return;
+    length = chunk[0] | chunk[1] << 8 | chunk[2] << 16 | std::uint64_t{chunk[3]} << 24;
+  } else {
+    in.clear();
+    in.seekg(0);
+    char first = ' ';
+    while (in.get(first) && std::isspace(static_cast<unsigned char>(first))) {
+    }
+    if (!in || first != '{') return;
+    in.seekg(-1, std::ios::cur);
+  }
+  int depth = 0;
+  bool text = false, escaped = false;
+  char buffer[1 << 16];
+  while (length > 0 && in) {
+    in.read(buffer, static_cast<std::streamsize>(std::min<std::uint64_t>(sizeof buffer, length)));
+    const std::streamsize got = in.gcount();
+    if (got <= 0) break;
+    length -= static_cast<std::uint64_t>(got);
+    for (std::streamsize n = 0; n < got; ++n) {
+      const char c = buffer[n];
+      if (text) {
+        if (escaped)
+          escaped = false;
+        else if (c == '\\')
+          escaped = true;
+        else if (c == '"')
+          text = false;
+        continue;
+      }
+      if (c == '"') {
+        text = true;
+      } else if (c == '{' || c == '[') {
+        if (++depth > max_gltf_depth)
+          throw input_error(place, "the mesh of model \"" + model +
+                                       "\" nests its JSON deeper than " +
+                                       std::to_string(max_gltf_depth) + " levels");
+      } else if (c == '}' || c == ']') {
+        --depth;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 FacetMesh read_facet_mesh(const std::filesystem::path& file, const std::string& model) {
   const std::string place = file.string();
   require_input_file(place, "the mesh of model \"" + model + "\"");
   check_ply_counts(place, model);
+  check_gltf_depth(place, model);
   Assimp::Importer importer;
   auto owned = std::make_unique<CheckedIOSystem>();
   const CheckedIOSystem* files = owned.get();

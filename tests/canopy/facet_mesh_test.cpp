@@ -111,5 +111,22 @@ TEST(FacetMesh, FilesTheModelNamesFollowTheRegularFileRule) {
   EXPECT_EQ(read_facet_mesh(write(dir.path() / "plate.gltf", gltf), "oak").triangles.size(), 3u);
 }
 
+// A glTF of 200 000 nested arrays overflowed the stack of Assimp's recursive JSON parser; one of
+// 256 levels, a string holding brackets and escaped quotes, is read on to the parser's own
+// verdict.
+TEST(FacetMesh, GltfNestedDeeperThanItsLimitIsRefusedBeforeItIsParsed) {
+  test_support::ScratchDir dir;
+  const std::string deep = std::string(200000, '[') + std::string(200000, ']');
+  std::string message = refusal(
+      write(dir.path() / "deep.gltf", R"({"asset": {"version": "2.0"}, "extras": )" + deep + "}"));
+  EXPECT_NE(message.find("deep.gltf: the mesh of model \"oak\" nests its JSON deeper than 256"),
+            std::string::npos)
+      << message;
+  const std::string levels = std::string(255, '[') + std::string(255, ']');
+  message = refusal(write(dir.path() / "fine.gltf", R"({"asset": {"version": "2.0"}, "extras": )" +
+                                                        levels + R"(, "x": "[[\"[[[" })"));
+  EXPECT_EQ(message.find("nests its JSON"), std::string::npos) << message;
+}
+
 }  // namespace
 }  // namespace glaswave

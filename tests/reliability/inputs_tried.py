@@ -976,6 +976,10 @@ def round_four_inputs(t):
         "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0}))
     t.run("42/1. a glTF whose buffer's URI is a FIFO", ["check", facets(model)], expect=3,
           says="FIFO")
+    model = t.write("deep.gltf", '{"asset": {"version": "2.0"}, "extras": ' + "[" * 200000 +
+                    "]" * 200000 + "}")
+    t.run("42/1. a glTF of 200 000 nested arrays", ["check", facets(model)], expect=3,
+          says="nests its JSON deeper than 256")
 
     # Voxel grids, written as netCDF4-python writes them: under the track (UTM 32N).
     utm = osr.SpatialReference()
