@@ -1,18 +1,25 @@
 // Facet tree models through Assimp, and the trees file through the CSV reader or OGR.
 #include "canopy/facet_trees.hpp"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <gdal_priv.h>
 #include <ogrsf_frmts.h>
+#include <sys/stat.h>
 
 #include <GeographicLib/LocalCartesian.hpp>
 #include <algorithm>
 #include <assimp/Importer.hpp>
+#include <cctype>
+#include <charconv>
 #include <cmath>
+#include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <sstream>
 
 #include "core/csv.hpp"
 #include "core/error.hpp"
@@ -45,6 +52,11 @@ void add_mesh(const aiMesh& mesh, const std::string& material, FacetMesh& out,
     const aiFace& face = mesh.mFaces[f];
     if (face.mNumIndices != 3) continue;  // points and lines are no facets
     const unsigned* i = face.mIndices;
+    // Assimp's validation refuses these; a face naming a vertex the mesh lacks is never used.
+    for (int c = 0; c < 3; ++c)
+      if (i[c] >= mesh.mNumVertices)
+        throw input_error(place, "a face names vertex " + std::to_string(i[c]) + " of " +
+                                     std::to_string(mesh.mNumVertices));
     const aiVector3D e1 = mesh.mVertices[i[1]] - mesh.mVertices[i[0]];
     const aiVector3D e2 = mesh.mVertices[i[2]] - mesh.mVertices[i[0]];
     if ((e1 ^ e2).SquareLength() <= 0.0f) continue;  // no area, no normal
@@ -56,16 +68,188 @@ void add_mesh(const aiMesh& mesh, const std::string& material, FacetMesh& out,
                       "holds more than " + std::to_string(max_facet_triangles) + " triangles");
 }
 
+// Every file Assimp opens itself (the model, an OBJ's mtllib, a glTF's buffers and images) under
+// the regular-file rule: a FIFO would be waited on for ever, a device read for ever. The first
+// file refused is kept, and read_facet_mesh refuses the model naming it, whether Assimp then
+// failed or went on without the file (an OBJ without its materials).
+class CheckedIOSystem : public Assimp::DefaultIOSystem {
+ public:
+  // Assimp's own Exists opens the file (and would wait on a FIFO); stat(2) opens nothing.
+  bool Exists(const char* file) const override {
+    struct stat status {};
+    if (::stat(file, &status) != 0) return false;
+    return S_ISREG(status.st_mode) || allowed(file);  // a FIFO's refusal kept
+  }
+
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    if (!allowed(file)) return nullptr;
+    return Assimp::DefaultIOSystem::Open(file, mode);
+  }
+
+  const std::string& refused() const { return refused_; }
+
+ private:
+  // False, with the refusal kept, unless `file` is a regular file to read.
+  bool allowed(const char* file) const {
+    try {
+      require_input_file(file, "a file the mesh names");
+      return true;
+    } catch (const Error& error) {
+      if (refused_.empty()) refused_ = error.what();
+      return false;
+    }
+  }
+
+  mutable std::string refused_;
+};
+
+// The least bytes a PLY element's properties take: binary, their sizes (a list, its count
+// alone); ASCII, a character and a separator each.
+std::uint64_t ply_property_bytes(const std::string& type, bool ascii) {
+  if (ascii) return 2;
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "double" || type == "float64") return 8;
+  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
+      type == "float32")
+    return 4;
+  return 1;
+}
+
+// A PLY header's elements are counted before Assimp reserves memory for them: a header that
+// declares more elements than the bytes after it can hold (10^9 faces in 200 bytes) is refused.
+void check_ply_counts(const std::string& place, const std::string& model) {
+  std::ifstream in(place, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || (line != "ply" && line != "ply\r")) return;
+  bool ascii = false;
+  std::vector<std::pair<std::string, std::uint64_t>> elements;  // name, count
+  std::vector<std::uint64_t> element_bytes;
+  constexpr std::size_t max_header_lines = 100000;
+  for (std::size_t n = 0; n < max_header_lines && std::getline(in, line); ++n) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "end_header") {
+      const std::uint64_t header = static_cast<std::uint64_t>(in.tellg());
+      std::error_code error;
+      const std::uint64_t size = std::filesystem::file_size(place, error);
+      if (error) return;
+      const std::uint64_t data = size > header ? size - header : 0;
+      long double needed = 0.0L;
+      for (std::size_t e = 0; e < elements.size(); ++e) {
+        needed += static_cast<long double>(elements[e].second) * element_bytes[e];
+        if (needed > static_cast<long double>(data))
+          throw input_error(place, "the mesh of model \"" + model + "\" declares " +
+                                       std::to_string(elements[e].second) + " " +
+                                       elements[e].first.substr(0, 40) +
+                                       " elements, more than its " + std::to_string(data) +
+                                       " bytes after the header hold (cut short or corrupt)");
+      }
+      return;
+    }
+    if (keyword == "format") {
+      std::string format;
+      words >> format;
+      ascii = format == "ascii";
+    } else if (keyword == "element") {
+      std::string name, count;
+      words >> name >> count;
+      std::uint64_t value = 0;
+      const auto [end, status] = std::from_chars(count.data(), count.data() + count.size(), value);
+      if (status != std::errc() || end != count.data() + count.size())
+        throw input_error(place, "the mesh of model \"" + model + "\": element " +
+                                     name.substr(0, 40) + "'s count is not a whole number");
+      elements.emplace_back(name, value);
+      element_bytes.push_back(0);
+    } else if (keyword == "property" && !elements.empty()) {
+      std::string type;
+      words >> type;
+      if (type == "list") words >> type;  // the count's type: the items may be none
+      element_bytes.back() += ply_property_bytes(type, ascii);
+    }
+  }
+}
+
+// glTF's JSON (a .gltf, or a .glb's first chunk) nested deeper than this is refused before
+// Assimp's recursive parser overflows its stack on it (200 000 levels of arrays: a crash). glTF
+// itself nests a few levels; extras may nest more.
+constexpr int max_gltf_depth = 256;
+
+void check_gltf_depth(const std::string& place, const std::string& model) {
+  std::ifstream in(place, std::ios::binary);
+  char magic[12] = {};
+  in.read(magic, 12);
+  std::uint64_t length = std::numeric_limits<std::uint64_t>::max();
+  if (in.gcount() == 12 && std::string_view(magic, 4) == "glTF") {
+    unsigned char chunk[8] = {};
+    in.read(reinterpret_cast<char*>(chunk), 8);
+    if (in.gcount() != 8 || std::string_view(reinterpret_cast<char*>(chunk) + 4, 4) != "JSON")
+      return;
+    length = chunk[0] | chunk[1] << 8 | chunk[2] << 16 | std::uint64_t{chunk[3]} << 24;
+  } else {
+    in.clear();
+    in.seekg(0);
+    char first = ' ';
+    while (in.get(first) && std::isspace(static_cast<unsigned char>(first))) {
+    }
+    if (!in || first != '{') return;
+    in.seekg(-1, std::ios::cur);
+  }
+  int depth = 0;
+  bool text = false, escaped = false;
+  char buffer[1 << 16];
+  while (length > 0 && in) {
+    in.read(buffer, static_cast<std::streamsize>(std::min<std::uint64_t>(sizeof buffer, length)));
+    const std::streamsize got = in.gcount();
+    if (got <= 0) break;
+    length -= static_cast<std::uint64_t>(got);
+    for (std::streamsize n = 0; n < got; ++n) {
+      const char c = buffer[n];
+      if (text) {
+        if (escaped)
+          escaped = false;
+        else if (c == '\\')
+          escaped = true;
+        else if (c == '"')
+          text = false;
+        continue;
+      }
+      if (c == '"') {
+        text = true;
+      } else if (c == '{' || c == '[') {
+        if (++depth > max_gltf_depth)
+          throw input_error(place, "the mesh of model \"" + model +
+                                       "\" nests its JSON deeper than " +
+                                       std::to_string(max_gltf_depth) + " levels");
+      } else if (c == '}' || c == ']') {
+        --depth;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 FacetMesh read_facet_mesh(const std::filesystem::path& file, const std::string& model) {
   const std::string place = file.string();
   require_input_file(place, "the mesh of model \"" + model + "\"");
+  check_ply_counts(place, model);
+  check_gltf_depth(place, model);
   Assimp::Importer importer;
-  // Node transforms applied, polygons cut into triangles, shared vertices merged.
+  auto owned = std::make_unique<CheckedIOSystem>();
+  const CheckedIOSystem* files = owned.get();
+  importer.SetIOHandler(owned.release());  // the importer deletes it
+  // Validated first (faces naming vertices the mesh lacks, counts that disagree), then node
+  // transforms applied, polygons cut into triangles, shared vertices merged.
   const aiScene* scene =
-      importer.ReadFile(place, aiProcess_Triangulate | aiProcess_PreTransformVertices |
+      importer.ReadFile(place, aiProcess_ValidateDataStructure | aiProcess_Triangulate |
+                                   aiProcess_PreTransformVertices |
                                    aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+  if (!files->refused().empty())
+    throw input_error(place, "the mesh of model \"" + model + "\" names a file it cannot use (" +
+                                 files->refused() + ")");
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode) {
     std::string why = importer.GetErrorString();
     std::replace(why.begin(), why.end(), '\n', ' ');

@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
+#include <unordered_set>
+#include <vector>
 
 #include "core/error.hpp"
 
@@ -15,6 +18,88 @@ namespace glaswave {
 
 namespace {
 constexpr std::uint64_t kPointWindow = 1 << 20;  // points read at a time: memory is the grid's
+
+// The blocks of 10 m that hold a point of the cloud, to find a patch of points far from the rest
+// before the ground is gridded (and the voxels made) over the empty space between: one ground
+// point 800 m from an 80 m plot made voxelize grid 800 m (45 s). Patches closer than 20 m of
+// empty blocks are one (flight lines, gaps in the ground returns).
+class Patches {
+ public:
+  static constexpr double block_m = 10.0;
+  static constexpr std::size_t max_blocks = std::size_t{1} << 22;  // beyond: not looked at
+
+  void add(double x, double y) {
+    const std::int64_t bx = static_cast<std::int64_t>(std::floor(x / block_m)),
+                       by = static_cast<std::int64_t>(std::floor(y / block_m));
+    if (bx == last_x_ && by == last_y_) return;  // neighbouring points share their block
+    last_x_ = bx;
+    last_y_ = by;
+    if (blocks_.size() < max_blocks) blocks_.insert(key(bx, by));
+  }
+
+  // An input error when the largest patch spans less than a quarter of the extent the grid would
+  // cover (lo, hi), naming the block of points farthest from it.
+  void check(const double lo[2], const double hi[2], const std::string& place) const {
+    if (blocks_.empty() || blocks_.size() >= max_blocks) return;
+    // The patches: blocks within 3 blocks of one another, breadth first.
+    std::unordered_set<std::uint64_t> seen;
+    std::vector<std::uint64_t> largest, patch;
+    for (const std::uint64_t start : blocks_) {
+      if (!seen.insert(start).second) continue;
+      patch.assign(1, start);
+      for (std::size_t n = 0; n < patch.size(); ++n) {
+        const auto [bx, by] = unkey(patch[n]);
+        for (std::int64_t dy = -3; dy <= 3; ++dy)
+          for (std::int64_t dx = -3; dx <= 3; ++dx) {
+            const std::uint64_t k = key(bx + dx, by + dy);
+            if (blocks_.count(k) && seen.insert(k).second) patch.push_back(k);
+          }
+      }
+      if (patch.size() > largest.size()) largest.swap(patch);
+    }
+    if (largest.size() == blocks_.size()) return;
+    std::int64_t x0 = INT64_MAX, y0 = INT64_MAX, x1 = INT64_MIN, y1 = INT64_MIN;
+    for (const std::uint64_t k : largest) {
+      const auto [bx, by] = unkey(k);
+      x0 = std::min(x0, bx), x1 = std::max(x1, bx), y0 = std::min(y0, by), y1 = std::max(y1, by);
+    }
+    const double patch_w = (x1 - x0 + 1) * block_m, patch_h = (y1 - y0 + 1) * block_m;
+    const double all_w = std::max(block_m, hi[0] - lo[0]), all_h = std::max(block_m, hi[1] - lo[1]);
+    if (patch_w * patch_h >= 0.25 * all_w * all_h) return;
+    // The block farthest from the largest patch's box.
+    double far = -1.0, far_x = 0.0, far_y = 0.0;
+    for (const std::uint64_t k : blocks_) {
+      const auto [bx, by] = unkey(k);
+      const double gx = double(std::max<std::int64_t>({0, x0 - bx, bx - x1})) * block_m,
+                   gy = double(std::max<std::int64_t>({0, y0 - by, by - y1})) * block_m;
+      if (std::hypot(gx, gy) > far) {
+        far = std::hypot(gx, gy);
+        far_x = (bx + 0.5) * block_m;
+        far_y = (by + 0.5) * block_m;
+      }
+    }
+    const auto metres = [](double m) { return std::to_string(std::llround(m)); };
+    throw input_error(place, "the cloud's points lie in separate patches: the largest spans " +
+                                 metres(patch_w) + " x " + metres(patch_h) + " m of the " +
+                                 metres(all_w) + " x " + metres(all_h) +
+                                 " m the cloud spans, points near x " + metres(far_x) + ", y " +
+                                 metres(far_y) + " lie " + metres(far) +
+                                 " m from it, and the grid would cover the empty space between "
+                                 "(crop the cloud to one patch)");
+  }
+
+ private:
+  static std::uint64_t key(std::int64_t bx, std::int64_t by) {
+    return (static_cast<std::uint64_t>(bx) << 32) ^ static_cast<std::uint32_t>(by);
+  }
+  static std::pair<std::int64_t, std::int64_t> unkey(std::uint64_t k) {
+    return {static_cast<std::int32_t>(k >> 32), static_cast<std::int32_t>(k & 0xffffffffu)};
+  }
+
+  std::unordered_set<std::uint64_t> blocks_;
+  std::int64_t last_x_ = INT64_MIN, last_y_ = INT64_MIN;
+};
+
 }  // namespace
 
 double GroundGrid::height_at(double x, double y) const {
@@ -168,11 +253,13 @@ CloudGround grid_cloud_ground(const LasFile& cloud, const std::string& crs,
   double hi[2] = {-lo[0], -lo[1]};
   std::vector<std::array<double, 3>> ground;
   std::vector<LasPoint> points;
+  Patches patches;
   for (std::uint64_t first = 0; first < count; first += kPointWindow) {
     points.clear();
     cloud.read_points(first, kPointWindow, points);
     for (const LasPoint& p : points) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+      patches.add(p.x, p.y);
       lo[0] = std::min(lo[0], p.x);
       lo[1] = std::min(lo[1], p.y);
       hi[0] = std::max(hi[0], p.x);
@@ -183,6 +270,7 @@ CloudGround grid_cloud_ground(const LasFile& cloud, const std::string& crs,
   out.points = count;
   out.ground_points = ground.size();
   if (!(hi[0] >= lo[0])) throw input_error(place, "the point cloud holds no point");
+  patches.check(lo, hi, place);
   const double x0 = std::floor(lo[0] / s) * s, y0 = std::floor(lo[1] / s) * s;
   const double nx_real = std::floor((hi[0] - x0) / s) + 1,
                ny_real = std::floor((hi[1] - y0) / s) + 1;

@@ -8,6 +8,7 @@
 #include <ogr_srs_api.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -48,9 +49,18 @@ double regular_step(const std::vector<double>& c, const std::string& place, cons
   return step;
 }
 
+// No vegetation stands 10 km above or below its ground: a height beyond is a grid in other
+// units or a corrupt one, and Embree cannot hold boxes near 1e300 m.
+constexpr double max_layer_height_m = 1.0e4;
+
 void check_layers(const std::vector<double>& edges, const std::string& place) {
+  for (std::size_t k = 0; k < edges.size(); ++k)
+    if (!(std::abs(edges[k]) <= max_layer_height_m))
+      throw input_error(place, "layer " + std::to_string(k == 0 ? 0 : k - 1) + "'s " +
+                                   (k == 0 ? "bottom" : "top") +
+                                   " is not a height within 10000 m of the ground");
   for (std::size_t k = 0; k + 1 < edges.size(); ++k)
-    if (!(std::isfinite(edges[k]) && edges[k + 1] > edges[k]))
+    if (!(edges[k + 1] > edges[k]))
       throw input_error(place,
                         "the layers' heights do not increase (layer " + std::to_string(k) + ")");
 }
@@ -60,7 +70,8 @@ void check_each_value(const VoxelBlock& block, const std::string& place, double 
                       std::size_t from, std::size_t to, int i0, int j0) {
   for (std::size_t n = from; n < to; ++n) {
     const float v = block.pad[n];
-    if (!(v >= 0.0f) || !std::isfinite(v) || (std::isfinite(fill) && v == fill)) {
+    if (!(v >= 0.0f) || !std::isfinite(v) ||
+        (std::isfinite(static_cast<float>(fill)) && v == static_cast<float>(fill))) {
       const std::size_t i = n % block.nx + i0, j = n / block.nx % block.ny + j0,
                         k = n / block.nx / block.ny;
       throw input_error(place, "plant area density at voxel (x " + std::to_string(i) + ", y " +
@@ -72,11 +83,10 @@ void check_each_value(const VoxelBlock& block, const std::string& place, double 
 
 void check_values(const VoxelBlock& block, const std::string& place, double fill, int i0, int j0) {
   // Every window of every shot is checked: blocks of values without a branch (the compiler
-  // vectorises them), each value again only in a block that holds a bad one. A float equals
-  // the fill value only if that is a float.
-  const bool fill_is_float =
-      std::isfinite(fill) && static_cast<double>(static_cast<float>(fill)) == fill;
-  const float fill_f = fill_is_float ? static_cast<float>(fill) : 0.0f;
+  // vectorises them), each value again only in a block that holds a bad one. Values are read as
+  // floats: a double variable's fill value is compared as the float it is read as.
+  const float fill_f = std::isfinite(fill) ? static_cast<float>(fill) : 0.0f;
+  const bool fill_is_float = std::isfinite(fill_f);
   const float* pad = block.pad.data();
   constexpr std::size_t stretch = 4096;
   for (std::size_t n0 = 0; n0 < block.pad.size(); n0 += stretch) {
@@ -106,14 +116,94 @@ void axis_window(double origin, double step, int n, double lo, double hi, int& f
   count = static_cast<int>(l) - first;
 }
 
+// A text attribute, NC_CHAR or a single NC_STRING (netCDF4-python writes a str holding other
+// than ASCII, a WKT's "°", as NC_STRING); empty when absent or of another type.
 std::string text_attribute(int ncid, int varid, const char* name) {
   std::size_t length = 0;
   nc_type type;
-  if (nc_inq_att(ncid, varid, name, &type, &length) != NC_NOERR || type != NC_CHAR) return {};
+  if (nc_inq_att(ncid, varid, name, &type, &length) != NC_NOERR) return {};
+  if (type == NC_STRING) {
+    if (length != 1) return {};
+    char* value = nullptr;
+    if (nc_get_att_string(ncid, varid, name, &value) != NC_NOERR) return {};
+    std::string text = value ? value : "";
+    nc_free_string(1, &value);
+    return text;
+  }
+  if (type != NC_CHAR) return {};
   std::string text(length, '\0');
   if (nc_get_att_text(ncid, varid, name, text.data()) != NC_NOERR) return {};
   while (!text.empty() && text.back() == '\0') text.pop_back();
   return text;
+}
+
+// The axis ('X', 'Y', 'Z') a coordinate variable says it is, by CF's `axis`, its standard_name,
+// `positive` or its name; 0 when it says none.
+char coordinate_axis(int ncid, int var, const std::string& name) {
+  const auto lower = [](std::string text) {
+    std::transform(text.begin(), text.end(), text.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return text;
+  };
+  const std::string axis = lower(text_attribute(ncid, var, "axis"));
+  if (axis == "x" || axis == "y" || axis == "z") return static_cast<char>(std::toupper(axis[0]));
+  const std::string standard = lower(text_attribute(ncid, var, "standard_name"));
+  if (standard == "projection_x_coordinate" || standard == "longitude" ||
+      standard == "grid_longitude")
+    return 'X';
+  if (standard == "projection_y_coordinate" || standard == "latitude" ||
+      standard == "grid_latitude")
+    return 'Y';
+  if (standard == "height" || standard == "altitude" ||
+      !text_attribute(ncid, var, "positive").empty())
+    return 'Z';
+  const std::string n = lower(name);
+  if (n == "x" || n == "lon" || n == "longitude" || n == "easting") return 'X';
+  if (n == "y" || n == "lat" || n == "latitude" || n == "northing") return 'Y';
+  if (n == "z" || n == "height" || n == "level") return 'Z';
+  return 0;
+}
+
+// NetCDF's default fill value of a variable of `type` (read as double), for a variable that
+// names none: a value never written reads as it.
+double default_fill(nc_type type) {
+  switch (type) {
+    case NC_BYTE:
+      return NC_FILL_BYTE;
+    case NC_UBYTE:
+      return NC_FILL_UBYTE;
+    case NC_SHORT:
+      return NC_FILL_SHORT;
+    case NC_USHORT:
+      return NC_FILL_USHORT;
+    case NC_INT:
+      return NC_FILL_INT;
+    case NC_UINT:
+      return NC_FILL_UINT;
+    case NC_FLOAT:
+      return NC_FILL_FLOAT;
+    case NC_DOUBLE:
+      return NC_FILL_DOUBLE;
+    default:
+      return std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+// A height of a GeoTIFF band's metadata: a decimal number of metres and nothing else.
+double height_metadata(const char* text, int band, const char* key, const std::string& place) {
+  std::string_view value(text);
+  while (!value.empty() && value.front() == ' ') value.remove_prefix(1);
+  while (!value.empty() && value.back() == ' ') value.remove_suffix(1);
+  if (!value.empty() && value.front() == '+') value.remove_prefix(1);
+  double number = 0.0;
+  const auto [end, status] = std::from_chars(value.data(), value.data() + value.size(), number);
+  if (value.empty() || status != std::errc() || end != value.data() + value.size() ||
+      !std::isfinite(number)) {
+    const std::string shown(std::string_view(text).substr(0, 40));
+    throw input_error(place, "band " + std::to_string(band) + "'s " + key + " \"" + shown +
+                                 "\" is not a number of metres");
+  }
+  return number;
 }
 
 }  // namespace
@@ -124,6 +214,9 @@ struct VoxelGridFile::Impl {
   bool netcdf = false;
   int ncid = -1, pad_var = -1;
   double fill = std::numeric_limits<double>::quiet_NaN();
+  // CF packing (NetCDF scale_factor and add_offset) or a GDAL band's scale and offset, a layer
+  // each; empty when no layer is packed.
+  std::vector<double> scale, offset;
   GDALDatasetH dataset = nullptr;
   bool memory = false;             // shape holds the whole grid, pad included
   std::size_t cache_bytes = 0;     // NetCDF's chunk cache for `pad`
@@ -158,6 +251,17 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
     if (nc_inq_varid(ncid, name, &var) != NC_NOERR)
       throw input_error(place, std::string("no coordinate variable for `pad`'s ") + names[d] +
                                    " dimension (" + name + ")");
+    int coord_dims = 0, coord_dim = -1;
+    nc_inq_varndims(ncid, var, &coord_dims);
+    if (coord_dims == 1) nc_inq_vardimid(ncid, var, &coord_dim);
+    if (coord_dims != 1 || coord_dim != dims[d])
+      throw input_error(place, std::string("the coordinate variable ") + name +
+                                   " is not one-dimensional over its own dimension");
+    const char axis = coordinate_axis(ncid, var, name);
+    if (axis != 0 && axis != "ZYX"[d])
+      throw input_error(place, std::string("`pad`'s dimension ") + std::to_string(d + 1) + " (" +
+                                   name + ") is its " + axis +
+                                   " axis: `pad` must be ordered (z, y, x)");
     coords[d].resize(sizes[d]);
     if (nc_get_var_double(ncid, var, coords[d].data()) != NC_NOERR)
       throw input_error(place, std::string("cannot read the ") + names[d] + " coordinates");
@@ -169,13 +273,14 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
         std::vector<double> b(2 * sizes[0]);
         int bdims = 0;
         nc_inq_varndims(ncid, bvar, &bdims);
-        std::size_t second = 0;
+        std::size_t first = 0, second = 0;
         if (bdims == 2) {
           int bd[2];
           nc_inq_vardimid(ncid, bvar, bd);
+          nc_inq_dimlen(ncid, bd[0], &first);
           nc_inq_dimlen(ncid, bd[1], &second);
         }
-        if (second != 2 || nc_get_var_double(ncid, bvar, b.data()) != NC_NOERR)
+        if (first != sizes[0] || second != 2 || nc_get_var_double(ncid, bvar, b.data()) != NC_NOERR)
           throw input_error(place, "the z bounds are not (z, 2)");
         edges.assign(1, b[0]);
         for (std::size_t k = 0; k < sizes[0]; ++k) {
@@ -224,7 +329,21 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
       static_cast<std::size_t>(std::min(chunk_bytes, double(VoxelGridFile::max_read_cache_bytes)));
   nc_set_var_chunk_cache(ncid, pad_var, cache_bytes, 10007, 0.75f);
   double fill_value = 0.0;
-  if (nc_get_att_double(ncid, pad_var, "_FillValue", &fill_value) == NC_NOERR) fill = fill_value;
+  nc_type pad_type = NC_NAT;
+  nc_inq_vartype(ncid, pad_var, &pad_type);
+  if (nc_get_att_double(ncid, pad_var, "_FillValue", &fill_value) == NC_NOERR)
+    fill = fill_value;
+  else
+    fill = default_fill(pad_type);
+  double factor = 1.0, add = 0.0;
+  const bool scaled = nc_get_att_double(ncid, pad_var, "scale_factor", &factor) == NC_NOERR;
+  const bool shifted = nc_get_att_double(ncid, pad_var, "add_offset", &add) == NC_NOERR;
+  if (scaled || shifted) {
+    if (!(std::isfinite(factor) && std::isfinite(add)))
+      throw input_error(place, "`pad`'s scale_factor or add_offset is not finite");
+    scale.assign(sizes[0], factor);
+    offset.assign(sizes[0], add);
+  }
   std::string mapping = text_attribute(ncid, pad_var, "grid_mapping");
   int crs_var = -1;
   if (mapping.empty() || nc_inq_varid(ncid, mapping.c_str(), &crs_var) != NC_NOERR)
@@ -272,8 +391,8 @@ void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
     if (!bottom || !top)
       throw input_error(place, "band " + std::to_string(b) +
                                    " has no z_bottom_m and z_top_m metadata (its heights)");
-    bottoms.emplace_back(CPLAtof(bottom), b);
-    tops[b] = CPLAtof(top);
+    bottoms.emplace_back(height_metadata(bottom, b, "z_bottom_m", place), b);
+    tops[b] = height_metadata(top, b, "z_top_m", place);
   }
   std::sort(bottoms.begin(), bottoms.end());
   shape.z_edges_m.assign(1, bottoms.front().first);
@@ -286,6 +405,17 @@ void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
     int has_nodata = 0;
     const double nodata = GDALGetRasterNoDataValue(GDALGetRasterBand(dataset, b), &has_nodata);
     if (has_nodata) fill = nodata;
+    int has_scale = 0, has_offset = 0;
+    const double band_scale = GDALGetRasterScale(GDALGetRasterBand(dataset, b), &has_scale);
+    const double band_offset = GDALGetRasterOffset(GDALGetRasterBand(dataset, b), &has_offset);
+    if ((has_scale && band_scale != 1.0) || (has_offset && band_offset != 0.0)) {
+      if (!(std::isfinite(band_scale) && std::isfinite(band_offset)))
+        throw input_error(place, "band " + std::to_string(b) + "'s scale or offset is not finite");
+      scale.resize(bands, 1.0);
+      offset.resize(bands, 0.0);
+      scale[band_of_layer.size() - 1] = band_scale;
+      offset[band_of_layer.size() - 1] = band_offset;
+    }
   }
   shape.nz = bands;
   check_layers(shape.z_edges_m, place);
@@ -394,7 +524,22 @@ VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
                                             " (truncated or corrupt)");
     }
   }
-  check_values(block, impl_->place, impl_->fill, i0, j0);
+  double fill = impl_->fill;
+  if (!impl_->scale.empty()) {
+    // Packed values: the fill value is a packed one, marked missing before values are unpacked.
+    const float packed_fill = std::isfinite(fill) ? static_cast<float>(fill) : 0.0f;
+    const bool has_fill = std::isfinite(fill) && std::isfinite(packed_fill);
+    const std::size_t layer = std::size_t(ni) * nj;
+    for (int k = 0; k < s.nz; ++k) {
+      const double a = impl_->scale[k], b = impl_->offset[k];
+      float* values = block.pad.data() + k * layer;
+      for (std::size_t n = 0; n < layer; ++n)
+        values[n] = has_fill && values[n] == packed_fill ? std::numeric_limits<float>::quiet_NaN()
+                                                         : static_cast<float>(values[n] * a + b);
+    }
+    fill = std::numeric_limits<double>::quiet_NaN();
+  }
+  check_values(block, impl_->place, fill, i0, j0);
   return block;
 }
 

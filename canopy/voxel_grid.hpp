@@ -6,8 +6,9 @@
 //     gives the layers' bottoms and tops; else layers are contiguous about the centres);
 //   - a multi-band GeoTIFF (any raster GDAL reads), band i the layer between the heights its band
 //     metadata `z_bottom_m` and `z_top_m` give.
-// Heights are above the local ground. Columns are regular in x and y (north up, no rotation);
-// layers may differ in thickness but neither overlap nor leave gaps.
+// Heights are above the local ground, within 10 km of it. Columns are regular in x and y (north
+// up, no rotation); layers may differ in thickness but neither overlap nor leave gaps. Packed
+// values (CF's scale_factor and add_offset, a GDAL band's scale and offset) are unpacked.
 //
 // A grid is opened once and read by windows of columns (a shot needs a few hundred metres of a
 // grid that may cover many km^2), as the DEM is.

@@ -1,12 +1,15 @@
 // Command line: run, sweep, brf, check, voxelize, --help, --version.
 #include "pipeline/app/cli.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <new>
@@ -19,6 +22,7 @@
 #include "canopy/gap_fraction.hpp"
 #include "core/error.hpp"
 #include "core/excerpt.hpp"
+#include "core/input_file.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/app/reference.hpp"
 #include "pipeline/app/run_outline.hpp"
@@ -52,6 +56,7 @@ struct Arguments {
   std::string cloud_file;            // voxelize CLOUD.las
   double voxel_size_m = 1.0;         // voxelize --voxel-size-m
   std::string crs;                   // voxelize --crs
+  bool force = false;                // voxelize --force: write over an existing grid
 };
 
 // A decimal integer of an option, in [0, max]: digits only (CLI11 would take "0x10" as 16, an
@@ -303,9 +308,13 @@ int check(const Arguments& arguments) {
   const Config config = load(arguments);
   const CheckSummary summary = check_inputs(config);
   print_warnings(summary.warnings);
-  std::printf("glaswave: %s is valid: %lld shots, %lld off the terrain",
+  std::printf("glaswave: %s is valid: %lld shots, %s%lld off the terrain",
               arguments.config_file.c_str(), static_cast<long long>(summary.shots),
+              summary.shots_located < summary.shots ? "about " : "",
               static_cast<long long>(summary.shots_off_terrain));
+  if (summary.shots_located < summary.shots)
+    std::printf(" (%lld of them located, evenly spread)",
+                static_cast<long long>(summary.shots_located));
   // An orbit keeps only the shots on the terrain: say how many it skipped.
   if (summary.shots < summary.sequence_length)
     std::printf(" (%lld of the orbit's %lld shots fall on it)",
@@ -372,10 +381,43 @@ int brf(const Arguments& arguments) {
 
 // voxelize: a LAS point cloud -> the voxel grid of plant area density (and the ground) that
 // canopy.point_cloud would use, written in the `voxels` NetCDF format.
+// voxelize's --out, before anything is computed: a new file in a folder that exists and takes
+// it, or (with --force) a regular file to replace, never the cloud itself nor a directory or
+// device.
+void check_voxelize_out(const Arguments& arguments) {
+  const std::string& out = arguments.out_dir;
+  require_no_nul(out, "--out", ErrorKind::config);
+  const std::string place = printable_path(out);
+  const auto refuse = [&](const std::string& why) { throw config_error(place, why); };
+  struct stat status {};
+  if (::stat(out.c_str(), &status) == 0) {
+    std::error_code error;
+    if (std::filesystem::equivalent(out, arguments.cloud_file, error))
+      refuse("--out is the point cloud itself; choose another --out");
+    if (S_ISDIR(status.st_mode)) refuse("--out is a directory; give the grid file's name");
+    if (!S_ISREG(status.st_mode)) refuse("--out exists and is not a regular file");
+    if (!arguments.force)
+      refuse("--out exists; remove it, choose another --out, or give --force to replace it");
+  } else if (errno != ENOENT) {
+    refuse(std::string("cannot use --out: ") + std::strerror(errno));
+  }
+  std::filesystem::path folder = std::filesystem::path(out).parent_path();
+  if (folder.empty()) folder = ".";
+  if (::stat(folder.c_str(), &status) != 0)
+    refuse("--out's folder " + printable_path(folder.string()) +
+           (errno == ENOENT ? " does not exist" : std::string(": ") + std::strerror(errno)));
+  if (!S_ISDIR(status.st_mode))
+    refuse("--out's folder " + printable_path(folder.string()) + " is not a folder");
+  if (::access(folder.c_str(), W_OK | X_OK) != 0)
+    refuse("cannot write in --out's folder " + printable_path(folder.string()) + ": " +
+           std::strerror(errno));
+}
+
 int voxelize(const Arguments& arguments, const std::string& command_line) {
   if (!(arguments.voxel_size_m >= 0.05 && arguments.voxel_size_m <= 100.0))
     throw config_error("--voxel-size-m",
                        "must be in [0.05, 100] m, got " + std::to_string(arguments.voxel_size_m));
+  check_voxelize_out(arguments);
   const LasFile cloud(arguments.cloud_file);
   GapFractionSettings settings;
   settings.voxel_size_m = arguments.voxel_size_m;
@@ -582,6 +624,7 @@ class Commands {
                          ->add_option("--crs", arguments_.crs,
                                       "the cloud's CRS when the file has none (EPSG:32633, WKT)")
                          ->type_name("CRS"));
+    voxelize_->add_flag("--force", arguments_.force, "replace an existing grid file at --out");
   }
 
   CLI::App& app_;

@@ -37,42 +37,39 @@ std::string json_pointer_child(const std::string& path, const std::string& key) 
 namespace {
 
 // What a parse has opened and not yet closed: one frame an object or array, with the keys an
-// object gave so far and the index an array has reached.
-class NestingCheck {
+// object gave so far and the index an array has reached. A SAX pass of its own over the text:
+// nlohmann-json's callback parser walks a parent's members at the end of each child object
+// (looking for one it discarded), so an object of n objects took n^2 steps (65 537 materials:
+// half a minute); this pass and the plain parse after it are linear.
+class NestingCheck : public nlohmann::json_sax<json> {
  public:
   explicit NestingCheck(std::string prefix) : prefix_(std::move(prefix)) {}
 
-  bool operator()(int /*depth*/, json::parse_event_t event, json& parsed) {
-    using event_t = json::parse_event_t;
-    switch (event) {
-      case event_t::object_start:
-      case event_t::array_start:
-        // The place named is the outermost levels only: the message stays one short line.
-        if (stack_.size() >= max_json_depth)
-          throw config_error(pointer(3) + "/...", "nests deeper than " +
-                                                      std::to_string(max_json_depth) +
-                                                      " levels of objects and arrays");
-        stack_.push_back({event == event_t::object_start, false, "", 0, {}});
-        break;
-      case event_t::key: {
-        Frame& frame = stack_.back();
-        frame.key = parsed.get<std::string>();
-        frame.keyed = true;
-        if (!frame.keys.insert(frame.key).second)
-          throw config_error(pointer(stack_.size()), "duplicate key: the object gives " +
-                                                         quoted_excerpt(frame.key) + " twice");
-        break;
-      }
-      case event_t::object_end:
-      case event_t::array_end:
-        stack_.pop_back();
-        element_done();
-        break;
-      case event_t::value:
-        element_done();
-        break;
-    }
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override { return open(true); }
+  bool start_array(std::size_t) override { return open(false); }
+  bool end_object() override { return close(); }
+  bool end_array() override { return close(); }
+
+  bool key(string_t& name) override {
+    Frame& frame = stack_.back();
+    frame.key = name;
+    frame.keyed = true;
+    if (!frame.keys.insert(frame.key).second)
+      throw config_error(pointer(stack_.size()),
+                         "duplicate key: the object gives " + quoted_excerpt(frame.key) + " twice");
     return true;
+  }
+
+  // The plain parse that follows throws the parser's own error for the same text.
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+    return false;
   }
 
  private:
@@ -84,8 +81,24 @@ class NestingCheck {
     std::unordered_set<std::string> keys;
   };
 
-  void element_done() {
+  bool open(bool object) {
+    // The place named is the outermost levels only: the message stays one short line.
+    if (stack_.size() >= max_json_depth)
+      throw config_error(
+          pointer(3) + "/...",
+          "nests deeper than " + std::to_string(max_json_depth) + " levels of objects and arrays");
+    stack_.push_back({object, false, "", 0, {}});
+    return true;
+  }
+
+  bool close() {
+    stack_.pop_back();
+    return value();
+  }
+
+  bool value() {
     if (!stack_.empty() && !stack_.back().object) ++stack_.back().index;
+    return true;
   }
 
   // The JSON pointer of the value being read, through its outermost `levels` levels.
@@ -107,7 +120,8 @@ class NestingCheck {
 
 json parse_json_checked(const std::string& text, const std::string& prefix) {
   NestingCheck check(prefix);
-  return json::parse(text, std::ref(check));
+  json::sax_parse(text, &check);
+  return json::parse(text);
 }
 
 std::string describe(const json& value) {

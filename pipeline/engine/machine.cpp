@@ -26,6 +26,7 @@
 #include "pipeline/shot/brf_shot.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
 #include "pipeline/shot/forest_source.hpp"
+#include "pipeline/shot/photon_receiver.hpp"
 #include "pipeline/shot/vegetation_source.hpp"
 #include "terrain/terrain.hpp"
 
@@ -154,7 +155,34 @@ RunMemory estimate_run_memory(const Config& c) {
   return m;
 }
 
+// The photon-counting receiver draws every background photon of a shot's window (a time, a
+// channel, the dead time, a record in the granules): about 0.2 us each, so 10^6 MHz over ATLAS's
+// 500 ns window is 0.1 s a shot, minutes a pass. The sun's rate is bounded by its worst case:
+// overhead, over a white scene. The sun at ATLAS's 500 ns gives a few photons; 10^4 cost about
+// 2 ms a shot.
+constexpr double max_background_photons = 1.0e4;
+
+void check_background(const Config& c) {
+  if (c.sensor.receiver != "photon_counting" || c.sensor.bands.empty()) return;
+  const ReceiverSettings settings = receiver_settings(c);
+  const double window_ns = static_cast<double>(c.sensor.bins) * c.sensor.bin_ns;
+  for (const PhotonCountingSettings& p : settings.photons) {
+    const double rate_Hz = most_background_rate_Hz(settings, p);
+    const double photons = rate_Hz * window_ns * 1e-9;
+    if (photons <= max_background_photons) continue;
+    const bool sun = p.background == BackgroundSource::sun;
+    throw config_error(
+        sun ? "/sensor/filter_bandwidth_nm" : "/simulation/background/rate_MHz",
+        std::string(sun ? "the sun overhead over a white scene" : "the background rate") +
+            " gives " + format_number(std::round(rate_Hz * 1e-6)) +
+            " MHz: " + format_number(std::round(photons)) +
+            " background photons in a shot's window of " + format_number(window_ns) +
+            " ns, more than the limit of " + format_number(max_background_photons) + " a shot");
+  }
+}
+
 void check_run(const Config& config) {
+  check_background(config);
   const RunMemory memory = estimate_run_memory(config);
   if (memory.bytes > memory.available_bytes) {
     std::ostringstream why;

@@ -75,7 +75,9 @@ class OutputDirectory {
 struct CheckSummary {
   std::int64_t shots = 0;              // records of the track (an orbit's: those on the terrain)
   std::int64_t sequence_length = 0;    // shot numbers of the track
-  std::int64_t shots_off_terrain = 0;  // records whose beam misses the terrain
+  std::int64_t shots_off_terrain = 0;  // records whose beam misses the terrain (of those located)
+  std::int64_t shots_located = 0;      // records located: every one, or an even sample of a long
+                                       // track (max_located_shots)
   std::vector<std::string> warnings;   // what the user should know, one line each
 };
 

@@ -73,6 +73,22 @@ const PhotonCountingSettings& PhotonCountingReceiver::beam_settings(int beam) co
   return settings_.photons.front();
 }
 
+double most_background_rate_Hz(const ReceiverSettings& settings, const PhotonCountingSettings& p) {
+  if (p.background == BackgroundSource::none) return 0.0;
+  if (p.background == BackgroundSource::rate) return p.background_rate_Hz;
+  const LidarBand& band = settings.lidar.bands.at(0);
+  SolarBackground b;
+  b.sun_zenith_deg = 0.0;
+  b.reflectance = 1.0;
+  b.transmission_one_way = std::sqrt(band.atmos_transmission_roundtrip);
+  b.filter_bandwidth_nm = p.filter_bandwidth_nm;
+  b.ifov_rad = settings.lidar.ifov_rad;
+  b.telescope_area_m2 = settings.lidar.telescope_area_m2;
+  b.efficiency = p.efficiency;
+  b.wavelength_nm = band.wavelength_nm;
+  return glaswave::background_rate_Hz(b);
+}
+
 double PhotonCountingReceiver::background_rate_Hz(const PhotonCountingSettings& p,
                                                   const ShotRecord& record, double received_J,
                                                   double range_m) const {

@@ -12,6 +12,11 @@
 
 namespace glaswave {
 
+// The most background photons a second a shot of beam `p` can be given: its fixed rate, none,
+// or the sun's worst case, overhead over a white scene through the band's atmosphere. check_run
+// bounds a shot's background photons by it, before any shot.
+double most_background_rate_Hz(const ReceiverSettings& settings, const PhotonCountingSettings& p);
+
 class PhotonCountingReceiver : public Receiver {
  public:
   explicit PhotonCountingReceiver(const ReceiverSettings& settings);

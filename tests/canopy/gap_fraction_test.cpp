@@ -158,5 +158,63 @@ TEST(GapFraction, DenseCanopiesAreUnderestimatedBelowTheOcclusion) {
   EXPECT_LT(bottom, 0.9);       // the lowest is not: biased low
 }
 
+// One ground point 800 m from an 80 m plot (issue 42) would have the ground gridded and the
+// voxels made over the 800 m between (45 s): refused, naming it. The plot alone, and the plot as
+// two flight lines 15 m apart or as a diagonal strip, are one patch each and voxelised.
+TEST(GapFraction, APatchFarFromTheRestIsRefusedNotGridded) {
+  test_support::ScratchDir dir;
+  const auto voxelize = [&](const std::vector<test::LasFixturePoint>& points) {
+    test::LasFixture f;
+    f.version_minor = 4;
+    f.point_format = 6;
+    f.wkt = utm33;
+    f.points = points;
+    test::write_las(dir.path() / "cloud.las", f);
+    GapFractionSettings settings;
+    settings.voxel_size_m = 1.0;
+    return voxelize_point_cloud(LasFile(dir.path() / "cloud.las"), "", "/crs", settings);
+  };
+  const auto point = [](double x, double y, int classification) {
+    test::LasFixturePoint p;
+    p.x = 500000.0 + x;
+    p.y = 4000000.0 + y;
+    p.z = 250.0 + (classification == 2 ? 0.0 : 10.0);
+    p.classification = classification;
+    return p;
+  };
+  std::vector<test::LasFixturePoint> plot;
+  for (int j = 0; j < 80; ++j)
+    for (int i = 0; i < 80; ++i) plot.push_back(point(i + 0.5, j + 0.5, (i + j) % 2 ? 5 : 2));
+  EXPECT_EQ(voxelize(plot).voxels.nx, 80);
+  for (const double far_m : {800.0, 1450.0}) {
+    auto stray = plot;
+    stray.push_back(point(far_m, 40.0, 2));
+    try {
+      voxelize(stray);
+      ADD_FAILURE() << "a point " << far_m << " m away was gridded";
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(e.kind(), ErrorKind::input);
+      EXPECT_NE(message.find("cloud.las: the cloud's points lie in separate patches"),
+                std::string::npos)
+          << message;
+      EXPECT_NE(message.find("x " + std::to_string(500000 + int(far_m / 10) * 10 + 5)),
+                std::string::npos)
+          << message;
+    }
+  }
+  // Two flight lines with 15 m between them; a strip along the diagonal of its 200 m square.
+  std::vector<test::LasFixturePoint> lines, strip;
+  for (int j = 0; j < 80; ++j)
+    for (int i = 0; i < 30; ++i) {
+      lines.push_back(point(i + 0.5, j + 0.5, 2));
+      lines.push_back(point(i + 45.5, j + 0.5, 2));
+    }
+  EXPECT_EQ(voxelize(lines).voxels.nx, 75);
+  for (int t = 0; t < 200; ++t)
+    for (int w = -8; w <= 8; ++w) strip.push_back(point(t + w + 10.0, t - w + 10.0, 2));
+  EXPECT_GT(voxelize(strip).voxels.nx, 200);
+}
+
 }  // namespace
 }  // namespace glaswave

@@ -1,6 +1,9 @@
 // Voxel grids of plant area density: the NetCDF written and read back by windows, a multi-band
 // GeoTIFF with z_bottom_m / z_top_m band metadata written here with GDAL, and grids that must be
-// refused (no CRS, layers with a gap, negative or missing density).
+// refused (no CRS, layers with a gap, negative or missing density); grids written by hand with
+// NetCDF-C in every way a grid can be wrong (issue 42): bounds or coordinates of other shapes,
+// dimensions in another order, values never written, heights no layer reaches; CF packing and
+// NC_STRING attributes read as CF means them.
 #include "canopy/voxel_grid.hpp"
 
 #include <cpl_conv.h>
@@ -11,6 +14,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <string>
 
 #include "core/error.hpp"
@@ -148,6 +152,202 @@ TEST(VoxelGrid, RefusesGridsItCannotUse) {
   EXPECT_NE(refusal(dir.path() / "missing.nc").find("no such"), std::string::npos);
   std::ofstream(dir.path() / "junk.nc") << "not a grid";
   EXPECT_NE(refusal(dir.path() / "junk.nc"), "");
+}
+
+// A grid written by hand: dimensions z, y, x of 3, 4, 6 (or those given), coordinate variables
+// of the sample block's centres, pad written as `put_pad` does; `extra` defines more before the
+// definitions end. Returns the file.
+struct HandGrid {
+  std::vector<std::string> order = {"z", "y", "x"};  // pad's dimensions, by name
+  std::size_t z_bounds_rows = 0;                     // 0: no z_bounds
+  bool x_two_dimensional = false;
+  bool crs_as_nc_string = false;
+  nc_type pad_type = NC_FLOAT;
+  bool write_pad = true;  // false: only layer 0 written
+  std::function<void(int nc, int pad)> extra;
+  std::function<void(int nc, int pad)> put_pad;  // replaces writing the sample's values
+  std::vector<double> z_bounds = {0, 1, 1, 3, 3, 6, 6, 10, 10, 15};
+};
+
+std::filesystem::path write_hand_grid(const std::filesystem::path& file, const HandGrid& g) {
+  const VoxelBlock b = sample_block();
+  int nc = -1;
+  EXPECT_EQ(nc_create(file.c_str(), NC_NETCDF4 | NC_CLOBBER, &nc), NC_NOERR);
+  int dz, dy, dx, dnv, dzb = -1;
+  nc_def_dim(nc, "z", 3, &dz);
+  nc_def_dim(nc, "y", 4, &dy);
+  nc_def_dim(nc, "x", 6, &dx);
+  nc_def_dim(nc, "nv", 2, &dnv);
+  const auto dim = [&](const std::string& name) {
+    return name == "z" ? dz : name == "y" ? dy : dx;
+  };
+  int vx, vy, vz, vzb = -1, vcrs, vpad;
+  if (g.x_two_dimensional) {
+    const int d[2] = {dy, dx};
+    nc_def_var(nc, "x", NC_DOUBLE, 2, d, &vx);
+  } else {
+    nc_def_var(nc, "x", NC_DOUBLE, 1, &dx, &vx);
+  }
+  nc_def_var(nc, "y", NC_DOUBLE, 1, &dy, &vy);
+  nc_def_var(nc, "z", NC_DOUBLE, 1, &dz, &vz);
+  if (g.z_bounds_rows > 0) {
+    nc_put_att_text(nc, vz, "bounds", 8, "z_bounds");
+    if (g.z_bounds_rows != 3) nc_def_dim(nc, "zb", g.z_bounds_rows, &dzb);
+    const int d[2] = {g.z_bounds_rows == 3 ? dz : dzb, dnv};
+    nc_def_var(nc, "z_bounds", NC_DOUBLE, 2, d, &vzb);
+  }
+  nc_def_var(nc, "crs", NC_INT, 0, nullptr, &vcrs);
+  if (g.crs_as_nc_string) {
+    const char* wkt = b.crs_wkt.c_str();
+    nc_put_att_string(nc, vcrs, "crs_wkt", 1, &wkt);
+  } else {
+    nc_put_att_text(nc, vcrs, "crs_wkt", b.crs_wkt.size(), b.crs_wkt.c_str());
+  }
+  const int pad_dims[3] = {dim(g.order[0]), dim(g.order[1]), dim(g.order[2])};
+  nc_def_var(nc, "pad", g.pad_type, 3, pad_dims, &vpad);
+  nc_put_att_text(nc, vpad, "grid_mapping", 3, "crs");
+  if (g.extra) g.extra(nc, vpad);
+  EXPECT_EQ(nc_enddef(nc), NC_NOERR);
+  std::vector<double> c;
+  for (int i = 0; i < 6; ++i) c.push_back(b.x0 + (i + 0.5) * b.dx);
+  if (g.x_two_dimensional) {
+    std::vector<double> xy;
+    for (int j = 0; j < 4; ++j) xy.insert(xy.end(), c.begin(), c.end());
+    nc_put_var_double(nc, vx, xy.data());
+  } else {
+    nc_put_var_double(nc, vx, c.data());
+  }
+  c.clear();
+  for (int j = 0; j < 4; ++j) c.push_back(b.y0 + (j + 0.5) * b.dy);
+  nc_put_var_double(nc, vy, c.data());
+  const double zc[3] = {0.5, 2.0, 4.5};
+  nc_put_var_double(nc, vz, zc);
+  if (vzb >= 0) {
+    std::vector<double> zb(g.z_bounds.begin(), g.z_bounds.begin() + 2 * g.z_bounds_rows);
+    nc_put_var_double(nc, vzb, zb.data());
+  }
+  if (g.put_pad) {
+    g.put_pad(nc, vpad);
+  } else if (g.write_pad) {
+    nc_put_var_float(nc, vpad, b.pad.data());
+  } else {
+    const std::size_t start[3] = {0, 0, 0}, count[3] = {1, 4, 6};
+    nc_put_vara_float(nc, vpad, start, count, b.pad.data());
+  }
+  EXPECT_EQ(nc_close(nc), NC_NOERR);
+  return file;
+}
+
+TEST(VoxelGrid, HandWrittenGridsOfOtherShapesAreRefusedNotOverrun) {
+  test_support::ScratchDir dir;
+  HandGrid g;
+  EXPECT_EQ(refusal(write_hand_grid(dir.path() / "plain.nc", g)), "");  // the writer is right
+  g.z_bounds_rows = 3;
+  EXPECT_EQ(refusal(write_hand_grid(dir.path() / "bounds.nc", g)), "");
+  g.z_bounds_rows = 5;  // more rows than z: read whole, it overran
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "rows.nc", g)).find("z bounds are not (z, 2)"),
+            std::string::npos);
+  g = HandGrid();
+  g.x_two_dimensional = true;  // x(y, x): 24 values into 6
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "x2d.nc", g)).find("not one-dimensional"),
+            std::string::npos);
+  g = HandGrid();
+  g.order = {"x", "y", "z"};
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "xyz.nc", g)).find("ordered (z, y, x)"),
+            std::string::npos);
+  g = HandGrid();
+  g.write_pad = false;  // layers 1 and 2 hold NetCDF's default fill
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "unwritten.nc", g)).find("z 1 of the grid"),
+            std::string::npos);
+  g.pad_type = NC_DOUBLE;  // a double's fill, read as a float
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "unwritten_double.nc", g)).find("missing"),
+            std::string::npos);
+}
+
+TEST(VoxelGrid, HeightsNoVegetationReachesAreRefused) {
+  test_support::ScratchDir dir;
+  HandGrid g;
+  g.z_bounds_rows = 3;
+  g.z_bounds = {0, 1, 1, 3, 3, 1e300};
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "high.nc", g)).find("within 10000 m"),
+            std::string::npos);
+  g.z_bounds = {-1e5, 1, 1, 3, 3, 6};
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "low.nc", g)).find("layer 0's bottom"),
+            std::string::npos);
+  // Centres near 1e308: the top edge computed from them overflows.
+  g = HandGrid();
+  g.extra = [](int, int) {};
+  const auto file = write_hand_grid(dir.path() / "centres.nc", g);
+  int nc = -1, var = -1;
+  ASSERT_EQ(nc_open(file.c_str(), NC_WRITE, &nc), NC_NOERR);
+  nc_inq_varid(nc, "z", &var);
+  const double z[3] = {1e307, 5e307, 1.7e308};
+  nc_put_var_double(nc, var, z);
+  nc_close(nc);
+  EXPECT_NE(refusal(file).find("within 10000 m"), std::string::npos);
+}
+
+TEST(VoxelGrid, CfPackingIsAppliedAndAStringAttributeRead) {
+  test_support::ScratchDir dir;
+  const VoxelBlock b = sample_block();
+  HandGrid g;
+  g.pad_type = NC_SHORT;
+  g.extra = [](int nc, int pad) {
+    const double scale = 0.01, offset = 0.5;
+    const short fill = -1;
+    nc_put_att_double(nc, pad, "scale_factor", NC_DOUBLE, 1, &scale);
+    nc_put_att_double(nc, pad, "add_offset", NC_DOUBLE, 1, &offset);
+    nc_put_att_short(nc, pad, "_FillValue", NC_SHORT, 1, &fill);
+  };
+  std::vector<short> packed;  // pad = 0.01 n + 0.5
+  for (float v : b.pad) packed.push_back(static_cast<short>(std::lround(v * 100)));
+  g.put_pad = [&](int nc, int pad) { nc_put_var_short(nc, pad, packed.data()); };
+  const VoxelGridFile grid(write_hand_grid(dir.path() / "packed.nc", g));
+  const VoxelBlock all = grid.window(-1e9, 1e9, -1e9, 1e9);
+  ASSERT_EQ(all.pad.size(), b.pad.size());
+  for (std::size_t n = 0; n < b.pad.size(); ++n)
+    EXPECT_NEAR(all.pad[n], 0.01 * packed[n] + 0.5, 1e-6) << n;
+  packed[5] = -1;  // the packed fill: missing, not -0.01 + 0.5
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "packed_fill.nc", g)).find("z 0 of the grid"),
+            std::string::npos);
+
+  g = HandGrid();
+  g.crs_as_nc_string = true;
+  const VoxelGridFile named(write_hand_grid(dir.path() / "string.nc", g));
+  EXPECT_EQ(named.shape().crs_wkt, b.crs_wkt);
+}
+
+// A GeoTIFF of one band 0-`top` m, with a scale of its own.
+std::filesystem::path write_one_band(const std::filesystem::path& file, const char* top,
+                                     double scale = 1.0) {
+  GDALAllRegister();
+  GDALDatasetH ds =
+      GDALCreate(GDALGetDriverByName("GTiff"), file.c_str(), 2, 2, 1, GDT_Float32, nullptr);
+  double t[6] = {500000.0, 2.0, 0.0, 4000008.0, 0.0, -2.0};
+  GDALSetGeoTransform(ds, t);
+  GDALSetProjection(ds, sample_block().crs_wkt.c_str());
+  GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+  GDALSetMetadataItem(band, "z_bottom_m", "0", nullptr);
+  GDALSetMetadataItem(band, "z_top_m", top, nullptr);
+  if (scale != 1.0) GDALSetRasterScale(band, scale);
+  const float values[4] = {1.0f, 2.0f, 3.0f, 4.0f};
+  EXPECT_EQ(
+      GDALRasterIO(band, GF_Write, 0, 0, 2, 2, const_cast<float*>(values), 2, 2, GDT_Float32, 0, 0),
+      CE_None);
+  GDALClose(ds);
+  return file;
+}
+
+TEST(VoxelGrid, GeotiffHeightsAreNumbersOfMetresAndItsScaleApplied) {
+  test_support::ScratchDir dir;
+  for (const char* top : {"ten", "10 ft", "1e400", "0x10", "nan"})
+    EXPECT_NE(refusal(write_one_band(dir.path() / "top.tif", top)).find("not a number of metres"),
+              std::string::npos)
+        << top;
+  const VoxelGridFile grid(write_one_band(dir.path() / "scaled.tif", " 10.5", 0.25));
+  EXPECT_EQ(grid.shape().z_edges_m, (std::vector<double>{0.0, 10.5}));
+  const VoxelBlock all = grid.window(-1e9, 1e9, -1e9, 1e9);
+  EXPECT_EQ(all.pad, (std::vector<float>{0.25f, 0.5f, 0.75f, 1.0f}));
 }
 
 }  // namespace

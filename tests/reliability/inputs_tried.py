@@ -914,6 +914,208 @@ except ValueError as error:
         t.rows[-1] = tuple(row)
 
 
+def write_las(path, points, scale=0.01):
+    """A LAS 1.2 cloud of point format 0 (no CRS: give --crs), points (x, y, z, class), each a
+    pulse's single return."""
+    import struct
+    xs, ys, zs = ([p[i] for p in points] for i in range(3))
+    header = struct.pack(
+        "<4sHH16sBB32s32sHHHIIBHI5I12d", b"LASF", 0, 0, b"\0" * 16, 1, 2, b"inputs_tried",
+        b"inputs_tried", 1, 2026, 227, 227, 0, 0, 20, len(points), len(points), 0, 0, 0, 0,
+        scale, scale, scale, 0.0, 0.0, 0.0, max(xs), min(xs), max(ys), min(ys), max(zs), min(zs))
+    assert len(header) == 227
+    body = b"".join(struct.pack("<iiiHBBbBH", round(x / scale), round(y / scale),
+                                round(z / scale), 0, 9, c, 0, 0, 0) for x, y, z, c in points)
+    pathlib.Path(path).write_bytes(header + body)
+    return str(path)
+
+
+def round_four_inputs(t):
+    """Issue 42's classes: meshes Assimp reads (indices, declared sizes, files it opens itself),
+    voxel grids of other shapes and heights, voxelize's --out, grids as netCDF4-python writes
+    them, sizes check accepts."""
+    from osgeo import gdal
+    import netCDF4
+    import numpy
+    gdal.UseExceptions()
+    out = str(t.path("out"))
+    # Facet models.
+    trees = t.write("trees.csv", "x,y,model,rotation_deg,scale\n0,0,oak,0,1\n")
+
+    def facets(model):
+        return t.config("facets.json", canopy={"facets": {
+            "trees_file": trees, "models": {"oak": model},
+            "materials": {"DefaultMaterial": {"reflectance": 0.3}}}})
+
+    def ply(count, faces):
+        return ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                f"property float z\nelement face {count}\nproperty list uchar int vertex_indices\n"
+                f"end_header\n0 0 0\n1 0 0\n0 1 0\n{faces}")
+
+    for name, faces in [("vertex 10^8 of 3", "3 0 1 100000000\n"), ("vertex -5", "3 0 1 -5\n")]:
+        model = t.write("bad.ply", ply(1, faces))
+        t.run(f"42/1. a PLY face naming {name} (check)", ["check", facets(model)], expect=3,
+              says="bad.ply")
+        t.run(f"42/1. a PLY face naming {name} (run)", ["run", facets(model), "--quiet", "--out",
+                                                        out], out=out, expect=3)
+    model = t.write("big.ply", ply(10**9, "3 0 1 2\n"))
+    t.run(f"42/1. a {os.path.getsize(model)}-byte PLY declaring 10^9 faces", [
+        "check", facets(model)], expect=3, says="declares 1000000000 face elements")
+    fifo = t.path("model.fifo")
+    if fifo.exists():
+        fifo.unlink()
+    os.mkfifo(fifo)
+    model = t.write("plate.obj", f"mtllib {fifo.name}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    t.run("42/1. an OBJ whose mtllib is a FIFO", ["check", facets(model)], expect=3, says="FIFO")
+    model = t.write("plate.gltf", json.dumps({
+        "asset": {"version": "2.0"}, "buffers": [{"uri": fifo.name, "byteLength": 36}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0}))
+    t.run("42/1. a glTF whose buffer's URI is a FIFO", ["check", facets(model)], expect=3,
+          says="FIFO")
+    model = t.write("deep.gltf", '{"asset": {"version": "2.0"}, "extras": ' + "[" * 200000 +
+                    "]" * 200000 + "}")
+    t.run("42/1. a glTF of 200 000 nested arrays", ["check", facets(model)], expect=3,
+          says="nests its JSON deeper than 256")
+
+    # Voxel grids, written as netCDF4-python writes them: under the track (UTM 32N).
+    utm = osr.SpatialReference()
+    utm.ImportFromEPSG(32632)
+    wkt = utm.ExportToWkt(["FORMAT=WKT2_2019"])  # its AREA says "6°E": an NC_STRING
+    to_utm = osr.CoordinateTransformation(GEODETIC, utm)
+    x_c, y_c, _ = to_utm.TransformPoint(46.0, 8.0, 0.0)
+
+    def grid(name, order=("z", "y", "x"), bounds_rows=None, x_2d=False, write_pad=True,
+             z=(1.0, 3.0, 5.0), packed=False):
+        path = str(t.path(name))
+        with netCDF4.Dataset(path, "w") as nc:
+            sizes = {"z": 3, "y": 40, "x": 40}
+            for d, n in sizes.items():
+                nc.createDimension(d, n)
+            nc.createDimension("nv", 2)
+            x = nc.createVariable("x", "f8", ("y", "x") if x_2d else ("x",))
+            y = nc.createVariable("y", "f8", ("y",))
+            zv = nc.createVariable("z", "f8", ("z",))
+            xs = x_c - 40 + 2 * numpy.arange(40) + 1
+            x[:] = numpy.tile(xs, (40, 1)) if x_2d else xs
+            y[:] = y_c - 40 + 2 * numpy.arange(40) + 1
+            zv[:] = z
+            if bounds_rows:
+                nc.createDimension("zb", bounds_rows)
+                zv.bounds = "z_bounds"
+                zb = nc.createVariable("z_bounds", "f8", ("zb", "nv"))
+                zb[:] = [[2 * k, 2 * k + 2] for k in range(bounds_rows)]
+            crs = nc.createVariable("crs", "i4")
+            crs.crs_wkt = wkt
+            pad = nc.createVariable("pad", "i2" if packed else "f4", order,
+                                    fill_value=-1 if packed else None)
+            pad.grid_mapping = "crs"
+            if packed:
+                pad.scale_factor, pad.add_offset = 0.001, 0.0
+            if write_pad:
+                pad[:] = numpy.full([sizes[d] for d in order], 0.2)
+            else:
+                pad[0] = numpy.full((40, 40), 0.2)
+        return path
+
+    def voxels(path):
+        return t.config("voxels.json", canopy={"voxels": {"file": path}})
+
+    t.run("42/3. a grid by netCDF4-python, its crs_wkt an NC_STRING (holding °)", [
+        "check", voxels(grid("string.nc"))], expect="ok")
+    t.run("42/3. a grid by netCDF4-python, packed (short, scale_factor 0.001)", [
+        "run", voxels(grid("packed.nc", packed=True)), "--quiet", "--out", out], out=out,
+        expect="ok")
+    t.run("42/1. z bounds of 5 rows over a z of 3", ["check", voxels(grid(
+        "rows.nc", bounds_rows=5))], expect=3, says="z bounds are not (z, 2)")
+    t.run("42/1. x a 2-D variable x(y, x)", ["check", voxels(grid("x2d.nc", x_2d=True))],
+          expect=3, says="not one-dimensional")
+    high = voxels(grid("high.nc", z=(1e307, 5e307, 1.7e308)))
+    t.run("42/1. z centres near 1e308 (check)", ["check", high], expect=3, says="within 10000 m")
+    t.run("42/1. z centres near 1e308 (run)", ["run", high, "--quiet", "--out", out], out=out,
+          expect=3, says="within 10000 m")
+    t.run("42/3. pad(x, y, z)", ["check", voxels(grid("xyz.nc", order=("x", "y", "z")))],
+          expect=3, says="ordered (z, y, x)")
+    t.run("42/3. pad written in its first layer only (NetCDF's fill in the others)", [
+        "run", voxels(grid("unwritten.nc", write_pad=False)), "--quiet", "--out", out],
+        out=out, expect=3, says="missing")
+    for top in ("ten", "10 ft", "1e400"):
+        path = str(t.path("top.tif"))
+        dataset = gdal.GetDriverByName("GTiff").Create(path, 40, 40, 1, gdal.GDT_Float32)
+        dataset.SetGeoTransform([x_c - 40, 2, 0, y_c + 40, 0, -2])
+        dataset.SetSpatialRef(utm)
+        band = dataset.GetRasterBand(1)
+        band.SetMetadataItem("z_bottom_m", "0")
+        band.SetMetadataItem("z_top_m", top)
+        band.Fill(0.2)
+        dataset = None
+        t.run(f"42/3. a GeoTIFF band's z_top_m {top!r}", ["check", voxels(path)], expect=3,
+              says="not a number of metres")
+
+    # voxelize --out.
+    points = [(500000.0 + 0.5 * i, 4000000.0 + 0.5 * j, 100.0 + (9.0 if (i + j) % 2 else 0.0),
+               5 if (i + j) % 2 else 2) for i in range(20) for j in range(20)]
+    cloud = write_las(t.path("plot.las"), points)
+    grid_out = t.path("grid.nc")
+    if grid_out.exists():
+        grid_out.unlink()
+    voxelize = ["voxelize", cloud, "--crs", "EPSG:32633", "--voxel-size-m", "2", "--out"]
+    t.run("42/2. voxelize into a new file", voxelize + [str(grid_out)], expect="ok")
+    t.run("42/2. voxelize onto an existing file", voxelize + [str(grid_out)], expect=2,
+          says="--force")
+    t.run("42/2. voxelize onto an existing file, --force", voxelize + [str(grid_out), "--force"],
+          expect="ok")
+    t.run("42/2. voxelize --out the cloud itself, --force", voxelize + [cloud, "--force"],
+          expect=2, says="the point cloud itself")
+    t.run("42/2. voxelize into a missing folder", voxelize + [str(t.path("none/grid.nc"))],
+          expect=2, says="does not exist")
+    t.run("42/2. voxelize onto a directory", voxelize + [str(t.dir)], expect=2,
+          says="is a directory")
+    t.run("42/2. voxelize onto /dev/null, --force", voxelize + ["/dev/null", "--force"], expect=2,
+          says="not a regular file")
+
+    # One class-2 point 800 m (1.45 km) from an 80 m plot.
+    plot = [(500000.5 + i, 4000000.5 + j, 100.0 + (10.0 if (i + j) % 2 else 0.0),
+             5 if (i + j) % 2 else 2) for i in range(80) for j in range(80)]
+    for far in (800, 1450):
+        stray = write_las(t.path("stray.las"), plot + [(500000.0 + far, 4000040.0, 100.0, 2)])
+        t.run(f"42/4. voxelize a plot with one ground point {far} m away", [
+            "voxelize", stray, "--crs", "EPSG:32633", "--out", str(t.path("stray.nc")),
+            "--force"], expect=3, says="separate patches")
+        t.run(f"42/4. a point cloud run, one ground point {far} m away", ["check", t.config(
+            "stray.json", terrain={"point_cloud": True},
+            canopy={"point_cloud": {"file": stray, "crs": "EPSG:32633"}})], expect=3,
+            says="separate patches")
+
+    # Sizes check accepted and run then spent minutes on.
+    t.run("42/4. background rate_MHz 1e6 (run)", ["run", t.config(
+        "background.json", sensor={"preset": "atlas"},
+        simulation={"rays_per_shot": 20, "background": {"rate_MHz": 1e6}}), "--quiet", "--out",
+        out], out=out, expect=2, says="/simulation/background/rate_MHz")
+    t.run("42/4. the sun through a filter of 10^4 nm", ["check", t.config(
+        "sun.json", sensor={"preset": "atlas", "filter_bandwidth_nm": 1e4})], expect=2,
+        says="/sensor/filter_bandwidth_nm")
+    done = t.run("42/4. a pass of 10^9 shots (check)", ["check", t.config(
+        "many.json", track__shots=10**9)], expect="ok")
+    if b"1000000 of them located" not in done.stdout:
+        row = list(t.rows[-1])
+        row[4] = "DOES NOT SAY it located a sample"
+        t.rows[-1] = tuple(row)
+    plate = t.write("plate.obj", "v -1 -1 1\nv 1 -1 1\nv 1 1 1\nf 1 2 3\n")
+    materials = {f"m{i}": {"reflectance": 0.3} for i in range(65536)}
+    materials["DefaultMaterial"] = {"reflectance": 0.3}
+    t.run("42/4. 65,537 facet materials (check)", ["check", t.config("materials.json", canopy={
+        "facets": {"trees_file": trees, "models": {"oak": plate}, "materials": materials}})],
+        expect="ok")
+    row = list(t.rows[-1])
+    if row[5] > 5.0:
+        row[4] = f"SLOW ({row[5]:.1f} s)"
+    t.rows[-1] = tuple(row)
+
+
 def journal_frames(journal):
     """The (start, end) byte offsets of a run journal's whole frames (pipeline/engine/journal.cpp:
     a 16-byte header, then frames of six 64-bit words, the payload and a checksum)."""
@@ -944,7 +1146,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="glaswave_inputs_") as scratch:
         t = Trial(glaswave, scratch)
         for group in (issue_items, configuration_cases, data_cases, granule_cases,
-                      round_three_config, round_three_inputs):
+                      round_three_config, round_three_inputs, round_four_inputs):
             if arguments.only in group.__name__:
                 group(t)
         pathlib.Path(arguments.out).write_text(t.table())

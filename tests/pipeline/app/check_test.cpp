@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <ogrsf_frmts.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -61,6 +62,16 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
         {"output", {{"per_order", true}}}},
        2,
        "/output/per_order: a shot's waveforms would take"},
+      // A photon-counting shot's background photons, each drawn (issue 42): a rate, and the
+      // sun's worst case through a filter 10 um wide.
+      {{{"sensor", {{"receiver", "photon_counting"}}},
+        {"simulation", {{"background", {{"rate_MHz", 1e6}}}}}},
+       2,
+       "/simulation/background/rate_MHz: the background rate gives 1000000 MHz: 544000 "
+       "background photons in a shot's window of 544 ns, more than the limit of 10000"},
+      {{{"sensor", {{"receiver", "photon_counting"}, {"filter_bandwidth_nm", 1e4}}}},
+       2,
+       "/sensor/filter_bandwidth_nm: the sun overhead over a white scene gives"},
       {{{"simulation", {{"rays_per_shot", 1e13}}}},
        2,
        "/simulation/rays_per_shot: must be <= 1000000000"},
@@ -98,6 +109,22 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
   const CommandOutcome run =
       run_glaswave("run " + good + " --quiet --out " + (dir_ / "out").string());
   EXPECT_EQ(run.status, 0) << run.output;
+}
+
+// A pass of 10^9 shots (the most a track may have) is checked in seconds: check locates 10^6
+// footprints evenly spread over it, and says so (issue 42: it located every one, an hour).
+TEST_F(Check, APassOfTheMostShotsIsCheckedBySample) {
+  const auto started = std::chrono::steady_clock::now();
+  const CommandOutcome check =
+      run_glaswave("check " + write_config({{"track", {{"shots", 1000000000}}}}));
+  EXPECT_EQ(check.status, 0) << check.output;
+  EXPECT_NE(check.output.find("1000000000 shots, about 0 off the terrain (1000000 of them "
+                              "located, evenly spread)"),
+            std::string::npos)
+      << check.output;
+  EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(60));
+  const CommandOutcome small = run_glaswave("check " + write_config({{"track", {{"shots", 3}}}}));
+  EXPECT_NE(small.output.find("3 shots, 0 off the terrain\n"), std::string::npos) << small.output;
 }
 
 // `output.footprints_format: "GPKG"`: check accepts it, run writes footprints.gpkg (and no

@@ -1,10 +1,13 @@
 // glaswave voxelize end to end: a LAS 1.4 cloud of a level 10 m x 10 m plot (ground returns,
 // and half the pulses' beamlets stopped in a layer 8-10 m up) -> grid.nc that the voxel reader
 // takes back, its crown layer's density the Beer-Lambert value; and the refusals of PRODUCT.md
-// section 5: LAZ, no CRS, a bad voxel size.
+// section 5: LAZ, no CRS, a bad voxel size; and an --out it would lose or cannot use, refused
+// before anything is computed (issue 42).
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "canopy/voxel_grid.hpp"
@@ -75,6 +78,41 @@ TEST(Voxelize, RefusesWhatItCannotUse) {
   EXPECT_NE(r.output.find("laszip"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("glaswave: error:"), 0u) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "grid.nc"));
+}
+
+// An existing --out is refused as `run` refuses one, unless --force; the cloud itself, a
+// directory or a device even with it; a missing folder said to be missing.
+TEST(Voxelize, RefusesAnOutputItWouldLose) {
+  test_support::ScratchDir dir;
+  test::write_las(dir.path() / "plot.las", plot_cloud());
+  const std::string cloud = (dir.path() / "plot.las").string();
+  const std::string line = "voxelize " + cloud + " --crs EPSG:32633 --voxel-size-m 2 --out ";
+  const auto grid = dir.path() / "grid.nc";
+  std::ofstream(grid) << "the user's own file";
+  auto r = test_support::run_glaswave(line + grid.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("grid.nc: --out exists"), std::string::npos) << r.output;
+  EXPECT_EQ(std::filesystem::file_size(grid), 19u);
+  r = test_support::run_glaswave(line + grid.string() + " --force");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(VoxelGridFile(grid).shape().nx, 5);
+  const auto before = std::filesystem::file_size(cloud);
+  r = test_support::run_glaswave(line + cloud + " --force");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("the point cloud itself"), std::string::npos) << r.output;
+  EXPECT_EQ(std::filesystem::file_size(cloud), before);
+  r = test_support::run_glaswave(line + (dir.path() / "none" / "grid.nc").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
+  r = test_support::run_glaswave(line + dir.path().string() + " --force");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("is a directory"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("points"), std::string::npos) << r.output;  // nothing computed
+  r = test_support::run_glaswave(line + "/dev/null --force");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("not a regular file"), std::string::npos) << r.output;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_NE(entry.path().extension(), ".part") << entry.path();
 }
 
 }  // namespace
