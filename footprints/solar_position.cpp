@@ -36,9 +36,12 @@ SolarPosition solar_position(double time_s, double lat_deg, double lon_deg, doub
   if (eraUtctai(utc1, utc2, &tai1, &tai2) < 0 || eraTaitt(tai1, tai2, &tt1, &tt2) != 0)
     throw std::invalid_argument("solar_position: ERFA cannot convert the time");
 
-  // The sun's barycentric position: the Earth's barycentric less its heliocentric (AU).
+  // The Earth's heliocentric and barycentric position and velocity (AU, AU/day): the sun's
+  // place below and the observer's motion in eraApco, from one call (eraEpv00 is most of the
+  // sun's cost, and eraAtco13 would evaluate it a second time for the same date).
   double heliocentric[2][3], barycentric[2][3];
   eraEpv00(tt1, tt2, heliocentric, barycentric);
+  // The sun's barycentric position: the Earth's barycentric less its heliocentric (AU).
   double sun[3];
   for (int i = 0; i < 3; ++i) sun[i] = barycentric[0][i] - heliocentric[0][i];
   const double distance_au = eraPm(sun);
@@ -48,12 +51,28 @@ SolarPosition solar_position(double time_s, double lat_deg, double lon_deg, doub
   // barycentre (eraPmpx moves an object of any distance exactly, as a vector difference).
   const double parallax_arcsec = ERFA_DR2AS / distance_au;
 
-  double azimuth = 0, zenith = 0, hour_angle = 0, declination = 0, right_ascension = 0, eo = 0;
-  const int status = eraAtco13(ra, dec, 0.0, 0.0, parallax_arcsec, 0.0, utc1, utc2, 0.0,
-                               lon_deg * kDeg, lat_deg * kDeg, height_m, 0.0, 0.0,
-                               /*phpa: no refraction*/ 0.0, 0.0, 0.0, 0.0, &azimuth, &zenith,
-                               &hour_angle, &declination, &right_ascension, &eo);
-  if (status < 0) throw std::invalid_argument("solar_position: ERFA cannot convert the time");
+  // eraAtco13's steps (eraApco13 then eraAtciq and eraAtioq, ERFA 2.0), with the Earth's
+  // ephemeris above: the same calls on the same arguments, so the same bits. UT1 = UTC, no
+  // polar motion, no refraction (pressure 0).
+  double ut11 = 0, ut12 = 0;
+  if (eraUtcut1(utc1, utc2, 0.0, &ut11, &ut12) < 0)
+    throw std::invalid_argument("solar_position: ERFA cannot convert the time");
+  double bpn[3][3];
+  eraPnm06a(tt1, tt2, bpn);
+  double cip_x = 0, cip_y = 0;
+  eraBpn2xy(bpn, &cip_x, &cip_y);
+  const double cio_s = eraS06(tt1, tt2, cip_x, cip_y);
+  const double era = eraEra00(ut11, ut12);
+  const double tio_s = eraSp00(tt1, tt2);
+  double refa = 0, refb = 0;
+  eraRefco(0.0, 0.0, 0.0, 0.0, &refa, &refb);
+  eraASTROM astrom;
+  eraApco(tt1, tt2, barycentric, heliocentric[0], cip_x, cip_y, cio_s, era, lon_deg * kDeg,
+          lat_deg * kDeg, height_m, 0.0, 0.0, tio_s, refa, refb, &astrom);
+  double ri = 0, di = 0;
+  eraAtciq(ra, dec, 0.0, 0.0, parallax_arcsec, 0.0, &astrom, &ri, &di);
+  double azimuth = 0, zenith = 0, hour_angle = 0, declination = 0, right_ascension = 0;
+  eraAtioq(ri, di, &astrom, &azimuth, &zenith, &hour_angle, &declination, &right_ascension);
   SolarPosition position;
   position.elevation_deg = 90.0 - zenith / kDeg;
   position.azimuth_deg = std::fmod(azimuth / kDeg + 360.0, 360.0);
