@@ -11,6 +11,7 @@
 #include "canopy/gap_fraction.hpp"
 #include "canopy/las_reader.hpp"
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
 #include "terrain/dem_terrain.hpp"
 #include "terrain/ground_mesh.hpp"
 
@@ -22,7 +23,7 @@ namespace {
 // cell centred at (x0 + (i + 1/2) s, y0 + (ny - row - 1/2) s), NaN where there is no ground.
 void write_ground_raster(const CloudGround& cloud, const std::string& path,
                          const std::string& place) {
-  GDALAllRegister();
+  prepare_gdal();
   const GroundGrid& g = cloud.ground;
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
   if (!driver) throw input_error(place, "GDAL has no GTiff driver to hold the cloud's ground");

@@ -23,6 +23,7 @@
 
 #include "core/csv.hpp"
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
 #include "core/input_file.hpp"
 
 namespace glaswave {
@@ -341,30 +342,21 @@ std::vector<FacetTree> read_csv_trees(const std::filesystem::path& file,
   return trees;
 }
 
-struct DatasetCloser {
-  void operator()(GDALDataset* dataset) const { GDALClose(dataset); }
-};
-
 std::vector<FacetTree> read_ogr_trees(const std::filesystem::path& file,
                                       const std::vector<std::string>& models) {
-  static std::once_flag registered;
-  std::call_once(registered, [] { GDALAllRegister(); });
+  prepare_gdal();
+  const GdalErrorTrap trap;
   const std::string path = file.string();
-  std::unique_ptr<GDALDataset, DatasetCloser> dataset(GDALDataset::FromHandle(
+  GdalDataset dataset(GDALDataset::FromHandle(
       GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
   if (!dataset)
     throw input_error(path, "the trees file is neither a .csv nor a vector file OGR reads");
-  OGRSpatialReference wgs84;
-  wgs84.SetWellKnownGeogCS("WGS84");
-  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   std::vector<FacetTree> trees;
   for (int l = 0; l < dataset->GetLayerCount(); ++l) {
     OGRLayer* layer = dataset->GetLayer(l);
     std::unique_ptr<OGRCoordinateTransformation> to_wgs84;
     if (const OGRSpatialReference* crs = layer->GetSpatialRef()) {
-      OGRSpatialReference source(*crs);
-      source.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-      to_wgs84.reset(OGRCreateCoordinateTransformation(&source, &wgs84));
+      to_wgs84 = transformation_to_wgs84(*crs);
       if (!to_wgs84)
         throw input_error(path,
                           "layer " + std::to_string(l) + ": its CRS cannot be brought to WGS84");

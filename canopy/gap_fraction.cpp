@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
 
 namespace glaswave {
 
@@ -158,16 +159,15 @@ GroundGrid grid_ground(const std::vector<std::array<double, 3>>& points, double 
   GDALGridNearestNeighborOptions nearest{};
   nearest.nSizeOfStructure = sizeof nearest;
   nearest.dfNoDataValue = std::numeric_limits<double>::quiet_NaN();
-  CPLPushErrorHandler(CPLQuietErrorHandler);
+  const GdalErrorTrap trap;
   // GDALGridCreate's node (i, j) lies at (xmin + (i + 0.5) dx, ymin + (j + 0.5) dy), row 0 at
   // ymin: the grid's own layout.
   const CPLErr status = GDALGridCreate(
       algorithm, algorithm == GGA_Linear ? static_cast<const void*>(&options) : &nearest,
       static_cast<GUInt32>(gx.size()), gx.data(), gy.data(), gz.data(), x0, x0 + nx * cell_m, y0,
       y0 + ny * cell_m, nx, ny, GDT_Float32, grid.height_m.data(), nullptr, nullptr);
-  const std::string cause = CPLGetLastErrorMsg();
-  CPLPopErrorHandler();
-  if (status != CE_None) throw input_error(place, "gridding the ground points failed: " + cause);
+  if (status != CE_None)
+    throw input_error(place, "gridding the ground points failed: " + trap.cause(""));
   return grid;
 }
 

@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
 #include "core/input_file.hpp"
 
 namespace glaswave {
@@ -103,15 +104,16 @@ const char* laz_advice =
 // An OGR spatial reference from any definition GDAL takes, as WKT2; empty when it takes none.
 std::string wkt_of(const std::string& definition) {
   OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
-  CPLPushErrorHandler(CPLQuietErrorHandler);
   std::string wkt;
-  if (OSRSetFromUserInput(srs, definition.c_str()) == OGRERR_NONE) {
-    char* text = nullptr;
-    const char* options[] = {"FORMAT=WKT2_2019", nullptr};
-    if (OSRExportToWktEx(srs, &text, options) == OGRERR_NONE && text) wkt = text;
-    CPLFree(text);
+  {
+    const GdalErrorTrap trap;
+    if (OSRSetFromUserInput(srs, definition.c_str()) == OGRERR_NONE) {
+      char* text = nullptr;
+      const char* options[] = {"FORMAT=WKT2_2019", nullptr};
+      if (OSRExportToWktEx(srs, &text, options) == OGRERR_NONE && text) wkt = text;
+      CPLFree(text);
+    }
   }
-  CPLPopErrorHandler();
   OSRDestroySpatialReference(srs);
   return wkt;
 }

@@ -16,6 +16,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
 #include "core/netcdf_lock.hpp"
 #include "terrain/gdal_source.hpp"
 
@@ -357,10 +358,11 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
 }
 
 void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
-  GDALAllRegister();
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  dataset = GDALOpen(file.c_str(), GA_ReadOnly);
-  CPLPopErrorHandler();
+  prepare_gdal();
+  {
+    const GdalErrorTrap trap;
+    dataset = GDALOpen(file.c_str(), GA_ReadOnly);
+  }
   if (!dataset) throw input_error(place, "cannot open the voxel grid (not a raster GDAL reads)");
   double t[6];
   if (GDALGetGeoTransform(dataset, t) != CE_None)
@@ -513,11 +515,10 @@ VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
     std::lock_guard lock(impl_->mutex);
     for (int k = 0; k < s.nz; ++k) {
       GDALRasterBandH band = GDALGetRasterBand(impl_->dataset, impl_->band_of_layer[k]);
-      CPLPushErrorHandler(CPLQuietErrorHandler);
+      const GdalErrorTrap trap;
       const CPLErr status =
           GDALRasterIO(band, GF_Read, i0, j0, ni, nj, block.pad.data() + std::size_t(k) * ni * nj,
                        ni, nj, GDT_Float32, 0, 0);
-      CPLPopErrorHandler();
       if (status != CE_None)
         throw input_error(impl_->place, "cannot read band " +
                                             std::to_string(impl_->band_of_layer[k]) +

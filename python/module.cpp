@@ -55,7 +55,7 @@ py::dict run(const std::optional<std::string>& path, const std::optional<std::st
     Config config = load(path, document, folder, overrides);
     // Python reads shots.nc back; the configuration written into it stays the user's.
     config.output.netcdf = true;
-    config.output.geojson = false;
+    config.output.footprints = false;
     config.output.plots = false;
     RunRequest request;
     request.out_dir = out_dir;

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
 #include "core/netcdf_lock.hpp"
 #include "terrain/crs_transform.hpp"
 #include "terrain/gdal_source.hpp"
@@ -43,50 +44,6 @@ std::string format_value(double value) {
 // Beyond this many nodes a side a mesh takes every k-th node (memory), and no longer matches
 // height_m exactly; a shot's patch is a few hundred nodes of a 1 m DEM.
 constexpr int max_mesh_nodes_per_side = 2048;
-
-// While alive, GDAL's errors on this thread are kept here instead of going to stderr: the user
-// sees one line of ours, with GDAL's message as its cause.
-class GdalErrorTrap {
- public:
-  GdalErrorTrap() { CPLPushErrorHandlerEx(&GdalErrorTrap::handle, this); }
-  ~GdalErrorTrap() { CPLPopErrorHandler(); }
-  GdalErrorTrap(const GdalErrorTrap&) = delete;
-  GdalErrorTrap& operator=(const GdalErrorTrap&) = delete;
-
-  std::string cause(const std::string& fallback) const {
-    return message_.empty() ? fallback : message_;
-  }
-
- private:
-  static void CPL_STDCALL handle(CPLErr level, CPLErrorNum, const char* text) {
-    auto* self = static_cast<GdalErrorTrap*>(CPLGetErrorHandlerUserData());
-    if (!self || level < CE_Failure || !text) return;
-    self->message_ = text;
-    // One line: GDAL's messages sometimes span several.
-    for (char& c : self->message_)
-      if (c == '\n' || c == '\r') c = ' ';
-  }
-  std::string message_;
-};
-
-struct DatasetCloser {
-  void operator()(GDALDataset* dataset) const {
-    // A netCDF or HDF5 DEM is closed through libnetcdf (see core/netcdf_lock.hpp).
-    const std::lock_guard lock(netcdf_library_mutex());
-    const GdalErrorTrap trap;
-    GDALClose(dataset);
-  }
-};
-
-void prepare_gdal() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    GDALAllRegister();
-    // GDAL's own block cache defaults to 5 % of the machine's memory; the tiles are cached here,
-    // so GDAL needs only the blocks of the read in hand. A user's GDAL_CACHEMAX still wins.
-    if (!CPLGetConfigOption("GDAL_CACHEMAX", nullptr)) GDALSetCacheMax64(std::int64_t{32} << 20);
-  });
-}
 
 // Metres per unit of a band's heights, for the units DEMs are written in (GDAL's unit type is
 // free text: "m", "metre", "cm", "ft", "US survey foot"...); empty for a unit not known here.
@@ -136,7 +93,7 @@ struct Node {
 struct DemTerrain::Impl {
   std::string path;
   Options options;
-  std::unique_ptr<GDALDataset, DatasetCloser> dataset;
+  GdalDataset dataset;
   GDALRasterBand* band = nullptr;
   int width = 0, height = 0;
   std::array<double, 6> geotransform{}, inverse{};

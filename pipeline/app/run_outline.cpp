@@ -150,7 +150,7 @@ std::string vegetation_line(const json& canopy) {
 std::string products_line(const json& output, const std::string& config_file) {
   std::vector<std::string> products;
   if (output.value("netcdf", true)) products.push_back("shots.nc");
-  if (output.value("geojson", true))
+  if (output.value("footprints", true))
     products.push_back(output.value("footprints_format", "GeoJSON") == "GPKG"
                            ? "footprints.gpkg"
                            : "footprints.geojson");

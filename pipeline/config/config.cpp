@@ -522,10 +522,23 @@ TrackSettings read_track(JsonReader& root, const SensorSettings& sensor) {
   return t;
 }
 
-OutputSettings read_output(JsonReader& root) {
+// output.geojson is the old name of output.footprints (which also writes a GeoPackage): read
+// into it with a warning, and written into the resolved configuration under the new name.
+void read_old_footprints_key(JsonReader& r, OutputSettings& o, std::vector<std::string>& warnings) {
+  if (!r.has("geojson")) return;
+  if (r.has("footprints"))
+    r.fail("geojson", "is the old name of output.footprints: give footprints alone");
+  o.footprints = r.boolean("geojson");
+  r.resolved().erase("geojson");
+  r.resolved()["footprints"] = o.footprints;
+  warnings.push_back(r.place("geojson") +
+                     ": is now output.footprints (the old name still works, for now)");
+}
+
+OutputSettings read_output(JsonReader& root, std::vector<std::string>& warnings) {
   OutputSettings o;
   JsonReader r = root.object("output");
-  read_fields(r, {}, o);
+  read_fields(r, {{"geojson", [&] { read_old_footprints_key(r, o, warnings); }}}, o);
   r.finish();
   return o;
 }
@@ -622,7 +635,7 @@ Config parse_config(const json& document) {
   if (terrain_given) c.terrain = read_terrain(root, c.sensor.bands);
   c.canopy = read_canopy(root, c.sensor.bands);
   c.track = read_track(root, c.sensor);
-  c.output = read_output(root);
+  c.output = read_output(root, c.warnings);
   c.detector = read_detector(root);
   c.brf = read_brf(root);
   root.finish();
@@ -639,14 +652,14 @@ void check_outputs(const Config& config) {
   // A photon-counting run's ICESat-2 granules are products of their own.
   const bool granules = config.sensor.receiver == "photon_counting" &&
                         (o.atl03.value_or(true) || o.atl08.value_or(true));
-  if (!o.netcdf && !o.geojson && !granules)
+  if (!o.netcdf && !o.footprints && !granules)
     throw config_error("/output",
-                       "nothing to write: output.netcdf and output.geojson are both false");
-  if (o.plots && !(o.netcdf && o.geojson))
+                       "nothing to write: output.netcdf and output.footprints are both false");
+  if (o.plots && !(o.netcdf && o.footprints))
     throw config_error(
         "/output/plots",
         "plots are drawn from shots.nc and footprints.geojson: they need output.netcdf "
-        "and output.geojson");
+        "and output.footprints");
   if (o.plots && !o.metrics)
     throw config_error("/output/metrics",
                        "plots draw the Gaussian fits and ground estimates: output.plots needs "

@@ -49,7 +49,7 @@ struct SimulationSettings {
 
 struct OutputSettings {
   bool netcdf = true;
-  bool geojson = true;
+  bool footprints = true;  // the footprints' layer, in footprints_format
   bool plots = false;
   bool per_order = false;
   bool metrics = true;                        // the waveform metrics and Gaussian decomposition
@@ -98,12 +98,9 @@ inline constexpr std::uint64_t max_order = 1000;  // a ray's weight is gone long
 inline constexpr double angle_rad = 0.05;
 // The highest spacecraft: above geostationary height (35786 km) nothing points a lidar down.
 inline constexpr double altitude_m = 4.0e7;
-// The copies of a shot's waveforms the transport tallies in (pipeline/transport/
-// shot_transport.cpp).
-inline constexpr double waveform_copies = 65.0;
 inline constexpr std::uint64_t track_shots = 1'000'000'000;  // 290 days of GLAS at 40 Hz
 // What one shot's waveforms may take: the transport tallies each shot's rays in 65 copies of
-// them (pipeline/transport/shot_transport.cpp) and every thread simulates a shot.
+// them (transport_waveform_copies) and every thread simulates a shot.
 inline constexpr double shot_waveform_bytes = 4.0 * 1024 * 1024;
 // `glaswave brf`'s tile is flat and periodic in the first footprint's local frame: 10 km across,
 // its corners (7.1 km out) already lie 3.9 m below that plane on the curved Earth.
@@ -125,6 +122,8 @@ struct Config {
   BrfSettings brf;
   // The configuration as used, presets expanded and defaults filled in; written into products.
   nlohmann::json resolved;
+  // What the user should know about the configuration itself (an old key's name), one line each.
+  std::vector<std::string> warnings;
 };
 
 // Calls `open`, which builds a floor below the configuration from the settings of `section` (a

@@ -792,11 +792,18 @@ Key output_keys() {
   using S = OutputSettings;
   const std::string photon_counting = "true with `sensor.receiver: photon_counting`, else false";
   return object(
-      "output", "which products to write; at least one of `netcdf` and `geojson`",
+      "output", "which products to write; at least one of `netcdf`, `footprints` and a granule",
       {o.boolean("netcdf", &S::netcdf, "write `shots.nc`"),
-       o.boolean("geojson", &S::geojson, "write the footprints (`footprints.geojson`)"),
+       o.boolean("footprints", &S::footprints,
+                 "write the footprints' layer (`footprints.geojson`, or `footprints.gpkg` as "
+                 "`footprints_format` says)"),
+       declare::boolean("geojson", true,
+                        "the old name of `footprints`: it still works, with a warning; not beside "
+                        "`footprints`")
+           .with_default(nullptr)
+           .with_default_text("`footprints`"),
        o.boolean("plots", &S::plots,
-                 "PNG plots (drawn from both products: needs `netcdf` and `geojson`)"),
+                 "PNG plots (drawn from both products: needs `netcdf` and `footprints`)"),
        o.boolean("per_order", &S::per_order, "per-scattering-order waveforms"),
        o.boolean("metrics", &S::metrics,
                  "the waveform metrics and Gaussian decomposition (`energy_tr` ... `rh`); "

@@ -16,6 +16,7 @@
 
 #include "core/error.hpp"
 #include "core/excerpt.hpp"
+#include "core/gdal_layer.hpp"
 #include "pipeline/config/canopy_section.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/keys.hpp"
@@ -28,24 +29,10 @@ using json = nlohmann::json;
 using Ring = std::vector<std::array<double, 2>>;
 
 // GDAL's messages go to the error, never to the terminal.
-class QuietGdal {
- public:
-  QuietGdal() {
-    CPLPushErrorHandler(CPLQuietErrorHandler);
-    CPLErrorReset();
-  }
-  ~QuietGdal() { CPLPopErrorHandler(); }
-  QuietGdal(const QuietGdal&) = delete;
-  QuietGdal& operator=(const QuietGdal&) = delete;
-  static std::string last() {
-    const std::string message = CPLGetLastErrorMsg();
-    return message.empty() ? "" : " (" + message + ")";
-  }
-};
-
-struct DatasetCloser {
-  void operator()(GDALDataset* d) const { GDALClose(d); }
-};
+// GDAL's last failure, for a message: " (its text)", or nothing.
+std::string gdal_cause(const GdalErrorTrap& trap) {
+  return trap.failed() ? " (" + trap.cause("") + ")" : "";
+}
 
 // A field's value as the JSON of a canopy key: numbers as numbers, booleans as booleans, lists as
 // arrays, and text that reads as a JSON object or array (an `lad` object) as that JSON.
@@ -217,24 +204,21 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
   // A pipe or a device would be waited for or read for ever (a Shapefile's folder is fine).
   std::error_code error;
   if (!std::filesystem::is_directory(path, error)) require_gdal_source(path, "the stands file");
-  GDALAllRegister();
-  const QuietGdal quiet;
+  prepare_gdal();
+  GdalErrorTrap trap;
   // GeoJSON keeps its FeatureCollection's other members (a `crs`) as NATIVE_DATA when asked.
   const char* const geojson[] = {"GeoJSON", nullptr};
   const char* const native_data[] = {"NATIVE_DATA=YES", nullptr};
-  std::unique_ptr<GDALDataset, DatasetCloser> dataset(GDALDataset::FromHandle(
+  GdalDataset dataset(GDALDataset::FromHandle(
       GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, geojson, native_data, nullptr)));
   if (!dataset) {
-    CPLErrorReset();
+    trap.reset();
     dataset.reset(GDALDataset::FromHandle(
         GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
   }
   if (!dataset)
     throw input_error(path, "cannot be read as a vector file (GeoJSON, GeoPackage, Shapefile...)" +
-                                QuietGdal::last());
-  OGRSpatialReference wgs84;
-  wgs84.SetWellKnownGeogCS("WGS84");
-  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+                                gdal_cause(trap));
   const int layers = dataset->GetLayerCount();
   std::vector<StandFeature> features;
   for (int l = 0; l < layers; ++l) {
@@ -246,14 +230,12 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
         layers > 1 ? "layer " + std::string(layer->GetName()) + " feature " : "feature ";
     std::unique_ptr<OGRCoordinateTransformation> to_wgs84;
     if (const OGRSpatialReference* crs = layer->GetSpatialRef()) {
-      OGRSpatialReference source(*crs);
-      source.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-      to_wgs84.reset(OGRCreateCoordinateTransformation(&source, &wgs84));
+      to_wgs84 = transformation_to_wgs84(*crs);
       if (!to_wgs84)
         throw input_error(path,
                           (layers > 1 ? "layer " + std::string(layer->GetName()) + ": " : "") +
                               "its CRS cannot be brought to WGS84 longitude and latitude" +
-                              QuietGdal::last());
+                              gdal_cause(trap));
     }
     layer->ResetReading();
     int index = 0;
@@ -267,7 +249,7 @@ std::vector<StandFeature> read_stand_features(const std::string& path) {
         throw input_error(path, stand.name + ": the geometry must be a Polygon or MultiPolygon");
       if (to_wgs84 && geometry->transform(to_wgs84.get()) != OGRERR_NONE)
         throw input_error(
-            path, stand.name + ": its coordinates cannot be brought to WGS84" + QuietGdal::last());
+            path, stand.name + ": its coordinates cannot be brought to WGS84" + gdal_cause(trap));
       if (type == wkbPolygon)
         add_polygon(*geometry->toPolygon(), stand.rings);
       else

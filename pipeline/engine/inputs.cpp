@@ -100,7 +100,7 @@ std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const T
 }
 
 bool products_read_shot_fields(const OutputSettings& output) {
-  return output.netcdf || output.geojson || output.gedi_l1b || output.gedi_l2a || output.glah01 ||
+  return output.netcdf || output.footprints || output.gedi_l1b || output.gedi_l2a || output.glah01 ||
          output.glah14;
 }
 

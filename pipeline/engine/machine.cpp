@@ -133,7 +133,7 @@ RunMemory estimate_run_memory(const Config& c) {
   m.scene_bytes = vegetation.region_bytes;
   m.source_bytes = vegetation.source_bytes;
   m.vegetation = vegetation.kind;
-  m.waveform_bytes = shot_size(c).bytes * run_limits::waveform_copies;
+  m.waveform_bytes = shot_size(c).bytes * shot_waveform_copies;
   m.threads = usable_cores();
   m.bytes = m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes);
   m.available_bytes = available_memory_bytes();
@@ -199,7 +199,7 @@ void check_run(const Config& config) {
     throw config_error(memory.place, why.str());
   }
   check_outputs(config);
-  if (config.output.geojson) {
+  if (config.output.footprints) {
     std::vector<std::string> band_names;
     for (const LidarBand& band : config.sensor.bands) band_names.push_back(band.name);
     check_footprint_properties(band_names, config.output.footprints_format == "GPKG"

@@ -319,7 +319,8 @@ CheckSummary check_inputs(const Config& config) {
   CheckSummary summary;
   summary.shots = track->size();
   summary.sequence_length = track->sequence_length();
-  summary.warnings = track->warnings();
+  summary.warnings = config.warnings;
+  for (const std::string& warning : track->warnings()) summary.warnings.push_back(warning);
   std::vector<std::array<double, 2>> centres;
   const std::int64_t step = (track->size() + max_located_shots - 1) / max_located_shots;
   for (std::int64_t record = 0; record < track->size(); record += std::max<std::int64_t>(1, step)) {
@@ -393,7 +394,7 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
     for (const auto& entry : fs::directory_iterator(request.out_dir, ignored))
       if (is_part(entry)) fs::remove(entry.path(), ignored);
   const Config& config = setup.used;
-  ProductSettings settings{config.output.netcdf, config.output.geojson,
+  ProductSettings settings{config.output.netcdf, config.output.footprints,
                            config.output.footprints_format == "GPKG" ? FootprintsFormat::gpkg
                                                                      : FootprintsFormat::geojson};
   settings.gedi_l1b = config.output.gedi_l1b;
@@ -451,6 +452,7 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   RunInfo info = run_info(setup->used, *setup->simulator, last - first, request.command_line);
   info.vertical_datum = setup->terrain->vertical_datum().description;
   RunSummary summary;
+  summary.warnings = config.warnings;
   std::unique_ptr<RunOutput> output;
   try {
     if (cluster.rank() == 0) output = open_output(*setup, request, info, summary);

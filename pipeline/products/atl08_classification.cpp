@@ -3,7 +3,10 @@
 #include "pipeline/products/atl08_classification.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <numeric>
 
@@ -32,19 +35,38 @@ double quantile(std::vector<double> values, double q) {
   return values[below] + (position - static_cast<double>(below)) * (values[above] - values[below]);
 }
 
-// Fills the NaN entries by linear interpolation between the nearest known ones (constant beyond).
+// The least-squares line through the values at `known` indices [from, to), evaluated at `i`.
+double line_at(const std::vector<double>& values, const std::vector<std::size_t>& known,
+               std::size_t from, std::size_t to, std::size_t i) {
+  double n = 0.0, sx = 0.0, sy = 0.0;
+  for (std::size_t k = from; k < to; ++k) {
+    n += 1.0, sx += static_cast<double>(known[k]), sy += values[known[k]];
+  }
+  const double mx = sx / n, my = sy / n;
+  double sxx = 0.0, sxy = 0.0;
+  for (std::size_t k = from; k < to; ++k) {
+    const double dx = static_cast<double>(known[k]) - mx;
+    sxx += dx * dx, sxy += dx * (values[known[k]] - my);
+  }
+  return my + (sxx > 0.0 ? sxy / sxx : 0.0) * (static_cast<double>(i) - mx);
+}
+
+// Fills the NaN entries by linear interpolation between the nearest known ones; beyond the first
+// and last, along the line through the five nearest (a track's end under crowns that hide its
+// ground keeps the slope of the ground before them, where it stayed level before).
 void fill_gaps(std::vector<double>& values) {
   std::vector<std::size_t> known;
   for (std::size_t i = 0; i < values.size(); ++i)
     if (!std::isnan(values[i])) known.push_back(i);
   if (known.empty()) return;
+  const std::size_t ends = std::min<std::size_t>(5, known.size());
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!std::isnan(values[i])) continue;
     const auto next = std::lower_bound(known.begin(), known.end(), i);
     if (next == known.begin()) {
-      values[i] = values[known.front()];
+      values[i] = line_at(values, known, 0, ends, i);
     } else if (next == known.end()) {
-      values[i] = values[known.back()];
+      values[i] = line_at(values, known, known.size() - ends, known.size(), i);
     } else {
       const std::size_t a = *(next - 1), b = *next;
       const double t = static_cast<double>(i - a) / static_cast<double>(b - a);
@@ -101,6 +123,29 @@ void filter_noise(std::span<const CloudPhoton> photons, const Atl08Settings& s, 
   }
 }
 
+// The 25 % quantile-regression line through `points` (x, y), evaluated at `x`: of the lines
+// through two of the points (an optimum of the check loss lies on one), the one whose weighted
+// residuals, 0.25 |r| above it and 0.75 |r| below, sum least; one point: its height.
+double lower_envelope_at(const std::vector<std::array<double, 2>>& points, double x) {
+  if (points.size() == 1) return points[0][1];
+  constexpr double quarter = 0.25;
+  double best_loss = std::numeric_limits<double>::infinity(), best = nan;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (std::size_t j = i + 1; j < points.size(); ++j) {
+      const double slope = (points[j][1] - points[i][1]) / (points[j][0] - points[i][0]);
+      double loss = 0.0;
+      for (const auto& p : points) {
+        const double r = p[1] - (points[i][1] + slope * (p[0] - points[i][0]));
+        loss += r >= 0.0 ? quarter * r : (quarter - 1.0) * r;
+      }
+      if (loss < best_loss) {
+        best_loss = loss;
+        best = points[i][1] + slope * (x - points[i][0]);
+      }
+    }
+  return best;
+}
+
 // Step 2: the ground surface at the cells' centres.
 std::vector<double> fit_ground(std::span<const CloudPhoton> photons,
                                const std::vector<bool>& signal, const Cells& cells) {
@@ -122,12 +167,21 @@ std::vector<double> fit_ground(std::span<const CloudPhoton> photons,
         break;
       }
   }
+  // A cell's candidate is its ground when it lies within 5 m above the lower envelope of the
+  // other cells' candidates within 100 m: the line under which a quarter of them lie (the 25 %
+  // quantile regression, one-sided at the track's ends), the cell itself left out so that the
+  // line cannot climb to it. A line follows a slope as the ground does; a quarter of 20 cells
+  // keeps canopy-only cells (a weak beam under dense crowns, several together at a track's end)
+  // from outvoting the ground, as a median of five did. A ground candidate rejected on a sharp
+  // ridge (more than 5 m above the line) is filled from its neighbours and refined below.
   std::vector<double> ground(cells.count, nan);
   for (std::size_t c = 0; c < cells.count; ++c) {
-    std::vector<double> around;
-    for (std::size_t k = c >= 2 ? c - 2 : 0; k < std::min(cells.count, c + 3); ++k)
-      if (!std::isnan(lowest[k])) around.push_back(lowest[k]);
-    if (!std::isnan(lowest[c]) && lowest[c] <= median(around) + 5.0) ground[c] = lowest[c];
+    if (std::isnan(lowest[c])) continue;
+    std::vector<std::array<double, 2>> around;
+    for (std::size_t k = c >= 10 ? c - 10 : 0; k < std::min(cells.count, c + 11); ++k)
+      if (k != c && !std::isnan(lowest[k])) around.push_back({static_cast<double>(k), lowest[k]});
+    if (around.empty() || lowest[c] <= lower_envelope_at(around, static_cast<double>(c)) + 5.0)
+      ground[c] = lowest[c];
   }
   fill_gaps(ground);
   for (const double band_m : {3.0, 1.5, 1.0}) {

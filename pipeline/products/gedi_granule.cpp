@@ -8,6 +8,8 @@
 #include <map>
 #include <numbers>
 
+#include "core/registry.hpp"
+
 namespace glaswave {
 namespace {
 
@@ -365,5 +367,20 @@ void GediGranuleWriter::write_l2a_beam(Hdf5Writer& f, const std::string& g,
       "canopy height, beam-weighted");
   write_footprint_truth(f, truth, shots);
 }
+
+namespace {
+
+const Registration<ProductWriter> gedi_l1b_writer(
+    "gedi_l1b.h5", 30, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
+      if (!c.settings.gedi_l1b) return nullptr;
+      return std::make_unique<GediGranuleWriter>(c.out_dir / "gedi_l1b.h5", GediLevel::l1b, c.info);
+    });
+const Registration<ProductWriter> gedi_l2a_writer(
+    "gedi_l2a.h5", 31, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
+      if (!c.settings.gedi_l2a) return nullptr;
+      return std::make_unique<GediGranuleWriter>(c.out_dir / "gedi_l2a.h5", GediLevel::l2a, c.info);
+    });
+
+}  // namespace
 
 }  // namespace glaswave

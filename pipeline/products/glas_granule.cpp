@@ -7,6 +7,8 @@
 #include <limits>
 #include <numbers>
 
+#include "core/registry.hpp"
+
 namespace glaswave {
 namespace {
 
@@ -278,5 +280,22 @@ void GlasGranuleWriter::write_file(Hdf5Writer& f) {
   write_glah14_offsets(f, d, shots_);
   write_glah14_truth(f, d, shots_);
 }
+
+namespace {
+
+const Registration<ProductWriter> glah01_writer(
+    "glah01.h5", 40, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
+      if (!c.settings.glah01) return nullptr;
+      return std::make_unique<GlasGranuleWriter>(c.out_dir / "glah01.h5", GlasLevel::glah01,
+                                                 c.settings.glas_topex, c.info);
+    });
+const Registration<ProductWriter> glah14_writer(
+    "glah14.h5", 41, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
+      if (!c.settings.glah14) return nullptr;
+      return std::make_unique<GlasGranuleWriter>(c.out_dir / "glah14.h5", GlasLevel::glah14,
+                                                 c.settings.glas_topex, c.info);
+    });
+
+}  // namespace
 
 }  // namespace glaswave

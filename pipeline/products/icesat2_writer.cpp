@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/registry.hpp"
 
 namespace glaswave {
 namespace {
@@ -139,5 +140,15 @@ void Icesat2Writer::abort() noexcept {
   done_ = true;
   kept_.clear();
 }
+
+namespace {
+
+const Registration<ProductWriter> icesat2_writer(
+    "atl03.h5 atl08.h5", 50, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
+      if (!c.icesat2.atl03 && !c.icesat2.atl08) return nullptr;
+      return std::make_unique<Icesat2Writer>(c.out_dir, c.icesat2, c.info);
+    });
+
+}  // namespace
 
 }  // namespace glaswave

@@ -26,6 +26,7 @@
 #include "core/error.hpp"
 #include "core/glas_time.hpp"
 #include "core/netcdf_lock.hpp"
+#include "core/registry.hpp"
 #include "core/write_error.hpp"
 #include "pipeline/products/product_fields.hpp"
 
@@ -875,5 +876,16 @@ void NetcdfWriter::abort() noexcept {
   const LibraryLock lock;
   if (impl_ && !impl_->ledger.finished()) impl_.reset();
 }
+
+namespace {
+
+// shots.nc, first of a run's products.
+const Registration<ProductWriter> netcdf_writer(
+    "shots.nc", 10, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
+      if (!c.settings.netcdf) return nullptr;
+      return std::make_unique<NetcdfWriter>(c.out_dir / "shots.nc", c.info);
+    });
+
+}  // namespace
 
 }  // namespace glaswave

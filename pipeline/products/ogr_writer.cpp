@@ -25,6 +25,8 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
+#include "core/registry.hpp"
 #include "core/write_error.hpp"
 #include "pipeline/products/product_fields.hpp"
 
@@ -33,30 +35,6 @@ namespace {
 
 // 1e-8 degree is about a millimetre on the ground: finer than any footprint position means.
 constexpr const char* kCoordinatePrecision = "COORDINATE_PRECISION=8";
-
-// GDAL reports through a global handler that prints; library code never prints. While one of
-// these lives, this thread's GDAL messages are kept here instead: the first failure becomes the
-// text of an Error, warnings (a GeoPackage under its .part name) are dropped.
-class GdalMessages {
- public:
-  GdalMessages() { CPLPushErrorHandlerEx(&GdalMessages::handle, this); }
-  ~GdalMessages() { CPLPopErrorHandler(); }
-  GdalMessages(const GdalMessages&) = delete;
-  GdalMessages& operator=(const GdalMessages&) = delete;
-
-  // The first failure's text, or `fallback` when GDAL said nothing.
-  std::string failure(const std::string& fallback) const {
-    return failure_.empty() ? fallback : fallback + ": " + failure_;
-  }
-  bool failed() const { return !failure_.empty(); }
-
- private:
-  static void CPL_STDCALL handle(CPLErr level, CPLErrorNum /*number*/, const char* message) {
-    auto* self = static_cast<GdalMessages*>(CPLGetErrorHandlerUserData());
-    if (level >= CE_Failure && self->failure_.empty()) self->failure_ = message;
-  }
-  std::string failure_;
-};
 
 using Ring = std::vector<std::array<double, 2>>;
 
@@ -184,7 +162,7 @@ struct OgrWriter::Impl {
   // Features and the dataset go before the .part is removed: the file is closed first, and
   // GDAL's messages about a dataset given up are nobody's business.
   ~Impl() {
-    const GdalMessages quiet;
+    const GdalErrorTrap quiet;
     pending.clear();
     dataset.reset();
   }
@@ -206,15 +184,14 @@ struct OgrWriter::Impl {
   }
 
   void create(const RunInfo& info) {
-    static std::once_flag registered;
-    std::call_once(registered, [] { GDALAllRegister(); });
+    prepare_gdal();
     const bool gpkg = format == FootprintsFormat::gpkg;
     // A GeoPackage says when its layer last changed (gpkg_contents.last_change): GDAL takes
     // that time from OGR_CURRENT_DATE where set, so reproducible runs give it theirs (the
     // setting is the process's, as SOURCE_DATE_EPOCH is).
     if (gpkg && info.created.reproducible)
       CPLSetConfigOption("OGR_CURRENT_DATE", info.created.iso8601.c_str());
-    const GdalMessages messages;
+    const GdalErrorTrap messages;
     GDALDriver* driver = GetGDALDriverManager()->GetDriverByName(gpkg ? "GPKG" : "GeoJSON");
     if (driver == nullptr)
       fail(std::string("GDAL has no ") + (gpkg ? "GPKG" : "GeoJSON") + " driver");
@@ -292,7 +269,7 @@ struct OgrWriter::Impl {
   }
 
   void emit(OGRFeature& feature) {
-    const GdalMessages messages;
+    const GdalErrorTrap messages;
     errno = 0;
     if (layer->CreateFeature(&feature) != OGRERR_NONE) {
       check_room();
@@ -369,7 +346,7 @@ void OgrWriter::finish(const RunStats& /*stats*/) {
   impl.ledger.check_finish();
   const std::string part = impl.file.part_path().string();
   {
-    const GdalMessages messages;
+    const GdalErrorTrap messages;
     errno = 0;
     if (impl.format == FootprintsFormat::gpkg && impl.dataset->CommitTransaction() != OGRERR_NONE) {
       impl.check_room();
@@ -389,5 +366,18 @@ void OgrWriter::abort() noexcept {
   // A finished product stays: only an unfinished one has a .part to give up.
   if (impl_ && !impl_->ledger.finished()) impl_.reset();
 }
+
+namespace {
+
+const Registration<ProductWriter> footprints_writer(
+    "footprints", 20, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
+      if (!c.settings.footprints) return nullptr;
+      const bool gpkg = c.settings.footprints_format == FootprintsFormat::gpkg;
+      return std::make_unique<OgrWriter>(
+          c.out_dir / (gpkg ? "footprints.gpkg" : "footprints.geojson"),
+          c.settings.footprints_format, c.info);
+    });
+
+}  // namespace
 
 }  // namespace glaswave

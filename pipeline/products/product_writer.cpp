@@ -1,14 +1,11 @@
-// The factory of a run's product writers: the one place that knows which writers exist.
+// The record ledger every writer keeps, and a run's writers made from the registered ones (each
+// writer registers itself in its own .cpp).
 #include "pipeline/products/product_writer.hpp"
 
 #include <algorithm>
 
 #include "core/error.hpp"
-#include "pipeline/products/gedi_granule.hpp"
-#include "pipeline/products/glas_granule.hpp"
-#include "pipeline/products/icesat2_writer.hpp"
-#include "pipeline/products/netcdf_writer.hpp"
-#include "pipeline/products/ogr_writer.hpp"
+#include "core/registry.hpp"
 
 namespace glaswave {
 
@@ -38,29 +35,10 @@ std::vector<std::unique_ptr<ProductWriter>> make_writers(const std::filesystem::
                                                          const ProductSettings& settings,
                                                          const RunInfo& info,
                                                          const Icesat2ProductSettings& icesat2) {
+  const WriterContext context{out_dir, settings, info, icesat2};
   std::vector<std::unique_ptr<ProductWriter>> writers;
-  if (settings.netcdf)
-    writers.push_back(std::make_unique<NetcdfWriter>(out_dir / "shots.nc", info));
-  if (settings.footprints) {
-    const bool gpkg = settings.footprints_format == FootprintsFormat::gpkg;
-    writers.push_back(
-        std::make_unique<OgrWriter>(out_dir / (gpkg ? "footprints.gpkg" : "footprints.geojson"),
-                                    settings.footprints_format, info));
-  }
-  if (settings.gedi_l1b)
-    writers.push_back(
-        std::make_unique<GediGranuleWriter>(out_dir / "gedi_l1b.h5", GediLevel::l1b, info));
-  if (settings.gedi_l2a)
-    writers.push_back(
-        std::make_unique<GediGranuleWriter>(out_dir / "gedi_l2a.h5", GediLevel::l2a, info));
-  if (settings.glah01)
-    writers.push_back(std::make_unique<GlasGranuleWriter>(out_dir / "glah01.h5", GlasLevel::glah01,
-                                                          settings.glas_topex, info));
-  if (settings.glah14)
-    writers.push_back(std::make_unique<GlasGranuleWriter>(out_dir / "glah14.h5", GlasLevel::glah14,
-                                                          settings.glas_topex, info));
-  if (icesat2.atl03 || icesat2.atl08)
-    writers.push_back(std::make_unique<Icesat2Writer>(out_dir, icesat2, info));
+  for (const auto& entry : Registry<ProductWriter>::instance().entries())
+    if (auto writer = entry.make(context)) writers.push_back(std::move(writer));
   return writers;
 }
 

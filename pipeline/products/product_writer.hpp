@@ -1,11 +1,12 @@
 // The one interface every product writer implements (shots.nc, footprints.geojson or .gpkg,
-// and the HDF5 granules to come), and the factory that makes a run's writers. A writer begins
-// when it is made (from its final path and the RunInfo), takes records by index, then finishes
-// or is aborted; its product appears under its final name only when finish() succeeds.
+// the HDF5 granules), and make_writers, which makes a run's writers from the registered ones. A
+// writer begins when it is made (from its final path and the RunInfo), takes records by index, then
+// finishes or is aborted; its product appears under its final name only when finish() succeeds.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,8 +16,14 @@
 
 namespace glaswave {
 
+struct WriterContext;
+
 class ProductWriter {
  public:
+  // Makes the writer a run's settings ask for, begun; null when they ask for none of its kind.
+  // Each writer registers its Factory from its own .cpp (core/registry.hpp).
+  using Factory = std::function<std::unique_ptr<ProductWriter>(const WriterContext&)>;
+
   virtual ~ProductWriter() = default;
 
   // Writes record `index` (0 <= index < RunInfo::shots), each index exactly once, in any order.
@@ -74,9 +81,18 @@ struct ProductSettings {
   bool glas_topex = false;  // GLAS heights on the TOPEX/Poseidon ellipsoid, not WGS84
 };
 
-// The writers of a run, each begun under `out_dir` (which must exist), with the ICESat-2
-// granules (DIR/atl03.h5, DIR/atl08.h5) of a photon-counting run. Empty when `settings`
-// asks for nothing. Throws Error (run) when a product cannot be created.
+// What a writer's Factory is given: the run's output directory (which exists), the products it
+// asks for and what every shot shares.
+struct WriterContext {
+  const std::filesystem::path& out_dir;
+  const ProductSettings& settings;
+  const RunInfo& info;
+  const Icesat2ProductSettings& icesat2;
+};
+
+// The writers of a run, each begun under `out_dir` (which must exist): every registered writer
+// (Registry<ProductWriter>) that `settings` ask for, in the registry's order. Empty when they ask
+// for nothing. Throws Error (run) when a product cannot be created.
 std::vector<std::unique_ptr<ProductWriter>> make_writers(
     const std::filesystem::path& out_dir, const ProductSettings& settings, const RunInfo& info,
     const Icesat2ProductSettings& icesat2 = {});

@@ -1,23 +1,19 @@
-// GeoTIFF writing through GDAL.
+// GeoTIFF writing through the one GDAL layer (core/gdal_layer.hpp).
 #include "pipeline/products/raster_writer.hpp"
 
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
-#include <mutex>
-
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
 
 namespace glaswave {
 
 void write_geotiff(const std::filesystem::path& path, const RasterImage& image) {
-  static std::once_flag registered;
-  std::call_once(registered, [] { GDALAllRegister(); });
-  auto fail = [&](const std::string& what) {
-    const std::string detail = CPLGetLastErrorMsg();
-    throw run_error(path.string(), what + (detail.empty() ? "" : ": " + detail));
-  };
+  prepare_gdal();
+  GdalErrorTrap trap;
+  auto fail = [&](const std::string& what) { throw run_error(path.string(), trap.failure(what)); };
   OGRSpatialReference crs;
   if (crs.SetFromUserInput(image.crs.c_str()) != OGRERR_NONE) fail("bad CRS " + image.crs);
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
@@ -43,9 +39,9 @@ void write_geotiff(const std::filesystem::path& path, const RasterImage& image) 
         fail("cannot write");
     }
     // Closing writes what GDAL still holds: a full disk shows up here.
-    CPLErrorReset();
+    trap.reset();
     dataset.reset();
-    if (CPLGetLastErrorType() == CE_Failure) fail("cannot write");
+    if (trap.failed()) fail("cannot write");
   }
   file.commit();
 }

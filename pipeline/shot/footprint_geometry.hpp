@@ -30,6 +30,10 @@ double patch_half_size_m(double reach_m);
 double estimated_patch_half_size_m(double range_m, double ifov_rad, double slope_deg,
                                    bool vegetation);
 
+// The copies of a shot's waveforms its transport tallies in (the ray groups and their sum), for
+// the memory estimate.
+inline constexpr double shot_waveform_copies = transport_waveform_copies;
+
 // Half-width of `glaswave brf`'s scene around its tile: the crowns reaching into a periodic
 // tile (5 m), or the light wandering out over a DEM (100 m).
 double brf_scene_half_size_m(double tile_half_size_m, bool periodic);

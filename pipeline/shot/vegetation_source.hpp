@@ -4,10 +4,9 @@
 // that geometry's material numbers index, the truth under the beam and a memory estimate.
 //
 // A new source is one class and one registration (register_vegetation_source, keyed by the
-// configuration's canopy kind): the engine and the transport do not change. Sources to come (a
-// regular grid of turbid voxels, triangle meshes with a material per triangle, point clouds)
-// add what they need to `Vegetation` and the scene; the transport's VolumeSpan and SurfaceHit
-// stay as they are.
+// configuration's canopy kind): the engine and the transport do not change. The built-in sources
+// (crowns and layers, facet trees, voxel grids, point clouds) add what they need to `Vegetation`
+// and the scene; the transport's VolumeSpan and SurfaceHit stay as they are.
 #pragma once
 
 #include <cstdint>

@@ -16,9 +16,9 @@
 namespace glaswave {
 namespace {
 
-// Rays are tallied in a fixed number of contiguous groups, summed in order: the result is the
-// same bits for any thread count, and memory does not grow with the rays.
-constexpr std::int64_t ray_groups = 64;
+// Rays are tallied in a fixed number of contiguous groups (transport_ray_groups), summed in
+// order: the result is the same bits for any thread count, and memory does not grow with the rays.
+constexpr std::int64_t ray_groups = transport_ray_groups;
 // Shots of fewer rays are traced on the calling thread: the engine runs shots in parallel, and
 // splitting a short shot costs more than it saves.
 constexpr std::int64_t parallel_rays = 2048;

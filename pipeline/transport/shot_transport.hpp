@@ -16,6 +16,12 @@
 
 namespace glaswave {
 
+// Rays are tallied in this many contiguous groups, summed in order (the same bits for any thread
+// count), each group in a copy of the shot's waveforms, and the sum in one more: what a shot's
+// tallies take, for the memory estimate.
+inline constexpr std::int64_t transport_ray_groups = 64;
+inline constexpr double transport_waveform_copies = transport_ray_groups + 1;
+
 // One shot in its local frame (the footprint's east-north-up frame), double precision.
 struct ShotGeometry {
   Vec3 sensor_m{};       // spacecraft position

@@ -102,7 +102,7 @@ def config(stands):
         "canopy": canopy,
         "track": {"type": "pass", "start_lat_deg": LAT0, "start_lon_deg": LON0,
                   "heading_deg": 10.0, "shots": 5, "spacing_m": 40.0},
-        "output": {"netcdf": True, "geojson": False, "plots": False},
+        "output": {"netcdf": True, "footprints": False, "plots": False},
     }
 
 

@@ -246,7 +246,7 @@ int main(int argc, char** argv) {
   glaswave::Config short_gpkg = short_shots;
   short_gpkg.output.footprints_format = "GPKG";
   glaswave::Config short_netcdf_only = short_shots;
-  short_netcdf_only.output.geojson = false;
+  short_netcdf_only.output.footprints = false;
 
   std::printf(
       "glaswave benchmark%s: %d cores; whole runs (NetCDF and GeoJSON unless named, no plots), "

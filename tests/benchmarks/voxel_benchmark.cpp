@@ -112,7 +112,7 @@ Config pass_config(const fs::path& grid, int shots, int rays) {
         {"shots", shots},
         {"spacing_m", 1.0},
         {"altitude_m", 600000.0}}},
-      {"output", {{"netcdf", true}, {"geojson", false}, {"plots", false}}},
+      {"output", {{"netcdf", true}, {"footprints", false}, {"plots", false}}},
   };
   return parse_config(document);
 }

@@ -27,7 +27,7 @@ inline nlohmann::json atlas_pass(int shots, int rays, std::uint64_t seed) {
         {"spacing_m", 0.7},
         {"altitude_m", 496000.0},
         {"start_time", "2019-03-20T12:00:00Z"}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
+      {"output", {{"netcdf", false}, {"footprints", false}}},
   };
 }
 

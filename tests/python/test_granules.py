@@ -58,7 +58,7 @@ def run(tmp_path, name, granule, **output):
                                     "elevation_m": 50.0}},
               "canopy": {"pai": 2.0, "cover": 0.6},
               "track": {"type": "granule", "file": str(granule), "altitude_m": 420000.0},
-              "output": {"netcdf": True, "geojson": False, **output}}
+              "output": {"netcdf": True, "footprints": False, **output}}
     path = tmp_path / (name + ".json")
     path.write_text(json.dumps(config))
     out = tmp_path / name

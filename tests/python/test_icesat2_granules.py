@@ -67,7 +67,7 @@ def run_pass(tmp_path):
                   "heading_deg": 0.0, "shots": 400, "spacing_m": 0.7, "rate_hz": 10000.0,
                   "altitude_m": 496000.0,
                   "start_time": START},
-        "output": {"netcdf": False, "geojson": False},
+        "output": {"netcdf": False, "footprints": False},
     }
     path = tmp_path / "atlas.json"
     path.write_text(json.dumps(config))

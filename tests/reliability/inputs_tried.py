@@ -224,7 +224,7 @@ def issue_items(t):
             ("3. simulation.rays_per_shot 1e12", {"simulation__rays_per_shot": 10**12}),
             ("3. canopy.crown_radius_m 0.01 (1e9 trees a shot)",
              {"canopy": {"crown_radius_m": 0.01}}),
-            ("3. output with everything off", {"output": {"netcdf": False, "geojson": False}}),
+            ("3. output with everything off", {"output": {"netcdf": False, "footprints": False}}),
             ("3. sensor.bins 16777216 x per_order x max_order 1000",
              {"sensor__bins": 16777216, "output": {"per_order": True},
               "simulation": {"max_order": 1000}}),

@@ -51,8 +51,8 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
   };
   const std::vector<Case> cases = {
       {{{"canopy", {{"pai", -1}}}}, 2, "/canopy/pai: must be >= 0, got -1"},
-      {{{"output", {{"netcdf", false}, {"geojson", false}}}}, 2, "/output: nothing to write"},
-      {{{"output", {{"plots", true}, {"geojson", false}}}}, 2, "/output/plots: plots are drawn"},
+      {{{"output", {{"netcdf", false}, {"footprints", false}}}}, 2, "/output: nothing to write"},
+      {{{"output", {{"plots", true}, {"footprints", false}}}}, 2, "/output/plots: plots are drawn"},
       {{{"output", {{"footprints_format", "GPKG"}, {"plots", true}}}},
        2,
        "/output/footprints_format: plots are drawn from footprints.geojson"},

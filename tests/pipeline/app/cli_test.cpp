@@ -278,7 +278,7 @@ TEST_F(Cli, BadConfigurationsFailWithOneLineNamingThePlace) {
       {"--set simulation.rays_per_shot=1e999", "/simulation/rays_per_shot"},
       {"--shots 9:12", "--shots"},
       {"--seed -1", "--seed: must be an integer in [0, 18446744073709551615], got \"-1\""},
-      {"--set output.netcdf=false --set output.geojson=false", "/output: nothing to write"},
+      {"--set output.netcdf=false --set output.footprints=false", "/output: nothing to write"},
   };
   for (const Case& c : cases) {
     const CommandOutcome run = run_glaswave("run " + config + " --quiet --out " +

@@ -28,7 +28,7 @@ class DebugRay : public ::testing::Test {
   void SetUp() override {
     // One shot at nadir over bare soil (0.15) on a plane sloping 8 degrees, few rays.
     nlohmann::json config = plane_shot("glas", 8.0, 0.0, rays);
-    config["output"] = {{"netcdf", true}, {"geojson", false}};
+    config["output"] = {{"netcdf", true}, {"footprints", false}};
     config_ = (dir_ / "plane.json").string();
     std::ofstream(config_) << config.dump(2);
   }

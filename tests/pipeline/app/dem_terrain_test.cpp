@@ -59,7 +59,7 @@ json shots_at(const json& terrain, const std::vector<std::array<double, 2>>& poi
         {"altitude_m", 600000.0},
         {"off_nadir_deg", off_nadir_deg},
         {"pointing_azimuth_deg", 60.0}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
+      {"output", {{"netcdf", false}, {"footprints", false}}},
   };
 }
 

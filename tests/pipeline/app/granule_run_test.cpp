@@ -49,7 +49,7 @@ void write_granule(const fs::path& file) {
 nlohmann::json granule_config(const std::string& file) {
   nlohmann::json config = test_support::plane_shot("gedi", 0.0, 0.0, 200);
   config["track"] = {{"type", "granule"}, {"file", file}, {"altitude_m", 420000.0}};
-  config["output"] = {{"netcdf", true}, {"geojson", false}};
+  config["output"] = {{"netcdf", true}, {"footprints", false}};
   return config;
 }
 

@@ -87,7 +87,7 @@ TEST_F(HostileInput, RunSizesBeyondTheLimitsAreRefusedByCheckAndRun) {
   // A forest of 1 cm crowns under the glas footprint: about 1e9 trees a shot.
   expect_refused(write_config({{"canopy", {{"crown_radius_m", 0.01}}}}), "", 2,
                  "/canopy/crown_radius_m: a run would hold about");
-  expect_refused(write_config({{"output", {{"netcdf", false}, {"geojson", false}}}}), "", 2,
+  expect_refused(write_config({{"output", {{"netcdf", false}, {"footprints", false}}}}), "", 2,
                  "/output: nothing to write");
 }
 

@@ -112,7 +112,7 @@ nlohmann::json glas_pass() {
         {"spacing_m", 172.0}}},
       {"output",
        {{"netcdf", true},
-        {"geojson", true},
+        {"footprints", true},
         {"plots", false},
         {"gedi_l1b", true},
         {"gedi_l2a", true},
@@ -137,7 +137,7 @@ TEST(ReproducibleProducts, TwoRunsWithSourceDateEpochWriteTheSameBytes) {
   EXPECT_EQ(text_attribute(dir.path() / "glas" / "out" / "shots.nc", "stats_wall_s"), "(absent)");
 
   nlohmann::json gpkg = glas_pass();
-  gpkg["output"] = {{"netcdf", false}, {"geojson", true}, {"footprints_format", "GPKG"}};
+  gpkg["output"] = {{"netcdf", false}, {"footprints", true}, {"footprints_format", "GPKG"}};
   fs::create_directories(dir.path() / "gpkg");
   const Reruns footprints = rerun(dir.path() / "gpkg", gpkg);
   EXPECT_TRUE(has(footprints.names, "footprints.gpkg"));
@@ -155,7 +155,7 @@ TEST(ReproducibleProducts, WithoutSourceDateEpochTheNetcdfProductDiffers) {
   const test_support::ScratchDir dir("glaswave_reproducible_clock");
   const Environment epoch("SOURCE_DATE_EPOCH", nullptr);
   nlohmann::json config = glas_pass();
-  config["output"] = {{"netcdf", true}, {"geojson", false}};
+  config["output"] = {{"netcdf", true}, {"footprints", false}};
   const Reruns r = rerun(dir.path(), config);
   EXPECT_TRUE(has(r.differ, "shots.nc"));
   EXPECT_NE(text_attribute(dir.path() / "out" / "shots.nc", "stats_wall_s"), "(absent)");
@@ -165,7 +165,7 @@ TEST(ReproducibleProducts, AMalformedSourceDateEpochIsRefused) {
   const test_support::ScratchDir dir("glaswave_reproducible_bad");
   const Environment epoch("SOURCE_DATE_EPOCH", "1700000000.5");
   nlohmann::json config = glas_pass();
-  config["output"] = {{"netcdf", true}, {"geojson", false}};
+  config["output"] = {{"netcdf", true}, {"footprints", false}};
   const fs::path file = dir.path() / "config.json";
   std::ofstream(file) << config.dump(2);
   const auto outcome = test_support::run_glaswave("run " + file.string() + " --out " +

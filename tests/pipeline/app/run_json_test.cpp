@@ -49,7 +49,7 @@ nlohmann::json gedi_over_plane() {
   config["track"]["altitude_m"] = 420000.0;
   config["track"]["points"] = {{{"lat_deg", 0.0}, {"lon_deg", 0.0}},
                                {{"lat_deg", 0.001}, {"lon_deg", 0.0}}};
-  config["output"] = {{"netcdf", true}, {"geojson", false}};
+  config["output"] = {{"netcdf", true}, {"footprints", false}};
   return config;
 }
 

@@ -118,7 +118,7 @@ nlohmann::json cloud_shot(const fs::path& cloud) {
            {{"type", "points"},
             {"points", {{{"lat_deg", lat}, {"lon_deg", lon}}}},
             {"altitude_m", 100000.0}}},
-          {"output", {{"netcdf", false}, {"geojson", false}}}};
+          {"output", {{"netcdf", false}, {"footprints", false}}}};
 }
 
 TEST(PointCloudTerrain, TheCloudsGroundWithinTwoCentimetres) {

@@ -277,6 +277,22 @@ TEST(Defaults, CanopyIsTable1) {
   EXPECT_EQ(c.terrain.soil_reflectance, (std::vector<double>{0.15, 0.15}));
 }
 
+// output.geojson, the old name of output.footprints: read into it with a warning naming the key,
+// the resolved configuration under the new name; refused beside the new name.
+TEST(OldNames, OutputGeojsonIsOutputFootprintsWithAWarning) {
+  const Config old = parse_config(doc(R"({"output": {"geojson": false}})"));
+  EXPECT_FALSE(old.output.footprints);
+  ASSERT_EQ(old.warnings.size(), 1u);
+  EXPECT_EQ(old.warnings[0],
+            "/output/geojson: is now output.footprints (the old name still works, for now)");
+  EXPECT_EQ(old.resolved["output"]["footprints"], false);
+  EXPECT_FALSE(old.resolved["output"].contains("geojson"));
+  const Config fresh = parse_config(doc(R"({"output": {"footprints": false}})"));
+  EXPECT_FALSE(fresh.output.footprints);
+  EXPECT_TRUE(fresh.warnings.empty());
+  EXPECT_THROW(parse_config(doc(R"({"output": {"geojson": true, "footprints": true}})")), Error);
+}
+
 TEST(Defaults, EverythingElse) {
   const Config c = parse_config(doc("{}"));
   EXPECT_EQ(c.seed, 1u);
@@ -291,7 +307,7 @@ TEST(Defaults, EverythingElse) {
   EXPECT_EQ(c.track.start_time_s, 0.0);
   EXPECT_EQ(c.track.orbit.epoch_s, 0.0);
   EXPECT_TRUE(c.output.netcdf);
-  EXPECT_TRUE(c.output.geojson);
+  EXPECT_TRUE(c.output.footprints);
   EXPECT_FALSE(c.output.plots);
   EXPECT_FALSE(c.output.per_order);
   EXPECT_EQ(c.brf.sun_zenith_deg, 30.0);
@@ -469,9 +485,9 @@ TEST(Errors, UnknownKeySuggestsTheNearest) {
             "/brf/views/1/zenith: unknown key \"zenith\"; did you mean \"zenith_deg\"?");
   // Nothing close: the known keys are listed instead of a guess.
   EXPECT_EQ(error_of(doc(R"({"output": {"xyz": true}})")),
-            "/output/xyz: unknown key \"xyz\"; known keys: atl03, atl08, footprints_format, "
-            "gedi_l1b, gedi_l2a, geojson, glah01, glah14, glas_ellipsoid, metrics, netcdf, "
-            "per_order, plots");
+            "/output/xyz: unknown key \"xyz\"; known keys: atl03, atl08, footprints, "
+            "footprints_format, gedi_l1b, gedi_l2a, geojson, glah01, glah14, glas_ellipsoid, "
+            "metrics, netcdf, per_order, plots");
 }
 
 TEST(Errors, WrongTypes) {

@@ -396,15 +396,15 @@ TEST(RunSize, TheLimitIsInTheMessage) {
 
 TEST(CheckRun, OutputsAndFormats) {
   EXPECT_EQ(run_error_of(doc("{}")), "");
-  EXPECT_EQ(run_error_of(doc(R"({"output": {"netcdf": false, "geojson": false}})")),
-            "/output: nothing to write: output.netcdf and output.geojson are both false");
-  EXPECT_THAT(run_error_of(doc(R"({"output": {"plots": true, "geojson": false}})")),
+  EXPECT_EQ(run_error_of(doc(R"({"output": {"netcdf": false, "footprints": false}})")),
+            "/output: nothing to write: output.netcdf and output.footprints are both false");
+  EXPECT_THAT(run_error_of(doc(R"({"output": {"plots": true, "footprints": false}})")),
               StartsWith("/output/plots: plots are drawn from shots.nc and footprints.geojson"));
   EXPECT_EQ(run_error_of(doc(R"({"output": {"footprints_format": "GPKG"}})")), "");
   EXPECT_EQ(run_error_of(doc(R"({"output": {"footprints_format": "GPKG", "plots": true}})")),
             "/output/footprints_format: plots are drawn from footprints.geojson: output.plots "
             "needs footprints_format \"GeoJSON\", got \"GPKG\"");
-  EXPECT_EQ(run_error_of(doc(R"({"output": {"footprints_format": "GPKG", "geojson": false}})")),
+  EXPECT_EQ(run_error_of(doc(R"({"output": {"footprints_format": "GPKG", "footprints": false}})")),
             "");
   EXPECT_EQ(error_of(doc(R"({"output": {"footprints_format": "gpkg"}})")),
             "/output/footprints_format: must be one of GeoJSON, GPKG, got \"gpkg\"; did you mean "

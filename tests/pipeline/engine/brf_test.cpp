@@ -28,7 +28,7 @@ nlohmann::json layer_scene(int shots) {
   nlohmann::json document = test_support::layer_shot(3.0, 0.05, 0.45, 0.4, 0.3, 60, 2000);
   document["seed"] = 11;
   document["track"]["points"] = points;
-  document["output"] = {{"netcdf", false}, {"geojson", false}};
+  document["output"] = {{"netcdf", false}, {"footprints", false}};
   document["brf"] = {{"sun_zenith_deg", 0.0},
                      {"views", {{{"zenith_deg", 0.0}, {"azimuth_deg", 0.0}}}},
                      {"photons", 30000},

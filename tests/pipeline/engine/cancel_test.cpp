@@ -24,7 +24,7 @@ TEST(Cancel, AThrowFromTheProgressCallbackLeavesNothingBehind) {
                        {"start_lon_deg", 0.0},
                        {"shots", 100},
                        {"spacing_m", 10.0}};
-  document["output"] = {{"netcdf", true}, {"geojson", true}};
+  document["output"] = {{"netcdf", true}, {"footprints", true}};
   const Config config = parse_config(document);
 
   const test_support::ScratchDir scratch("glaswave_cancel_test");

@@ -50,7 +50,7 @@ inline nlohmann::json plane_shot(const std::string& preset, double slope_deg, do
         {"altitude_m", 600000.0},
         {"off_nadir_deg", off_nadir_deg},
         {"pointing_azimuth_deg", 90.0}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
+      {"output", {{"netcdf", false}, {"footprints", false}}},
   };
 }
 
@@ -125,7 +125,7 @@ inline nlohmann::json layer_shot(double pai, double leaf_size_m, double rho, dou
         {"leaf_transmittance", tau},
         {"dbh_m", 0.0}}},
       {"track", {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}}},
-      {"output", {{"netcdf", false}, {"geojson", false}, {"per_order", true}}},
+      {"output", {{"netcdf", false}, {"footprints", false}, {"per_order", true}}},
   };
 }
 

@@ -31,7 +31,7 @@ nlohmann::json bare_pass(double slope_deg, std::int64_t rays, int shots) {
         {"heading_deg", 0.0},
         {"shots", shots},
         {"spacing_m", 172.0}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
+      {"output", {{"netcdf", false}, {"footprints", false}}},
   };
 }
 
@@ -90,7 +90,7 @@ TEST(WaveformProcessing, DenseCanopyAtFewRaysKeepsItsCanopy) {
           {"heading_deg", 350.0},
           {"shots", 3},
           {"spacing_m", 172.0}}},
-        {"output", {{"netcdf", false}, {"geojson", false}}},
+        {"output", {{"netcdf", false}, {"footprints", false}}},
     });
     for (const ShotRecord& record : run.records) {
       const std::size_t band = 1;  // 1064 nm

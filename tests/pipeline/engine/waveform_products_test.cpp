@@ -35,7 +35,7 @@ nlohmann::json pass_over_plane(int shots) {
         {"heading_deg", 0.0},
         {"shots", shots},
         {"spacing_m", 100.0}}},
-      {"output", {{"netcdf", false}, {"geojson", false}}},
+      {"output", {{"netcdf", false}, {"footprints", false}}},
   };
 }
 
