@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pipeline/products/canopy_indices.hpp"
 #include "pipeline/products/product_fields.hpp"
 
 namespace glaswave {
@@ -95,18 +96,8 @@ struct Extent {
 };
 
 Extent signal_extent(const std::vector<double>& smoothed, double threshold) {
-  const int n = static_cast<int>(smoothed.size());
-  int first = 0;
-  while (smoothed[first] <= threshold) ++first;
-  int last = n - 1;
-  while (smoothed[last] <= threshold) --last;
-  const double t = threshold;
-  const double begin =
-      first == 0 ? 0.0
-                 : first - 1 + (t - smoothed[first - 1]) / (smoothed[first] - smoothed[first - 1]);
-  const double end =
-      last == n - 1 ? n - 1.0 : last + (smoothed[last] - t) / (smoothed[last] - smoothed[last + 1]);
-  return {begin, end};
+  const ThresholdCrossings c = threshold_crossings(smoothed, threshold, threshold);
+  return {c.begin_bin, c.end_bin};
 }
 
 // The Gaussians fitted over the signal's extent and the pulse's tails beyond it, and their
@@ -205,35 +196,15 @@ Partition partition_energy(const std::vector<double>& signal, Extent extent, dou
   return p;
 }
 
-// rh: counted up from signal end, each bin's energy spread evenly over its part in [begin, end];
-// `total` > 0 is the energy between them.
+// rh: counted up from signal end (cumulative_energy_bins), above the ground; `total` > 0 is the
+// energy between begin and end.
 void relative_heights(const std::vector<double>& energy, double total, Extent extent,
                       const WaveformAxis& axis, WaveformMetrics& m) {
-  const int n = static_cast<int>(energy.size());
-  const double begin = extent.begin, end = extent.end;
-  std::array<double, kRhLevels> position{};
-  int level = 0;
-  double cumulative = 0.0;
-  for (int i = static_cast<int>(std::ceil(end));
-       i >= static_cast<int>(std::floor(begin)) && level < kRhLevels; --i) {
-    if (i < 0 || i >= n) continue;
-    const double lo = std::max(i - 0.5, begin), hi = std::min(i + 0.5, end);  // lo is higher
-    if (hi <= lo) continue;
-    while (level < kRhLevels) {
-      // Slightly short of the exact share, so that round-off cannot push rh100 past the top.
-      const double target = total * (level / 100.0 - 1e-12);
-      if (energy[i] > 0.0 && cumulative + energy[i] >= target) {
-        const double along = std::clamp((target - cumulative) / energy[i], 0.0, 1.0);
-        position[level++] = hi - along * (hi - lo);
-      } else {
-        break;
-      }
-    }
-    cumulative += energy[i];
-  }
-  for (; level < kRhLevels; ++level) position[level] = begin;  // round-off at the top
+  const std::size_t n = energy.size();
+  const std::array<double, kRhLevels> position =
+      cumulative_energy_bins(energy, total, extent.begin, extent.end);
   for (int k = 0; k < kRhLevels; ++k)
-    m.rh_m[k] = axis.elevation_m(position[k], static_cast<std::size_t>(n)) - m.ground_elev_m;
+    m.rh_m[k] = axis.elevation_m(position[k], n) - m.ground_elev_m;
 }
 
 // TR, CR, GR, the waveform index, the centroid, rh and the canopy height from the partition.
@@ -253,7 +224,7 @@ void store_partition(const Partition& p, Extent extent, const WaveformAxis& axis
   m.energy_cr_J = p.canopy * joules_per_bin;
   m.energy_gr_J = p.ground * joules_per_bin;
   m.energy_tr_J = m.energy_cr_J + m.energy_gr_J;
-  if (m.energy_tr_J > 0.0) m.waveform_index = (m.energy_cr_J - m.energy_gr_J) / m.energy_tr_J;
+  m.waveform_index = waveform_index(m.energy_cr_J, m.energy_gr_J);  // NaN (none()) when TR is 0
   if (total > 0.0) relative_heights(p.energy, total, extent, axis, m);
   // Canopy height as the product contract and GLA14 define it: signal begin above the ground.
   // It includes the pulse's own rise to the threshold (about 3 m for a 5 ns pulse over bare
@@ -388,6 +359,66 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
   const double split = m.gaussians.empty() ? extent.begin : split_at_ground(axis, bins, m);
   store_partition(partition_energy(signal, extent, split), extent, axis, m);
   return m;
+}
+
+ThresholdCrossings threshold_crossings(std::span<const double> smoothed, double front_level,
+                                       double back_level) {
+  ThresholdCrossings c;
+  const int n = static_cast<int>(smoothed.size());
+  int first = 0;
+  while (first < n && !(smoothed[first] > front_level)) ++first;
+  int last = n - 1;
+  while (last >= 0 && !(smoothed[last] > back_level)) --last;
+  if (first >= n || last < 0 || last < first) return c;
+  const double f = front_level, b = back_level;
+  c.begin_bin =
+      first == 0 ? 0.0
+                 : first - 1 + (f - smoothed[first - 1]) / (smoothed[first] - smoothed[first - 1]);
+  c.end_bin =
+      last == n - 1 ? n - 1.0 : last + (smoothed[last] - b) / (smoothed[last] - smoothed[last + 1]);
+  c.found = true;
+  return c;
+}
+
+BinEnergy energy_between(std::span<const double> signal, double begin_bin, double end_bin) {
+  const int n = static_cast<int>(signal.size());
+  BinEnergy e;
+  e.energy.assign(n, 0.0);
+  if (!(end_bin > begin_bin)) return e;
+  for (int i = std::max(0, static_cast<int>(std::floor(begin_bin)));
+       i <= static_cast<int>(std::ceil(end_bin)) && i < n; ++i) {
+    e.energy[i] = signal[i] * overlap(i, begin_bin, end_bin);
+    e.total += e.energy[i];
+  }
+  return e;
+}
+
+std::array<double, kRhLevels> cumulative_energy_bins(std::span<const double> energy, double total,
+                                                     double begin_bin, double end_bin) {
+  const int n = static_cast<int>(energy.size());
+  const double begin = begin_bin, end = end_bin;
+  std::array<double, kRhLevels> position{};
+  int level = 0;
+  double cumulative = 0.0;
+  for (int i = static_cast<int>(std::ceil(end));
+       i >= static_cast<int>(std::floor(begin)) && level < kRhLevels; --i) {
+    if (i < 0 || i >= n) continue;
+    const double lo = std::max(i - 0.5, begin), hi = std::min(i + 0.5, end);  // lo is higher
+    if (hi <= lo) continue;
+    while (level < kRhLevels) {
+      // Slightly short of the exact share, so that round-off cannot push rh100 past the top.
+      const double target = total * (level / 100.0 - 1e-12);
+      if (energy[i] > 0.0 && cumulative + energy[i] >= target) {
+        const double along = std::clamp((target - cumulative) / energy[i], 0.0, 1.0);
+        position[level++] = hi - along * (hi - lo);
+      } else {
+        break;
+      }
+    }
+    cumulative += energy[i];
+  }
+  for (; level < kRhLevels; ++level) position[level] = begin;  // round-off at the top
+  return position;
 }
 
 std::vector<double> process_shot_waveforms(ShotRecord& record, double bin_ns,

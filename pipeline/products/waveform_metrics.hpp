@@ -110,6 +110,32 @@ WaveformMetrics process_waveform(std::span<const double> power_W, const Waveform
 SignalQuality signal_quality(std::span<const double> power_W, const WaveformAxis& axis,
                              const WaveformProcessing& settings);
 
+// Where a smoothed waveform crosses its thresholds, as fractional bins: `begin` where it first
+// rises above `front_level`, `end` where it last stands above `back_level`, each interpolated
+// linearly between the bins either side (GLA14's and GEDI L2A's toploc and botloc). `found` is
+// false when no value exceeds either level or the end would come before the begin.
+struct ThresholdCrossings {
+  bool found = false;
+  double begin_bin = 0.0, end_bin = 0.0;
+};
+ThresholdCrossings threshold_crossings(std::span<const double> smoothed, double front_level,
+                                       double back_level);
+
+// The energy of `signal` (noise level removed) between two fractional bins, each bin's value
+// spread evenly over the bin ([i - 0.5, i + 0.5]) and counted for its part inside: per bin, and
+// the total.
+struct BinEnergy {
+  std::vector<double> energy;
+  double total = 0.0;
+};
+BinEnergy energy_between(std::span<const double> signal, double begin_bin, double end_bin);
+
+// Where the energy counted up from `end_bin` reaches k % of `total` (k = 0..100), as fractional
+// bins: GEDI L2A's relative heights before the ground is subtracted. Level 0 is end_bin, level 100
+// begin_bin. `energy` is energy_between's per bin; `total` > 0.
+std::array<double, kRhLevels> cumulative_energy_bins(std::span<const double> energy, double total,
+                                                     double begin_bin, double end_bin);
+
 // Processes every band of record.rx_waveform_W (bins of `bin_ns`, between elev_bin0_m and
 // elev_lastbin_m) and stores the metrics in the record's per-band fields. A band whose waveform
 // is fill (a flagged shot) gets fill, with n_peaks 0. A shot none of whose bands has signal is
