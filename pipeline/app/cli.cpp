@@ -1,4 +1,4 @@
-// Command line: run, sweep, brf, check, voxelize, --help, --version.
+// Command line: run, sweep, brf, check, voxelize, table, retrieve, --help, --version.
 #include "pipeline/app/cli.hpp"
 
 #include <unistd.h>
@@ -21,6 +21,7 @@
 #include "core/excerpt.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/app/reference.hpp"
+#include "pipeline/app/retrieval_cli.hpp"
 #include "pipeline/app/run_outline.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/engine/brf.hpp"
@@ -405,6 +406,7 @@ class Commands {
     add_sweep();
     add_brf();
     add_voxelize();
+    retrieval_ = std::make_unique<RetrievalCommands>(app_);
   }
 
   // Runs the command the line chose.
@@ -415,6 +417,11 @@ class Commands {
           config_error("mpirun",
                        "only `glaswave run` shares its shots among processes; run "
                        "this command without mpirun")));
+    if (retrieval_->chosen())
+      return retrieval_->dispatch(command_line, [&](bool quiet, const char* unit) {
+        auto bar = std::make_shared<Progress>(!quiet, arguments_.progress_interval_s, unit);
+        return [bar](std::int64_t done, std::int64_t total) { (*bar)(done, total); };
+      });
     if (*brf_) return brf(arguments_);
     if (*voxelize_) return voxelize(arguments_, command_line);
     if (*run_) return run(arguments_, command_line);
@@ -592,6 +599,7 @@ class Commands {
   CLI::App* sweep_ = nullptr;
   CLI::App* brf_ = nullptr;
   CLI::App* voxelize_ = nullptr;
+  std::unique_ptr<RetrievalCommands> retrieval_;  // table, retrieve
   std::vector<CLI::Option*> given_;  // options refused when given empty
   static constexpr std::uint64_t max_threads = 65536;
 };
