@@ -4,7 +4,7 @@
 // the track. The transport keys rays by (seed, shot, ray); the detector bins by (seed, shot,
 // band and bin); the photon-counting receiver its events by (seed, shot, beam and bin); stands
 // tiles by (seed, tile, kind of canopy); roughness lattice nodes by (seed, node, zone); the sun's
-// photons of `brf` by (seed, batch, photon).
+// photons of `brf` by (seed, batch, photon); the forward table's design by (seed, parameter).
 #pragma once
 
 #include <cstdint>
@@ -31,6 +31,7 @@ enum class RandomPurpose : std::uint64_t {
   sun = 0x5a7b1e55f0c0ffeeULL,          // `brf`: photons traced from the sun
   beam_points = 0xb3a9501b01c0ffeeULL,  // the transport's scrambling of a shot's Sobol' points
   photons = 0x9407025c0a7e1a5eULL,      // photon counting: a shot's photon events by (beam, bin)
+  table_design = 0x7ab1e5d0e5161c0dULL,  // `glaswave table`: the design's shift by (parameter)
 };
 
 // Two signed indices (a 2-D grid's row and column, each within +-2^31) as one key.

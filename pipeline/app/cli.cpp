@@ -1,4 +1,4 @@
-// Command line: run, sweep, brf, check, voxelize, --help, --version.
+// Command line: run, sweep, brf, check, voxelize, table, retrieve, --help, --version.
 #include "pipeline/app/cli.hpp"
 
 #include <sys/stat.h>
@@ -25,6 +25,7 @@
 #include "core/input_file.hpp"
 #include "pipeline/app/plots.hpp"
 #include "pipeline/app/reference.hpp"
+#include "pipeline/app/retrieval_cli.hpp"
 #include "pipeline/app/run_outline.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/engine/brf.hpp"
@@ -447,6 +448,7 @@ class Commands {
     add_sweep();
     add_brf();
     add_voxelize();
+    retrieval_ = std::make_unique<RetrievalCommands>(app_);
   }
 
   // Runs the command the line chose.
@@ -457,6 +459,11 @@ class Commands {
           config_error("mpirun",
                        "only `glaswave run` shares its shots among processes; run "
                        "this command without mpirun")));
+    if (retrieval_->chosen())
+      return retrieval_->dispatch(command_line, [&](bool quiet, const char* unit) {
+        auto bar = std::make_shared<Progress>(!quiet, arguments_.progress_interval_s, unit);
+        return [bar](std::int64_t done, std::int64_t total) { (*bar)(done, total); };
+      });
     if (*brf_) return brf(arguments_);
     if (*voxelize_) return voxelize(arguments_, command_line);
     if (*run_) return run(arguments_, command_line);
@@ -635,6 +642,7 @@ class Commands {
   CLI::App* sweep_ = nullptr;
   CLI::App* brf_ = nullptr;
   CLI::App* voxelize_ = nullptr;
+  std::unique_ptr<RetrievalCommands> retrieval_;  // table, retrieve
   std::vector<CLI::Option*> given_;  // options refused when given empty
   static constexpr std::uint64_t max_threads = 65536;
 };

@@ -568,6 +568,59 @@ BrfSettings read_brf(JsonReader& root) {
   return b;
 }
 
+TableSettings read_table(JsonReader& root) {
+  TableSettings t;
+  JsonReader r = root.object("table");
+  // An object of at least one entry, or absent.
+  const auto entries_of = [&](const std::string& key) -> const json* {
+    const json& value = r.raw(key);
+    if (value.is_null()) return nullptr;
+    if (!value.is_object() || value.empty())
+      r.fail(key, "must be an object of at least one key, got " + describe(value));
+    return &value;
+  };
+  const auto read_vary = [&] {
+    const json* vary = entries_of("vary");
+    if (!vary) return;
+    for (const auto& [name, range] : vary->items()) {
+      const std::string place = json_pointer_child(r.place("vary"), name);
+      if (!range.is_array() || range.size() != 2)
+        throw config_error(place, "must be [low, high], got " + describe(range));
+      const double low = read_number(place + "/0", range[0], any_finite());
+      const double high = read_number(place + "/1", range[1], any_finite());
+      if (!(low <= high)) throw config_error(place, "must be [low, high] with low <= high");
+      t.vary.push_back({name, {low, high}});
+      r.resolved()["vary"][name] = range;
+    }
+  };
+  const auto read_values = [&] {
+    const json* values = entries_of("values");
+    if (!values) return;
+    for (const auto& [name, list] : values->items()) {
+      const std::string place = json_pointer_child(r.place("values"), name);
+      if (!list.is_array() || list.empty())
+        throw config_error(place, "must be an array of at least one value, got " + describe(list));
+      std::vector<std::string> texts;
+      for (const json& value : list) {
+        if (!value.is_string() || value.get<std::string>().empty())
+          throw config_error(place, "each value must be a non-empty string (read as --set reads "
+                                    "VALUE), got " +
+                                        describe(value));
+        texts.push_back(value.get<std::string>());
+      }
+      t.values.push_back({name, std::move(texts)});
+      r.resolved()["values"][name] = list;
+    }
+  };
+  read_fields(r, {{"vary", read_vary}, {"values", read_values}}, t);
+  r.finish();
+  for (const auto& [name, range] : t.vary)
+    for (const auto& [other, list] : t.values)
+      if (name == other)
+        r.fail("values", "`" + name + "` is both varied over a range and given values");
+  return t;
+}
+
 }  // namespace
 
 ShotSize shot_size(const Config& c) {
@@ -638,6 +691,7 @@ Config parse_config(const json& document) {
   c.output = read_output(root, c.warnings);
   c.detector = read_detector(root);
   c.brf = read_brf(root);
+  c.table = read_table(root);
   root.finish();
   if (!terrain_given)
     root.fail("terrain", "is required: give \"dem\", \"plane\" or \"point_cloud\"");

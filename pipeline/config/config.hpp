@@ -2,6 +2,7 @@
 // ranges checked. Every error names its JSON path; the transport never sees JSON.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -81,6 +82,21 @@ struct BrfSettings {
   double tile_half_size_m() const { return 0.5 * pixels() * image_resolution_m; }
 };
 
+// Settings of `glaswave table` (PRODUCT.md section 11): the forward table the `rt` retrieval
+// searches. Each entry is the configuration with the varied keys set as `--set` would set them.
+struct TableSettings {
+  // Keys (dotted paths, as --set names them) sampled over [low, high] by a seeded
+  // low-discrepancy design, in the order given.
+  std::vector<std::pair<std::string, std::array<double, 2>>> vary;
+  // Keys and the values they take (each read as --set reads VALUE: JSON when it parses, else a
+  // string), chosen by the design's coordinate of their own.
+  std::vector<std::pair<std::string, std::vector<std::string>>> values;
+  std::int64_t entries = 1000;
+  // The track's first shots simulated for each entry: their mean is the entry's waveform and
+  // their scatter the table's Monte Carlo noise.
+  std::int64_t shots_per_entry = 2;
+};
+
 // The sensor preset that gives the sensor's defaults.
 inline constexpr const char* default_sensor_preset = "north2010";
 
@@ -120,6 +136,7 @@ struct Config {
   OutputSettings output;
   DetectorSettings detector;
   BrfSettings brf;
+  TableSettings table;
   // The configuration as used, presets expanded and defaults filled in; written into products.
   nlohmann::json resolved;
   // What the user should know about the configuration itself (an old key's name), one line each.

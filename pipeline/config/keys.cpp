@@ -888,6 +888,27 @@ Key brf_keys() {
                 "8192 of them (see Limits)")});
 }
 
+Key table_keys() {
+  const Fields<TableSettings> t;
+  using S = TableSettings;
+  return object(
+      "table",
+      "`glaswave table`: the forward table of the `rt` retrieval (docs/retrieval.md); ignored "
+      "by `run`",
+      {map("vary",
+           "keys (dotted paths, as `--set` names them) and the range [low, high] each is sampled "
+           "over by a seeded low-discrepancy (Halton) design",
+           number_pair("NAME", {0.0, 1.0}, any_finite(), "", "the key's range")),
+       map("values",
+           "keys and the values each takes, chosen evenly by the design (each read as `--set` "
+           "reads VALUE: JSON when it parses, else a string)",
+           string_array("NAME", "the key's values")),
+       t.integer("entries", &S::entries, 1, 1000000, "", "entries of the table"),
+       t.integer("shots_per_entry", &S::shots_per_entry, 1, 64, "",
+                 "the track's first shots simulated for each entry: their mean is its waveform, "
+                 "their scatter the table's Monte Carlo noise (at least 2 to measure it)")});
+}
+
 }  // namespace
 
 const Key& configuration_keys() {
@@ -906,7 +927,7 @@ const Key& configuration_keys() {
                           "random seed: a shot's waveform depends only on the configuration, the "
                           "seed and its shot number"),
          sensor_keys(), simulation_keys(), terrain_keys(), canopy_keys(), track_keys(),
-         output_keys(), detector_keys(), brf_keys()});
+         output_keys(), detector_keys(), brf_keys(), table_keys()});
   }();
   return root;
 }

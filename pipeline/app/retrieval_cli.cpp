@@ -1,0 +1,148 @@
+// `glaswave table` and `glaswave retrieve`: their options, the summary they print.
+#include "pipeline/app/retrieval_cli.hpp"
+
+#include <charconv>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "core/error.hpp"
+#include "core/excerpt.hpp"
+#include "pipeline/config/config.hpp"
+#include "pipeline/retrieval/forward_table.hpp"
+#include "pipeline/retrieval/retrieve.hpp"
+
+namespace glaswave {
+
+namespace {
+
+std::optional<std::int64_t> decimal(const std::string& text, const char* option,
+                                    const std::string& usage) {
+  if (text.empty()) return std::nullopt;
+  std::int64_t value = -1;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.find_first_not_of("0123456789") != std::string::npos || error != std::errc() ||
+      end != text.data() + text.size())
+    throw config_error(option, usage);
+  return value;
+}
+
+int threads_of(const std::string& text) {
+  if (text.empty()) return 0;
+  const auto value =
+      decimal(text, "--threads", "must be an integer in [0, 65536], got " + quoted_excerpt(text));
+  if (*value > 65536)
+    throw config_error("--threads", "must be an integer in [0, 65536], got " + excerpt(text));
+  return static_cast<int>(*value);
+}
+
+}  // namespace
+
+RetrievalCommands::RetrievalCommands(CLI::App& app) {
+  table_ = app.add_subcommand("table", "simulate the forward table the `rt` retrieval searches");
+  table_->footer(
+      "Example:\n"
+      "  glaswave table share/studies/retrieval_table.json --out gedi_table.nc\n"
+      "The configuration's `table` section names the varied keys and the entries. Exit status: "
+      "0 done, 2 bad command line or configuration, 3 unusable input data, 4 failure while "
+      "running. Manual: docs/retrieval.md.");
+  table_->add_option("CONFIG", config_file, "the configuration, with its `table` section")
+      ->type_name("CONFIG.json")
+      ->required();
+  table_->add_option("--out", out, "the table to write (NetCDF)")->type_name("TABLE.nc")->required();
+  table_->add_option("--set", overrides, "override a configuration key, as `run --set`")
+      ->type_name("KEY=VALUE");
+  table_->add_option("--threads", threads_text, "threads; 0 (the default) uses every core")
+      ->type_name("N");
+  table_->add_flag("--quiet", quiet, "no progress bar");
+
+  retrieve_ = app.add_subcommand(
+      "retrieve", "canopy height, cover, PAI and ground from measured shots, by every method");
+  retrieve_->footer(
+      "Example:\n"
+      "  glaswave retrieve out/pass/shots.nc --table gedi_table.nc --out out/pass-retrieval\n"
+      "Writes DIR/retrieval.nc: per shot and method, canopy_height, cover, pai, "
+      "ground_elevation and rhov_rhog, rt's posterior sd and 5-95 % bounds and rt_flag, and the "
+      "truth of simulated input. Exit status as `run`. Manual: docs/retrieval.md.");
+  retrieve_->add_option("INPUT", inputs, "glaswave's shots.nc")->type_name("INPUT")->required();
+  retrieve_->add_option("--out", out, "output directory (default: the first input's)")
+      ->type_name("DIR");
+  retrieve_->add_option("--table", table_file, "the forward table (`glaswave table`), for rt")
+      ->type_name("TABLE.nc");
+  retrieve_
+      ->add_option("--methods", methods,
+                   "methods, comma-separated, among gedi_l2a, gedi_l2b, wi, rt (default: every "
+                   "one the input allows; rt with --table)")
+      ->type_name("NAME,...");
+  retrieve_->add_option("--shots", shots, "shot numbers A to B-1 only")->type_name("A:B");
+  retrieve_->add_option("--threads", threads_text, "threads; 0 (the default) uses every core")
+      ->type_name("N");
+  retrieve_->add_flag("--quiet", quiet, "no progress bar");
+  retrieve_->add_flag("--json", json, "print the summary as one JSON object");
+}
+
+bool RetrievalCommands::chosen() const { return *table_ || *retrieve_; }
+
+int RetrievalCommands::dispatch(const std::string& command_line, const ProgressFactory& progress) {
+  return *table_ ? table(command_line, progress) : retrieve(command_line, progress);
+}
+
+int RetrievalCommands::table(const std::string& command_line, const ProgressFactory& progress) {
+  const std::filesystem::path file(config_file);
+  nlohmann::json document = read_json_file(file);
+  for (const std::string& assignment : overrides) apply_override(document, assignment);
+  TableRequest request{document, file.parent_path(), threads_of(threads_text)};
+  if (std::filesystem::exists(out))
+    throw config_error(out, "exists already: give another --out");
+  const auto started = std::chrono::steady_clock::now();
+  const ForwardTable table = build_table(request, progress(quiet, "entries"));
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  write_table(table, out, command_line);
+  std::printf("glaswave: %zu entries in %.2f s (%.3g s an entry), %zu bins of %zu band(s); "
+              "Monte Carlo sd %.3g of the peak; %s\n",
+              table.entries(), wall_s, wall_s / static_cast<double>(table.entries()),
+              table.height_m.size(), table.bands(), table.mc_relative_sd, out.c_str());
+  return 0;
+}
+
+int RetrievalCommands::retrieve(const std::string& command_line, const ProgressFactory& progress) {
+  RetrieveRequest request;
+  for (const std::string& input : inputs) request.inputs.emplace_back(input);
+  request.out_dir = out;
+  if (!table_file.empty()) request.table = table_file;
+  std::size_t start = 0;
+  while (!methods.empty() && start <= methods.size()) {
+    const std::size_t comma = methods.find(',', start);
+    request.methods.push_back(methods.substr(start, comma == std::string::npos ? comma : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (!shots.empty()) {
+    const std::string usage = "expected A:B with shot numbers, got " + quoted_excerpt(shots);
+    const auto colon = shots.find(':');
+    if (colon == std::string::npos) throw config_error("--shots", usage);
+    request.first_shot = decimal(shots.substr(0, colon), "--shots", usage);
+    request.last_shot = decimal(shots.substr(colon + 1), "--shots", usage);
+  }
+  request.threads = threads_of(threads_text);
+  request.command_line = command_line;
+  const RetrieveSummary summary = run_retrieval(request, progress(quiet || json, "shots"));
+  const double rate = summary.wall_s > 0.0 ? summary.shots / summary.wall_s : 0.0;
+  std::string names;
+  for (const std::string& m : summary.methods) names += (names.empty() ? "" : ",") + m;
+  if (json) {
+    nlohmann::json j = {{"shots", summary.shots},           {"methods", summary.methods},
+                        {"rt_flagged", summary.rt_flagged}, {"wall_s", summary.wall_s},
+                        {"shots_per_s", rate},              {"product", summary.product.string()}};
+    std::printf("%s\n", j.dump().c_str());
+  } else {
+    std::printf("glaswave: %lld shots retrieved by %s in %.2f s (%.0f shots/s); %lld flagged by "
+                "rt; %s\n",
+                static_cast<long long>(summary.shots), names.c_str(), summary.wall_s, rate,
+                static_cast<long long>(summary.rt_flagged), summary.product.c_str());
+  }
+  return 0;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,436 @@
+// `glaswave retrieve`: shots.nc read, the methods run on every shot in parallel, retrieval.nc
+// written under the names PRODUCT.md section 11 gives.
+#include "pipeline/retrieval/retrieve.hpp"
+
+#include <netcdf.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "pipeline/products/canopy_indices.hpp"
+#include "pipeline/products/gedi_l2a_groups.hpp"
+#include "pipeline/products/gedi_l2b_algorithm.hpp"
+#include "pipeline/retrieval/netcdf_file.hpp"
+
+namespace glaswave {
+
+namespace {
+
+using nlohmann::json;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The noise of a waveform with a detector: mean and sd of the quieter of its two ends (15 % of
+// the bins each, as the products' waveform processing takes it).
+std::pair<double, double> end_noise(const std::vector<double>& w) {
+  const std::size_t n = std::max<std::size_t>(2, w.size() * 15 / 100);
+  std::pair<double, double> best{kNaN, kNaN};
+  for (int end = 0; end < 2; ++end) {
+    double sum = 0.0, sum2 = 0.0;
+    for (std::size_t i = 0; i < n && i < w.size(); ++i) {
+      const double x = end == 0 ? w[i] : w[w.size() - 1 - i];
+      sum += x;
+      sum2 += x * x;
+    }
+    const double mean = sum / n;
+    const double sd = std::sqrt(std::max(0.0, sum2 / n - mean * mean));
+    if (std::isnan(best.first) || mean < best.first) best = {mean, sd};
+  }
+  return best;
+}
+
+bool detector_enabled(const json& config) {
+  const auto d = config.find("detector");
+  if (d == config.end() || !d->is_object()) return false;
+  const auto e = d->find("enabled");
+  return e != d->end() && e->is_boolean() && e->get<bool>();
+}
+
+double config_number(const json& config, const char* section, const char* key,
+                     const std::string& file) {
+  const auto s = config.find(section);
+  if (s != config.end() && s->is_object()) {
+    const auto k = s->find(key);
+    if (k != s->end() && k->is_number()) return k->get<double>();
+  }
+  throw input_error(file, std::string("its `config` attribute has no ") + section + "." + key);
+}
+
+}  // namespace
+
+MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::int64_t> first,
+                         std::optional<std::int64_t> last) {
+  const NetcdfFile nc = NetcdfFile::open(file);
+  const std::string place = file.string();
+  const std::optional<std::string> config_text = nc.text_attribute("", "config");
+  if (!config_text || !nc.has_variable("rx_waveform"))
+    throw input_error(place, "not a glaswave shots.nc (no `config` attribute or `rx_waveform`); "
+                             "GEDI L1B, GLAH01 and ATL03 granules are not read yet");
+  json config;
+  try {
+    config = json::parse(*config_text);
+  } catch (const json::exception&) {
+    throw input_error(place, "its `config` attribute is not JSON");
+  }
+  MeasuredShots out;
+  out.bin_ns = config_number(config, "sensor", "bin_ns", place);
+  out.pulse_sigma_ns = config_number(config, "sensor", "pulse_sigma_ns", place);
+  out.band_names = nc.strings("band_name");
+  const bool noisy = detector_enabled(config);
+  const std::vector<std::size_t> shape = nc.shape("rx_waveform");
+  if (shape.size() != 3 || shape[1] != out.band_names.size() || shape[2] < 2)
+    throw input_error(place, "`rx_waveform` must be (shot, band, bin) with at least 2 bins");
+  const std::size_t shots = shape[0], bands = shape[1], bins = shape[2];
+  const std::vector<std::int64_t> numbers = nc.integers("shot_number");
+  if (numbers.size() != shots) throw input_error(place, "`shot_number` must be (shot)");
+  std::size_t begin = 0, end = shots;
+  while (begin < shots && first && numbers[begin] < *first) ++begin;
+  while (end > begin && last && numbers[end - 1] >= *last) --end;
+  for (std::size_t i = begin; i < end; ++i)
+    if ((first && numbers[i] < *first) || (last && numbers[i] >= *last))
+      throw input_error(place, "its shot numbers are not in increasing order");
+  const std::size_t count = end - begin;
+  const auto per_shot = [&](const char* name) {
+    if (!nc.has_variable(name)) return std::vector<double>(count, kNaN);
+    std::vector<double> v = nc.doubles(name, {begin}, {count});
+    return v;
+  };
+  const auto per_band = [&](const char* name) {
+    if (!nc.has_variable(name)) return std::vector<double>(count * bands, kNaN);
+    return nc.doubles(name, {begin, 0}, {count, bands});
+  };
+  const std::vector<double> lat = per_shot("lat"), lon = per_shot("lon"), elev = per_shot("elev"),
+                            off_nadir = per_shot("off_nadir_deg"), bin0 = per_shot("elev_bin0"),
+                            lastbin = per_shot("elev_lastbin"), flag = per_shot("quality_flag"),
+                            beam = per_shot("beam"), cover = per_shot("cover_true"),
+                            pai = per_shot("pai_true"), height = per_shot("canopy_height_true");
+  const std::vector<double> canopy = per_band("rx_energy_canopy"), ground = per_band("rx_energy_ground");
+  const std::vector<double> waveforms =
+      count > 0 ? nc.doubles("rx_waveform", {begin, 0, 0}, {count, bands, bins}) : std::vector<double>{};
+  out.simulated = true;
+  out.shots.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    MeasuredShot& s = out.shots[i];
+    s.shot_number = numbers[begin + i];
+    s.beam = std::isfinite(beam[i]) ? static_cast<int>(beam[i]) : 255;
+    s.lat_deg = lat[i];
+    s.lon_deg = lon[i];
+    s.off_nadir_deg = std::isfinite(off_nadir[i]) ? off_nadir[i] : 0.0;
+    s.axis = {out.bin_ns, bin0[i], lastbin[i]};
+    s.good = flag[i] == 1.0 && std::isfinite(bin0[i]) && std::isfinite(lastbin[i]);
+    for (std::size_t k = 0; k < bands; ++k) {
+      const auto from = waveforms.begin() + static_cast<std::ptrdiff_t>((i * bands + k) * bins);
+      s.waveform_W.emplace_back(from, from + static_cast<std::ptrdiff_t>(bins));
+      for (double x : s.waveform_W.back())
+        if (!std::isfinite(x)) s.good = false;
+      const std::pair<double, double> noise =
+          noisy ? end_noise(s.waveform_W.back()) : std::pair<double, double>{0.0, 0.0};
+      s.noise_mean_W.push_back(noise.first);
+      s.noise_sd_W.push_back(noise.second);
+    }
+    s.canopy_height_true_m = height[i];
+    s.cover_true = cover[i];
+    s.pai_true = pai[i];
+    s.ground_elevation_true_m = elev[i];
+    s.rhov_rhog_true = implied_rhov_rhog(canopy[i * bands], ground[i * bands], cover[i]);
+  }
+  return out;
+}
+
+namespace {
+
+struct ShotResults {
+  std::map<std::string, MethodEstimates> estimates;
+  std::array<double, kL2bProfileBins> pavd_z{};
+  RtResult rt;
+};
+
+constexpr MethodEstimates kNone{kNaN, kNaN, kNaN, kNaN, kNaN};
+
+ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
+                          const std::vector<std::string>& methods, const RtInversion* rt) {
+  ShotResults r;
+  r.pavd_z.fill(kNaN);
+  r.rt = RtResult::none();
+  for (const std::string& m : methods) r.estimates[m] = kNone;
+  if (!shot.good) return r;
+  const std::vector<double>& w = shot.waveform_W[0];
+  const double peak = *std::max_element(w.begin(), w.end()) - shot.noise_mean_W[0];
+  // A waveform without a detector has no noise: L2A's thresholds (multiples of sigma) then stand
+  // on a floor of 1 % of the peak (its 6 sigma back threshold 6 %): lower, the lone rays of a
+  // Monte Carlo shot of 10^3 rays scattered far below the ground (2 % of the peak at 20 m in
+  // RetrieveCli's layers) were taken for the ground.
+  const double sigma = shot.noise_sd_W[0] > 0.0 ? shot.noise_sd_W[0] : 0.01 * peak;
+  const L2aResult l2a = process_l2a({w, shot.axis, shot.noise_mean_W[0], sigma});
+  const L2aGroupResult& selected = l2a.selected();
+  const double zenith_rad = shot.off_nadir_deg * std::numbers::pi / 180.0;
+  const bool want_l2b = r.estimates.count("gedi_l2b") || r.estimates.count("wi");
+  GediL2bResult l2b = GediL2bResult::none({});
+  if (want_l2b && selected.has_ground)
+    l2b = gedi_l2b(l2b_input(w, shot.axis, shot.noise_mean_W[0], selected, zenith_rad));
+  if (r.estimates.count("gedi_l2a") && selected.has_ground)
+    r.estimates["gedi_l2a"] = {selected.rh_m[98], kNaN, kNaN, selected.elev_lowestmode_m, kNaN};
+  if (r.estimates.count("gedi_l2b") && l2b.algorithmrun_flag) {
+    r.estimates["gedi_l2b"] = {kNaN, l2b.cover, l2b.pai, selected.elev_lowestmode_m,
+                               l2b.rhov / l2b.rhog};
+    std::copy(l2b.pavd_z.begin(), l2b.pavd_z.end(), r.pavd_z.begin());
+  }
+  if (r.estimates.count("wi") && l2b.algorithmrun_flag) {
+    // The seed's index on L2B's split of the return: (1 + WI) / 2 = Rv / (Rv + Rg) is the cover
+    // when canopy and ground reflect alike (rhov/rhog = 1), and its PAI L2B's formula's.
+    const double wi = waveform_index(l2b.rv, l2b.rg);
+    const double cover = 0.5 * (1.0 + wi);
+    r.estimates["wi"] = {kNaN, cover, -std::log(1.0 - cover) * std::cos(zenith_rad) / 0.5,
+                         kNaN, 1.0};
+  }
+  if (rt) {
+    RtShot input;
+    for (const auto& band : shot.waveform_W) input.waveform.emplace_back(band);
+    input.axis = shot.axis;
+    input.noise_mean_W = shot.noise_mean_W;
+    input.noise_sd_W = shot.noise_sd_W;
+    // The first guess of the ground: L2A's default group a1 (6 sigma back threshold), not the
+    // selected one, which takes the lowest mode any group finds: a5's 2 sigma reaches lone
+    // multiply scattered rays far below the ground in a noise-free Monte Carlo waveform.
+    const L2aGroupResult& a1 = l2a.groups[0];
+    input.ground_guess_m = a1.has_ground ? a1.elev_lowestmode_m
+                           : selected.has_ground ? selected.elev_lowestmode_m
+                                                 : kNaN;
+    r.rt = rt->invert(input);
+    r.estimates["rt"] = {r.rt.canopy_height_m.mean, r.rt.cover.mean, r.rt.pai.mean,
+                         r.rt.ground_elevation_m.mean, r.rt.rhov_rhog.mean};
+  }
+  (void)pulse_sigma_ns;
+  return r;
+}
+
+const char* const kVariables[] = {"canopy_height", "cover", "pai", "ground_elevation",
+                                   "rhov_rhog"};
+const char* const kUnits[] = {"m", "1", "1", "m", "1"};
+
+double variable_of(const MethodEstimates& e, int v) {
+  switch (v) {
+    case 0: return e.canopy_height_m;
+    case 1: return e.cover;
+    case 2: return e.pai;
+    case 3: return e.ground_elevation_m;
+    default: return e.rhov_rhog;
+  }
+}
+
+RtStatistic statistic_of(const RtResult& r, int v) {
+  switch (v) {
+    case 0: return r.canopy_height_m;
+    case 1: return r.cover;
+    case 2: return r.pai;
+    case 3: return r.ground_elevation_m;
+    default: return r.rhov_rhog;
+  }
+}
+
+void write_product(const std::filesystem::path& path, const MeasuredShots& input,
+                   const std::vector<ShotResults>& results, const std::vector<std::string>& methods,
+                   const RetrieveRequest& request) {
+  NetcdfFile nc = NetcdfFile::create(path);
+  const std::size_t shots = input.shots.size();
+  nc.define_dimension("shot", shots);
+  nc.define_dimension("height", kL2bProfileBins);
+  nc.put_text("", "Conventions", "CF-1.10");
+  nc.put_text("", "title", "glaswave retrievals: each method's estimates per shot");
+  nc.put_text("", "source", std::string("glaswave ") + GLASWAVE_VERSION);
+  nc.put_text("", "history", request.command_line);
+  std::string joined;
+  for (const std::string& m : methods) joined += (joined.empty() ? "" : ",") + m;
+  nc.put_text("", "methods", joined);
+  std::string inputs;
+  for (const auto& i : request.inputs) inputs += (inputs.empty() ? "" : ",") + i.string();
+  nc.put_text("", "inputs", inputs);
+  if (request.table) nc.put_text("", "rt_table", request.table->string());
+  nc.define_variable("shot_number", NC_INT64, {"shot"}, "", "the shot number");
+  nc.define_variable("beam", NC_UBYTE, {"shot"}, "", "GEDI beam number (255: none)");
+  nc.define_variable("lat", NC_DOUBLE, {"shot"}, "degrees_north", "footprint centre latitude");
+  nc.put_text("lat", "standard_name", "latitude");
+  nc.define_variable("lon", NC_DOUBLE, {"shot"}, "degrees_east", "footprint centre longitude");
+  nc.put_text("lon", "standard_name", "longitude");
+  nc.define_variable("height", NC_DOUBLE, {"height"}, "m",
+                     "lower edge of the 5 m height bin above the ground");
+  const std::string coordinates = "lat lon";
+  for (const std::string& m : methods) {
+    for (int v = 0; v < 5; ++v) {
+      const std::string name = std::string(kVariables[v]) + "_" + m;
+      nc.define_variable(name, NC_DOUBLE, {"shot"}, kUnits[v],
+                         std::string(kVariables[v]) + " retrieved by " + m);
+      nc.put_text(name, "coordinates", coordinates);
+      if (m != "rt") continue;
+      for (const char* suffix : {"_rt_sd", "_rt_p05", "_rt_p95"}) {
+        const std::string extra = std::string(kVariables[v]) + suffix;
+        nc.define_variable(extra, NC_DOUBLE, {"shot"}, kUnits[v],
+                           std::string(kVariables[v]) + " posterior " + (suffix + 4));
+        nc.put_text(extra, "coordinates", coordinates);
+      }
+    }
+  }
+  const bool l2b = std::find(methods.begin(), methods.end(), "gedi_l2b") != methods.end();
+  const bool rt = std::find(methods.begin(), methods.end(), "rt") != methods.end();
+  if (l2b)
+    nc.define_variable("pavd_z_gedi_l2b", NC_DOUBLE, {"shot", "height"}, "m^2 m^-3",
+                       "plant area volume density per 5 m bin (GEDI L2B)");
+  if (rt) {
+    nc.define_variable("rt_flag", NC_UBYTE, {"shot"}, "", "what the rt table cannot explain");
+    nc.put_bytes("rt_flag", "flag_masks", {rt_misfit, rt_table_edge, rt_ground_search_edge, rt_not_run});
+    nc.put_text("rt_flag", "flag_meanings",
+                "misfit table_edge ground_search_edge not_run");
+    nc.define_variable("rt_chi2_per_dof", NC_DOUBLE, {"shot"}, "1",
+                       "best chi-squared per degree of freedom of the rt fit");
+  }
+  if (input.simulated) {
+    for (int v = 0; v < 5; ++v)
+      nc.define_variable(std::string(kVariables[v]) + "_true", NC_DOUBLE, {"shot"}, kUnits[v],
+                         std::string(kVariables[v]) + ": the simulation's truth");
+  }
+  nc.end_define();
+  std::vector<std::int64_t> numbers(shots);
+  std::vector<std::uint8_t> beams(shots);
+  std::vector<double> lat(shots), lon(shots), heights(kL2bProfileBins);
+  for (std::size_t i = 0; i < shots; ++i) {
+    numbers[i] = input.shots[i].shot_number;
+    beams[i] = static_cast<std::uint8_t>(std::clamp(input.shots[i].beam, 0, 255));
+    lat[i] = input.shots[i].lat_deg;
+    lon[i] = input.shots[i].lon_deg;
+  }
+  for (int k = 0; k < kL2bProfileBins; ++k) heights[k] = k * kL2bDz_m;
+  nc.write("shot_number", numbers);
+  nc.write("beam", beams);
+  nc.write("lat", lat);
+  nc.write("lon", lon);
+  nc.write("height", heights);
+  std::vector<double> column(shots);
+  for (const std::string& m : methods) {
+    for (int v = 0; v < 5; ++v) {
+      for (std::size_t i = 0; i < shots; ++i) column[i] = variable_of(results[i].estimates.at(m), v);
+      nc.write(std::string(kVariables[v]) + "_" + m, column);
+      if (m != "rt") continue;
+      for (int part = 0; part < 3; ++part) {
+        for (std::size_t i = 0; i < shots; ++i) {
+          const RtStatistic s = statistic_of(results[i].rt, v);
+          column[i] = part == 0 ? s.sd : part == 1 ? s.p05 : s.p95;
+        }
+        nc.write(std::string(kVariables[v]) + (part == 0 ? "_rt_sd" : part == 1 ? "_rt_p05" : "_rt_p95"),
+                 column);
+      }
+    }
+  }
+  if (l2b) {
+    std::vector<double> pavd;
+    for (const ShotResults& r : results) pavd.insert(pavd.end(), r.pavd_z.begin(), r.pavd_z.end());
+    nc.write("pavd_z_gedi_l2b", pavd);
+  }
+  if (rt) {
+    std::vector<std::uint8_t> flags(shots);
+    for (std::size_t i = 0; i < shots; ++i) {
+      flags[i] = results[i].rt.flag;
+      column[i] = results[i].rt.chi2_min / results[i].rt.dof;
+    }
+    nc.write("rt_flag", flags);
+    nc.write("rt_chi2_per_dof", column);
+  }
+  if (input.simulated) {
+    for (int v = 0; v < 5; ++v) {
+      for (std::size_t i = 0; i < shots; ++i) {
+        const MeasuredShot& s = input.shots[i];
+        const double values[] = {s.canopy_height_true_m, s.cover_true, s.pai_true,
+                                 s.ground_elevation_true_m, s.rhov_rhog_true};
+        column[i] = values[v];
+      }
+      nc.write(std::string(kVariables[v]) + "_true", column);
+    }
+  }
+  nc.commit();
+}
+
+}  // namespace
+
+RetrieveSummary run_retrieval(const RetrieveRequest& request,
+                              const std::function<void(std::int64_t, std::int64_t)>& progress) {
+  if (request.inputs.empty()) throw config_error("INPUT", "give at least one shots.nc");
+  std::vector<std::string> methods = request.methods;
+  if (methods.empty()) {
+    methods = {"gedi_l2a", "gedi_l2b", "wi"};
+    if (request.table) methods.push_back("rt");
+  }
+  for (const std::string& m : methods) {
+    if (std::find(kRetrievalMethods.begin(), kRetrievalMethods.end(), m) == kRetrievalMethods.end())
+      throw config_error("--methods", "unknown method \"" + m +
+                                          "\": choose among gedi_l2a, gedi_l2b, wi, rt");
+    if (std::count(methods.begin(), methods.end(), m) > 1)
+      throw config_error("--methods", "\"" + m + "\" is given twice");
+  }
+  const bool want_rt = std::find(methods.begin(), methods.end(), "rt") != methods.end();
+  if (want_rt && !request.table)
+    throw config_error("--methods", "rt needs --table TABLE.nc (made by `glaswave table`)");
+  const std::filesystem::path out_dir =
+      request.out_dir.empty() ? request.inputs.front().parent_path() : request.out_dir;
+  const std::filesystem::path product = (out_dir.empty() ? "." : out_dir) / "retrieval.nc";
+  if (std::filesystem::exists(product))
+    throw config_error(product.string(), "exists already: give another --out");
+
+  MeasuredShots input;
+  for (const std::filesystem::path& file : request.inputs) {
+    MeasuredShots more = read_shots(file, request.first_shot, request.last_shot);
+    if (input.band_names.empty() && input.shots.empty()) {
+      input = std::move(more);
+      continue;
+    }
+    if (more.band_names != input.band_names || more.bin_ns != input.bin_ns)
+      throw input_error(file.string(), "its bands or bins are not those of " +
+                                           request.inputs.front().string());
+    for (MeasuredShot& s : more.shots) input.shots.push_back(std::move(s));
+  }
+  std::optional<ForwardTable> table;
+  std::optional<RtInversion> rt;
+  if (want_rt) {
+    table = read_table(*request.table);
+    rt.emplace(*table, request.rt);
+    rt->check_compatible(input.band_names, input.bin_ns, request.table->string());
+  }
+  std::filesystem::create_directories(out_dir.empty() ? "." : out_dir);
+
+  const std::int64_t shots = static_cast<std::int64_t>(input.shots.size());
+  std::vector<ShotResults> results(input.shots.size());
+  std::atomic<std::int64_t> done{0};
+  std::mutex progress_mutex;
+  const auto started = std::chrono::steady_clock::now();
+  const int cores = tbb::this_task_arena::max_concurrency();
+  tbb::task_arena arena(request.threads > 0 ? std::min(request.threads, cores) : cores);
+  arena.execute([&] {
+    tbb::parallel_for(std::int64_t{0}, shots, [&](std::int64_t i) {
+      results[i] = retrieve_shot(input.shots[i], input.pulse_sigma_ns, methods,
+                                 rt ? &*rt : nullptr);
+      const std::int64_t finished = ++done;
+      if (progress && finished % 64 == 0) {
+        std::lock_guard lock(progress_mutex);
+        progress(finished, shots);
+      }
+    });
+  });
+  RetrieveSummary summary;
+  summary.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  write_product(product, input, results, methods, request);
+  summary.shots = shots;
+  summary.methods = methods;
+  summary.product = product;
+  for (const ShotResults& r : results) summary.rt_flagged += want_rt && r.rt.flag != 0;
+  return summary;
+}
+
+}  // namespace glaswave

@@ -1,0 +1,77 @@
+// `glaswave retrieve` (PRODUCT.md section 11): measured shots in, each method's estimates out,
+// side by side in DIR/retrieval.nc with the truth of simulated input. Reads glaswave's own
+// shots.nc; the methods are GEDI L2A's six groups and selected one (gedi_l2a), GEDI L2B
+// (gedi_l2b), the seed's waveform index (wi) and the physically based inversion over a forward
+// table (rt).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pipeline/retrieval/rt_inversion.hpp"
+
+namespace glaswave {
+
+inline const std::vector<std::string> kRetrievalMethods = {"gedi_l2a", "gedi_l2b", "wi", "rt"};
+
+struct RetrieveRequest {
+  std::vector<std::filesystem::path> inputs;
+  std::filesystem::path out_dir;               // empty: the first input's folder
+  std::optional<std::filesystem::path> table;  // needed by rt
+  std::vector<std::string> methods;            // empty: every method the input allows
+  std::optional<std::int64_t> first_shot, last_shot;  // shot numbers [A, B)
+  int threads = 0;                                    // 0: every core
+  std::string command_line;
+  RtSettings rt;
+};
+
+struct RetrieveSummary {
+  std::int64_t shots = 0;
+  std::vector<std::string> methods;
+  std::int64_t rt_flagged = 0;  // shots with rt_flag != 0
+  double wall_s = 0.0;          // the methods on the shots, reading and writing left out
+  std::filesystem::path product;
+};
+
+// One measured shot as the methods read it: band 0 for the missions' algorithms, every band for
+// rt.
+struct MeasuredShot {
+  std::int64_t shot_number = 0;
+  int beam = 0;
+  double lat_deg = 0.0, lon_deg = 0.0, off_nadir_deg = 0.0;
+  std::vector<std::vector<double>> waveform_W;  // [band][bin]
+  WaveformAxis axis;
+  std::vector<double> noise_mean_W, noise_sd_W;  // [band]
+  bool good = true;
+  // Truth of simulated input (NaN otherwise).
+  double canopy_height_true_m, cover_true, pai_true, ground_elevation_true_m, rhov_rhog_true;
+};
+
+struct MeasuredShots {
+  std::vector<std::string> band_names;
+  double bin_ns = 0.0;
+  double pulse_sigma_ns = 0.0;
+  bool simulated = true;
+  std::vector<MeasuredShot> shots;
+};
+
+// Reads glaswave's shots.nc (shot numbers [first, last) when given): its waveforms, where they
+// lie, each band's noise (the quieter end of the window's mean and sd where the run's detector
+// was on, else 0: a simulation without a detector has none) and the truth. An input error naming
+// the file when it is not one.
+MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::int64_t> first,
+                         std::optional<std::int64_t> last);
+
+// Each method's estimates of one shot: V per method, NaN where a method gives none.
+struct MethodEstimates {
+  double canopy_height_m, cover, pai, ground_elevation_m, rhov_rhog;
+};
+
+RetrieveSummary run_retrieval(const RetrieveRequest& request,
+                              const std::function<void(std::int64_t, std::int64_t)>& progress);
+
+}  // namespace glaswave
