@@ -266,6 +266,15 @@ MeasuredShots read_gedi_l1b(const std::filesystem::path& file,
       s.noise_sd_W = {std::isfinite(noise_sd[i]) && noise_sd[i] > 0.0 ? noise_sd[i] : 0.0};
       s.good = count[i] >= 2 && std::isfinite(bin0[i]) && std::isfinite(lastbin[i]);
       for (double x : s.waveform_W.back()) s.good = s.good && std::isfinite(x);
+      // glaswave's granule of a run without a detector: its "noise" is the Monte Carlo's few
+      // rays before the signal (a sd of 1e-5 of the peak), which L2A's thresholds would take for
+      // a detector's and so find the ground among lone rays far below. Under 1e-3 of the peak
+      // (no detector is that quiet) it is none, as in shots.nc without a detector.
+      if (out.simulated && s.good) {
+        const std::vector<double>& w = s.waveform_W.back();
+        const double peak = *std::max_element(w.begin(), w.end()) - s.noise_mean_W[0];
+        if (s.noise_sd_W[0] < 1e-3 * peak) s.noise_mean_W[0] = s.noise_sd_W[0] = 0.0;
+      }
       s.canopy_height_true_m = fill(height[i]);
       s.cover_true = fill(cover[i]);
       s.pai_true = fill(pai[i]);
