@@ -32,7 +32,7 @@ class Hdf5Writer {
 
   // `values` laid out C-order over `dims` (one dimension of values.size() when empty). With
   // `fill`, the dataset's fill value and its _FillValue attribute (in the dataset's type).
-  // T: double, float, int64, uint64, int32, uint16, int16, int8, uint8.
+  // T: double, float, int64, uint64, int32, uint32, uint16, int16, int8, uint8.
   template <typename T>
   void write(const std::string& path, const std::vector<T>& values,
              const std::vector<Hdf5Attribute>& attributes = {},

@@ -61,10 +61,17 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
   retrieve_->footer(
       "Example:\n"
       "  glaswave retrieve out/pass/shots.nc --table gedi_table.nc --out out/pass-retrieval\n"
+      "  glaswave retrieve GEDI01_B_...h5 GEDI02_A_...h5 --out gedi-retrieval\n"
       "Writes DIR/retrieval.nc: per shot and method, canopy_height, cover, pai, "
       "ground_elevation and rhov_rhog, rt's posterior sd and 5-95 % bounds and rt_flag, and the "
-      "truth of simulated input. Exit status as `run`. Manual: docs/retrieval.md.");
-  retrieve_->add_option("INPUT", inputs, "glaswave's shots.nc")->type_name("INPUT")->required();
+      "truth of simulated input; for GEDI L1B input also DIR/gedi_l2b.h5 in GEDI02_B's layout. "
+      "Exit status as `run`. Manual: docs/retrieval.md.");
+  retrieve_
+      ->add_option("INPUT", inputs,
+                   "glaswave's shots.nc, or a GEDI L1B granule (GEDI01_B or gedi_l1b.h5) with "
+                   "its L2A beside it when given; the kind read from the layout")
+      ->type_name("INPUT")
+      ->required();
   retrieve_->add_option("--out", out, "output directory (default: the first input's)")
       ->type_name("DIR");
   retrieve_->add_option("--table", table_file, "the forward table (`glaswave table`), for rt")
@@ -135,12 +142,14 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
     nlohmann::json j = {{"shots", summary.shots},           {"methods", summary.methods},
                         {"rt_flagged", summary.rt_flagged}, {"wall_s", summary.wall_s},
                         {"shots_per_s", rate},              {"product", summary.product.string()}};
+    if (!summary.l2b_granule.empty()) j["l2b_granule"] = summary.l2b_granule.string();
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("glaswave: %lld shots retrieved by %s in %.2f s (%.0f shots/s); %lld flagged by "
                 "rt; %s\n",
                 static_cast<long long>(summary.shots), names.c_str(), summary.wall_s, rate,
                 static_cast<long long>(summary.rt_flagged), summary.product.c_str());
+    if (!summary.l2b_granule.empty()) std::printf("glaswave: %s\n", summary.l2b_granule.c_str());
   }
   return 0;
 }

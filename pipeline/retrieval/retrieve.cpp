@@ -20,6 +20,7 @@
 #include "pipeline/products/canopy_indices.hpp"
 #include "pipeline/products/gedi_l2a_groups.hpp"
 #include "pipeline/products/gedi_l2b_algorithm.hpp"
+#include "pipeline/retrieval/gedi_l1b_reader.hpp"
 #include "pipeline/retrieval/netcdf_file.hpp"
 
 namespace glaswave {
@@ -73,8 +74,10 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
   const std::string place = file.string();
   const std::optional<std::string> config_text = nc.text_attribute("", "config");
   if (!config_text || !nc.has_variable("rx_waveform"))
-    throw input_error(place, "not a glaswave shots.nc (no `config` attribute or `rx_waveform`); "
-                             "GEDI L1B, GLAH01 and ATL03 granules are not read yet");
+    throw input_error(place,
+                      "neither a glaswave shots.nc (no `config` attribute or `rx_waveform`) "
+                      "nor a GEDI L1B granule (no BEAMxxxx/rxwaveform); GLAH01 and ATL03 "
+                      "granules are not read yet");
   json config;
   try {
     config = json::parse(*config_text);
@@ -152,6 +155,10 @@ struct ShotResults {
   std::map<std::string, MethodEstimates> estimates;
   std::array<double, kL2bProfileBins> pavd_z{};
   RtResult rt;
+  // What gedi_l2b.h5 takes: the L2A group L2B ran on, its number, L2B's result.
+  L2aGroupResult l2a{};
+  int selected_algorithm = 0;
+  GediL2bResult l2b = GediL2bResult::none({});
 };
 
 constexpr MethodEstimates kNone{kNaN, kNaN, kNaN, kNaN, kNaN};
@@ -171,12 +178,18 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
   // RetrieveCli's layers) were taken for the ground.
   const double sigma = shot.noise_sd_W[0] > 0.0 ? shot.noise_sd_W[0] : 0.01 * peak;
   const L2aResult l2a = process_l2a({w, shot.axis, shot.noise_mean_W[0], sigma});
-  const L2aGroupResult& selected = l2a.selected();
+  // L2A's granule's group and ground when one was given beside an L1B, else glaswave's selection.
+  const L2aGroupResult selected = gedi_l2a_choice(l2a, shot.gedi, r.selected_algorithm);
+  r.l2a = selected;
   const double zenith_rad = shot.off_nadir_deg * std::numbers::pi / 180.0;
   const bool want_l2b = r.estimates.count("gedi_l2b") || r.estimates.count("wi");
   GediL2bResult l2b = GediL2bResult::none({});
-  if (want_l2b && selected.has_ground)
-    l2b = gedi_l2b(l2b_input(w, shot.axis, shot.noise_mean_W[0], selected, zenith_rad));
+  if (want_l2b && selected.has_ground) {
+    GediL2bInput in = l2b_input(w, shot.axis, shot.noise_mean_W[0], selected, zenith_rad);
+    if (shot.gedi.has_l2a) in.l2a_quality_flag = in.l2a_quality_flag && shot.gedi.l2a_quality_flag;
+    l2b = gedi_l2b(in);
+  }
+  r.l2b = l2b;
   if (r.estimates.count("gedi_l2a") && selected.has_ground)
     r.estimates["gedi_l2a"] = {selected.rh_m[98], kNaN, kNaN, selected.elev_lowestmode_m, kNaN};
   if (r.estimates.count("gedi_l2b") && l2b.algorithmrun_flag) {
@@ -361,7 +374,8 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
 
 RetrieveSummary run_retrieval(const RetrieveRequest& request,
                               const std::function<void(std::int64_t, std::int64_t)>& progress) {
-  if (request.inputs.empty()) throw config_error("INPUT", "give at least one shots.nc");
+  if (request.inputs.empty())
+    throw config_error("INPUT", "give at least one shots.nc or GEDI L1B granule");
   std::vector<std::string> methods = request.methods;
   if (methods.empty()) {
     methods = {"gedi_l2a", "gedi_l2b", "wi"};
@@ -383,18 +397,16 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   if (std::filesystem::exists(product))
     throw config_error(product.string(), "exists already: give another --out");
 
-  MeasuredShots input;
-  for (const std::filesystem::path& file : request.inputs) {
-    MeasuredShots more = read_shots(file, request.first_shot, request.last_shot);
-    if (input.band_names.empty() && input.shots.empty()) {
-      input = std::move(more);
-      continue;
-    }
-    if (more.band_names != input.band_names || more.bin_ns != input.bin_ns)
-      throw input_error(file.string(), "its bands or bins are not those of " +
-                                           request.inputs.front().string());
-    for (MeasuredShot& s : more.shots) input.shots.push_back(std::move(s));
-  }
+  MeasuredShots input = read_retrieve_inputs(request.inputs, request.first_shot, request.last_shot);
+  if (want_rt && input.gedi_l1b)
+    throw config_error("--methods",
+                       "rt reads glaswave's shots.nc: a GEDI L1B granule's counts "
+                       "are not on the table's scale");
+  const bool want_l2b_granule =
+      input.gedi_l1b && std::find(methods.begin(), methods.end(), "gedi_l2b") != methods.end();
+  const std::filesystem::path l2b_granule = (out_dir.empty() ? "." : out_dir) / "gedi_l2b.h5";
+  if (want_l2b_granule && std::filesystem::exists(l2b_granule))
+    throw config_error(l2b_granule.string(), "exists already: give another --out");
   std::optional<ForwardTable> table;
   std::optional<RtInversion> rt;
   if (want_rt) {
@@ -426,6 +438,22 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   summary.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   write_product(product, input, results, methods, request);
+  if (want_l2b_granule) {
+    std::vector<GediL2bShot> granule;
+    for (std::size_t i = 0; i < input.shots.size(); ++i) {
+      const MeasuredShot& s = input.shots[i];
+      if (!s.gedi.present) continue;
+      const ShotResults& r = results[i];
+      granule.push_back({static_cast<std::uint64_t>(s.shot_number), s.gedi, s.axis,
+                         s.waveform_W.empty() ? 0 : s.waveform_W[0].size(), r.selected_algorithm,
+                         r.l2a,
+                         static_cast<std::uint8_t>(r.l2a.has_ground && s.good &&
+                                                   (!s.gedi.has_l2a || s.gedi.l2a_quality_flag)),
+                         s.gedi.has_l2a ? s.gedi.l2a_sensitivity : kNaN, r.l2b});
+    }
+    write_gedi_l2b(l2b_granule, granule, request.command_line);
+    summary.l2b_granule = l2b_granule;
+  }
   summary.shots = shots;
   summary.methods = methods;
   summary.product = product;

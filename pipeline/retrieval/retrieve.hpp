@@ -1,8 +1,9 @@
 // `glaswave retrieve` (PRODUCT.md section 11): measured shots in, each method's estimates out,
 // side by side in DIR/retrieval.nc with the truth of simulated input. Reads glaswave's own
-// shots.nc; the methods are GEDI L2A's six groups and selected one (gedi_l2a), GEDI L2B
-// (gedi_l2b), the seed's waveform index (wi) and the physically based inversion over a forward
-// table (rt).
+// shots.nc and GEDI L1B granules with their L2A (gedi_l1b_reader.hpp), and writes
+// DIR/gedi_l2b.h5 for the latter (gedi_l2b_granule.hpp); the methods are GEDI L2A's six groups and
+// selected one (gedi_l2a), GEDI L2B (gedi_l2b), the seed's waveform index (wi) and the physically
+// based inversion over a forward table (rt).
 #pragma once
 
 #include <cstdint>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/retrieval/gedi_l2b_granule.hpp"
 #include "pipeline/retrieval/rt_inversion.hpp"
 
 namespace glaswave {
@@ -35,6 +37,7 @@ struct RetrieveSummary {
   std::int64_t rt_flagged = 0;  // shots with rt_flag != 0
   double wall_s = 0.0;          // the methods on the shots, reading and writing left out
   std::filesystem::path product;
+  std::filesystem::path l2b_granule;  // DIR/gedi_l2b.h5 for GEDI L1B input, else empty
 };
 
 // One measured shot as the methods read it: band 0 for the missions' algorithms, every band for
@@ -49,6 +52,7 @@ struct MeasuredShot {
   bool good = true;
   // Truth of simulated input (NaN otherwise).
   double canopy_height_true_m, cover_true, pai_true, ground_elevation_true_m, rhov_rhog_true;
+  GediShotInfo gedi;  // GEDI L1B input's (present) and its L2A's
 };
 
 struct MeasuredShots {
@@ -56,6 +60,7 @@ struct MeasuredShots {
   double bin_ns = 0.0;
   double pulse_sigma_ns = 0.0;
   bool simulated = true;
+  bool gedi_l1b = false;  // read from a GEDI L1B granule: gedi_l2b.h5 is written
   std::vector<MeasuredShot> shots;
 };
 
