@@ -26,8 +26,8 @@ namespace {
 using nlohmann::json;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-constexpr std::array<int, 32> kPrimes = {2,  3,  5,  7,  11, 13, 17, 19, 23,  29,  31,
-                                         37, 41, 43, 47, 53, 59, 61, 67, 71,  73,  79,
+constexpr std::array<int, 32> kPrimes = {2,  3,  5,  7,   11,  13,  17,  19,  23,  29, 31,
+                                         37, 41, 43, 47,  53,  59,  61,  67,  71,  73, 79,
                                          83, 89, 97, 101, 103, 107, 109, 113, 127, 131};
 
 // Halton's radical inverse of `index` in base `base`.
@@ -87,6 +87,7 @@ struct EntryResult {
   std::vector<std::vector<double>> waveform_W;  // [band][bin] on the entry's own axis
   std::vector<double> height_m;
   std::vector<double> mc_sd_W;
+  std::vector<std::vector<double>> shot0_W;  // [band][bin] the first shot, on the entry's axis
   std::vector<double> energy_canopy_J, energy_ground_J;
   double pai = 0.0, cover = 0.0, height = 0.0;
   double off_nadir_deg = 0.0;
@@ -111,8 +112,9 @@ EntryResult simulate_entry(const Config& config, std::int64_t shots_wanted,
     const std::size_t bins = record.rx_waveform_W.at(0).size();
     std::vector<double> heights(bins);
     for (std::size_t b = 0; b < bins; ++b)
-      heights[b] = record.elev_bin0_m + (record.elev_lastbin_m - record.elev_bin0_m) *
-                                            static_cast<double>(b) / static_cast<double>(bins - 1) -
+      heights[b] = record.elev_bin0_m +
+                   (record.elev_lastbin_m - record.elev_bin0_m) * static_cast<double>(b) /
+                       static_cast<double>(bins - 1) -
                    record.elev_m;
     if (k == 0) {
       entry.height_m = heights;
@@ -148,6 +150,7 @@ EntryResult simulate_entry(const Config& config, std::int64_t shots_wanted,
     }
     entry.mc_sd_W.push_back(sd);
     entry.waveform_W.push_back(std::move(mean));
+    if (shots >= 2) entry.shot0_W.push_back(per_shot[band][0]);
   }
   return entry;
 }
@@ -159,8 +162,8 @@ double design_coordinate(std::uint64_t seed, std::int64_t entry, std::size_t par
     throw config_error("/table", "at most " + std::to_string(kPrimes.size()) + " keys may vary");
   RandomStream shift(seed, parameter, 0, RandomPurpose::table_design);
   // Halton's first point is 0 in every dimension: start at 1.
-  const double u = radical_inverse(static_cast<std::uint64_t>(entry) + 1, kPrimes[parameter]) +
-                   shift.uniform();
+  const double u =
+      radical_inverse(static_cast<std::uint64_t>(entry) + 1, kPrimes[parameter]) + shift.uniform();
   return u - std::floor(u);
 }
 
@@ -172,8 +175,9 @@ double implied_rhov_rhog(double energy_canopy, double energy_ground, double cove
 ForwardTable build_table(const TableRequest& request, const TableProgress& progress) {
   const Config base = load_config_document(request.document, request.folder, {});
   if (base.sensor.receiver != "waveform")
-    throw config_error("/sensor/receiver", "a forward table holds waveforms: the receiver must "
-                                           "be \"waveform\"");
+    throw config_error("/sensor/receiver",
+                       "a forward table holds waveforms: the receiver must "
+                       "be \"waveform\"");
   ForwardTable table;
   for (const auto& [key, range] : base.table.vary)
     table.parameters.push_back({key, range[0], range[1], {}});
@@ -209,8 +213,8 @@ ForwardTable build_table(const TableRequest& request, const TableProgress& progr
       try {
         entry_config(request, table.parameters, values, base.seed);
       } catch (const Error& e) {
-        throw config_error(place, "with " + parameter.key + "=" + value_text(parameter, v) +
-                                      ": " + e.what());
+        throw config_error(
+            place, "with " + parameter.key + "=" + value_text(parameter, v) + ": " + e.what());
       }
     }
   }
@@ -222,10 +226,9 @@ ForwardTable build_table(const TableRequest& request, const TableProgress& progr
       const TableParameter& parameter = table.parameters[p];
       const double u = design_coordinate(base.seed, e, p);
       table.parameter_values[e].push_back(
-          parameter.is_range()
-              ? parameter.low + u * (parameter.high - parameter.low)
-              : std::min(std::floor(u * parameter.values.size()),
-                         static_cast<double>(parameter.values.size() - 1)));
+          parameter.is_range() ? parameter.low + u * (parameter.high - parameter.low)
+                               : std::min(std::floor(u * parameter.values.size()),
+                                          static_cast<double>(parameter.values.size() - 1)));
     }
   }
 
@@ -242,9 +245,8 @@ ForwardTable build_table(const TableRequest& request, const TableProgress& progr
   };
   const int cores = tbb::this_task_arena::max_concurrency();
   tbb::task_arena arena(request.threads > 0 ? std::min(request.threads, cores) : cores);
-  arena.execute([&] {
-    tbb::parallel_for(std::int64_t{0}, entries, [&](std::int64_t e) { simulate(e); });
-  });
+  arena.execute(
+      [&] { tbb::parallel_for(std::int64_t{0}, entries, [&](std::int64_t e) { simulate(e); }); });
 
   // The table's axis: entry 0's, cropped to the bins where some entry has signal (above 1e-6 of
   // its peak), widened by 4 pulse sigma; every entry resampled onto it (the same bins where the
@@ -263,7 +265,8 @@ ForwardTable build_table(const TableRequest& request, const TableProgress& progr
     }
   }
   if (first > last) throw run_error("/table", "no entry of the table has any return");
-  const std::size_t margin = static_cast<std::size_t>(std::ceil(4.0 * table.pulse_sigma_ns / table.bin_ns));
+  const std::size_t margin =
+      static_cast<std::size_t>(std::ceil(4.0 * table.pulse_sigma_ns / table.bin_ns));
   first = first > margin ? first - margin : 0;
   last = std::min(axis.size() - 1, last + margin);
   table.height_m.assign(axis.begin() + first, axis.begin() + last + 1);
@@ -278,6 +281,11 @@ ForwardTable build_table(const TableRequest& request, const TableProgress& progr
       if (peak > 0.0 && std::isfinite(r.mc_sd_W[band])) relative.push_back(r.mc_sd_W[band] / peak);
     }
     table.waveform_W.push_back(std::move(waveforms));
+    if (!r.shot0_W.empty()) {
+      std::vector<std::vector<double>> shot0;
+      for (const auto& w : r.shot0_W) shot0.push_back(resample(w, r.height_m, table.height_m));
+      table.shot0_W.push_back(std::move(shot0));
+    }
     table.mc_sd_W.push_back(r.mc_sd_W);
     table.pai_true.push_back(r.pai);
     table.cover_true.push_back(r.cover);
@@ -316,7 +324,8 @@ std::vector<std::string> split(const std::string& text) {
   std::size_t start = 0;
   while (start <= text.size()) {
     const std::size_t comma = text.find(',', start);
-    out.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    out.push_back(
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -334,7 +343,7 @@ void write_table(const ForwardTable& table, const std::filesystem::path& path,
   nc.define_dimension("height", bins);
   nc.put_text("", "Conventions", "CF-1.10");
   nc.put_text("", "title", "glaswave forward table for the rt retrieval");
-  nc.put_text("", "glaswave_table_version", "1");
+  nc.put_text("", "glaswave_table_version", "2");
   nc.put_text("", "source", std::string("glaswave ") + GLASWAVE_VERSION);
   nc.put_text("", "history", command_line);
   nc.put_text("", "config", table.config_json);
@@ -352,9 +361,9 @@ void write_table(const ForwardTable& table, const std::filesystem::path& path,
   nc.put_text("height", "positive", "up");
   for (const TableParameter& p : table.parameters) {
     const std::string name = parameter_variable(p);
-    nc.define_variable(name, NC_DOUBLE, {"entry"}, "",
-                       p.is_range() ? "value of " + p.key
-                                    : "index of the value of " + p.key + " in `values`");
+    nc.define_variable(
+        name, NC_DOUBLE, {"entry"}, "",
+        p.is_range() ? "value of " + p.key : "index of the value of " + p.key + " in `values`");
     nc.put_text(name, "key", p.key);
     if (p.is_range()) {
       nc.put_number(name, "valid_min", p.low);
@@ -370,6 +379,10 @@ void write_table(const ForwardTable& table, const std::filesystem::path& path,
   }());
   nc.define_variable("waveform", NC_DOUBLE, {"entry", "band", "height"}, "W",
                      "mean received power of the entry's shots");
+  const bool shot0 = table.shot0_W.size() == entries;
+  if (shot0)
+    nc.define_variable("waveform_shot0", NC_DOUBLE, {"entry", "band", "height"}, "W",
+                       "received power of the entry's first shot alone");
   nc.define_variable("waveform_mc_sd", NC_DOUBLE, {"entry", "band"}, "W",
                      "one shot's Monte Carlo sd per bin over the bins holding signal");
   nc.define_variable("energy_canopy", NC_DOUBLE, {"entry", "band"}, "J",
@@ -389,17 +402,20 @@ void write_table(const ForwardTable& table, const std::filesystem::path& path,
     for (std::size_t e = 0; e < entries; ++e) values[e] = table.parameter_values[e][p];
     nc.write(parameter_variable(table.parameters[p]), values);
   }
-  std::vector<double> waveform, mc, canopy, ground;
+  std::vector<double> waveform, first, mc, canopy, ground;
   for (std::size_t e = 0; e < entries; ++e) {
     for (std::size_t band = 0; band < bands; ++band) {
       waveform.insert(waveform.end(), table.waveform_W[e][band].begin(),
                       table.waveform_W[e][band].end());
+      if (shot0)
+        first.insert(first.end(), table.shot0_W[e][band].begin(), table.shot0_W[e][band].end());
       mc.push_back(table.mc_sd_W[e][band]);
       canopy.push_back(table.energy_canopy_J[e][band]);
       ground.push_back(table.energy_ground_J[e][band]);
     }
   }
   nc.write("waveform", waveform);
+  if (shot0) nc.write("waveform_shot0", first);
   nc.write("waveform_mc_sd", mc);
   nc.write("energy_canopy", canopy);
   nc.write("energy_ground", ground);
@@ -414,8 +430,9 @@ ForwardTable read_table(const std::filesystem::path& path) {
   const NetcdfFile nc = NetcdfFile::open(path);
   const auto fail = [&](const std::string& why) -> void { throw input_error(path.string(), why); };
   if (!nc.text_attribute("", "glaswave_table_version"))
-    fail("not a glaswave forward table (no glaswave_table_version attribute; made by `glaswave "
-         "table`)");
+    fail(
+        "not a glaswave forward table (no glaswave_table_version attribute; made by `glaswave "
+        "table`)");
   ForwardTable table;
   const auto number = [&](const char* name) {
     const std::optional<double> v = nc.number_attribute("", name);
@@ -438,6 +455,11 @@ ForwardTable read_table(const std::filesystem::path& path) {
   const std::size_t entries = shape[0], bands = shape[1], bins = shape[2];
   if (entries == 0 || bins < 2) fail("the table is empty");
   const std::vector<double> waveform = nc.doubles("waveform");
+  std::vector<double> first;
+  if (nc.has_variable("waveform_shot0")) {
+    if (nc.shape("waveform_shot0") != shape) fail("`waveform_shot0` must be shaped as `waveform`");
+    first = nc.doubles("waveform_shot0");
+  }
   const std::vector<double> mc = nc.doubles("waveform_mc_sd");
   const std::vector<double> canopy = nc.doubles("energy_canopy");
   const std::vector<double> ground = nc.doubles("energy_ground");
@@ -457,6 +479,16 @@ ForwardTable read_table(const std::filesystem::path& path) {
       g.push_back(ground[e * bands + band]);
     }
     table.waveform_W.push_back(std::move(w));
+    if (!first.empty()) {
+      std::vector<std::vector<double>> w0(bands);
+      for (std::size_t band = 0; band < bands; ++band) {
+        const auto begin = first.begin() + static_cast<std::ptrdiff_t>((e * bands + band) * bins);
+        w0[band].assign(begin, begin + static_cast<std::ptrdiff_t>(bins));
+        for (double& x : w0[band])
+          if (!std::isfinite(x)) fail("`waveform_shot0` holds a value that is not finite");
+      }
+      table.shot0_W.push_back(std::move(w0));
+    }
     table.mc_sd_W.push_back(std::move(m));
     table.energy_canopy_J.push_back(std::move(c));
     table.energy_ground_J.push_back(std::move(g));

@@ -36,10 +36,14 @@ struct ForwardTable {
   std::vector<std::string> band_names;  // the sensor's, in its order
   double bin_ns = 0.0;
   double pulse_sigma_ns = 0.0;
-  double off_nadir_deg = 0.0;           // of the table's shots
-  std::vector<double> height_m;         // [bin] centre above the footprint's ground, decreasing
+  double off_nadir_deg = 0.0;    // of the table's shots
+  std::vector<double> height_m;  // [bin] centre above the footprint's ground, decreasing
   std::vector<std::vector<std::vector<double>>> waveform_W;  // [entry][band][bin] mean of shots
   std::vector<std::vector<double>> mc_sd_W;  // [entry][band] one shot's per-bin Monte Carlo sd
+  // [entry][band][bin] the entry's first shot alone (empty in a version-1 table or with one shot
+  // an entry): beside the mean, it gives the Monte Carlo noise's per-bin variance and a held-out
+  // shot of known truth, from which the rt likelihood is calibrated (rt_inversion.hpp).
+  std::vector<std::vector<std::vector<double>>> shot0_W;
   // One shot's Monte Carlo sd over its waveform's peak: the median over entries and bands of
   // mc_sd_W / peak; NaN with one shot an entry.
   double mc_relative_sd = 0.0;
@@ -60,9 +64,9 @@ struct ForwardTable {
 };
 
 struct TableRequest {
-  nlohmann::json document;          // the configuration, --set applied
-  std::filesystem::path folder;     // where its relative paths are taken from
-  int threads = 0;                  // 0: every core
+  nlohmann::json document;       // the configuration, --set applied
+  std::filesystem::path folder;  // where its relative paths are taken from
+  int threads = 0;               // 0: every core
 };
 
 // Called after each entry with (entries done, entries in all).

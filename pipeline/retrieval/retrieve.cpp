@@ -116,9 +116,11 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
                             lastbin = per_shot("elev_lastbin"), flag = per_shot("quality_flag"),
                             beam = per_shot("beam"), cover = per_shot("cover_true"),
                             pai = per_shot("pai_true"), height = per_shot("canopy_height_true");
-  const std::vector<double> canopy = per_band("rx_energy_canopy"), ground = per_band("rx_energy_ground");
+  const std::vector<double> canopy = per_band("rx_energy_canopy"),
+                            ground = per_band("rx_energy_ground");
   const std::vector<double> waveforms =
-      count > 0 ? nc.doubles("rx_waveform", {begin, 0, 0}, {count, bands, bins}) : std::vector<double>{};
+      count > 0 ? nc.doubles("rx_waveform", {begin, 0, 0}, {count, bands, bins})
+                : std::vector<double>{};
   out.simulated = true;
   out.shots.resize(count);
   for (std::size_t i = 0; i < count; ++i) {
@@ -202,8 +204,8 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
     // when canopy and ground reflect alike (rhov/rhog = 1), and its PAI L2B's formula's.
     const double wi = waveform_index(l2b.rv, l2b.rg);
     const double cover = 0.5 * (1.0 + wi);
-    r.estimates["wi"] = {kNaN, cover, -std::log(1.0 - cover) * std::cos(zenith_rad) / 0.5,
-                         kNaN, 1.0};
+    r.estimates["wi"] = {kNaN, cover, -std::log(1.0 - cover) * std::cos(zenith_rad) / 0.5, kNaN,
+                         1.0};
   }
   if (rt) {
     RtShot input;
@@ -215,7 +217,7 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
     // selected one, which takes the lowest mode any group finds: a5's 2 sigma reaches lone
     // multiply scattered rays far below the ground in a noise-free Monte Carlo waveform.
     const L2aGroupResult& a1 = l2a.groups[0];
-    input.ground_guess_m = a1.has_ground ? a1.elev_lowestmode_m
+    input.ground_guess_m = a1.has_ground         ? a1.elev_lowestmode_m
                            : selected.has_ground ? selected.elev_lowestmode_m
                                                  : kNaN;
     r.rt = rt->invert(input);
@@ -226,27 +228,36 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
   return r;
 }
 
-const char* const kVariables[] = {"canopy_height", "cover", "pai", "ground_elevation",
-                                   "rhov_rhog"};
+const char* const kVariables[] = {"canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog"};
 const char* const kUnits[] = {"m", "1", "1", "m", "1"};
 
 double variable_of(const MethodEstimates& e, int v) {
   switch (v) {
-    case 0: return e.canopy_height_m;
-    case 1: return e.cover;
-    case 2: return e.pai;
-    case 3: return e.ground_elevation_m;
-    default: return e.rhov_rhog;
+    case 0:
+      return e.canopy_height_m;
+    case 1:
+      return e.cover;
+    case 2:
+      return e.pai;
+    case 3:
+      return e.ground_elevation_m;
+    default:
+      return e.rhov_rhog;
   }
 }
 
 RtStatistic statistic_of(const RtResult& r, int v) {
   switch (v) {
-    case 0: return r.canopy_height_m;
-    case 1: return r.cover;
-    case 2: return r.pai;
-    case 3: return r.ground_elevation_m;
-    default: return r.rhov_rhog;
+    case 0:
+      return r.canopy_height_m;
+    case 1:
+      return r.cover;
+    case 2:
+      return r.pai;
+    case 3:
+      return r.ground_elevation_m;
+    default:
+      return r.rhov_rhog;
   }
 }
 
@@ -299,9 +310,11 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
                        "plant area volume density per 5 m bin (GEDI L2B)");
   if (rt) {
     nc.define_variable("rt_flag", NC_UBYTE, {"shot"}, "", "what the rt table cannot explain");
-    nc.put_bytes("rt_flag", "flag_masks", {rt_misfit, rt_table_edge, rt_ground_search_edge, rt_not_run});
+    nc.put_bytes(
+        "rt_flag", "flag_masks",
+        {rt_misfit, rt_table_edge, rt_ground_search_edge, rt_not_run, rt_ground_off_guess});
     nc.put_text("rt_flag", "flag_meanings",
-                "misfit table_edge ground_search_edge not_run");
+                "misfit table_edge ground_search_edge not_run ground_off_guess");
     nc.define_variable("rt_chi2_per_dof", NC_DOUBLE, {"shot"}, "1",
                        "best chi-squared per degree of freedom of the rt fit");
   }
@@ -329,7 +342,8 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
   std::vector<double> column(shots);
   for (const std::string& m : methods) {
     for (int v = 0; v < 5; ++v) {
-      for (std::size_t i = 0; i < shots; ++i) column[i] = variable_of(results[i].estimates.at(m), v);
+      for (std::size_t i = 0; i < shots; ++i)
+        column[i] = variable_of(results[i].estimates.at(m), v);
       nc.write(std::string(kVariables[v]) + "_" + m, column);
       if (m != "rt") continue;
       for (int part = 0; part < 3; ++part) {
@@ -337,7 +351,9 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
           const RtStatistic s = statistic_of(results[i].rt, v);
           column[i] = part == 0 ? s.sd : part == 1 ? s.p05 : s.p95;
         }
-        nc.write(std::string(kVariables[v]) + (part == 0 ? "_rt_sd" : part == 1 ? "_rt_p05" : "_rt_p95"),
+        nc.write(std::string(kVariables[v]) + (part == 0   ? "_rt_sd"
+                                               : part == 1 ? "_rt_p05"
+                                                           : "_rt_p95"),
                  column);
       }
     }
@@ -383,8 +399,8 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   }
   for (const std::string& m : methods) {
     if (std::find(kRetrievalMethods.begin(), kRetrievalMethods.end(), m) == kRetrievalMethods.end())
-      throw config_error("--methods", "unknown method \"" + m +
-                                          "\": choose among gedi_l2a, gedi_l2b, wi, rt");
+      throw config_error("--methods",
+                         "unknown method \"" + m + "\": choose among gedi_l2a, gedi_l2b, wi, rt");
     if (std::count(methods.begin(), methods.end(), m) > 1)
       throw config_error("--methods", "\"" + m + "\" is given twice");
   }
@@ -425,8 +441,8 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   tbb::task_arena arena(request.threads > 0 ? std::min(request.threads, cores) : cores);
   arena.execute([&] {
     tbb::parallel_for(std::int64_t{0}, shots, [&](std::int64_t i) {
-      results[i] = retrieve_shot(input.shots[i], input.pulse_sigma_ns, methods,
-                                 rt ? &*rt : nullptr);
+      results[i] =
+          retrieve_shot(input.shots[i], input.pulse_sigma_ns, methods, rt ? &*rt : nullptr);
       const std::int64_t finished = ++done;
       if (progress && finished % 64 == 0) {
         std::lock_guard lock(progress_mutex);

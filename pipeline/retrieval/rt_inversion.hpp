@@ -1,26 +1,54 @@
 // The `rt` retrieval: a measured waveform against every entry of the forward table.
 //
-// Likelihood. Each band's measured waveform m (its noise mean removed) is Gaussian about the
-// entry's waveform T placed with its ground at the elevation g: m_b ~ N(a T(z_b - g), sigma^2),
-// over the bins R the table can reach. sigma^2 = noise_sd^2 + (f peak)^2 (1/K + [simulated]):
-// the shot's detector noise, plus the Monte Carlo noise of the table's mean of K shots and, for
-// simulated input, of the measured shot itself, each one shot's f = the table's measured
-// mc_relative_sd times the measured peak (a constant per shot, so that the search below is a
-// cross-correlation). The amplitude a is 1 (the table and the shot share the sensor's pulse
-// energy and units: the absolute return carries the reflectances and the cover) unless
-// free_scale, where a >= 0 is fitted by least squares per entry and ground (for waveforms whose
-// calibration is unknown). The ground g is unknown: it is searched over whole bins about a first
-// guess (L2A's lowest mode), g(s) = z_0 + s dz - h_0 for the shift s of the table's bins against
-// the measured ones, and marginalised.
+// Likelihood (RtLikelihood::calibrated, the default). Each band's measured waveform m (its noise
+// mean removed) is Gaussian about the table's expected waveform T~(theta) placed with its ground
+// at the elevation g: m_b ~ N(T~(z_b - g), V(b)), with
+//   V = noise_sd^2 + (r_m + h_e / K) v(T~),   v(T) = a T + c T^2,
+// the shot's detector noise plus the Monte Carlo noise of the measured shot (r_m = the table's
+// rays over the shot's for simulated input, 0 for real input) and of the table's expectation (K
+// shots an entry, h_e the emulator's variance factor). v is fitted per band by iteratively
+// reweighted least squares to the scatter of each entry's first shot about its mean (the rays'
+// Poisson noise gives a T, a ray's amplitude; the ground's and crowns' whole returns, whose share
+// of rays varies, give c T^2); its signal is floored at a, one ray, below which a Gaussian of the
+// Poisson variance mis-scores lone rays. T~ is a local linear emulator: at each entry, the
+// least-squares plane through its k nearest entries in the design's normalised coordinates
+// (categorical keys equal), which averages away the entries' own Monte Carlo noise (the first
+// cut compared the shot with each entry's noisy mean, so that neighbours lay tens of chi2 apart)
+// and whose variance factor h_e = sum of the squared hat weights. The ground is continuous: whole
+// bins s searched, and within each a sub-bin offset delta in [-1/2, 1/2] profiled on T~'s first
+// order expansion T~(j - delta) = T~(j) - delta dT~/dj (a half bin left whole misplaces a
+// Gaussian pulse's flank by several times the noise). The log-likelihood is
+//   l = -(chi2 + sum log V) / (2 tau),
+// tau the tempering that the pulse's correlation of the Monte Carlo noise across bins demands (a
+// ray's return spreads over the pulse: independent bins would count each ray several times; the
+// composite likelihood's curvature adjustment). tau is calibrated on the table itself: each of
+// `calibration_shots` entries' first shot, displaced by a sub-bin offset, is retrieved from the
+// other entries (its own mean replaced by its other shots' in the emulator), and tau, started at
+// the pulse's correlation length 2 sqrt(pi) sigma_bins, is scaled until the 90th percentile of
+// the varied parameters' squared standardised errors is a Gaussian's (2.706): the 90 % interval
+// the product states.
 //
-// Posterior. Uniform over the table's entries (the design is the prior) and over the shifts:
-// w(e, s) ∝ exp(-chi2(e, s) / 2). Each variable's mean, sd, 5 % and 95 % come from the entries'
+// The first cut's likelihood (RtLikelihood::constant_sd), kept for comparison: sigma^2 =
+// noise_sd^2 + (f peak)^2 (1/K + [simulated]) per shot, the raw entries, whole bins, tau = 1;
+// its amplitude may be fitted (free_scale) for waveforms whose calibration is unknown.
+//
+// Search (RtSearch::two_stage, the default). The ground is found in two stages: a wide
+// cross-correlation of a few entries spread over the design (the design's first 16: Halton's
+// prefix covers it) over +- ground_search_m about the first guess (L2A's lowest mode, which may
+// be the canopy's), every other bin; then the exact likelihood of every entry at that ground,
+// the entries within prune_log_likelihood of the best kept, and those over the shifts about it,
+// widened while the window's edge holds posterior mass. RtSearch::direct: every entry at every
+// whole bin within search_half_width_bins of the guess (the first cut's).
+//
+// Posterior. Uniform over the table's entries (the design is the prior) and over the ground:
+// w(e, s) ∝ exp(l(e, s)). Each variable's mean, sd, 5 % and 95 % come from the entries'
 // marginal weights (the ground's from the shifts').
 //
-// Flags (rt_flag, bits): 1 the best chi2 per degree of freedom beyond chi2_dof_limit (the table
-// cannot explain the shot), 2 more than edge_mass of the posterior in the outer edge_fraction of
-// a varied range (the truth may lie outside the table), 4 the best ground at the search's edge,
-// 8 not run (no finite waveform, no signal).
+// Flags (rt_flag, bits): 1 the best chi2 per signal bin beyond chi2_dof_limit (the table cannot
+// explain the shot), 2 more than edge_mass of the posterior in the outer edge_fraction of a
+// varied range (the truth may lie outside the table), 4 the best ground at the search's edge, 8
+// not run (no finite waveform, no signal), 16 the ground more than ground_offset_flag_m from the
+// first guess (the guess took another return for the ground: the metres say which).
 #pragma once
 
 #include <cstdint>
@@ -37,16 +65,34 @@ enum RtFlag : std::uint8_t {
   rt_table_edge = 2,
   rt_ground_search_edge = 4,
   rt_not_run = 8,
+  rt_ground_off_guess = 16,
 };
+
+enum class RtLikelihood { calibrated, constant_sd };
+enum class RtSearch { two_stage, direct };
 
 struct RtSettings {
   double chi2_dof_limit = 4.0;
   double edge_fraction = 0.05;
   double edge_mass = 0.5;
-  // Whole bins searched either side of the first guess of the ground; 0: 1.5 pulse sigma, at
-  // least 4.
+  RtLikelihood likelihood = RtLikelihood::calibrated;
+  RtSearch search = RtSearch::two_stage;
+  // Whole bins searched either side of the first guess of the ground (direct); 0: 1.5 pulse
+  // sigma, at least 4.
   int search_half_width_bins = 0;
-  bool free_scale = false;
+  // two_stage: the wide search's half width about the first guess (m), the log-likelihood below
+  // the best at which an entry is dropped, and the distance from the guess that is flagged (m).
+  double ground_search_m = 15.0;
+  double prune_log_likelihood = 10.0;
+  double ground_offset_flag_m = 2.0;
+  // The emulator's neighbours; 0: max(16, 4 (parameters + 1)); 1: the raw entries.
+  int emulator_neighbours = 0;
+  // The tempering tau; 0: calibrated on the table's first shots (1 where it has none).
+  double tempering = 0.0;
+  int calibration_shots = 200;
+  // Rays a measured simulated shot traced; 0: the table's.
+  double measured_rays_per_shot = 0.0;
+  bool free_scale = false;  // constant_sd only
   // The measured shot is a simulation (glaswave's shots.nc): its own Monte Carlo noise counts.
   bool measured_is_simulated = true;
   // One shot's Monte Carlo sd over its peak where the table could not measure it (one shot an
@@ -76,7 +122,8 @@ struct RtResult {
   double dof = 0.0;
   std::uint8_t flag = 0;
   std::int64_t best_entry = -1;
-  static RtResult none();  // NaN statistics, flag rt_not_run
+  double ground_guess_m = 0.0;  // the first guess the search started from
+  static RtResult none();       // NaN statistics, flag rt_not_run
 };
 
 // A shot made ready for the search: its waveforms less their noise means, its sigma per band,
@@ -85,8 +132,13 @@ struct RtPreparedShot {
   std::vector<std::vector<double>> measured;  // [band][bin]
   std::vector<double> sigma;                  // [band]
   std::vector<double> m2;                     // [band] sum of m^2 over R
-  double z0_m = 0.0, dz_m = 0.0;              // bin 0's elevation, and the step per bin
-  int first_shift = 0, last_shift = 0;        // inclusive
+  std::vector<double> noise2;                 // [band] noise_sd^2 (calibrated)
+  std::vector<double> w_out;                  // [band] 1 / V where the table has no signal
+  double outside = 0.0;                       // sum over R of m^2 w_out (calibrated)
+  double ground_guess_m = 0.0;
+  int centre_shift = 0;
+  double z0_m = 0.0, dz_m = 0.0;                 // bin 0's elevation, and the step per bin
+  int first_shift = 0, last_shift = 0;           // inclusive
   std::size_t region_begin = 0, region_end = 0;  // R = [begin, end) of the measured bins
   bool usable = false;
 };
@@ -104,15 +156,51 @@ class RtInversion {
   RtPreparedShot prepare(const RtShot& shot) const;
   // The ground elevation of a shift.
   double ground_elevation_m(const RtPreparedShot& shot, int shift) const;
-  // chi2 of one entry at one shift over R (and the amplitude used).
+  // chi2 of one entry at one shift over R (and the amplitude used); calibrated: chi2 at the
+  // profiled sub-bin offset delta, and sum log V less its value without signal.
   struct Fit {
-    double chi2 = 0.0, scale = 1.0;
+    double chi2 = 0.0, scale = 1.0, delta = 0.0, log_det = 0.0;
   };
   Fit fit(const RtPreparedShot& shot, std::size_t entry, int shift) const;
 
   RtResult invert(const RtShot& shot) const;
 
+  // The fitted noise model v(T) = a T + c T^2 per band (W^2), the floor of its signal, and tau.
+  double variance_linear_W(std::size_t band) const { return var_linear_[band]; }
+  double variance_quadratic(std::size_t band) const { return var_quadratic_[band]; }
+  double tempering() const { return tempering_; }
+  const std::vector<double>& emulated_W(std::size_t entry, std::size_t band) const {
+    return emulated_[entry][band];
+  }
+
  private:
+  struct Cell {
+    std::uint32_t entry;
+    int shift;
+    double log_likelihood, chi2, delta;
+  };
+  // Entry e's band k as the calibrated kernel reads it (the emulator's, or an override).
+  struct EntryBand {
+    const double* t;
+    const double* slope;
+    const double* curvature;
+  };
+  void build_emulator();
+  void fit_noise_model();
+  void build_variances();
+  void calibrate_tempering();
+  RtPreparedShot prepare_window(const RtShot& shot, int centre, int half) const;
+  Fit fit_calibrated(const RtPreparedShot& shot, std::size_t entry, int shift,
+                     const EntryBand* bands) const;
+  double log_det(const RtPreparedShot& shot, std::size_t entry) const;
+  // The cells searched (calibrated); `excluded` an entry left out (the calibration's), `override`
+  // bands per entry where non-null.
+  std::vector<Cell> search(const RtPreparedShot& shot, std::int64_t excluded,
+                           const std::vector<const EntryBand*>& override_bands,
+                           bool* at_edge) const;
+  RtResult summarise(const RtPreparedShot& shot, const std::vector<Cell>& cells,
+                     bool at_edge) const;
+
   const ForwardTable& table_;
   RtSettings settings_;
   double mc_relative_sd_;
@@ -124,6 +212,17 @@ class RtInversion {
   std::vector<std::vector<std::uint32_t>> sorted_;
   // Per entry: whether it lies in the outer edge of a varied range, low or high, per parameter.
   std::vector<std::vector<std::uint8_t>> edge_;
+  // Calibrated: per entry and band the emulated T~ and its slope per bin, V's signal part u
+  // and 1/u, sum log(u / u_out) without detector noise and on a grid of noise variances; the
+  // emulator's weights (neighbour, weight) and variance factor.
+  std::vector<std::vector<std::vector<double>>> emulated_, slope_, curvature_, signal_var_,
+      inv_signal_var_;
+  std::vector<std::vector<std::vector<double>>> log_det_grid_;
+  std::vector<std::vector<std::pair<std::uint32_t, double>>> smoother_;
+  std::vector<double> leverage_;
+  std::vector<double> var_linear_, var_quadratic_, signal_floor_W_, out_var_;
+  double measured_factor_ = 1.0;  // r_m
+  double tempering_ = 1.0;
 };
 
 }  // namespace glaswave
