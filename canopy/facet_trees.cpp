@@ -326,8 +326,8 @@ DiscLeaves read_disc_leaves(const std::filesystem::path& file, const std::string
                                      "nx ny nz`)");
       v[i] = *value;
     }
-    if (!(v[0] > 0.0 && v[0] <= 100.0))
-      throw input_error(place, "the radius must be in (0, 100] m, got " + std::to_string(v[0]));
+    if (!(v[0] > 0.0 && v[0] <= max_model_reach_m))
+      throw input_error(place, "the radius must be in (0, 1000] m, got " + std::to_string(v[0]));
     for (int i = 1; i < 4; ++i)
       if (std::abs(v[i]) > max_model_reach_m)
         throw input_error(place,

@@ -46,7 +46,7 @@ bool is_disc_leaf_file(const std::filesystem::path& file);
 // Reads a disc leaf file of model `model` (for messages): one disc a line, seven numbers apart by
 // spaces or tabs, `radius x y z nx ny nz` (metres, the model's frame; the normal need not be
 // unit, it is normalised); blank lines and lines starting with '#' skipped. A line that is not
-// seven finite numbers, a radius not in (0, 100] m, a centre beyond 1 km of the origin, a normal
+// seven finite numbers, a radius not in (0, 1000] m, a centre beyond 1 km of the origin, a normal
 // of zero length, more than max_facet_triangles discs or none at all is refused, naming the file
 // and line.
 DiscLeaves read_disc_leaves(const std::filesystem::path& file, const std::string& model);

@@ -64,7 +64,7 @@ TEST(DiscLeaves, MalformedLinesAreRefusedNamingTheFileAndLine) {
         Case{"0.1 0 0 one 0 0 1\n", "bad.def:1: field 4"},
         Case{"0.1 0 0 nan 0 0 1\n", "not a finite number"},
         Case{"0 0 0 1 0 0 1\n", "bad.def:1: the radius"},
-        Case{"-0.1 0 0 1 0 0 1\n", "the radius must be in (0, 100]"},
+        Case{"-0.1 0 0 1 0 0 1\n", "the radius must be in (0, 1000]"},
         Case{"0.1 0 0 2000 0 0 1\n", "beyond 1 km"},
         Case{"0.1 0 0 1 0 0 0\n", "bad.def:1: the normal"},
         Case{"0.1 0 0 1 1e308 1e308 0\n", "the normal"}, Case{"# nothing\n\n", "hold no disc"},
