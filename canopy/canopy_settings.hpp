@@ -62,11 +62,12 @@ struct CanopySettings {
   std::string point_cloud_file;
   std::string point_cloud_crs;
   double voxel_size_m = 1.0;
-  // Facet trees (canopy.facets): the trees file, each model's name and mesh file, the
-  // materials the meshes' material names map to.
+  // Facet trees (canopy.facets): the trees file, each model's name and mesh (or disc leaf)
+  // file, the materials the meshes' material names map to, and the discs' material.
   std::string facet_trees_file;
   std::vector<std::pair<std::string, std::string>> facet_models;
   std::vector<FacetMaterialSettings> facet_materials;
+  std::string facet_disc_material = "leaf";  // the material of every disc leaf model's discs
 };
 
 // A stand: polygons (lon, lat rings; a point is inside when an odd number of rings hold it, so

@@ -1,4 +1,5 @@
-// Facet tree models through Assimp, and the trees file through the CSV reader or OGR.
+// Facet tree models through Assimp, disc leaf files, and the trees file through the CSV reader or
+// OGR.
 #include "canopy/facet_trees.hpp"
 
 #include <assimp/DefaultIOSystem.h>
@@ -274,11 +275,102 @@ FacetMesh read_facet_mesh(const std::filesystem::path& file, const std::string& 
   return mesh;
 }
 
+bool is_disc_leaf_file(const std::filesystem::path& file) {
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".def";
+}
+
+DiscLeaves read_disc_leaves(const std::filesystem::path& file, const std::string& model) {
+  const std::string path = file.string();
+  require_input_file(path, "the disc leaves of model \"" + model + "\"");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw input_error(path, "cannot open the disc leaves of model \"" + model + "\"");
+  DiscLeaves leaves;
+  constexpr std::size_t max_line_bytes = 4096;
+  char line[max_line_bytes];
+  long number = 0;
+  while (true) {
+    in.getline(line, max_line_bytes);
+    if (in.eof() && in.gcount() == 0) break;
+    ++number;
+    const std::string place = path + ":" + std::to_string(number);
+    if (in.fail()) {
+      if (!in.eof())
+        throw input_error(place, "a line longer than " + std::to_string(max_line_bytes) +
+                                     " bytes is no disc leaf (`radius x y z nx ny nz`)");
+      in.clear(std::ios::eofbit);
+    }
+    std::string_view text(line);
+    std::vector<std::string_view> words;
+    for (std::size_t at = 0; at < text.size();) {
+      const std::size_t start = text.find_first_not_of(" \t\r", at);
+      if (start == std::string_view::npos) break;
+      const std::size_t end = std::min(text.find_first_of(" \t\r", start), text.size());
+      words.push_back(text.substr(start, end - start));
+      at = end;
+    }
+    if (words.empty() || words.front().front() == '#') {
+      if (in.eof()) break;
+      continue;
+    }
+    if (words.size() != 7)
+      throw input_error(place, "a disc leaf is 7 numbers, `radius x y z nx ny nz`, got " +
+                                   std::to_string(words.size()) + " fields");
+    double v[7];
+    for (int i = 0; i < 7; ++i) {
+      const std::optional<double> value = parse_number(words[i]);
+      if (!value)
+        throw input_error(place, "field " + std::to_string(i + 1) + ", " + field_excerpt(words[i]) +
+                                     ", is not a finite number (a disc leaf is `radius x y z "
+                                     "nx ny nz`)");
+      v[i] = *value;
+    }
+    if (!(v[0] > 0.0 && v[0] <= max_model_reach_m))
+      throw input_error(place, "the radius must be in (0, 1000] m, got " + std::to_string(v[0]));
+    for (int i = 1; i < 4; ++i)
+      if (std::abs(v[i]) > max_model_reach_m)
+        throw input_error(place,
+                          "the centre lies beyond 1 km of the model's origin (model units are "
+                          "metres)");
+    const double length = std::sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+    if (!(length > 0.0) || !std::isfinite(length))
+      throw input_error(place, "the normal (nx ny nz) has no length");
+    if (leaves.size() >= max_facet_triangles)
+      throw input_error(place,
+                        "holds more than " + std::to_string(max_facet_triangles) + " disc leaves");
+    leaves.discs_m.insert(leaves.discs_m.end(),
+                          {static_cast<float>(v[1]), static_cast<float>(v[2]),
+                           static_cast<float>(v[3]), static_cast<float>(v[0])});
+    leaves.normals.insert(leaves.normals.end(),
+                          {static_cast<float>(v[4] / length), static_cast<float>(v[5] / length),
+                           static_cast<float>(v[6] / length)});
+    if (in.eof()) break;
+  }
+  if (in.bad())
+    throw input_error(path, "the disc leaves of model \"" + model + "\" could not be read");
+  if (leaves.size() == 0)
+    throw input_error(path, "the disc leaves of model \"" + model + "\" hold no disc");
+  return leaves;
+}
+
 namespace {
 
 const std::vector<std::string_view> geographic_header{"lon", "lat", "model", "rotation_deg",
                                                       "scale"};
 const std::vector<std::string_view> metric_header{"x", "y", "model", "rotation_deg", "scale"};
+// The optional last column: the model's origin above the ground (a floating crown).
+constexpr std::string_view height_column = "z_m";
+constexpr double max_height_m = 1000.0;
+
+// Whether `fields` is `header`, or `header` and z_m.
+bool header_is(const std::vector<std::string_view>& fields,
+               const std::vector<std::string_view>& header) {
+  if (fields.size() == header.size() + 1 && fields.back() == height_column)
+    return std::equal(header.begin(), header.end(), fields.begin());
+  return fields == header;
+}
 
 int model_number(std::string_view name, const std::vector<std::string>& models,
                  const std::string& place) {
@@ -298,6 +390,8 @@ void check_tree(const FacetTree& tree, const std::string& place) {
     throw input_error(place, "lon must be in [-180, 360]");
   if (!(tree.lat_deg >= -90.0 && tree.lat_deg <= 90.0))
     throw input_error(place, "lat must be in [-90, 90]");
+  if (!(tree.z_m >= 0.0 && tree.z_m <= max_height_m))
+    throw input_error(place, "z_m must be in [0, 1000] m");
 }
 
 std::vector<FacetTree> read_csv_trees(const std::filesystem::path& file,
@@ -306,11 +400,14 @@ std::vector<FacetTree> read_csv_trees(const std::filesystem::path& file,
   CsvReader csv(file, "the trees file");
   std::vector<std::string_view> fields;
   std::optional<GeographicLib::LocalCartesian> origin;
-  if (csv.next_row(fields) && fields != geographic_header) {
-    if (fields != metric_header)
+  std::size_t columns = geographic_header.size();
+  const bool header = csv.next_row(fields);
+  if (header) columns = fields.size();
+  if (header && !header_is(fields, geographic_header)) {
+    if (!header_is(fields, metric_header))
       throw input_error(csv.place(),
                         "expected the header lon,lat,model,rotation_deg,scale or "
-                        "x,y,model,rotation_deg,scale");
+                        "x,y,model,rotation_deg,scale (either with a last column z_m)");
     if (!plane)
       throw input_error(
           csv.place(), "x,y trees are metres from terrain.plane's origin; with a DEM give lon,lat");
@@ -319,14 +416,16 @@ std::vector<FacetTree> read_csv_trees(const std::filesystem::path& file,
   std::vector<FacetTree> trees;
   while (csv.next_row(fields)) {
     const std::string place = csv.place();
-    if (fields.size() != 5)
-      throw input_error(place, "expected 5 values, got " + std::to_string(fields.size()));
+    if (fields.size() != columns)
+      throw input_error(place, "expected " + std::to_string(columns) + " values, got " +
+                                   std::to_string(fields.size()));
     FacetTree tree;
     const double a = csv.number(fields[0], origin ? "x" : "lon");
     const double b = csv.number(fields[1], origin ? "y" : "lat");
     tree.model = model_number(fields[2], models, place);
     tree.rotation_deg = csv.number(fields[3], "rotation_deg");
     tree.scale = csv.number(fields[4], "scale");
+    if (columns == 6) tree.z_m = csv.number(fields[5], height_column);
     if (origin) {
       if (std::abs(a) > max_offset_m || std::abs(b) > max_offset_m)
         throw input_error(place, "x and y must be within 1000000 m of the plane's origin");
@@ -370,6 +469,7 @@ std::vector<FacetTree> read_ogr_trees(const std::filesystem::path& file,
         throw input_error(path, "layer " + std::to_string(l) + " has no attribute " + names[i] +
                                     " (trees need model, rotation_deg and scale)");
     }
+    const int height = definition->GetFieldIndex("z_m");  // optional
     layer->ResetReading();
     for (std::unique_ptr<OGRFeature> feature(layer->GetNextFeature()); feature;
          feature.reset(layer->GetNextFeature())) {
@@ -386,6 +486,7 @@ std::vector<FacetTree> read_ogr_trees(const std::filesystem::path& file,
       tree.model = model_number(feature->GetFieldAsString(fields[0]), models, place);
       tree.rotation_deg = feature->GetFieldAsDouble(fields[1]);
       tree.scale = feature->GetFieldAsDouble(fields[2]);
+      if (height >= 0) tree.z_m = feature->GetFieldAsDouble(height);
       check_tree(tree, place);
       trees.push_back(tree);
     }

@@ -3,6 +3,7 @@
 #include "pipeline/app/run_outline.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -130,6 +131,31 @@ std::string terrain_line(const json& terrain) {
 
 std::string vegetation_line(const json& canopy) {
   if (canopy.is_null()) return "none (bare ground)";
+  auto file_name = [](const json& path) {
+    return std::filesystem::path(text(path)).filename().string();
+  };
+  if (canopy.contains("facets")) {
+    // Facet trees: their models, meshes or disc leaves, and the file that places them.
+    const json& facets = canopy["facets"];
+    int meshes = 0, discs = 0;
+    const json models = facets.value("models", json::object());
+    for (const auto& [name, file] : models.items()) {
+      std::string extension = std::filesystem::path(text(file)).extension().string();
+      for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      ++(extension == ".def" ? discs : meshes);
+    }
+    std::string line = "facet trees from " + file_name(facets.value("trees_file", json(""))) +
+                       ": " + std::to_string(meshes) + " mesh model" + (meshes == 1 ? "" : "s");
+    if (discs > 0)
+      line += ", " + std::to_string(discs) + " disc leaf model" + (discs == 1 ? "" : "s");
+    return line;
+  }
+  if (canopy.contains("voxels"))
+    return "a voxel grid of plant area density from " +
+           file_name(canopy["voxels"].value("file", json("")));
+  if (canopy.contains("point_cloud"))
+    return "a point cloud from " + file_name(canopy["point_cloud"].value("file", json(""))) +
+           ", voxelised at " + number(canopy["point_cloud"].value("voxel_size_m", 1.0)) + " m";
   std::string line;
   if (canopy.contains("crowns_file")) {
     line = "explicit crowns from " +

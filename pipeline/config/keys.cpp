@@ -673,22 +673,35 @@ Key canopy_keys() {
               std::move(cloud_keys)),
        object(
            "facets",
-           "facet trees instead of crowns (no other canopy key beside it): triangle meshes, one "
-           "shared model each, placed by `trees_file`, each tree standing on the terrain under "
-           "its stem",
+           "facet trees instead of crowns (no other canopy key beside it): triangle meshes or "
+           "disc leaves, one shared model each, placed by `trees_file`, each tree standing on "
+           "the terrain under its stem (or floating `z_m` above it)",
            {f.path(
                  "trees_file", &S::facet_trees_file,
                  "the trees: a `.csv` with header `lon,lat,model,rotation_deg,scale` (degrees) or "
                  "`x,y,model,rotation_deg,scale` (metres east and north of `terrain.plane`'s "
-                 "origin), or any vector file OGR reads of points (in any CRS) with the "
-                 "attributes `model`, `rotation_deg` and `scale`; `rotation_deg` turns the "
-                 "model's +y axis to that azimuth (clockwise from north)")
+                 "origin), either with a last column `z_m` (the model's origin above the ground, "
+                 "0 to 1000 m; 0 when absent), or any vector file OGR reads of points (in any "
+                 "CRS) with the attributes `model`, `rotation_deg` and `scale` (and optionally "
+                 "`z_m`); `rotation_deg` turns the model's +y axis to that azimuth (clockwise "
+                 "from north)")
                 .with_required(),
             map("models",
-                "each model's name and its mesh file (any format Assimp reads: OBJ, PLY, glTF, "
-                "...; metres, z up, the stem's foot at the origin)",
-                path("NAME", "the mesh file"))
+                "each model's name and its file: a mesh (any format Assimp reads: OBJ, PLY, "
+                "glTF, ...; metres, z up, the stem's foot at the origin), or leaves as discs in "
+                "RAMI's text, a `*.def` file of one disc a line `radius x y z nx ny nz` (metres, "
+                "the model's frame), all of `disc_material`",
+                path("NAME", "the mesh or disc leaf file"))
                 .with_required(),
+            f.bind(declare::string("disc_material", std::nullopt,
+                                   "the material (an entry of `materials`, two-sided when it "
+                                   "has a `transmittance`) of every disc of the disc leaf "
+                                   "models")
+                       .with_default_text("`leaf`"),
+                   &S::facet_disc_material,
+                   [](JsonReader& r, const std::string& key) {
+                     return r.optional_string(key).value_or("leaf");
+                   }),
             map("materials",
                 "the optics of each material name the meshes use (a mesh material without an "
                 "entry is an error)",

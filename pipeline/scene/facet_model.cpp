@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <string>
 #include <unordered_map>
 
@@ -30,7 +31,6 @@ FacetModel::FacetModel(FacetMesh mesh, std::vector<int> triangle_materials)
     bottom_m_ = std::min(bottom_m_, double{vertices_m_[i + 2]});
     top_m_ = std::max(top_m_, double{vertices_m_[i + 2]});
   }
-  // Cells no smaller than 1/512 of the model's width, so that a large model keeps few.
   double low[2] = {std::numeric_limits<double>::infinity(),
                    std::numeric_limits<double>::infinity()};
   double high[2] = {-low[0], -low[1]};
@@ -39,31 +39,9 @@ FacetModel::FacetModel(FacetMesh mesh, std::vector<int> triangle_materials)
       low[axis] = std::min(low[axis], double{vertices_m_[i + axis]});
       high[axis] = std::max(high[axis], double{vertices_m_[i + axis]});
     }
-  AreaGrid& grid = area_grid_;
-  grid.cell_m = std::max({min_area_cell_m, (high[0] - low[0]) / 512.0, (high[1] - low[1]) / 512.0});
-  std::int64_t first[2] = {0, 0};
-  for (int axis = 0; axis < 2 && !triangles_.empty(); ++axis) {
-    first[axis] = static_cast<std::int64_t>(std::floor(low[axis] / grid.cell_m));
-    grid.first_centre_m[axis] = (static_cast<double>(first[axis]) + 0.5) * grid.cell_m;
-  }
-  // Cells keyed by their indices, in the order first met: the same cells for the same mesh.
-  // Every centroid lies within the vertices' bounds, so that at most 514 columns and rows hold
-  // them; the clamp only guards a rounding at the last one.
-  std::unordered_map<std::int64_t, std::size_t> cells;
-  auto add = [&](const Vec3& point, double area) {
-    std::int64_t index[2];
-    for (int axis = 0; axis < 2; ++axis)
-      index[axis] = std::clamp<std::int64_t>(
-          static_cast<std::int64_t>(std::floor(point[axis] / grid.cell_m)) - first[axis], 0, 513);
-    const auto [entry, added] = cells.emplace(index[0] * 1024 + index[1], grid.cells.size());
-    if (added) {
-      grid.cells.push_back(
-          {static_cast<std::uint16_t>(index[0]), static_cast<std::uint16_t>(index[1]), 0.0f});
-      grid.columns = std::max(grid.columns, static_cast<int>(index[0]) + 1);
-      grid.rows = std::max(grid.rows, static_cast<int>(index[1]) + 1);
-    }
-    grid.cells[entry->second].area_m2 += static_cast<float>(area);
-  };
+  if (!triangles_.empty()) start_area_grid(low, high);
+  const AreaGrid& grid = area_grid_;
+  auto add = [this](const Vec3& point, double area) { add_area(point, area); };
   for (std::size_t t = 0; t + 2 < triangles_.size(); t += 3) {
     Vec3 p[3];
     for (int k = 0; k < 3; ++k) {
@@ -85,7 +63,92 @@ FacetModel::FacetModel(FacetMesh mesh, std::vector<int> triangle_materials)
           add(p[0] + ((i + 2.0 / 3.0) / n) * e1 + ((j + 2.0 / 3.0) / n) * e2, part);
       }
   }
+  cell_numbers_ = {};           // only needed while the grid is made
   vertices_m_.push_back(0.0f);  // Embree reads a vertex's three floats with one 16-byte load
+}
+
+FacetModel::FacetModel(DiscLeaves discs, int material)
+    : discs_m_(std::move(discs.discs_m)), normals_(std::move(discs.normals)) {
+  if (discs_m_.empty() || normals_.size() != 3 * this->discs())
+    throw run_error("facet model", "discs need a centre, radius and normal each");
+  material_runs_.push_back({0, material});
+  top_m_ = -std::numeric_limits<double>::infinity();
+  bottom_m_ = std::numeric_limits<double>::infinity();
+  double low[2] = {std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::infinity()};
+  double high[2] = {-low[0], -low[1]};
+  for (std::size_t d = 0; d < this->discs(); ++d) {
+    const float* c = &discs_m_[4 * d];
+    const double r = c[3];
+    const Vec3 n{normals_[3 * d], normals_[3 * d + 1], normals_[3 * d + 2]};
+    // A disc reaches r sin(its tilt) up and down, r sqrt(1 - n_axis^2) along a horizontal axis.
+    const double vertical = r * std::sqrt(std::max(0.0, 1.0 - n[2] * n[2]));
+    reach_m_ = std::max(reach_m_, std::hypot(double{c[0]}, double{c[1]}) + r);
+    bottom_m_ = std::min(bottom_m_, c[2] - vertical);
+    top_m_ = std::max(top_m_, c[2] + vertical);
+    for (int axis = 0; axis < 2; ++axis) {
+      const double half = r * std::sqrt(std::max(0.0, 1.0 - n[axis] * n[axis]));
+      low[axis] = std::min(low[axis], c[axis] - half);
+      high[axis] = std::max(high[axis], c[axis] + half);
+    }
+  }
+  start_area_grid(low, high);
+  for (std::size_t d = 0; d < this->discs(); ++d) {
+    const float* c = &discs_m_[4 * d];
+    const double r = c[3];
+    const Vec3 centre{c[0], c[1], c[2]};
+    const double area = std::numbers::pi * r * r;
+    area_m2_ += area;
+    // A disc wider than a cell is cut into n^2 pieces of equal area (n rings of n sectors), each
+    // gathered at its middle.
+    const int n = std::max(1, static_cast<int>(std::ceil(2.0 * r / area_grid_.cell_m)));
+    if (n == 1) {
+      add_area(centre, area);
+      continue;
+    }
+    const Vec3 normal{normals_[3 * d], normals_[3 * d + 1], normals_[3 * d + 2]};
+    const Vec3 helper = std::abs(normal[2]) < 0.9 ? Vec3{0.0, 0.0, 1.0} : Vec3{1.0, 0.0, 0.0};
+    const Vec3 u = normalized(cross(normal, helper)), v = cross(normal, u);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const double rho = r * std::sqrt((i + 0.5) / n);
+        const double phi = 2.0 * std::numbers::pi * (j + 0.5) / n;
+        add_area(centre + rho * std::cos(phi) * u + rho * std::sin(phi) * v,
+                 area / (double(n) * n));
+      }
+  }
+  cell_numbers_ = {};        // only needed while the grid is made
+  normals_.push_back(0.0f);  // Embree may read a normal's three floats with one 16-byte load
+}
+
+void FacetModel::start_area_grid(const double low[2], const double high[2]) {
+  // Cells no smaller than 1/512 of the model's width, so that a large model keeps few.
+  AreaGrid& grid = area_grid_;
+  grid.cell_m = std::max({min_area_cell_m, (high[0] - low[0]) / 512.0, (high[1] - low[1]) / 512.0});
+  for (int axis = 0; axis < 2; ++axis) {
+    first_cell_[axis] = static_cast<std::int64_t>(std::floor(low[axis] / grid.cell_m));
+    grid.first_centre_m[axis] = (static_cast<double>(first_cell_[axis]) + 0.5) * grid.cell_m;
+  }
+}
+
+// Cells keyed by their indices, in the order first met: the same cells for the same model.
+// Every point lies within the model's bounds, so that at most 514 columns and rows hold them; the
+// clamp only guards a rounding at the last one.
+void FacetModel::add_area(const Vec3& point, double area) {
+  AreaGrid& grid = area_grid_;
+  std::int64_t index[2];
+  for (int axis = 0; axis < 2; ++axis)
+    index[axis] = std::clamp<std::int64_t>(
+        static_cast<std::int64_t>(std::floor(point[axis] / grid.cell_m)) - first_cell_[axis], 0,
+        513);
+  const auto [entry, added] = cell_numbers_.emplace(index[0] * 1024 + index[1], grid.cells.size());
+  if (added) {
+    grid.cells.push_back(
+        {static_cast<std::uint16_t>(index[0]), static_cast<std::uint16_t>(index[1]), 0.0f});
+    grid.columns = std::max(grid.columns, static_cast<int>(index[0]) + 1);
+    grid.rows = std::max(grid.rows, static_cast<int>(index[1]) + 1);
+  }
+  grid.cells[entry->second].area_m2 += static_cast<float>(area);
 }
 
 FacetModel::~FacetModel() {
@@ -100,12 +163,23 @@ RTCSceneTy* FacetModel::scene_on(const RayDevice& device) const {
   RTCDevice handle = device.handle();
   if (const auto found = scenes_.find(handle); found != scenes_.end()) return found->second;
   RTCScene scene = rtcNewScene(handle);
-  RTCGeometry geometry = rtcNewGeometry(handle, RTC_GEOMETRY_TYPE_TRIANGLE);
-  rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                             vertices_m_.data(), 0, 3 * sizeof(float), vertices_m_.size() / 3);
-  rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                             triangles_.data(), 0, 3 * sizeof(std::uint32_t),
-                             triangles_.size() / 3);
+  RTCGeometry geometry = nullptr;
+  if (!discs_m_.empty()) {
+    // Oriented discs: a centre and radius, and a normal; Embree hits either side and gives the
+    // normal as the hit's geometric normal, in the model's frame.
+    geometry = rtcNewGeometry(handle, RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                               discs_m_.data(), 0, 4 * sizeof(float), discs());
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3,
+                               normals_.data(), 0, 3 * sizeof(float), discs());
+  } else {
+    geometry = rtcNewGeometry(handle, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                               vertices_m_.data(), 0, 3 * sizeof(float), vertices_m_.size() / 3);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                               triangles_.data(), 0, 3 * sizeof(std::uint32_t),
+                               triangles_.size() / 3);
+  }
   rtcCommitGeometry(geometry);
   rtcAttachGeometryByID(scene, geometry, 0);
   rtcReleaseGeometry(geometry);
@@ -122,9 +196,11 @@ RTCSceneTy* FacetModel::scene_on(const RayDevice& device) const {
 }
 
 double FacetModel::bytes() const {
-  // Embree's BVH of triangles takes about 100 bytes a triangle at medium quality.
+  // Embree's BVH of triangles takes about 100 bytes a triangle at medium quality; of discs, as
+  // many (a bound for them as for a triangle).
   return vertices_m_.size() * sizeof(float) + triangles_.size() * sizeof(std::uint32_t) +
-         material_runs_.size() * sizeof(MaterialRun) + triangles() * 100.0 +
+         (discs_m_.size() + normals_.size()) * sizeof(float) +
+         material_runs_.size() * sizeof(MaterialRun) + (triangles() + discs()) * 100.0 +
          area_grid_.cells.size() * sizeof(AreaCell);
 }
 

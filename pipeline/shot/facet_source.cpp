@@ -16,6 +16,22 @@ FacetSource::FacetSource(const VegetationSettings& settings)
   const CanopySettings& canopy = settings.canopy;
   std::vector<std::string> names;
   for (const auto& [name, file] : canopy.facet_models) {
+    if (is_disc_leaf_file(file)) {
+      // Leaves as discs, all of canopy.facets.disc_material.
+      DiscLeaves discs = read_disc_leaves(file, name);
+      const auto found = std::find_if(
+          materials_.begin(), materials_.end(),
+          [&](const FacetMaterialSettings& m) { return m.name == canopy.facet_disc_material; });
+      if (found == materials_.end())
+        throw input_error(file, "model \"" + name + "\" is of disc leaves of the material \"" +
+                                    canopy.facet_disc_material +
+                                    "\" (canopy.facets.disc_material), which "
+                                    "canopy.facets.materials does not give");
+      models_.push_back(std::make_shared<const FacetModel>(
+          std::move(discs), static_cast<int>(found - materials_.begin())));
+      names.push_back(name);
+      continue;
+    }
     FacetMesh mesh = read_facet_mesh(file, name);
     // Each mesh material is one of the configuration's, by name.
     std::vector<int> numbers;
@@ -56,7 +72,7 @@ RegionVegetation FacetSource::grow(const VegetationRegion& region) const {
       continue;
     const double ground_m = region.terrain.height_m(tree.lat_deg, tree.lon_deg);
     if (!std::isfinite(ground_m)) continue;
-    const Vec3 foot = region.frame.to_local({tree.lat_deg, tree.lon_deg, ground_m});
+    const Vec3 foot = region.frame.to_local({tree.lat_deg, tree.lon_deg, ground_m + tree.z_m});
     if (std::abs(foot[0]) > reach_m || std::abs(foot[1]) > reach_m) continue;
     geometry.facets.push_back(
         {models_[tree.model], foot, tree.rotation_deg * std::numbers::pi / 180.0, tree.scale});

@@ -1,6 +1,7 @@
-// Facet trees as a vegetation source (PRODUCT.md section 8, canopy.facets): triangle meshes
-// read with Assimp, one shared model each (pipeline/scene/facet_model.hpp), placed by a trees
-// file, each tree standing on the terrain under its stem as an Embree instance of its model.
+// Facet trees as a vegetation source (PRODUCT.md sections 8 and 13, canopy.facets): triangle
+// meshes read with Assimp or leaves as discs read from RAMI's `*.def` files, one shared model
+// each (pipeline/scene/facet_model.hpp), placed by a trees file, each tree standing on the terrain
+// under its stem (or floating z_m above it) as an Embree instance of its model.
 // The meshes' material names map to the configuration's materials: leaves (a transmittance
 // given) two-sided bi-Lambertian, the others (wood) Lambertian. The hotspot comes out of the
 // geometry: the way back to the sensor runs through the same facets.

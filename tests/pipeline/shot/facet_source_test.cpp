@@ -179,6 +179,55 @@ TEST(FacetSource, TruthWeighsATurnedScaledTreeWhereItStands) {
   EXPECT_NEAR(truth.pai / expected, 1.0, 0.005) << truth.pai;
 }
 
+// A floating instance (the trees file's z_m): one disc leaf model, a horizontal disc of radius
+// 300 m (wider than the beam) 0.5 m above its origin, placed at z_m 0 and at z_m 10; at order 1
+// over black ground the waveform is the pulse reflected by the disc, so that the second arrives
+// earlier by 2 z / c = 2 * 10 / 299 792 458 m/s = 66.713 ns: its centroid within half a bin of
+// 0.1 ns (the transport tallies each return's time to its bin; with 1 ns bins the shift comes out
+// 67 ns; both waveforms are the same Gaussian shifted, each window placed by the scene's top),
+// its energy the same (the range changes R^2 by 3e-5), and the truth's canopy height 0.5 and
+// 10.5 m.
+TEST(FacetSource, AFloatingInstanceReturnsEarlierByTwiceItsHeightOverC) {
+  test_support::ScratchDir dir;
+  write(dir.path() / "disc.def", "# radius x y z nx ny nz\n300 0 0 0.5 0 0 1\n");
+  VegetationSettings vegetation = plate_settings(dir.path());
+  vegetation.canopy.facet_models = {{"disc", (dir.path() / "disc.def").string()}};
+  const std::unique_ptr<Terrain> terrain = plane_terrain(0.0);
+  ShotSettings settings = shot_settings(0.0, 2000);
+  settings.transport.max_order = 1;
+  settings.lidar.bin_ns = 0.1;  // the transport tallies a return's time to its bin
+  settings.lidar.bins = 5440;
+  const Footprint footprint = nadir_footprint(*terrain);
+  auto shot = [&](double z_m) {
+    write(dir.path() / "trees.csv",
+          "x,y,model,rotation_deg,scale,z_m\n0,0,disc,0,1," + std::to_string(z_m) + "\n");
+    const ShotSimulator simulator(settings, *terrain, make_vegetation_source(vegetation),
+                                  make_receiver(receiver_settings(settings, "waveform")));
+    return simulator.simulate(footprint);
+  };
+  // The arrival time of a waveform's centroid after a fixed instant (the return from elevation
+  // 0): its bin's time in the window, less the window's start, 2 elev_bin0_m / c before it.
+  auto arrival_ns = [](const ShotRecord& record) {
+    const std::vector<double>& power_W = record.rx_waveform_W[0];
+    double sum = 0.0, moment = 0.0;
+    for (std::size_t b = 0; b < power_W.size(); ++b) {
+      sum += power_W[b];
+      moment += power_W[b] * static_cast<double>(b);
+    }
+    return moment / sum * 0.1 - 2.0 * record.elev_bin0_m / 299792458.0 * 1e9;  // bins of 0.1 ns
+  };
+  const ShotRecord standing = shot(0.0), floating = shot(10.0);
+  ASSERT_EQ(standing.quality_flag, quality_good);
+  ASSERT_EQ(floating.quality_flag, quality_good);
+  const double shift_ns = arrival_ns(standing) - arrival_ns(floating);
+  RecordProperty("shift_ns", std::to_string(shift_ns));
+  EXPECT_NEAR(shift_ns, 2.0 * 10.0 / 299792458.0 * 1e9, 0.05);
+  EXPECT_NEAR(floating.rx_energy_J[0] / standing.rx_energy_J[0], 1.0, 1e-3);
+  EXPECT_EQ(standing.rx_energy_ground_J[0], 0.0);
+  EXPECT_NEAR(standing.canopy_height_true_m, 0.5, 0.01);
+  EXPECT_NEAR(floating.canopy_height_true_m, 10.5, 0.01);
+}
+
 std::string refusal(const VegetationSettings& settings) {
   try {
     make_vegetation_source(settings);
@@ -230,6 +279,18 @@ TEST(FacetSource, BadFilesAreRefusedNamingTheFile) {
   message = refusal(settings);
   EXPECT_NE(message.find("trees.gpkg"), std::string::npos) << message;
   for (const std::string& m : {message}) EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+
+  // A disc leaf model: a malformed line named by file and line; discs of a material that
+  // canopy.facets.materials does not give, named by the key.
+  settings = plate_settings(dir.path());
+  settings.canopy.facet_models = {{"plate", (dir.path() / "plate.def").string()}};
+  write(dir.path() / "plate.def", "0.1 0 0 1 0 0 1\n0.1 0 0 1 0 0\n");
+  message = refusal(settings);
+  EXPECT_NE(message.find("plate.def:2:"), std::string::npos) << message;
+  write(dir.path() / "plate.def", "0.1 0 0 1 0 0 1\n");
+  settings.canopy.facet_disc_material = "needle";
+  message = refusal(settings);
+  EXPECT_NE(message.find("\"needle\" (canopy.facets.disc_material)"), std::string::npos) << message;
 }
 
 }  // namespace
