@@ -37,7 +37,7 @@ json layer(double pai, double elevation_m, int points) {
         {"pai", pai},
         {"cover", 1.0}}},
       {"track", {{"type", "points"}, {"points", track_points}, {"altitude_m", 420000.0}}},
-      {"output", {{"geojson", false}}},
+      {"output", {{"footprints", false}}},
   };
 }
 

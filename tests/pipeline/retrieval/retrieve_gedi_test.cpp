@@ -77,7 +77,7 @@ TEST(RetrieveGedi, GlaswavesOwnL1bGivesWhatItsShotsGive) {
         {"pai", 1.5},
         {"cover", 1.0}}},
       {"track", {{"type", "points"}, {"points", track_points}, {"altitude_m", 420000.0}}},
-      {"output", {{"geojson", false}, {"gedi_l1b", true}}},
+      {"output", {{"footprints", false}, {"gedi_l1b", true}}},
   };
   std::ofstream(dir.path() / "pass.json") << config.dump(2);
   const CommandOutcome run = run_glaswave("run " + (dir.path() / "pass.json").string() +
