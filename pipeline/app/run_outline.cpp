@@ -105,6 +105,18 @@ std::string sensor_line(const json& sensor, const json& track) {
   return line;
 }
 
+// The layers and each band's two-way transmission through their column.
+std::string atmosphere_line(const Config& config) {
+  const AtmosphereSettings& a = *config.atmosphere;
+  std::string line = (a.preset.empty() ? std::string("") : a.preset + ", ") +
+                     plural(static_cast<double>(a.layers.size()), "layer", "layers") +
+                     ", two-way transmission";
+  for (std::size_t b = 0; b < config.sensor.bands.size(); ++b)
+    line += (b ? ", " : " ") + number(config.sensor.bands[b].atmos_transmission_roundtrip, 2) +
+            " (" + config.sensor.bands[b].name + ")";
+  return line;
+}
+
 std::string terrain_line(const json& terrain) {
   std::string line;
   if (terrain.contains("dem")) {
@@ -219,6 +231,7 @@ std::string run_outline(const Config& config, const CheckSummary& summary,
   line("track:", track_line(resolved.value("track", json::object()), summary));
   line("sensor:", sensor_line(resolved.value("sensor", json::object()),
                               resolved.value("track", json::object())));
+  if (config.atmosphere) line("atmosphere:", atmosphere_line(config));
   line("terrain:", terrain_line(resolved.value("terrain", json::object())));
   line("vegetation:", vegetation_line(canopy));
   line("rays:", number(rays, 12) + " a shot, up to " + number(max_order, 12) +

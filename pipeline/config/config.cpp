@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/glas_time.hpp"
 #include "core/names.hpp"
+#include "pipeline/config/atmosphere_presets.hpp"
 #include "pipeline/config/canopy_section.hpp"
 #include "pipeline/config/cross_checks.hpp"
 #include "pipeline/config/json_reader.hpp"
@@ -40,7 +41,8 @@ std::string band_list(const std::vector<LidarBand>& bands) {
 std::vector<double> spectral(JsonReader& reader, const std::string& key,
                              const std::vector<LidarBand>& bands) {
   const Key& declared = reader.declared(key, KeyType::spectral);
-  const double fallback = declared.default_value.get<double>();
+  if (declared.required) reader.require(key);
+  const double fallback = declared.required ? 0.0 : declared.default_value.get<double>();
   const Range& range = declared.range;
   const json& value = reader.raw(key);
   const std::string place = reader.place(key);
@@ -111,20 +113,26 @@ std::string sensor_preset(const json& given) {
                          (suggestion.empty() ? "; the presets are " + known : suggestion));
 }
 
-// The laser's bands, their names unique.
-void read_bands(JsonReader& r, SensorSettings& s) {
+// The laser's bands, their names unique. With an atmosphere the layers give each band's two-way
+// transmission (parse_config sets it): the user's bands may not give it, and a preset's is left
+// out of the resolved configuration, which then reads back the same.
+void read_bands(JsonReader& r, SensorSettings& s, bool atmosphere, bool bands_given) {
   for (JsonReader& b : r.object_array("bands", true)) {
     LidarBand band;
-    for (const char* key :
-         {"name", "wavelength_nm", "pulse_energy_mJ", "atmos_transmission_roundtrip"})
-      b.require(key);
+    for (const char* key : {"name", "wavelength_nm", "pulse_energy_mJ"}) b.require(key);
+    if (!atmosphere) b.require("atmos_transmission_roundtrip");
     band.name = b.string("name", "");
     if (band.name.empty()) b.fail("name", "must not be empty");
     for (const LidarBand& other : s.bands)
       if (other.name == band.name) b.fail("name", "duplicate band name \"" + band.name + "\"");
     band.wavelength_nm = b.number("wavelength_nm");
     band.pulse_energy_mJ = b.number("pulse_energy_mJ");
-    band.atmos_transmission_roundtrip = b.number("atmos_transmission_roundtrip");
+    if (!atmosphere)
+      band.atmos_transmission_roundtrip = *b.optional_number("atmos_transmission_roundtrip");
+    else if (b.has("atmos_transmission_roundtrip") && bands_given)
+      b.fail("atmos_transmission_roundtrip",
+             "cannot be given beside \"atmosphere\": the layers give each band's two-way "
+             "transmission");
     b.finish();
     s.bands.push_back(band);
   }
@@ -159,11 +167,155 @@ SensorSettings read_sensor(JsonReader& root) {
   if (given.is_object())
     for (const auto& [key, value] : given.items()) merged[key] = value;
 
+  const bool atmosphere = !root.raw("atmosphere").is_null();
+  const bool bands_given = given.is_object() && given.contains("bands");
   JsonReader r(merged, "/sensor", root.resolved()["sensor"],
                root.declared("sensor", KeyType::object));
-  read_fields(r, {{"bands", [&] { read_bands(r, s); }}, {"beams", [&] { check_beams(r, s); }}}, s);
+  read_fields(r,
+              {{"bands", [&] { read_bands(r, s, atmosphere, bands_given); }},
+               {"beams", [&] { check_beams(r, s); }}},
+              s);
   r.finish();
   return s;
+}
+
+// ---- the atmosphere -------------------------------------------------------------------------
+
+// A fixed array of numbers, each within its declared range.
+std::vector<double> number_tuple(JsonReader& r, const std::string& key) {
+  const Key& k = r.declared(key, KeyType::number_tuple);
+  const json& value = r.raw(key);
+  std::string names;
+  for (const auto& [name, range] : k.items) names += (names.empty() ? "" : ", ") + name;
+  if (!value.is_array() || value.size() != k.items.size())
+    r.fail(key, "must be an array of " + std::to_string(k.items.size()) + " numbers [" + names +
+                    "], got " + describe(value));
+  std::vector<double> numbers;
+  for (std::size_t i = 0; i < k.items.size(); ++i)
+    numbers.push_back(
+        read_number(r.place(key) + "/" + std::to_string(i), value[i], k.items[i].second));
+  r.resolved()[key] = value;
+  return numbers;
+}
+
+// A layer's phase function: "rayleigh", {"hg_g": g} or {"hg2": [g1, g2, w]}.
+AtmospherePhase read_phase(JsonReader& r) {
+  const json& value = r.raw("phase");
+  AtmospherePhase phase;
+  if (value.is_null()) r.fail("phase", "is required");
+  if (value == "rayleigh") {
+    r.resolved()["phase"] = value;
+    return phase;
+  }
+  if (!value.is_object())
+    r.fail("phase",
+           "must be \"rayleigh\", {\"hg_g\": g} or {\"hg2\": [g1, g2, w]}, got " + describe(value));
+  JsonReader p(value, r.place("phase"), r.resolved()["phase"],
+               r.declared("phase", KeyType::choice_or_object));
+  const bool hg = p.has("hg_g"), hg2 = p.has("hg2");
+  p.finish();
+  if (hg == hg2) throw config_error(p.path(), "give exactly one of \"hg_g\" and \"hg2\"");
+  if (hg) {
+    phase.kind = AtmospherePhase::Kind::henyey_greenstein;
+    phase.g1 = *p.optional_number("hg_g");
+  } else {
+    const std::vector<double> terms = number_tuple(p, "hg2");
+    phase.kind = AtmospherePhase::Kind::two_term_henyey_greenstein;
+    phase.g1 = terms[0];
+    phase.g2 = terms[1];
+    phase.weight = terms[2];
+  }
+  return phase;
+}
+
+AtmosphereLayer read_layer(JsonReader& r, const std::vector<LidarBand>& bands) {
+  AtmosphereLayer layer;
+  const auto check_top = [&] {
+    if (!(layer.top_m > layer.base_m))
+      r.fail("top_m", "must be above base_m (" + format_number(layer.base_m) + "), got " +
+                          format_number(layer.top_m));
+  };
+  read_fields(
+      r,
+      {{"top_m", check_top},
+       {"optical_depth", [&] { layer.optical_depth = spectral(r, "optical_depth", bands); }},
+       {"single_scattering_albedo",
+        [&] { layer.single_scattering_albedo = spectral(r, "single_scattering_albedo", bands); }},
+       {"phase", [&] { layer.phase = read_phase(r); }}},
+      layer);
+  r.finish();
+  return layer;
+}
+
+// A preset's layer as the resolved configuration writes it: per-band values keyed by band name.
+json layer_json(const AtmosphereLayer& layer, const std::vector<LidarBand>& bands) {
+  json depth = json::object(), albedo = json::object();
+  for (std::size_t b = 0; b < bands.size(); ++b) {
+    depth[bands[b].name] = layer.optical_depth[b];
+    albedo[bands[b].name] = layer.single_scattering_albedo[b];
+  }
+  json phase = "rayleigh";
+  if (layer.phase.kind == AtmospherePhase::Kind::henyey_greenstein)
+    phase = {{"hg_g", layer.phase.g1}};
+  if (layer.phase.kind == AtmospherePhase::Kind::two_term_henyey_greenstein)
+    phase = {{"hg2", {layer.phase.g1, layer.phase.g2, layer.phase.weight}}};
+  return {{"base_m", layer.base_m},
+          {"top_m", layer.top_m},
+          {"above", layer.above_ellipsoid ? "ellipsoid" : "ground"},
+          {"optical_depth", depth},
+          {"single_scattering_albedo", albedo},
+          {"phase", phase}};
+}
+
+// `"atmosphere"`: a preset's name, or {"preset", "layers"} (layers given replace the preset's).
+// Absent: nothing, and nothing is written into the resolved configuration, which goes into the
+// products as before.
+std::optional<AtmosphereSettings> read_atmosphere(JsonReader& root,
+                                                  const std::vector<LidarBand>& bands) {
+  const json& value = root.raw("atmosphere");
+  if (value.is_null()) return std::nullopt;
+  const Key& declared = root.declared("atmosphere", KeyType::choice_or_object);
+  AtmosphereSettings a;
+  json& resolved = root.resolved()["atmosphere"];
+  resolved = json::object();
+  if (value.is_string()) {
+    a.preset = value.get<std::string>();
+    if (std::find(declared.choices.begin(), declared.choices.end(), a.preset) ==
+        declared.choices.end())
+      root.throw_not_one_of("atmosphere", a.preset, declared.choices);
+  } else if (value.is_object()) {
+    JsonReader r(value, root.place("atmosphere"), resolved, declared);
+    a.preset = r.optional_string("preset").value_or("");
+    if (!a.preset.empty() && std::find(declared.choices.begin(), declared.choices.end(),
+                                       a.preset) == declared.choices.end())
+      r.throw_not_one_of("preset", a.preset, declared.choices);
+    for (JsonReader& layer : r.object_array("layers", a.preset.empty()))
+      a.layers.push_back(read_layer(layer, bands));
+    r.finish();
+  } else {
+    root.fail("atmosphere",
+              "must be a preset's name or an object of \"preset\" and \"layers\", got " +
+                  describe(value));
+  }
+  if (!a.preset.empty()) resolved["preset"] = a.preset;
+  if (a.layers.empty()) {
+    a.layers = atmosphere_preset(a.preset, bands);
+    json& layers = resolved["layers"];
+    layers = json::array();
+    for (const AtmosphereLayer& layer : a.layers) layers.push_back(layer_json(layer, bands));
+  }
+  return a;
+}
+
+// Each band's two-way transmission through the layers' whole vertical column, as the bands'
+// fixed value stands for it without an atmosphere (the photon-counting receiver's background,
+// the GLAS granules' reflectivity).
+void set_band_transmissions(SensorSettings& sensor, const AtmosphereSettings& atmosphere) {
+  for (std::size_t b = 0; b < sensor.bands.size(); ++b) {
+    double tau = 0.0;
+    for (const AtmosphereLayer& layer : atmosphere.layers) tau += layer.optical_depth[b];
+    sensor.bands[b].atmos_transmission_roundtrip = std::exp(-2.0 * tau);
+  }
 }
 
 // Photon counting's background light: "sun", "none" or {"rate_MHz": R}.
@@ -680,6 +832,8 @@ Config parse_config(const json& document) {
   c.seed = root.unsigned_integer("seed");
   // The sensor first: its bands give the per-band optical properties their length.
   c.sensor = read_sensor(root);
+  c.atmosphere = read_atmosphere(root, c.sensor.bands);
+  if (c.atmosphere) set_band_transmissions(c.sensor, *c.atmosphere);
   c.simulation = read_simulation(root);
   // A missing terrain is told after every other section is read and the unknown keys are
   // refused, so that a wrong value given ({"canopy": {"pai": -1}}) or a misspelt "terrian" is

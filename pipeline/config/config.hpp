@@ -13,6 +13,7 @@
 
 #include "canopy/canopy_settings.hpp"
 #include "core/error.hpp"
+#include "footprints/atmosphere_settings.hpp"
 #include "footprints/lidar_settings.hpp"
 #include "footprints/track_settings.hpp"
 #include "pipeline/config/json_text.hpp"  // read_json_file and apply_override, as load_config
@@ -129,6 +130,9 @@ inline constexpr double brf_image_copies = 2.0;
 struct Config {
   std::uint64_t seed = 1;
   SensorSettings sensor;
+  // The layers the light crosses (`"atmosphere"`, presets expanded for the bands); empty: none,
+  // and each band's fixed atmos_transmission_roundtrip.
+  std::optional<AtmosphereSettings> atmosphere;
   SimulationSettings simulation;
   TerrainSettings terrain;
   std::optional<CanopySettings> canopy;  // empty: bare ground

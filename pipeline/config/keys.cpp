@@ -8,7 +8,9 @@
 #include <typeinfo>
 
 #include "canopy/canopy_settings.hpp"
+#include "footprints/atmosphere_settings.hpp"
 #include "footprints/track_settings.hpp"
+#include "pipeline/config/atmosphere_presets.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/presets.hpp"
@@ -170,6 +172,13 @@ Key number_pair(std::string name, std::array<double, 2> fallback, Range range, s
   Key k = make(std::move(name), KeyType::number_pair, std::move(unit), std::move(description));
   k.default_value = json::array({fallback[0], fallback[1]});
   k.range = range;
+  return k;
+}
+
+Key number_tuple(std::string name, std::vector<std::pair<std::string, Range>> items,
+                 std::string unit, std::string description) {
+  Key k = make(std::move(name), KeyType::number_tuple, std::move(unit), std::move(description));
+  k.items = std::move(items);
   return k;
 }
 
@@ -431,8 +440,8 @@ Key sensor_keys() {
                             "energy of a transmitted pulse")
                          .with_required(),
                      number("atmos_transmission_roundtrip", std::nullopt, open_closed(0, 1), "",
-                            "two-way transmission of the atmosphere")
-                         .with_required()})
+                            "two-way transmission of the atmosphere; required without "
+                            "`atmosphere`, refused beside it (its layers give it)")})
            .with_items(1, run_limits::bands)
            .with_default_text("the preset's"),
        s.choice("receiver", &S::receiver, {"waveform", "photon_counting"},
@@ -459,6 +468,67 @@ Key sensor_keys() {
        s.number("dead_time_ns", &S::dead_time_ns, at_least(0), "ns",
                 "photon counting: each detector channel's non-paralysable dead time (16 channels "
                 "a strong beam, 4 a weak one)")});
+}
+
+Key atmosphere_keys() {
+  const Fields<AtmosphereLayer> l;
+  using L = AtmosphereLayer;
+  // Heights: the shore of the Dead Sea lies 430 m below the ellipsoid; the atmosphere ends near
+  // 100 km.
+  const Range heights = closed(-1000, 100000);
+  const auto height = [&](const char* name, double L::*member, const char* description) {
+    return l.bind(number(name, std::nullopt, heights, "m", description).with_required(), member,
+                  [](JsonReader& r, const std::string& key) { return r.number(key); });
+  };
+  Key phase = make("phase", KeyType::choice_or_object, "",
+                   "the layer's phase function: `rayleigh` (molecules), `{\"hg_g\": g}` "
+                   "(Henyey–Greenstein of asymmetry g) or `{\"hg2\": [g1, g2, w]}` (w HG(g1) + "
+                   "(1 − w) HG(g2), a forward and a backward peak)");
+  phase.choices = {"rayleigh"};
+  phase.required = true;
+  phase.children = {
+      number("hg_g", std::nullopt, open(-1, 1), "", "Henyey–Greenstein asymmetry g"),
+      number_tuple("hg2", {{"g1", open(-1, 1)}, {"g2", open(-1, 1)}, {"w", closed(0, 1)}}, "",
+                   "two-term Henyey–Greenstein: the asymmetries of its two terms and the weight "
+                   "of the first")};
+  Key atmosphere =
+      make("atmosphere", KeyType::choice_or_object, "",
+           "the atmosphere's layers on the light's path (docs/physics.md): a preset's name, or "
+           "an object. With it, each band's two-way transmission comes from the layers (give "
+           "no `sensor.bands[].atmos_transmission_roundtrip` beside it); absent: each band's "
+           "fixed `atmos_transmission_roundtrip`, as before");
+  atmosphere.default_text = "none";
+  atmosphere.choices = atmosphere_preset_names();
+  Key preset =
+      choice("preset", std::nullopt, atmosphere_preset_names(),
+             "`clear` (molecules and a clean continental aerosol, τ 0.064 at 550 nm), "
+             "`haze` (molecules and a polluted one, τ 0.327), `cirrus` (`clear` and a "
+             "cirrus of τ 0.3 at 9–11 km above the ellipsoid) or `stratus` (`clear` "
+             "and a stratus of τ 2 at 0.5–1.5 km above the ground), expanded for the "
+             "bands' wavelengths (docs/guide/atmosphere.md); `layers` beside it replace its own");
+  preset.default_text = "none";
+  // Beyond an optical depth of 50 the two-way transmission is below 1e-43.
+  Key optical_depth = spectral("optical_depth", 0.0, closed(0, 50), "",
+                               "the layer's vertical extinction optical depth");
+  optical_depth.default_value = nullptr;
+  optical_depth.required = true;
+  atmosphere.children = {
+      std::move(preset),
+      object_array(
+          "layers", nullptr,
+          "horizontally uniform layers, which may overlap; the preset's when not given",
+          {height("base_m", &L::base_m, "the layer's base"),
+           height("top_m", &L::top_m, "the layer's top, above its base"),
+           l.choice_of("above", &L::above_ellipsoid, {{"ground", false}, {"ellipsoid", true}},
+                       "what the heights are measured from: the ground under the footprint "
+                       "centre, or the WGS84 ellipsoid"),
+           std::move(optical_depth),
+           spectral("single_scattering_albedo", 1.0, closed(0, 1), "",
+                    "the part of the extinction that scatters"),
+           std::move(phase)})
+          .with_items(1, std::numeric_limits<std::size_t>::max())
+          .with_default_text("the preset's")};
+  return atmosphere;
 }
 
 Key background_key() {
@@ -939,8 +1009,8 @@ const Key& configuration_keys() {
                           std::numeric_limits<std::uint64_t>::max(), "",
                           "random seed: a shot's waveform depends only on the configuration, the "
                           "seed and its shot number"),
-         sensor_keys(), simulation_keys(), terrain_keys(), canopy_keys(), track_keys(),
-         output_keys(), detector_keys(), brf_keys(), table_keys()});
+         sensor_keys(), atmosphere_keys(), simulation_keys(), terrain_keys(), canopy_keys(),
+         track_keys(), output_keys(), detector_keys(), brf_keys(), table_keys()});
   }();
   return root;
 }
@@ -1000,6 +1070,20 @@ json key_schema(const Key& k) {
       json item = {{"type", "number"}};
       add_range(item, k.range);
       s = {{"type", "array"}, {"items", item}, {"minItems", 2}, {"maxItems", 2}};
+      break;
+    }
+    case KeyType::number_tuple: {
+      json items = json::array();
+      for (const auto& [name, range] : k.items) {
+        json item = {{"type", "number"}, {"description", name}};
+        add_range(item, range);
+        items.push_back(item);
+      }
+      s = {{"type", "array"},
+           {"prefixItems", items},
+           {"items", false},
+           {"minItems", k.items.size()},
+           {"maxItems", k.items.size()}};
       break;
     }
     case KeyType::object:
@@ -1118,6 +1202,14 @@ std::string allowed_cell(const Key& k) {
       return "number " + k.range.interval() + ", or an object of one per band";
     case KeyType::number_pair:
       return "[min, max], each " + k.range.interval();
+    case KeyType::number_tuple: {
+      std::string names, ranges;
+      for (const auto& [name, range] : k.items) {
+        names += (names.empty() ? "" : ", ") + name;
+        ranges += (ranges.empty() ? "" : ", ") + name + " " + range.interval();
+      }
+      return "[" + names + "]: " + ranges;
+    }
     case KeyType::object:
       return k.nullable && k.default_text == "null" ? "object or null" : "object";
     case KeyType::object_array: {

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <typeinfo>
+#include <utility>
 #include <vector>
 
 namespace glaswave {
@@ -47,6 +48,7 @@ enum class KeyType {
   string,            // a string; one of `choices` when they are given (and `open_choices` is false)
   spectral,          // a number within `range` for every band, or an object keyed by band name
   number_pair,       // [min, max], both within `range`, min <= max
+  number_tuple,      // a fixed number of numbers, each named and within its own range
   object,            // an object whose keys are `children`
   object_array,      // an array of objects whose keys are `children`
   choice_or_object,  // one of `choices`, or an object whose keys are `children`
@@ -76,6 +78,8 @@ struct Key {
   bool nullable = false;  // null reads as absent
   std::size_t min_items = 0, max_items = std::numeric_limits<std::size_t>::max();  // arrays
   std::vector<Key> children;  // object, object_array, choice_or_object
+  // number_tuple: the name and range of each number, in order.
+  std::vector<std::pair<std::string, Range>> items;
   // The member the key sets, for keys declared with one (keys.cpp's Fields): `read` reads the
   // key through the reader into that member of a settings struct of type `owner`. Keys whose
   // value needs other keys have none: their section reads them (read_fields' hooks).
@@ -112,6 +116,9 @@ Key spectral(std::string name, double fallback, Range range, std::string unit,
              std::string description);
 Key number_pair(std::string name, std::array<double, 2> fallback, Range range, std::string unit,
                 std::string description);
+// A fixed array of numbers, each named and with its own range (hg2's [g1, g2, w]).
+Key number_tuple(std::string name, std::vector<std::pair<std::string, Range>> items,
+                 std::string unit, std::string description);
 Key object(std::string name, std::string description, std::vector<Key> children);
 Key object_array(std::string name, nlohmann::json fallback, std::string description,
                  std::vector<Key> item_keys);

@@ -29,6 +29,7 @@ ShotSettings shot_settings(const Config& config) {
   settings.transport.per_order =
       config.output.per_order || config.sensor.receiver == "photon_counting";
   settings.transport.seed = config.seed;
+  settings.transport.atmosphere = config.atmosphere;
   settings.soil_reflectance = config.terrain.soil_reflectance;
   settings.roughness = config.terrain.roughness;
   // Photon counting's 10 kHz footprints overlap almost entirely: they share their stretch's scene.

@@ -230,19 +230,23 @@ ShotSimulator::ShotScene ShotSimulator::scene_of(
     shot.own = build_scene(footprint);
     shot.geometry = shot.own->where.geometry;
     shot.orientation = shot.own->where.orientation;
-    return shot;
+  } else {
+    const LocalFrame& frame = shot.stretch->frame;
+    shot.geometry.sensor_m = frame.local_from_ecef(footprint.spacecraft_ecef);
+    shot.geometry.axis = frame.local_direction(footprint.beam_ecef);
+    shot.geometry.range_m = footprint.range_m;
+    shot.centre_m = frame.to_local(footprint.ground);
+    // The ground fitted under the shot's own beam, for the record alone: fill when unread.
+    if (settings_.shot_fields_read)
+      shot.orientation = footprint_frame(scenes_.terrain(), lidar_, footprint).orientation;
+    else
+      shot.orientation.slope_deg = shot.orientation.aspect_deg =
+          std::numeric_limits<double>::quiet_NaN();
   }
-  const LocalFrame& frame = shot.stretch->frame;
-  shot.geometry.sensor_m = frame.local_from_ecef(footprint.spacecraft_ecef);
-  shot.geometry.axis = frame.local_direction(footprint.beam_ecef);
-  shot.geometry.range_m = footprint.range_m;
-  shot.centre_m = frame.to_local(footprint.ground);
-  // The ground fitted under the shot's own beam, for the record alone: fill when unread.
-  if (settings_.shot_fields_read)
-    shot.orientation = footprint_frame(scenes_.terrain(), lidar_, footprint).orientation;
-  else
-    shot.orientation.slope_deg = shot.orientation.aspect_deg =
-        std::numeric_limits<double>::quiet_NaN();
+  // The atmosphere's layers stand on the ground under the footprint centre (the transport's
+  // ShotGeometry).
+  shot.geometry.ground_z_m = shot.centre_m[2];
+  shot.geometry.ground_height_m = footprint.ground.h_m;
   return shot;
 }
 

@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "core/random.hpp"
+#include "pipeline/transport/atmosphere.hpp"
 #include "pipeline/transport/sobol_points.hpp"
 
 namespace glaswave {
@@ -147,6 +148,7 @@ struct Path {
   double min_distance_m = 0.0;
   bool canopy_return = false;  // whether the first element met is foliage or a trunk
   int order = 0;               // of the last element met
+  bool lost = false;           // scattered out of the atmosphere before reaching the scene
 };
 
 // The element a path meets.
@@ -173,7 +175,11 @@ class PathTracer {
   void trace_path(bool beam_path, RayRandom& random, Tally& tally);
   Path sample_beam(bool beam_path, RayRandom& random);
   std::optional<Vertex> find_vertex(const Path& path, RayRandom& random, Tally& tally);
-  void score_direct(const Path& path, const Vertex& vertex, int order, Tally& tally);
+  void score_direct(const Path& path, const Vertex& vertex, int order, Tally& tally,
+                    RayRandom& random);
+  void score_through_atmosphere(const Path& path, const Vertex& vertex, int order,
+                                double transmission, double beam_ratio, double laser_m,
+                                const Vec3& up_to_laser, Tally& tally, RayRandom& random);
   double laser_transmission(const Path& path, const Vertex& vertex, int order,
                             const Vec3& up_to_laser, Tally& tally);
   void bin(const Path& path, int order, int bin, Tally& tally);
@@ -206,6 +212,9 @@ class PathTracer {
   bool any_point_leaves_ = false;
   std::vector<VolumeSpan> spans_;
   std::vector<double> throughput_, response_;
+  // The layers above the scene, when the shot has an atmosphere, and a band's scratch.
+  std::optional<AtmosphereModel> atmosphere_;
+  std::vector<double> factor_;
   std::vector<double> projection_;  // G of each foliage for one direction
   const SobolPoints points_;        // the shot's quasi-random points
   std::int64_t ray_ = 0;            // the ray being traced
@@ -232,10 +241,14 @@ PathTracer::PathTracer(const Scene& scene, const LidarModel& lidar, const ShotGe
       foliage_(scene.has_volumes()),
       throughput_(bands_),
       response_(bands_),
+      factor_(bands_),
       projection_(optics.foliage.size()),
       points_(options.seed, static_cast<std::uint64_t>(shot_number)) {
   for (const Foliage& f : optics.foliage)
     any_point_leaves_ = any_point_leaves_ || f.leaf_size_m == 0.0;
+  if (options.atmosphere)
+    atmosphere_.emplace(*options.atmosphere, bands_, geometry.ground_z_m, geometry.ground_height_m,
+                        start_height_m_);
 }
 
 // Each ray traces two paths. The first, drawn by the beam's irradiance, scores the single
@@ -266,6 +279,10 @@ void PathTracer::tally_squares(Tally& tally) {
 
 void PathTracer::trace_path(bool beam_path, RayRandom& random, Tally& tally) {
   Path path = sample_beam(beam_path, random);
+  if (path.lost) {
+    emit(RayEventKind::leave, path, path.position, nullptr);
+    return;
+  }
   emit(RayEventKind::enter, path, path.position, nullptr);
   for (int order = 1; order <= options_.max_order; ++order) {
     const std::optional<Vertex> vertex = find_vertex(path, random, tally);
@@ -278,7 +295,7 @@ void PathTracer::trace_path(bool beam_path, RayRandom& random, Tally& tally) {
     if (order == 1) path.canopy_return = vertex->element != RayElement::ground;
     emit(RayEventKind::interaction, path, vertex->point, &*vertex);
     // The second path's first interaction is the beam path's to score.
-    if (beam_path || order > 1) score_direct(path, *vertex, order, tally);
+    if (beam_path || order > 1) score_direct(path, *vertex, order, tally, random);
     if (beam_path || order == options_.max_order) {
       emit(RayEventKind::end, path, vertex->point, &*vertex);
       return;
@@ -307,11 +324,20 @@ Path PathTracer::sample_beam(bool beam_path, RayRandom& random) {
   path.beam_path = beam_path;
   // The beam path scores only its first interaction and never needs the density.
   path.density = beam_path ? 0.0 : 0.5 * beam_density(first_direction) + 0.5 * uniform_density_;
+  std::fill(throughput_.begin(), throughput_.end(), 1.0);
+  if (atmosphere_) {
+    // Down through the layers: the beam path is the laser's light, scattered on its way to the
+    // scene; the second path the detector's view, scattered on the way back (reciprocity).
+    path.position = geometry_.sensor_m;
+    path.direction = first_direction;
+    path.lost = !atmosphere_->cross(path.position, path.direction, path.path_m, throughput_,
+                                    [&random] { return random.uniform(); });
+    return path;
+  }
   const double start_m = (geometry_.sensor_m[2] - start_height_m_) / -first_direction[2];
   path.position = geometry_.sensor_m + start_m * first_direction;
   path.direction = first_direction;
   path.path_m = start_m;
-  std::fill(throughput_.begin(), throughput_.end(), 1.0);
   return path;
 }
 
@@ -355,7 +381,8 @@ std::optional<Vertex> PathTracer::find_vertex(const Path& path, RayRandom& rando
 // Direct laser light at the element, scored toward the detector. The laser sits with the
 // detector: at the first interaction its light comes down the very path sampled, and with
 // finite leaves it finds the same gaps (the hotspot, PHYSICS.md section 3).
-void PathTracer::score_direct(const Path& path, const Vertex& vertex, int order, Tally& tally) {
+void PathTracer::score_direct(const Path& path, const Vertex& vertex, int order, Tally& tally,
+                              RayRandom& random) {
   const Vec3 to_laser = geometry_.sensor_m - vertex.point;
   const double laser_m = norm(to_laser);
   const Vec3 up_to_laser = (1.0 / laser_m) * to_laser;
@@ -368,6 +395,11 @@ void PathTracer::score_direct(const Path& path, const Vertex& vertex, int order,
   // Beyond the first order, the laser's light at the point over the density of the detector
   // ray that found it.
   const double beam_ratio = order > 1 ? beam_density(laser_light) / path.density : 1.0;
+  if (atmosphere_) {
+    score_through_atmosphere(path, vertex, order, transmission, beam_ratio, laser_m, up_to_laser,
+                             tally, random);
+    return;
+  }
   const double range_m = geometry_.range_m;
   const double scale = transmission * beam_ratio * (range_m / laser_m) * (range_m / laser_m);
   const double time_ns = (laser_m + path.path_m - 2.0 * range_m) / speed_of_light_m_s * 1e9;
@@ -388,6 +420,90 @@ void PathTracer::score_direct(const Path& path, const Vertex& vertex, int order,
     event.bin = tally_bin - lidar_.margin_bins();
     (*observer_)(event);
   }
+}
+
+// The direct return with the atmosphere's layers above the scene. Beyond the first order the path
+// is the detector's view (its scatterings in the layers drawn already) and the laser lights the
+// element straight through them. At the first order the path is the laser's light, which may have
+// scattered in the layers: the element sends it back straight, seen when it lies in the field of
+// view, and once scattered in the layers into the field of view (a point drawn on a detector ray
+// uniform over the field of view, at a height drawn by the layers' scattering). The scene is
+// crossed on the way back as by the straight return (the scattering angles are small).
+void PathTracer::score_through_atmosphere(const Path& path, const Vertex& vertex, int order,
+                                          double transmission, double beam_ratio, double laser_m,
+                                          const Vec3& up_to_laser, Tally& tally,
+                                          RayRandom& random) {
+  const AtmosphereModel& atmosphere = *atmosphere_;
+  const double range_m = geometry_.range_m;
+  const Vec3 laser_light = -1.0 * up_to_laser;
+  auto score = [&](double path_m) {
+    const double time_ns = (path_m - 2.0 * range_m) / speed_of_light_m_s * 1e9;
+    const int tally_bin = lidar_.tally_index(time_ns);
+    if (tally_bin >= 0) bin(path, order, tally_bin, tally);
+    if (observer_) {
+      RayEvent event = event_at(RayEventKind::score, path, vertex.point, &vertex);
+      event.weight = response_;
+      event.path_m = path_m;
+      event.time_ns = time_ns;
+      event.tally_bin = tally_bin;
+      event.bin = tally_bin - lidar_.margin_bins();
+      (*observer_)(event);
+    }
+  };
+  const double direct_scale = transmission * beam_ratio * (range_m / laser_m) * (range_m / laser_m);
+  if (order > 1) {
+    const Vec3 toward_detector = -1.0 * path.direction;
+    for (std::size_t band = 0; band < bands_; ++band)
+      response_[band] = throughput_[band] *
+                        element_response(vertex.element, vertex.material, optics_, band,
+                                         vertex.normal, laser_light, toward_detector) *
+                        direct_scale *
+                        std::exp(-atmosphere.column_optical_depth(band) / up_to_laser[2]);
+    score(laser_m + path.path_m);
+    return;
+  }
+  // The element's response is per unit irradiance across the light's path; the light sent
+  // toward a direction other than the one it came from is that times cos(out) / cos(in).
+  const Vec3& incoming = path.direction;
+  const double cos_in = std::abs(dot(vertex.normal, incoming));
+  if (!(cos_in > 0.0)) return;
+  const Vec3 from_sensor = vertex.point - geometry_.sensor_m;
+  const double off_axis_rad =
+      std::atan2(norm(cross(from_sensor, geometry_.axis)), dot(from_sensor, geometry_.axis));
+  if (off_axis_rad <= lidar_.max_angle_rad() * (1.0 + 1e-9) && up_to_laser[2] > 0.0) {
+    const double cos_out = std::abs(dot(vertex.normal, up_to_laser));
+    for (std::size_t band = 0; band < bands_; ++band)
+      response_[band] = throughput_[band] *
+                        element_response(vertex.element, vertex.material, optics_, band,
+                                         vertex.normal, incoming, up_to_laser) *
+                        (cos_out / cos_in) * direct_scale *
+                        std::exp(-atmosphere.column_optical_depth(band) / up_to_laser[2]);
+    score(path.path_m + laser_m);
+  }
+  if (!atmosphere.scatters()) return;
+  const double u1 = random.uniform(), u2 = random.uniform(), u3 = random.uniform();
+  const Vec3 down = beam_.uniform_direction(u1, u2);
+  AtmosphereModel::ScatterPoint at;
+  if (!atmosphere.scatter_point(geometry_.sensor_m, down, u3, at)) return;
+  const Vec3 to_point = at.point - vertex.point;
+  const double rise_m = norm(to_point);
+  const Vec3 up = (1.0 / rise_m) * to_point;
+  if (!(up[2] > 0.0)) return;
+  atmosphere.scattering_factor(at, down, dot(up, -1.0 * down), factor_);
+  const double cos_out = std::abs(dot(vertex.normal, up));
+  const double scale = transmission * (cos_out / cos_in) * range_m * range_m *
+                       lidar_.fov_solid_angle_sr() / (rise_m * rise_m);
+  const double floor_z = atmosphere.floor_z_m();
+  for (std::size_t band = 0; band < bands_; ++band)
+    response_[band] =
+        throughput_[band] *
+        element_response(vertex.element, vertex.material, optics_, band, vertex.normal, incoming,
+                         up) *
+        scale * factor_[band] *
+        std::exp(-atmosphere.optical_depth(band, floor_z, at.z_m) / up[2] -
+                 atmosphere.optical_depth(band, at.z_m, std::numeric_limits<double>::infinity()) /
+                     -down[2]);
+  score(path.path_m + rise_m + norm(geometry_.sensor_m - at.point));
 }
 
 // Part of the laser's light that reaches the element: surfaces block it (beyond the first
@@ -516,6 +632,8 @@ std::vector<double> scored_row(const std::vector<double>& flat, std::size_t size
 // pulse and its integrals, and/or the energies scored before the pulse.
 ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double range_m,
                              const TransportOptions& options) {
+  // With an atmosphere its layers weigh each return; the bands' fixed transmission is not used.
+  const bool layers = options.atmosphere.has_value();
   ShotWaveforms waveforms;
   waveforms.ray_queries = tally.ray_queries;
   const double bin_s = lidar.sensor().bin_ns * 1e-9;
@@ -543,7 +661,8 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
   };
   for (std::size_t band = 0; band < lidar.band_count(); ++band) {
     const LidarBand& b = lidar.sensor().bands[band];
-    const double scale = b.pulse_energy_mJ * 1e-3 * b.atmos_transmission_roundtrip *
+    const double scale = b.pulse_energy_mJ * 1e-3 *
+                         (layers ? 1.0 : b.atmos_transmission_roundtrip) *
                          lidar.sensor().telescope_area_m2 * lidar.fov_fraction() /
                          (std::numbers::pi * range_m * range_m) / rays;
     if (options.scored_energies) {

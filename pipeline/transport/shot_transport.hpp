@@ -7,8 +7,10 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
+#include "footprints/atmosphere_settings.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"
 #include "pipeline/transport/ray_event.hpp"
@@ -27,6 +29,10 @@ struct ShotGeometry {
   Vec3 sensor_m{};       // spacecraft position
   Vec3 axis{};           // beam axis, unit, spacecraft -> ground
   double range_m = 0.0;  // to the footprint centre: times are relative to 2 * range_m / c
+  // The ground under the footprint centre: its z in the frame and its height above the ellipsoid,
+  // where the atmosphere's layers are placed from.
+  double ground_z_m = 0.0;
+  double ground_height_m = 0.0;
 };
 
 // A shot's returns before the pulse shapes them: the energy (J) scored in each tally bin
@@ -70,6 +76,9 @@ struct TransportOptions {
   // scored before the pulse (ShotWaveforms::scored, the photon-counting receiver's).
   bool power_waveforms = true;
   bool scored_energies = false;
+  // The layers the light crosses above the scene (atmosphere.hpp); absent: none, and each band's
+  // fixed atmos_transmission_roundtrip scales the returns instead.
+  std::optional<AtmosphereSettings> atmosphere;
 };
 
 // Simulates shot `shot_number`. The result depends only on the inputs, never on how many
