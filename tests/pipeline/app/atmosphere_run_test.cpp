@@ -71,7 +71,7 @@ class AtmosphereRun : public ::testing::Test {
           {"heading_deg", 350.0},
           {"shots", shots},
           {"spacing_m", 172.0}}},
-        {"output", {{"geojson", false}}}};
+        {"output", {{"footprints", false}}}};
     const fs::path file = dir_.path() / (atmosphere + ".json");
     std::ofstream(file) << config.dump(2);
     const auto out = dir_.path() / atmosphere;
