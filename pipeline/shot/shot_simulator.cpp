@@ -69,7 +69,8 @@ void ShotSimulator::share_scenes_along(const Track& track) {
 namespace {
 
 // The sun at the footprint, where the shot has a position and a time ERFA can take (or the
-// stretch's, interpolated to the shot).
+// stretch's, interpolated to the shot): ERFA's slow terms interpolated between whole minutes, the
+// twentieth of a full evaluation that a few-ray shot could not afford.
 void set_sun(ShotRecord& record, const std::optional<StretchSun>& stretch = std::nullopt) {
   if (stretch) {
     const SolarPosition sun = stretch->at(record.shot_number);
@@ -79,8 +80,9 @@ void set_sun(ShotRecord& record, const std::optional<StretchSun>& stretch = std:
   }
   if (!std::isfinite(record.lat_deg) || !std::isfinite(record.lon_deg)) return;
   try {
-    const SolarPosition sun = solar_position(record.time_s, record.lat_deg, record.lon_deg,
-                                             std::isfinite(record.elev_m) ? record.elev_m : 0.0);
+    const SolarPosition sun =
+        solar_position_interpolated(record.time_s, record.lat_deg, record.lon_deg,
+                                    std::isfinite(record.elev_m) ? record.elev_m : 0.0);
     record.solar_elevation_deg = sun.elevation_deg;
     record.solar_azimuth_deg = sun.azimuth_deg;
   } catch (const std::invalid_argument&) {
