@@ -128,8 +128,7 @@ void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const 
   returns.waveforms = simulate_shot(scene, lidar_, shot.geometry, shot.built().optics,
                                     settings_.transport, footprint.shot_number);
   if (ray_queries)
-    *ray_queries +=
-        returns.waveforms.ray_queries + (settings_.shot_fields_read ? outline_vertices : 0);
+    *ray_queries += returns.waveforms.ray_queries + (outline_read() ? outline_vertices : 0);
   scale_pulse_energy(returns.waveforms, footprint.pulse_energy_scale);
   returns.shot_number = footprint.shot_number;
   returns.beam = footprint.beam;
@@ -151,7 +150,7 @@ void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const 
   record.cover_true = truth.cover;
   record.pai_true = truth.pai;
   record.canopy_height_true_m = truth.canopy_height_m;
-  if (settings_.shot_fields_read)
+  if (outline_read())
     record.footprint_lonlat = beam_outline(scene, lidar_, shot.geometry, shot.frame());
 }
 
