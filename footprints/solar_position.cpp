@@ -121,8 +121,8 @@ struct Knot {
   TimeTerms terms{};
 };
 
-// The knots met last on this thread, the most recent first: a track's times advance, so its
-// shots meet the same two again and again.
+// The four knots met last on this thread (once all four are held, a new one takes the slot of
+// its minute modulo 4): a track's times advance, so its shots meet the same two again and again.
 const Knot& knot_at(std::int64_t minute) {
   thread_local std::array<Knot, 4> kept;
   thread_local int count = 0;
