@@ -84,20 +84,21 @@ std::unique_ptr<VegetationSource> grow_vegetation(const Config& config, const Te
 namespace {
 
 std::unique_ptr<ShotSimulator> make_simulator(const Config& config, const Terrain& terrain,
-                                              bool shot_fields_read) {
+                                              bool shot_fields_read, bool outline_read) {
   std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config, &terrain);
   ReceiverSettings receiver = receiver_settings(config);
   receiver.metrics_read = shot_fields_read;
   std::unique_ptr<Receiver> made = at_section("/detector", [&] { return make_receiver(receiver); });
   ShotSettings shot = shot_settings(config);
   shot.shot_fields_read = shot_fields_read;
+  shot.outline_read = outline_read;
   return std::make_unique<ShotSimulator>(shot, terrain, std::move(vegetation), std::move(made));
 }
 
 }  // namespace
 
 std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const Terrain& terrain) {
-  return make_simulator(config, terrain, true);
+  return make_simulator(config, terrain, true, true);
 }
 
 bool products_read_shot_fields(const OutputSettings& output) {
@@ -107,7 +108,9 @@ bool products_read_shot_fields(const OutputSettings& output) {
 
 std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
                                                        const Terrain& terrain) {
-  return make_simulator(config, terrain, products_read_shot_fields(config.output));
+  // The beam's outline is the footprint polygons' alone (footprints.geojson or .gpkg).
+  return make_simulator(config, terrain, products_read_shot_fields(config.output),
+                        config.output.geojson);
 }
 
 RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int64_t shots,

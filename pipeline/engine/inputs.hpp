@@ -35,7 +35,8 @@ bool products_read_shot_fields(const OutputSettings& output);
 // The shot simulator of a run writing the configuration's products: make_shot_simulator's,
 // leaving out what none of them reads (a photon-counting run writing its ICESat-2 granules
 // alone skips the waveform processing, flagging its shots as that would, the ground fitted
-// under each shot of a shared stretch and the beam's outline).
+// under each shot of a shared stretch and the beam's outline; a run without the footprint
+// polygons skips the outline).
 std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
                                                        const Terrain& terrain);
 // What the products need to know besides the shots.

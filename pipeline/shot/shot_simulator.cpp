@@ -69,7 +69,8 @@ void ShotSimulator::share_scenes_along(const Track& track) {
 namespace {
 
 // The sun at the footprint, where the shot has a position and a time ERFA can take (or the
-// stretch's, interpolated to the shot).
+// stretch's, interpolated to the shot): ERFA's slow terms interpolated between whole minutes, the
+// twentieth of a full evaluation that a few-ray shot could not afford.
 void set_sun(ShotRecord& record, const std::optional<StretchSun>& stretch = std::nullopt) {
   if (stretch) {
     const SolarPosition sun = stretch->at(record.shot_number);
@@ -79,8 +80,9 @@ void set_sun(ShotRecord& record, const std::optional<StretchSun>& stretch = std:
   }
   if (!std::isfinite(record.lat_deg) || !std::isfinite(record.lon_deg)) return;
   try {
-    const SolarPosition sun = solar_position(record.time_s, record.lat_deg, record.lon_deg,
-                                             std::isfinite(record.elev_m) ? record.elev_m : 0.0);
+    const SolarPosition sun =
+        solar_position_interpolated(record.time_s, record.lat_deg, record.lon_deg,
+                                    std::isfinite(record.elev_m) ? record.elev_m : 0.0);
     record.solar_elevation_deg = sun.elevation_deg;
     record.solar_azimuth_deg = sun.azimuth_deg;
   } catch (const std::invalid_argument&) {
@@ -126,8 +128,7 @@ void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const 
   returns.waveforms = simulate_shot(scene, lidar_, shot.geometry, shot.built().optics,
                                     settings_.transport, footprint.shot_number);
   if (ray_queries)
-    *ray_queries +=
-        returns.waveforms.ray_queries + (settings_.shot_fields_read ? outline_vertices : 0);
+    *ray_queries += returns.waveforms.ray_queries + (outline_read() ? outline_vertices : 0);
   scale_pulse_energy(returns.waveforms, footprint.pulse_energy_scale);
   returns.shot_number = footprint.shot_number;
   returns.beam = footprint.beam;
@@ -149,7 +150,7 @@ void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const 
   record.cover_true = truth.cover;
   record.pai_true = truth.pai;
   record.canopy_height_true_m = truth.canopy_height_m;
-  if (settings_.shot_fields_read)
+  if (outline_read())
     record.footprint_lonlat = beam_outline(scene, lidar_, shot.geometry, shot.frame());
 }
 

@@ -1,9 +1,11 @@
 // The benchmark that ./scripts/benchmark runs: whole runs (run_simulation, NetCDF and GeoJSON
 // written, no plots) of the seed's base case, a bare 20 degree slope against flat ground, 19-ray
 // shots (with and without the waveform metrics, with the footprints as GPKG, with NetCDF alone),
-// one thread against every core, a raw Embree probe beside them, and the share of each stage of
-// a shot. Every figure is measured in this one run, so that the ratios hold on a shared machine
-// whose absolute speed drifts. Not a test: `--quick` is the short mode that ctest runs.
+// one thread against every core, a raw Embree probe beside them, the share of each stage of a
+// shot, and the per-shot floor in HELIOS++'s shape (19 rays, flat and 20 degrees, 4,000 and 40,000
+// shots, one thread, NetCDF alone) against the rays' own cost. Every figure is measured in this one
+// run, so that the ratios hold on a shared machine whose absolute speed drifts. Not a test:
+// `--quick` is the short mode that ctest runs.
 #include <embree3/rtcore.h>
 #include <sys/resource.h>
 #include <tbb/parallel_for.h>
@@ -26,6 +28,7 @@
 #include "pipeline/engine/run.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/waveform_metrics.hpp"
+#include "pipeline/shot/footprint_geometry.hpp"
 #include "terrain/ground_mesh.hpp"
 
 namespace {
@@ -45,10 +48,12 @@ struct Sizes {
   int short_shots;              // 19 rays a shot over flat bare ground
   int stage_shots;              // shots timed stage by stage, one thread
   std::int64_t probe_rays;      // raw Embree queries
+  int floor_shots[2];           // the per-shot floor's runs (HELIOS++'s 4,000 and 40,000 pulses)
+  int ray_shots;                // shots traced through one scene for the rays' own cost
 };
 
-constexpr Sizes full_sizes{3, 40, 10000, 400, 1000, 10000, 8, 4000000};
-constexpr Sizes quick_sizes{1, 2, 500, 20, 200, 200, 2, 100000};
+constexpr Sizes full_sizes{3, 40, 10000, 400, 1000, 10000, 8, 4000000, {4000, 40000}, 4000};
+constexpr Sizes quick_sizes{1, 2, 500, 20, 200, 200, 2, 100000, {100, 1000}, 200};
 
 // A pass northward over a plane facing east (45 N, 7 E, 172 m between shots), so that every shot
 // meets the same ground, with the north2010 sensor.
@@ -213,6 +218,35 @@ StageSeconds stage_seconds(const glaswave::Config& config, int shots) {
   return stages;
 }
 
+// The rays' own cost of a shot, CPU s: its transport (the rays, their binning and the pulse)
+// through a scene built once, under the track's first footprint, for `shots` shot numbers on one
+// thread. What a shot would cost if the scene, the ground fit, the sun, the receiver and the
+// record were free.
+double rays_cpu_s_per_shot(const glaswave::Config& config, int shots) {
+  const auto terrain = glaswave::make_terrain(config.terrain);
+  const glaswave::Track track(config.track, *terrain);
+  const auto simulator = glaswave::make_shot_simulator(config, *terrain);
+  const glaswave::Footprint footprint = track.footprint(0);
+  const glaswave::FootprintFrame where =
+      glaswave::footprint_frame(*terrain, simulator->lidar(), footprint);
+  const double half_size_m = glaswave::traced_patch_half_size_m(
+      *terrain, simulator->lidar(), footprint, where.frame, simulator->lidar().max_angle_rad());
+  const glaswave::BuiltScene built =
+      simulator->scenes().build(where.frame, where.orientation, half_size_m, 0.0);
+  const glaswave::TransportOptions options = glaswave::shot_settings(config).transport;
+  double energy_J = 0.0;  // read, so that the shots are not optimised away
+  tbb::task_arena one(1);
+  const double cpu_start_s = process_cpu_s();
+  one.execute([&] {
+    for (int shot = 0; shot < shots; ++shot)
+      energy_J += glaswave::simulate_shot(*built.scene, simulator->lidar(), where.geometry,
+                                          built.optics, options, shot)
+                      .energy_J[0];
+  });
+  const double cpu_s = process_cpu_s() - cpu_start_s;
+  return energy_J > 0.0 ? cpu_s / shots : 0.0;
+}
+
 void print_run(const char* name, int rays, int threads, const RunFigures& f) {
   std::printf("%-34s %6lld %6d %7d %10.1f %12.3g %12.3g\n", name, static_cast<long long>(f.shots),
               rays, threads, f.shots_per_s(), static_cast<double>(f.queries) / f.shots,
@@ -226,15 +260,66 @@ void print_stages(const char* name, const StageSeconds& s, int shots) {
               total / shots);
 }
 
+// HELIOS++'s shape: 19 sub-rays a pulse, 4,000 and 40,000 pulses over a flat and a 20 degree
+// plane on one thread, every product but the footprint polygons (NetCDF with the metrics).
+// What a shot costs beyond its rays is the floor: CPU of the whole run a shot, and the marginal
+// cost of a shot between the two runs (the run's fixed costs left out), each against the rays'
+// own cost measured in the same rounds. Returns the figures, for the check that each came out.
+std::vector<double> print_floor(const Sizes& n) {
+  std::vector<double> floor_figures;
+  std::printf(
+      "per-shot floor, 19-ray shots, one thread, NetCDF alone (CPU, us a shot; the fastest of %d "
+      "round%s):\n",
+      n.rounds, n.rounds > 1 ? "s" : "");
+  std::printf("%-12s %8s %10s %10s %12s %10s %10s\n", "plane", "shots", "run us", "rays us",
+              "run / rays", "marginal", "/ rays");
+  for (const double slope_deg : {0.0, 20.0}) {
+    double run_cpu_s[2] = {0.0, 0.0}, rays_s = 0.0;
+    for (int round = 0; round < n.rounds; ++round) {
+      for (int k = 0; k < 2; ++k) {
+        glaswave::Config floor_case = pass_config(n.floor_shots[k], 19, 8, slope_deg, false);
+        floor_case.output.geojson = false;
+        const double cpu_s = whole_run(floor_case, 1).cpu_seconds;
+        if (round == 0 || cpu_s < run_cpu_s[k]) run_cpu_s[k] = cpu_s;
+      }
+      const double r = rays_cpu_s_per_shot(pass_config(1, 19, 8, slope_deg, false), n.ray_shots);
+      if (round == 0 || r < rays_s) rays_s = r;
+    }
+    const double marginal_s = (run_cpu_s[1] - run_cpu_s[0]) / (n.floor_shots[1] - n.floor_shots[0]);
+    for (int k = 0; k < 2; ++k) {
+      const double per_shot_s = run_cpu_s[k] / n.floor_shots[k];
+      std::printf("%-12s %8d %10.1f %10.1f %12.1f %10.1f %10.1f\n",
+                  slope_deg == 0.0 ? "flat" : "20 degrees", n.floor_shots[k], 1e6 * per_shot_s,
+                  1e6 * rays_s, per_shot_s / rays_s, 1e6 * marginal_s, marginal_s / rays_s);
+      floor_figures.push_back(per_shot_s / rays_s);
+    }
+  }
+  return floor_figures;  // the marginal costs left out: noise can make a short run's negative
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
-  if (argc > 1 && !quick) {
-    std::fprintf(stderr, "usage: %s [--quick]\n", argv[0]);
-    return 2;
+  bool quick = false, floor_only = false;  // --floor: the per-shot floor's case alone
+  for (int i = 1; i < argc; ++i) {
+    quick = quick || std::strcmp(argv[i], "--quick") == 0;
+    floor_only = floor_only || std::strcmp(argv[i], "--floor") == 0;
+    if (std::strcmp(argv[i], "--quick") != 0 && std::strcmp(argv[i], "--floor") != 0) {
+      std::fprintf(stderr, "usage: %s [--quick] [--floor]\n", argv[0]);
+      return 2;
+    }
   }
   const Sizes n = quick ? quick_sizes : full_sizes;
+  auto measured = [](const std::vector<double>& figures) {
+    for (double figure : figures)
+      if (!(std::isfinite(figure) && figure > 0.0)) return false;
+    return true;
+  };
+  if (floor_only) {
+    const bool all = measured(print_floor(n));
+    std::printf(all ? "every figure measured\n" : "a figure is missing\n");
+    return all ? 0 : 1;
+  }
   const int cores = tbb::this_task_arena::max_concurrency();
   const glaswave::Config base = pass_config(n.base_shots, n.base_rays, 8, 5.0, true);
   const glaswave::Config flat = pass_config(n.slope_shots, n.slope_rays, 1, 0.0, false);
@@ -304,7 +389,13 @@ int main(int argc, char** argv) {
   print_stages("base case", base_stages, n.stage_shots);
   print_stages("19-ray shots", short_stages, 100 * n.stage_shots);
 
+  const std::vector<double> floor_figures = print_floor(n);
+
   // The short mode is a CI check that every figure came out.
+  if (!measured(floor_figures)) {
+    std::printf("a figure is missing\n");
+    return 1;
+  }
   for (double figure :
        {probe_ratio, slope_ratio, scaling, short_run.shots_per_s(), short_bare_run.shots_per_s(),
         short_gpkg_run.shots_per_s(), short_netcdf_run.shots_per_s(), base_stages.total(),

@@ -27,6 +27,20 @@ TEST(PlaneTerrain, FallsTowardItsAspect) {
   EXPECT_NEAR(plane.height_m(lat, lon), 300.0, 1e-3);
 }
 
+// A plane answers has_data without sampling: what the samples Terrain::has_data takes would say,
+// over a footprint anywhere on the globe, poles and the antimeridian included, and 50 km wide.
+TEST(PlaneTerrain, HasDataEverywhereAsItsSamplesSay) {
+  const PlaneTerrain plane({45.0, 7.0, 300.0, 20.0, 90.0});
+  for (const double lat_deg : {-90.0, -60.0, 0.0, 45.0, 89.9})
+    for (const double lon_deg : {-180.0, 7.0, 179.9}) {
+      const LocalFrame frame({lat_deg, lon_deg, 100.0});
+      for (const double radius_m : {10.0, 50000.0}) {
+        EXPECT_TRUE(plane.has_data(frame, radius_m));
+        EXPECT_TRUE(plane.Terrain::has_data(frame, radius_m)) << lat_deg << " " << lon_deg;
+      }
+    }
+}
+
 TEST(LocalFrame, RoundTripsAndAxesAreOrthonormal) {
   const LocalFrame frame({34.3, -118.2, 1200.0});
   const Vec3 local{120.0, -35.0, 8.0};

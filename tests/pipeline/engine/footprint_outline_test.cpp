@@ -98,5 +98,30 @@ TEST(FootprintOutline, OffNadirPolygonIsStretchedAlongTheTiltBy1OverCosIncidence
   }
 }
 
+// The outline is the footprint polygons' alone: a run that writes none (output.geojson false)
+// leaves it empty and skips its ray queries, and every other field is the same bits.
+TEST(FootprintOutline, LeftEmptyWhereNoFootprintPolygonIsWritten) {
+  nlohmann::json document = test_support::plane_shot("north2010", 20.0, 0.0, 50);
+  document["output"] = {{"netcdf", true}, {"geojson", true}};
+  const Config with_polygons = parse_config(document);
+  document["output"]["geojson"] = false;
+  const Config without_polygons = parse_config(document);
+  const auto terrain = make_terrain(with_polygons.terrain);
+  const Footprint footprint = Track(with_polygons.track, *terrain).footprint(0);
+  std::int64_t queries_with = 0, queries_without = 0;
+  const ShotRecord a =
+      make_run_shot_simulator(with_polygons, *terrain)->simulate(footprint, &queries_with);
+  const ShotRecord b =
+      make_run_shot_simulator(without_polygons, *terrain)->simulate(footprint, &queries_without);
+  EXPECT_GE(a.footprint_lonlat.size(), 30u);
+  EXPECT_TRUE(b.footprint_lonlat.empty());
+  EXPECT_EQ(queries_with - queries_without, 36);
+  EXPECT_EQ(a.rx_waveform_W, b.rx_waveform_W);
+  EXPECT_EQ(a.rh_m, b.rh_m);
+  EXPECT_EQ(a.slope_deg, b.slope_deg);
+  EXPECT_EQ(a.solar_elevation_deg, b.solar_elevation_deg);
+  EXPECT_EQ(a.cover_true, b.cover_true);
+}
+
 }  // namespace
 }  // namespace glaswave
