@@ -49,7 +49,9 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
   table_->add_option("CONFIG", config_file, "the configuration, with its `table` section")
       ->type_name("CONFIG.json")
       ->required();
-  table_->add_option("--out", out, "the table to write (NetCDF)")->type_name("TABLE.nc")->required();
+  table_->add_option("--out", out, "the table to write (NetCDF)")
+      ->type_name("TABLE.nc")
+      ->required();
   table_->add_option("--set", overrides, "override a configuration key, as `run --set`")
       ->type_name("KEY=VALUE");
   table_->add_option("--threads", threads_text, "threads; 0 (the default) uses every core")
@@ -99,17 +101,23 @@ int RetrievalCommands::table(const std::string& command_line, const ProgressFact
   nlohmann::json document = read_json_file(file);
   for (const std::string& assignment : overrides) apply_override(document, assignment);
   TableRequest request{document, file.parent_path(), threads_of(threads_text)};
-  if (std::filesystem::exists(out))
-    throw config_error(out, "exists already: give another --out");
+  if (std::filesystem::exists(out)) throw config_error(out, "exists already: give another --out");
+  // Its folder is made as `run` makes its own, before the table is simulated.
+  const std::filesystem::path folder = std::filesystem::path(out).parent_path();
+  std::error_code made;
+  if (!folder.empty()) std::filesystem::create_directories(folder, made);
+  if (made)
+    throw config_error(out, "cannot make its folder " + folder.string() + ": " + made.message());
   const auto started = std::chrono::steady_clock::now();
   const ForwardTable table = build_table(request, progress(quiet, "entries"));
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   write_table(table, out, command_line);
-  std::printf("glaswave: %zu entries in %.2f s (%.3g s an entry), %zu bins of %zu band(s); "
-              "Monte Carlo sd %.3g of the peak; %s\n",
-              table.entries(), wall_s, wall_s / static_cast<double>(table.entries()),
-              table.height_m.size(), table.bands(), table.mc_relative_sd, out.c_str());
+  std::printf(
+      "glaswave: %zu entries in %.2f s (%.3g s an entry), %zu bins of %zu band(s); "
+      "Monte Carlo sd %.3g of the peak; %s\n",
+      table.entries(), wall_s, wall_s / static_cast<double>(table.entries()), table.height_m.size(),
+      table.bands(), table.mc_relative_sd, out.c_str());
   return 0;
 }
 
@@ -121,7 +129,8 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
   std::size_t start = 0;
   while (!methods.empty() && start <= methods.size()) {
     const std::size_t comma = methods.find(',', start);
-    request.methods.push_back(methods.substr(start, comma == std::string::npos ? comma : comma - start));
+    request.methods.push_back(
+        methods.substr(start, comma == std::string::npos ? comma : comma - start));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -139,16 +148,20 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
   std::string names;
   for (const std::string& m : summary.methods) names += (names.empty() ? "" : ",") + m;
   if (json) {
-    nlohmann::json j = {{"shots", summary.shots},           {"methods", summary.methods},
-                        {"rt_flagged", summary.rt_flagged}, {"wall_s", summary.wall_s},
-                        {"shots_per_s", rate},              {"product", summary.product.string()}};
+    nlohmann::json j = {{"shots", summary.shots},
+                        {"methods", summary.methods},
+                        {"rt_flagged", summary.rt_flagged},
+                        {"wall_s", summary.wall_s},
+                        {"shots_per_s", rate},
+                        {"product", summary.product.string()}};
     if (!summary.l2b_granule.empty()) j["l2b_granule"] = summary.l2b_granule.string();
     std::printf("%s\n", j.dump().c_str());
   } else {
-    std::printf("glaswave: %lld shots retrieved by %s in %.2f s (%.0f shots/s); %lld flagged by "
-                "rt; %s\n",
-                static_cast<long long>(summary.shots), names.c_str(), summary.wall_s, rate,
-                static_cast<long long>(summary.rt_flagged), summary.product.c_str());
+    std::printf(
+        "glaswave: %lld shots retrieved by %s in %.2f s (%.0f shots/s); %lld flagged by "
+        "rt; %s\n",
+        static_cast<long long>(summary.shots), names.c_str(), summary.wall_s, rate,
+        static_cast<long long>(summary.rt_flagged), summary.product.c_str());
     if (!summary.l2b_granule.empty()) std::printf("glaswave: %s\n", summary.l2b_granule.c_str());
   }
   return 0;

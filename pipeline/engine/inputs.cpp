@@ -102,15 +102,15 @@ std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const T
 }
 
 bool products_read_shot_fields(const OutputSettings& output) {
-  return output.netcdf || output.footprints || output.gedi_l1b || output.gedi_l2a || output.glah01 ||
-         output.glah14;
+  return output.netcdf || output.footprints || output.gedi_l1b || output.gedi_l2a ||
+         output.glah01 || output.glah14;
 }
 
 std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
                                                        const Terrain& terrain) {
   // The beam's outline is the footprint polygons' alone (footprints.geojson or .gpkg).
   return make_simulator(config, terrain, products_read_shot_fields(config.output),
-                        config.output.geojson);
+                        config.output.footprints);
 }
 
 RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int64_t shots,

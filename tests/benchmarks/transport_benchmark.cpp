@@ -278,7 +278,7 @@ std::vector<double> print_floor(const Sizes& n) {
     for (int round = 0; round < n.rounds; ++round) {
       for (int k = 0; k < 2; ++k) {
         glaswave::Config floor_case = pass_config(n.floor_shots[k], 19, 8, slope_deg, false);
-        floor_case.output.geojson = false;
+        floor_case.output.footprints = false;
         const double cpu_s = whole_run(floor_case, 1).cpu_seconds;
         if (round == 0 || cpu_s < run_cpu_s[k]) run_cpu_s[k] = cpu_s;
       }

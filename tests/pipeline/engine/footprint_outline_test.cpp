@@ -98,13 +98,13 @@ TEST(FootprintOutline, OffNadirPolygonIsStretchedAlongTheTiltBy1OverCosIncidence
   }
 }
 
-// The outline is the footprint polygons' alone: a run that writes none (output.geojson false)
+// The outline is the footprint polygons' alone: a run that writes none (output.footprints false)
 // leaves it empty and skips its ray queries, and every other field is the same bits.
 TEST(FootprintOutline, LeftEmptyWhereNoFootprintPolygonIsWritten) {
   nlohmann::json document = test_support::plane_shot("north2010", 20.0, 0.0, 50);
-  document["output"] = {{"netcdf", true}, {"geojson", true}};
+  document["output"] = {{"netcdf", true}, {"footprints", true}};
   const Config with_polygons = parse_config(document);
-  document["output"]["geojson"] = false;
+  document["output"]["footprints"] = false;
   const Config without_polygons = parse_config(document);
   const auto terrain = make_terrain(with_polygons.terrain);
   const Footprint footprint = Track(with_polygons.track, *terrain).footprint(0);
