@@ -704,16 +704,7 @@ RtResult RtInversion::summarise(const RtPreparedShot& p, const std::vector<Cell>
   }
   r.dof = static_cast<double>(std::max<std::size_t>(1, signal));
   if (r.chi2_min / r.dof > settings_.chi2_dof_limit) r.flag |= rt_misfit;
-  const double total = std::accumulate(entry_weight.begin(), entry_weight.end(), 0.0);
-  for (std::size_t q = 0; q < table_.parameters.size(); ++q) {
-    double low = 0.0, high = 0.0;
-    for (std::size_t e = 0; e < entries; ++e) {
-      if (edge_[e][q] == 1) low += entry_weight[e];
-      if (edge_[e][q] == 2) high += entry_weight[e];
-    }
-    if (low > settings_.edge_mass * total || high > settings_.edge_mass * total)
-      r.flag |= rt_table_edge;
-  }
+  if (posterior_at_table_edge(entry_weight)) r.flag |= rt_table_edge;
   if (at_edge) r.flag |= rt_ground_search_edge;
   if (std::abs(r.ground_elevation_m.mean - p.ground_guess_m) > settings_.ground_offset_flag_m)
     r.flag |= rt_ground_off_guess;
@@ -913,19 +904,23 @@ RtResult RtInversion::invert(const RtShot& shot) const {
   r.dof = static_cast<double>((p.region_end - p.region_begin) * p.measured.size());
   r.best_entry = static_cast<std::int64_t>(best_index / shifts);
   if (best / std::max(1.0, r.dof) > settings_.chi2_dof_limit) r.flag |= rt_misfit;
-  const double total = std::accumulate(entry_weight.begin(), entry_weight.end(), 0.0);
-  for (std::size_t q = 0; q < table_.parameters.size(); ++q) {
-    double low = 0.0, high = 0.0;
-    for (std::size_t e = 0; e < entries; ++e) {
-      if (edge_[e][q] == 1) low += entry_weight[e];
-      if (edge_[e][q] == 2) high += entry_weight[e];
-    }
-    if (low > settings_.edge_mass * total || high > settings_.edge_mass * total)
-      r.flag |= rt_table_edge;
-  }
+  if (posterior_at_table_edge(entry_weight)) r.flag |= rt_table_edge;
   const int best_shift = static_cast<int>(best_index % shifts);
   if (best_shift == 0 || best_shift == shifts - 1) r.flag |= rt_ground_search_edge;
   return r;
+}
+
+bool RtInversion::posterior_at_table_edge(const std::vector<double>& entry_weight) const {
+  const double total = std::accumulate(entry_weight.begin(), entry_weight.end(), 0.0);
+  for (std::size_t q = 0; q < table_.parameters.size(); ++q) {
+    double low = 0.0, high = 0.0;
+    for (std::size_t e = 0; e < entry_weight.size(); ++e) {
+      if (edge_[e][q] == 1) low += entry_weight[e];
+      if (edge_[e][q] == 2) high += entry_weight[e];
+    }
+    if (low > settings_.edge_mass * total || high > settings_.edge_mass * total) return true;
+  }
+  return false;
 }
 
 }  // namespace glaswave

@@ -174,6 +174,9 @@ class RtInversion {
   }
 
  private:
+  // Whether more than settings_.edge_mass of the posterior's weight (entry_weight, one an entry)
+  // lies in the outer part of a varied range (edge_): the rt_table_edge flag.
+  bool posterior_at_table_edge(const std::vector<double>& entry_weight) const;
   struct Cell {
     std::uint32_t entry;
     int shift;

@@ -51,7 +51,9 @@ std::vector<double> read_variable(int nc, const char* name, std::size_t expected
   int var = -1;
   EXPECT_EQ(nc_inq_varid(nc, name, &var), NC_NOERR) << name;
   std::vector<double> values(expected, -1.0);
-  if (var >= 0) EXPECT_EQ(nc_get_var_double(nc, var, values.data()), NC_NOERR) << name;
+  if (var >= 0) {
+    EXPECT_EQ(nc_get_var_double(nc, var, values.data()), NC_NOERR) << name;
+  }
   return values;
 }
 
