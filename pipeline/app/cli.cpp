@@ -643,7 +643,7 @@ class Commands {
   CLI::App* brf_ = nullptr;
   CLI::App* voxelize_ = nullptr;
   std::unique_ptr<RetrievalCommands> retrieval_;  // table, retrieve
-  std::vector<CLI::Option*> given_;  // options refused when given empty
+  std::vector<CLI::Option*> given_;               // options refused when given empty
   static constexpr std::uint64_t max_threads = 65536;
 };
 

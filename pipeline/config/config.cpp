@@ -755,9 +755,10 @@ TableSettings read_table(JsonReader& root) {
       std::vector<std::string> texts;
       for (const json& value : list) {
         if (!value.is_string() || value.get<std::string>().empty())
-          throw config_error(place, "each value must be a non-empty string (read as --set reads "
-                                    "VALUE), got " +
-                                        describe(value));
+          throw config_error(place,
+                             "each value must be a non-empty string (read as --set reads "
+                             "VALUE), got " +
+                                 describe(value));
         texts.push_back(value.get<std::string>());
       }
       t.values.push_back({name, std::move(texts)});

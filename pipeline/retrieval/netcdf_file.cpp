@@ -59,8 +59,10 @@ NetcdfFile& NetcdfFile::operator=(NetcdfFile&& other) noexcept {
 NetcdfFile::~NetcdfFile() {
   if (id_ < 0) return;
   Lock lock(netcdf_library_mutex());
-  if (part_) nc_abort(id_);  // the .part is then removed by AtomicFile
-  else nc_close(id_);
+  if (part_)
+    nc_abort(id_);  // the .part is then removed by AtomicFile
+  else
+    nc_close(id_);
 }
 
 void NetcdfFile::fail(const std::string& message) const {
@@ -77,8 +79,7 @@ void NetcdfFile::check(int status, const std::string& what) const {
 
 int NetcdfFile::variable_id(const std::string& name) const {
   int varid = -1;
-  if (nc_inq_varid(id_, name.c_str(), &varid) != NC_NOERR)
-    fail("no variable `" + name + "`");
+  if (nc_inq_varid(id_, name.c_str(), &varid) != NC_NOERR) fail("no variable `" + name + "`");
   return varid;
 }
 
@@ -106,7 +107,9 @@ std::vector<std::size_t> NetcdfFile::shape(const std::string& name) const {
   std::size_t total = 1;
   for (int d = 0; d < ndims; ++d) {
     check(nc_inq_dimlen(id_, dims[d], &lengths[d]), "reading `" + name + "`");
-    total = lengths[d] == 0 ? 0 : (total > kMaxValues / lengths[d] ? kMaxValues + 1 : total * lengths[d]);
+    total = lengths[d] == 0
+                ? 0
+                : (total > kMaxValues / lengths[d] ? kMaxValues + 1 : total * lengths[d]);
   }
   if (total > kMaxValues) fail("`" + name + "` is too large to read");
   return lengths;
@@ -217,9 +220,9 @@ void NetcdfFile::define_variable(const std::string& name, int type,
     for (const std::string& d : dims) dimids.push_back(dimension_id(d));
     int varid = -1;
     const std::string what = "defining `" + name + "`";
-    check(nc_def_var(id_, name.c_str(), type, static_cast<int>(dimids.size()), dimids.data(),
-                     &varid),
-          what);
+    check(
+        nc_def_var(id_, name.c_str(), type, static_cast<int>(dimids.size()), dimids.data(), &varid),
+        what);
     if (dims.size() >= 2 && type != NC_STRING) check(nc_def_var_deflate(id_, varid, 1, 1, 4), what);
     if (type == NC_DOUBLE) {
       const double fill = std::numeric_limits<double>::quiet_NaN();

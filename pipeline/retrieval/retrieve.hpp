@@ -22,9 +22,9 @@ inline const std::vector<std::string> kRetrievalMethods = {"gedi_l2a", "gedi_l2b
 
 struct RetrieveRequest {
   std::vector<std::filesystem::path> inputs;
-  std::filesystem::path out_dir;               // empty: the first input's folder
-  std::optional<std::filesystem::path> table;  // needed by rt
-  std::vector<std::string> methods;            // empty: every method the input allows
+  std::filesystem::path out_dir;                      // empty: the first input's folder
+  std::optional<std::filesystem::path> table;         // needed by rt
+  std::vector<std::string> methods;                   // empty: every method the input allows
   std::optional<std::int64_t> first_shot, last_shot;  // shot numbers [A, B)
   int threads = 0;                                    // 0: every core
   std::string command_line;

@@ -156,8 +156,11 @@ TEST(Atl08Classification, CrownsAtATracksEndAreNotItsGround) {
       const double tolerance_m = x < 260.0 ? 0.5 : 0.75;
       EXPECT_NEAR(c.ground_at(x), 100.0 + 0.07 * x, tolerance_m) << "seed " << seed << " at " << x;
     }
-    for (std::size_t i = 0; i < beam.photons.size(); ++i)
-      if (beam.photons[i].truth_class == 2) EXPECT_NE(c.classes[i], 1) << "seed " << seed;
+    for (std::size_t i = 0; i < beam.photons.size(); ++i) {
+      if (beam.photons[i].truth_class == 2) {
+        EXPECT_NE(c.classes[i], 1) << "seed " << seed;
+      }
+    }
   }
 }
 
@@ -213,11 +216,19 @@ std::string bytes(const std::filesystem::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
+// A granule's run information: its history, an empty configuration, the rest unknown (fill).
+GranuleInfo granule_info(const std::string& history) {
+  GranuleInfo info;
+  info.history = history;
+  info.config_json = "{}";
+  return info;
+}
+
 TEST(Icesat2Granules, Atl03HasItsPathsAndOneBasedSegmentRanges) {
   const test_support::ScratchDir dir("icesat2_atl03");
   const std::vector<BeamTrack> beams = {synthetic_beam("gt1l", 5), synthetic_beam("gt1r", 6)};
   const std::vector<Atl08Classes> classes = classify_beams(beams, Atl08Settings{});
-  write_atl03(dir.path() / "atl03.h5", beams, classes, {"glaswave run test", "{}"});
+  write_atl03(dir.path() / "atl03.h5", beams, classes, granule_info("glaswave run test"));
   ASSERT_TRUE(std::filesystem::exists(dir.path() / "atl03.h5"));
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "atl03.h5.part"));
   const hid_t file = H5Fopen((dir.path() / "atl03.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -273,8 +284,9 @@ TEST(Icesat2Granules, Atl08HasItsPathsAndTheSameBytesTwice) {
   const std::vector<BeamTrack> beams = {synthetic_beam("gt2l", 7)};
   const Atl08Settings settings;
   const std::vector<Atl08Classes> classes = classify_beams(beams, settings);
-  write_atl08(dir.path() / "a.h5", beams, classes, settings, {"h", "{}"});
-  write_atl08(dir.path() / "b.h5", beams, classify_beams(beams, settings), settings, {"h", "{}"});
+  write_atl08(dir.path() / "a.h5", beams, classes, settings, granule_info("h"));
+  write_atl08(dir.path() / "b.h5", beams, classify_beams(beams, settings), settings,
+              granule_info("h"));
   EXPECT_EQ(bytes(dir.path() / "a.h5"), bytes(dir.path() / "b.h5"));
   const hid_t file = H5Fopen((dir.path() / "a.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
@@ -314,7 +326,7 @@ TEST(Icesat2Granules, Atl08TerrainStatisticsMatchTheCloudsTruth) {
   const std::vector<BeamTrack> beams = {synthetic_beam("gt2l", 9)};
   const Atl08Settings settings;
   write_atl08(dir.path() / "atl08.h5", beams, classify_beams(beams, settings), settings,
-              {"h", "{}"});
+              granule_info("h"));
   const hid_t file = H5Fopen((dir.path() / "atl08.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
   const std::string g = "/gt2l/land_segments/terrain/";
@@ -392,7 +404,7 @@ std::optional<T> fill_value(hid_t file, const std::string& path, hid_t memory) {
 
 // A transmitted pulse of 1.5 ns FWHM sampled every 0.1 ns over +-3 ns about its peak.
 GranuleInfo forward_info() {
-  GranuleInfo info{"glaswave run test", "{}"};
+  GranuleInfo info = granule_info("glaswave run test");
   info.sc_orient = atlas_sc_orient_forward;
   info.dead_time_ns = 3.2;
   const double sigma_ns = 1.5 / (2.0 * std::sqrt(2.0 * std::log(2.0)));
@@ -541,7 +553,8 @@ TEST(Icesat2Granules, Atl03HasEveryPathReadIcesat2AndIcesat2VegROpen) {
 TEST(Icesat2Granules, Atl03AttributesAsTheDataDictionaryGivesThem) {
   const test_support::ScratchDir dir("icesat2_atl03_attributes");
   const std::vector<BeamTrack> beams = {synthetic_beam("gt2l", 13)};
-  write_atl03(dir.path() / "atl03.h5", beams, classify_beams(beams, Atl08Settings{}), {"h", "{}"});
+  write_atl03(dir.path() / "atl03.h5", beams, classify_beams(beams, Atl08Settings{}),
+              granule_info("h"));
   const hid_t file = H5Fopen((dir.path() / "atl03.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
   const std::string h = "/gt2l/heights/", geo = "/gt2l/geolocation/";
@@ -582,7 +595,7 @@ TEST(Icesat2Granules, Atl08HasTheSegmentFieldsIcesat2VegRReads) {
   const std::vector<BeamTrack> beams = {synthetic_beam("gt2l", 14)};
   const Atl08Settings settings;
   write_atl08(dir.path() / "atl08.h5", beams, classify_beams(beams, settings), settings,
-              {"h", "{}"});
+              granule_info("h"));
   const hid_t file = H5Fopen((dir.path() / "atl08.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
   const std::string g = "/gt2l/land_segments/";
