@@ -15,6 +15,19 @@ namespace glaswave {
 
 namespace {
 
+// The bins [begin, end) from the first to the last of `values` above `level`; [0, 0) for none.
+std::pair<std::size_t, std::size_t> support_above(const std::vector<double>& values, double level) {
+  std::size_t begin = values.size(), end = 0;
+  for (std::size_t j = 0; j < values.size(); ++j) {
+    if (values[j] > level) {
+      begin = std::min(begin, j);
+      end = j + 1;
+    }
+  }
+  if (begin > end) begin = end = 0;
+  return {begin, end};
+}
+
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // The grid of detector noise variances on which sum log V is tabulated: u_out 2^(g - 24).
 constexpr int kLogDetGrid = 40, kLogDetGridLow = -24;
@@ -78,14 +91,7 @@ RtInversion::RtInversion(const ForwardTable& table, const RtSettings& settings)
     for (std::size_t k = 0; k < bands; ++k) {
       const std::vector<double>& t = table.waveform_W[e][k];
       const double peak = *std::max_element(t.begin(), t.end());
-      std::size_t begin = bins, end = 0;
-      for (std::size_t j = 0; j < bins; ++j) {
-        if (t[j] > 1e-4 * peak) {
-          begin = std::min(begin, j);
-          end = j + 1;
-        }
-      }
-      if (begin > end) begin = end = 0;
+      const auto [begin, end] = support_above(t, 1e-4 * peak);
       support_begin_[e][k] = begin;
       support_end_[e][k] = end;
       std::vector<double>& prefix = prefix_tt_[e][k];
@@ -307,14 +313,7 @@ void RtInversion::build_variances() {
     for (std::size_t b = 0; b < bands; ++b) {
       const std::vector<double>& tt = emulated_[e][b];
       const double floor = signal_floor_W_[b];
-      std::size_t begin = bins, end = 0;
-      for (std::size_t j = 0; j < bins; ++j) {
-        if (tt[j] > floor) {
-          begin = std::min(begin, j);
-          end = j + 1;
-        }
-      }
-      if (begin > end) begin = end = 0;
+      const auto [begin, end] = support_above(tt, floor);
       support_begin_[e][b] = begin;
       support_end_[e][b] = end;
       std::vector<double>& u = signal_var_[e][b];
