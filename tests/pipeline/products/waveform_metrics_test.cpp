@@ -343,7 +343,9 @@ TEST(SignalQuality, FollowsTheThresholdRuleWorkedByHand) {
   }
 }
 
-// flag_shot_signal flags as process_shot_waveforms does and leaves the metrics fill.
+// flag_shot_signal flags as process_shot_waveforms does (a second path to the same flag: it only
+// asks signal_quality) and leaves the metrics fill; where a shot's flag is known without either
+// (no light at all, a clean pulse, noise alone), it is checked against that too.
 TEST(FlagShotSignal, FlagsAsTheProcessingAndLeavesTheMetricsFill) {
   WaveformProcessing detected = noise_free();
   detected.noise_free = false;
@@ -371,6 +373,13 @@ TEST(FlagShotSignal, FlagsAsTheProcessingAndLeavesTheMetricsFill) {
       flag_shot_signal(flagged, kBinNs, settings);
       EXPECT_EQ(flagged.quality_flag, processed.quality_flag) << "shot " << k;
       EXPECT_EQ(flagged.quality_reason, processed.quality_reason) << "shot " << k;
+      // Known by construction: no light in either band has no signal; a 1 uW pulse on no noise
+      // is a good shot; detected, noise alone (no pulse in either band) has no signal.
+      if (k == 0 || (k == 4 && !settings.noise_free)) {
+        EXPECT_EQ(flagged.quality_flag, quality_invalid) << "shot " << k;
+        EXPECT_EQ(flagged.quality_reason, reason_no_signal) << "shot " << k;
+      }
+      if (k == 1) EXPECT_EQ(flagged.quality_flag, quality_good) << "shot " << k;
       ASSERT_EQ(flagged.n_peaks, (std::vector<std::int32_t>{0, 0}));
       EXPECT_TRUE(std::isnan(flagged.energy_tr_J[0]));
       EXPECT_TRUE(std::isnan(flagged.rh_m[1][50]));
