@@ -272,12 +272,18 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
   nc.put_text("", "title", "glaswave retrievals: each method's estimates per shot");
   nc.put_text("", "source", std::string("glaswave ") + GLASWAVE_VERSION);
   nc.put_text("", "history", request.command_line);
-  std::string joined;
-  for (const std::string& m : methods) joined += (joined.empty() ? "" : ",") + m;
-  nc.put_text("", "methods", joined);
-  std::string inputs;
-  for (const auto& i : request.inputs) inputs += (inputs.empty() ? "" : ",") + i.string();
-  nc.put_text("", "inputs", inputs);
+  // Appended in place: "," + a temporary string trips GCC 12's false -Wrestrict.
+  auto join = [](const auto& items, auto text_of) {
+    std::string out;
+    for (const auto& item : items) {
+      if (!out.empty()) out += ',';
+      out += text_of(item);
+    }
+    return out;
+  };
+  nc.put_text("", "methods", join(methods, [](const std::string& m) { return m; }));
+  nc.put_text("", "inputs",
+              join(request.inputs, [](const std::filesystem::path& p) { return p.string(); }));
   if (request.table) nc.put_text("", "rt_table", request.table->string());
   nc.define_variable("shot_number", NC_INT64, {"shot"}, "", "the shot number");
   nc.define_variable("beam", NC_UBYTE, {"shot"}, "", "GEDI beam number (255: none)");
