@@ -185,6 +185,26 @@ void Hdf5Writer::double_attribute(const std::string& object, const std::string& 
           "cannot write the attribute " + name + " of " + object);
 }
 
+void Hdf5Writer::double_array_attribute(const std::string& object, const std::string& name,
+                                        const std::vector<double>& values,
+                                        const std::vector<std::uint64_t>& dims_in) {
+  Impl& m = *impl_;
+  const std::vector<hsize_t> dims(dims_in.begin(), dims_in.end());
+  const hsize_t total =
+      std::accumulate(dims.begin(), dims.end(), hsize_t{1}, std::multiplies<hsize_t>());
+  m.check(!dims.empty() && total == values.size(),
+          "internal: the attribute " + name + " of " + object + " has " +
+              std::to_string(values.size()) + " values for its dimensions");
+  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+  Handle attr(space.valid()
+                  ? H5Acreate_by_name(m.file.get(), object.c_str(), name.c_str(), H5T_IEEE_F64LE,
+                                      space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)
+                  : -1,
+              H5Aclose);
+  m.check(attr.valid() && H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, values.data()) >= 0,
+          "cannot write the attribute " + name + " of " + object);
+}
+
 template <typename T>
 void Hdf5Writer::write(const std::string& path, const std::vector<T>& values,
                        const std::vector<Hdf5Attribute>& attributes,

@@ -45,6 +45,11 @@ class Hdf5Writer {
   // Scalar attributes of an existing object ("/" for the file's own).
   void text_attribute(const std::string& object, const std::string& name, const std::string& value);
   void double_attribute(const std::string& object, const std::string& name, double value);
+  // A float64 array attribute, `values` laid out C-order over `dims` (GLAH01's ANCILLARY_DATA
+  // sample-location tables).
+  void double_array_attribute(const std::string& object, const std::string& name,
+                              const std::vector<double>& values,
+                              const std::vector<std::uint64_t>& dims);
   // Flushes and closes; throws when the file cannot be completed (a full disk).
   void close();
 

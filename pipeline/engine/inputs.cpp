@@ -135,8 +135,11 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
   info.orders = config.output.per_order ? config.simulation.max_order : 0;
   info.photon_events = simulator.receiver().photon_events();
   const DetectorSettings& d = config.detector;
-  if (d.enabled && d.bits > 0 && d.saturation_W && *d.saturation_W > 0)
+  if (d.enabled) info.detector_gain = d.gain;
+  if (d.enabled && d.bits > 0 && d.saturation_W && *d.saturation_W > 0) {
     info.counts_per_W = d.gain * (std::ldexp(1.0, d.bits) - 1.0) / *d.saturation_W;
+    info.full_scale_counts = std::ldexp(1.0, d.bits) - 1.0;
+  }
   return info;
 }
 

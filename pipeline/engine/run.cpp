@@ -364,8 +364,13 @@ Icesat2ProductSettings icesat2_product_settings(const Config& config) {
   // A pass's beams fly their own ground tracks about it; another track is the beam's own.
   const bool pass = config.track.type == TrackType::pass;
   const AtlasOrientation orientation = atlas_orientation(config.sensor.sc_orient);
+  // The photon receiver's pulse: the first band's energy times the beam's ratio to a strong one.
+  const double strong_J = config.sensor.bands.empty()
+                              ? std::nan("")
+                              : config.sensor.bands.front().pulse_energy_mJ * 1e-3;
   for (const AtlasBeam& beam : select_atlas_beams(config.sensor.beams, orientation))
-    s.beams.push_back({beam.name, beam.strong, beam.spot_number, pass ? beam.across_m : 0.0});
+    s.beams.push_back({beam.name, beam.strong, beam.spot_number, pass ? beam.across_m : 0.0,
+                       strong_J * beam.energy_ratio});
   s.sc_orient = static_cast<std::int8_t>(orientation);
   s.dead_time_ns = config.sensor.dead_time_ns;
   return s;

@@ -41,8 +41,15 @@ class GlasGranuleWriter : public Hdf5GranuleWriter {
     double amp[6], area[6], sigma[6], center_off[6];
     double cover = 0, pai = 0, height = 0;
     std::vector<float> rx, rx_canopy, rx_ground;
+    // What the missions' readers open besides (docs/granules.md): the range to the last gate
+    // and the land range's offset from it, the waveform's skewness and smoothed peaks, its
+    // noise (counts), the last gate's time on a 1 GHz clock from the transmit peak's address.
+    double ref_range = 0, land_off = 0, skew = 0, noise_mean = 0, noise_sd = 0;
+    std::int32_t peaks1 = 0, resp_end = 0;
+    bool saturated = false;
   };
   void keep(std::int64_t index, const ShotRecord& shot) override;
+  void keep_reader_fields(Shot& s, const ShotRecord& r) const;
   void write_file(Hdf5Writer& file) override;
 
   GlasLevel level_;

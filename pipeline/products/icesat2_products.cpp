@@ -9,12 +9,14 @@
 #include <numbers>
 #include <type_traits>
 #include <utility>
+#include <variant>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/glas_time.hpp"
 #include "core/hdf5_file.hpp"
 #include "core/netcdf_lock.hpp"
+#include "pipeline/products/atl03_platform_fields.hpp"
 
 namespace glaswave {
 namespace {
@@ -566,6 +568,19 @@ void write_geolocation(Granule& g, const std::string& beam_group, const BeamTrac
             {"meters", "height uncertainty", "qualityInformation",
              "0: the simulation's photons are placed without geolocation error"},
             0, true);
+  // The platform's, the pulse's and the range's (atl03_platform_fields.hpp), at the same shots.
+  std::vector<const BeamShot*> reference_shots;
+  for (const std::size_t k : s.first_shot) reference_shots.push_back(&beam.shots[k]);
+  for (const SegmentField& field : atl03_platform_fields(beam, reference_shots)) {
+    std::visit(
+        [&](const auto& values) {
+          g.dataset(h, field.name, values,
+                    {field.units, field.long_name, field.content_type, field.description}, 0, true);
+        },
+        field.values);
+    add_coordinates(g, h, {field.name.c_str()},
+                    "delta_time reference_photon_lat reference_photon_lon");
+  }
   add_coordinates(g, h,
                   {"segment_id", "ph_index_beg", "segment_ph_cnt", "reference_photon_index",
                    "segment_dist_x", "segment_length", "solar_elevation", "sigma_h"},

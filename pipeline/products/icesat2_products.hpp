@@ -40,6 +40,12 @@ struct BeamShot {
   double background_rate_Hz = 0.0;   // the background photons' rate in the receiver (ATL03's
                                      // bckgrd_atlas/bckgrd_rate): measured by ATLAS, here known
   double solar_elevation_deg = 0.0;  // the sun above the footprint's horizon (NaN: unknown)
+  double solar_azimuth_deg = std::numeric_limits<double>::quiet_NaN();  // clockwise from north
+  // The spacecraft (WGS84) and its range to the footprint centre, NaN where not known.
+  double sc_lat_deg = std::numeric_limits<double>::quiet_NaN();
+  double sc_lon_deg = std::numeric_limits<double>::quiet_NaN();
+  double sc_alt_m = std::numeric_limits<double>::quiet_NaN();
+  double range_m = std::numeric_limits<double>::quiet_NaN();
   std::uint32_t first_photon = 0, photon_count = 0;  // its photons in BeamTrack::photons
 };
 
@@ -49,6 +55,7 @@ struct BeamTrack {
   bool strong = true;
   int spot_number = 1;    // ATLAS's spot, 1-6
   double across_m = 0.0;  // its ground track right of the reference ground track's
+  double pulse_energy_J = std::numeric_limits<double>::quiet_NaN();  // its transmitted pulse's
   std::vector<BeamShot> shots;
   std::vector<BeamPhoton> photons;
 };
@@ -59,6 +66,7 @@ struct GranuleBeam {
   bool strong = true;
   int spot_number = 3;
   double across_m = 0.0;  // its ground track right of the reference ground track's
+  double pulse_energy_J = std::numeric_limits<double>::quiet_NaN();  // NaN: not known, fill
 };
 
 // ATL03's orbit_info/sc_orient: 0 backward, 1 forward (footprints/atlas_beams.hpp's

@@ -77,6 +77,11 @@ void Icesat2Writer::write(std::int64_t index, const ShotRecord& shot) {
   kept.shot.canopy_cover = shot.cover_true;
   kept.shot.pai = shot.pai_true;
   kept.shot.solar_elevation_deg = shot.solar_elevation_deg;
+  kept.shot.solar_azimuth_deg = shot.solar_azimuth_deg;
+  kept.shot.sc_lat_deg = shot.sc_lat_deg;
+  kept.shot.sc_lon_deg = shot.sc_lon_deg;
+  kept.shot.sc_alt_m = shot.sc_alt_m;
+  kept.shot.range_m = shot.range_m;
   const double lowest_fifth_ns = window_start_ns_ + 0.8 * window_ns_;
   for (const double t : shot.photon_time_ns)
     if (t >= lowest_fifth_ns) kept.below_ground += 1.0;
@@ -102,6 +107,7 @@ BeamTrack Icesat2Writer::gather_beam(const GranuleBeam& granule_beam) const {
   beam.strong = granule_beam.strong;
   beam.spot_number = granule_beam.spot_number;
   beam.across_m = granule_beam.across_m;
+  beam.pulse_energy_J = granule_beam.pulse_energy_J;
   const bool every_record = settings_.beams.size() == 1;
   std::vector<double> below;
   for (const auto& [index, kept] : kept_) {

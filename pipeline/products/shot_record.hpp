@@ -121,6 +121,11 @@ struct RunInfo {
   // Digitiser counts per W of recorded power, for the granules' waveforms in counts: the
   // detector's gain x (2^bits - 1) / saturation_W when it digitises, else 1 count per nW.
   double counts_per_W = 1e9;
+  // The detector's gain (detector.gain) when the detector applies; NaN without one (GLAH14's
+  // i_gval_rcv is then fill).
+  double detector_gain = std::numeric_limits<double>::quiet_NaN();
+  // The digitiser's full scale in counts (2^bits - 1) when it clips; 0 when nothing clips.
+  double full_scale_counts = 0.0;
   // When the products were made (SOURCE_DATE_EPOCH's time where set: then they hold no wall-clock
   // measurement, so that identical runs write identical files); empty: the writer's clock.
   CreationTime created;

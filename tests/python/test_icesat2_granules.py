@@ -418,3 +418,70 @@ def test_20m_sub_segments_read_as_spacelidar_highres_reads_them(granules):
                 else:
                     assert tall.sum() < 5
     assert checked >= 10
+
+
+# ICESat2VegR's ATL03_seg_metadata_dt default `attributes` (R/ATL03_seg_metadata_dt.R), each read
+# at ATL03.seg.map's geolocation/<name>, in its order; it takes surf_type out and adds
+# reference_photon_lon and reference_photon_lat; h_ph it derives from reference_photon_index,
+# ph_index_beg and heights/h_ph. Every column must have one value a segment (a data.table's).
+SEG_METADATA_DEFAULT = [
+    "altitude_sc", "bounce_time_offset", "delta_time", "full_sat_fract", "near_sat_fract",
+    "neutat_delay_derivative", "neutat_delay_total", "neutat_ht", "ph_index_beg", "pitch",
+    "podppd_flag", "range_bias_corr", "ref_azimuth", "ref_elev", "reference_photon_index", "roll",
+    "segment_dist_x", "segment_id", "segment_length", "segment_ph_cnt", "sigma_across",
+    "sigma_along", "sigma_h", "sigma_lat", "sigma_lon", "solar_azimuth", "solar_elevation",
+    "tx_pulse_energy", "tx_pulse_skew_est", "tx_pulse_width_lower", "tx_pulse_width_upper", "yaw",
+    "reference_photon_lon", "reference_photon_lat"]
+ATLAS_STRONG_J, ATLAS_WEAK_J = 175e-6, 45e-6  # ATLAS's pulse energies (the preset's ratio)
+
+
+def test_atl03_segments_read_as_icesat2vegr_seg_metadata_reads_them(granules):
+    atl03, _ = granules
+    for beam in BEAMS:
+        g = atl03[beam]
+        n = len(g["geolocation/segment_id"])
+        columns = {}
+        for name in SEG_METADATA_DEFAULT:
+            d = g["geolocation/" + name]
+            assert d.shape == (n,), f"{beam}/geolocation/{name}: {d.shape}, {n} segments"
+            assert "_FillValue" in d.attrs or name in ("segment_id", "delta_time",
+                                                       "segment_dist_x", "segment_length",
+                                                       "reference_photon_lat",
+                                                       "reference_photon_lon"), name
+            columns[name] = d[()]
+        # h_ph: heights/h_ph at ph_index_beg + reference_photon_index - 1 (1-based), NA where
+        # reference_photon_index is 0.
+        ref = columns["reference_photon_index"]
+        idx = columns["ph_index_beg"] + ref - 1
+        h = g["heights/h_ph"][()]
+        assert np.all(idx[ref > 0] >= 1) and np.all(idx[ref > 0] <= len(h))
+        # The platform's numbers against the pass's own: 496 km up, the beam's energy, the range
+        # as the spacecraft's height over the ground (3.3 km across it adds under 12 m), c.
+        for name in ("altitude_sc",):
+            assert columns[name].dtype == np.float64
+        for name in SEG_METADATA_DEFAULT:
+            if name not in ("altitude_sc", "delta_time", "ph_index_beg", "podppd_flag",
+                            "reference_photon_index", "segment_dist_x", "segment_id",
+                            "segment_length", "segment_ph_cnt", "reference_photon_lon",
+                            "reference_photon_lat"):
+                assert columns[name].dtype == np.float32, name
+        assert columns["podppd_flag"].dtype == np.int8
+        np.testing.assert_allclose(columns["altitude_sc"], 496000.0, atol=1.0)
+        energy = ATLAS_STRONG_J if STRONG[beam] else ATLAS_WEAK_J
+        np.testing.assert_allclose(columns["tx_pulse_energy"], energy, rtol=1e-6)
+        ground = g["geophys_corr/dem_h"][()].astype(np.float64)
+        one_way_s = columns["bounce_time_offset"].astype(np.float64)
+        assert np.all((one_way_s * 299792458.0 - (496000.0 - ground) >= -1.0)
+                      & (one_way_s * 299792458.0 - (496000.0 - ground) <= 12.0))
+        # ref_elev: the spacecraft at most 3.4 km across from 496 km up, within 0.4 degrees of
+        # the zenith.
+        assert np.all(np.abs(columns["ref_elev"] - np.pi / 2) < np.radians(0.4))
+        # By 19:30 UTC on 21 June at 118.2 W the sun stands south-east (local noon 19:52).
+        assert np.all((columns["solar_azimuth"] > 90) & (columns["solar_azimuth"] < 180))
+        for name in ("pitch", "roll", "yaw", "sigma_along", "sigma_across", "sigma_lat",
+                     "sigma_lon", "tx_pulse_skew_est", "range_bias_corr"):
+            assert np.all(columns[name] == 0), name
+        fill = np.float32(3.4028235e38)
+        for name in ("tx_pulse_width_lower", "tx_pulse_width_upper", "full_sat_fract",
+                     "near_sat_fract", "neutat_ht"):
+            assert np.all(columns[name] == fill), name
