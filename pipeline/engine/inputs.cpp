@@ -134,6 +134,7 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
     info.tx_waveform_W.push_back(lidar.tx_waveform_W(band));
   info.orders = config.output.per_order ? config.simulation.max_order : 0;
   info.photon_events = simulator.receiver().photon_events();
+  info.atmosphere = config.atmosphere.has_value();
   const DetectorSettings& d = config.detector;
   if (d.enabled) info.detector_gain = d.gain;
   if (d.enabled && d.bits > 0 && d.saturation_W && *d.saturation_W > 0) {

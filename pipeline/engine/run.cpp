@@ -27,6 +27,7 @@
 #include "pipeline/engine/machine.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/record_codec.hpp"
+#include "pipeline/transport/atmosphere.hpp"
 
 namespace glaswave {
 namespace {
@@ -373,6 +374,14 @@ Icesat2ProductSettings icesat2_product_settings(const Config& config) {
                        strong_J * beam.energy_ratio});
   s.sc_orient = static_cast<std::int8_t>(orientation);
   s.dead_time_ns = config.sensor.dead_time_ns;
+  // ATL08's cloud flags: the layers ATL09 would report, at the beams' one band.
+  if (config.atmosphere) {
+    std::vector<CloudLayer>& layers = s.cloud_layers.emplace();
+    for (const std::size_t i : detected_layers(*config.atmosphere, 0)) {
+      const AtmosphereLayer& layer = config.atmosphere->layers[i];
+      layers.push_back({layer.base_m, layer.above_ellipsoid});
+    }
+  }
   return s;
 }
 

@@ -831,17 +831,65 @@ void write_segment_place(Granule& g, const std::string& h, const std::vector<Lan
              "1 where the segment has no terrain height (too few ground photons), else 0"});
 }
 
-// land_segments/ flags of what the simulation does not have: no clouds or blowing snow, no
-// atmospheric multiple scattering, no photons removed between ATL03 and ATL08; saturation is
+// ATL09's flags of the layers over a segment whose ground is `ground_h` above the ellipsoid (NaN:
+// not known), as ATL08 defines them: msw_flag 0 without layers, else by the lowest layer's base
+// above the ground, 3 below 1 km, 2 from 1 to 3 km, 1 above 3 km (4 and 5, blowing snow, never;
+// -1 where the ground is not known); cloud_flag_atm the number of layers (0-10); layer_flag 1
+// where there are any.
+struct LayerFlags {
+  std::vector<std::int8_t> msw, cloud_atm, layer;
+};
+LayerFlags layer_flags(const std::vector<CloudLayer>& layers, const std::vector<float>& ground_h) {
+  LayerFlags f;
+  for (const float h : ground_h) {
+    double lowest_m = std::numeric_limits<double>::infinity();
+    for (const CloudLayer& layer : layers)
+      lowest_m = std::min(lowest_m, layer.base_m - (layer.above_ellipsoid ? h : 0.0));
+    const bool known =
+        h != fill_float || std::none_of(layers.begin(), layers.end(),
+                                        [](const CloudLayer& l) { return l.above_ellipsoid; });
+    f.msw.push_back(layers.empty()       ? 0
+                    : !known             ? -1
+                    : lowest_m < 1000.0  ? 3
+                    : lowest_m <= 3000.0 ? 2
+                                         : 1);
+    f.cloud_atm.push_back(static_cast<std::int8_t>(std::min<std::size_t>(layers.size(), 10)));
+    f.layer.push_back(layers.empty() ? 0 : 1);
+  }
+  return f;
+}
+
+// land_segments/ flags: the atmosphere's layers where the run has an `atmosphere` section (else
+// none: no clouds or blowing snow); no photons removed between ATL03 and ATL08; saturation is
 // not assessed (fill).
-void write_segment_flags(Granule& g, const std::string& h, std::size_t count) {
+void write_segment_flags(Granule& g, const std::string& h, const std::vector<float>& ground_h,
+                         const GranuleInfo& info) {
+  const std::size_t count = ground_h.size();
   const std::vector<std::int8_t> zero(count, 0);
-  g.dataset(h, "msw_flag", zero,
-            {"1", "Multiple Scattering Warning Flag", "qualityInformation",
-             "0 (no layers): the simulated atmosphere has no clouds or blowing snow"});
-  g.dataset(h, "layer_flag", zero,
-            {"1", "Consolidated Cloud Flag", "qualityInformation",
-             "0 (clear): the simulated atmosphere has no clouds or blowing snow"});
+  if (info.cloud_layers) {
+    const LayerFlags f = layer_flags(*info.cloud_layers, ground_h);
+    const char* found =
+        "from the simulated atmosphere's layers whose backscatter at least equals the molecules' "
+        "(their base above the segment's dem_h)";
+    g.dataset(h, "msw_flag", f.msw,
+              {"1", "Multiple Scattering Warning Flag", "qualityInformation",
+               std::string("0 no layers; the lowest layer's base below 1 km 3, 1-3 km 2, above 3 "
+                           "km 1; no blowing snow (4, 5): ") +
+                   found});
+    g.dataset(h, "cloud_flag_atm", f.cloud_atm,
+              {"1", "Cloud Flag from Atmosphere", "qualityInformation",
+               std::string("Number of cloud or aerosol layers (0-10), ") + found});
+    g.dataset(h, "layer_flag", f.layer,
+              {"1", "Consolidated Cloud Flag", "qualityInformation",
+               std::string("1 where there are cloud or aerosol layers, else 0: ") + found});
+  } else {
+    g.dataset(h, "msw_flag", zero,
+              {"1", "Multiple Scattering Warning Flag", "qualityInformation",
+               "0 (no layers): the simulated atmosphere has no clouds or blowing snow"});
+    g.dataset(h, "layer_flag", zero,
+              {"1", "Consolidated Cloud Flag", "qualityInformation",
+               "0 (clear): the simulated atmosphere has no clouds or blowing snow"});
+  }
   g.dataset(h, "ph_removal_flag", zero,
             {"1", "Photon Removal Flag", "qualityInformation",
              "0: no signal photons are removed between the classification's two steps"});
@@ -984,7 +1032,8 @@ void write_segment_truth(Granule& g, const std::string& land, const SegmentTruth
 }
 
 void write_land_segments(Granule& g, const std::string& beam_group, const BeamTrack& beam,
-                         const Atl08Classes& classes, const Atl08Settings& settings) {
+                         const Atl08Classes& classes, const Atl08Settings& settings,
+                         const GranuleInfo& info) {
   if (beam.shots.empty()) return;
   const double first_m =
       std::floor(beam.shots.front().along_m / settings.segment_m) * settings.segment_m;
@@ -994,7 +1043,7 @@ void write_land_segments(Granule& g, const std::string& beam_group, const BeamTr
   const SegmentTruth t = segment_truth(beam, first_m, s.size(), settings.segment_m);
   const Group land = g.group(beam_group, "land_segments");
   write_segment_place(g, land.get(), s, t);
-  write_segment_flags(g, land.get(), s.size());
+  write_segment_flags(g, land.get(), t.dem_h, info);
   const Group terrain = g.group(land.get(), "terrain");
   const Group canopy = g.group(land.get(), "canopy");
   write_terrain(g, terrain.get(), s);
@@ -1067,7 +1116,7 @@ void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>
   for (std::size_t b = 0; b < beams.size(); ++b) {
     const Group beam_group = g.group(g.file(), beams[b].name);
     write_beam_attributes(g, beam_group.get(), beams[b], info.sc_orient);
-    write_land_segments(g, beam_group.get(), beams[b], classes[b], settings);
+    write_land_segments(g, beam_group.get(), beams[b], classes[b], settings, info);
     write_signal_photons(g, beam_group.get(), beams[b], classes[b]);
   }
   g.finish();

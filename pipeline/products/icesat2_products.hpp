@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -77,12 +78,22 @@ inline constexpr std::int8_t atlas_sc_orient_forward = 1;
 // Which ICESat-2 granules a run writes, and for which beams (in the granules' order). With
 // several beams a record belongs to the one whose spot number is its ShotRecord::beam; one beam
 // takes every record.
+// A cloud or aerosol layer of the simulated atmosphere that ATL09's layer finder would report
+// (pipeline/transport/atmosphere.hpp's detected_layers): its base above the ground under the
+// segment, or above the WGS84 ellipsoid.
+struct CloudLayer {
+  double base_m = 0.0;
+  bool above_ellipsoid = false;
+};
+
 struct Icesat2ProductSettings {
   bool atl03 = false;
   bool atl08 = false;
   std::vector<GranuleBeam> beams = {GranuleBeam{}};
   std::int8_t sc_orient = atlas_sc_orient_backward;
   double dead_time_ns = 3.2;  // each detector channel's (sensor.dead_time_ns)
+  // With an `atmosphere` section, its reported layers (maybe none); without, absent.
+  std::optional<std::vector<CloudLayer>> cloud_layers;
 };
 
 struct GranuleInfo {
@@ -93,6 +104,8 @@ struct GranuleInfo {
   // The transmitted pulse, ATL03's transmitter echo path histogram: its times about the peak
   // (ns) and power (any scale); empty: not known, fill.
   std::vector<double> pulse_time_ns, pulse_power;
+  // ATL08's msw_flag, layer_flag and cloud_flag_atm come from these (Icesat2ProductSettings).
+  std::optional<std::vector<CloudLayer>> cloud_layers;
 };
 
 // DIR/atl03.h5. Per beam: heights/{h_ph, lat_ph, lon_ph, delta_time, dist_ph_along,

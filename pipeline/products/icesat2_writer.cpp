@@ -40,7 +40,8 @@ Icesat2Writer::Icesat2Writer(const std::filesystem::path& out_dir,
             settings.sc_orient,
             settings.dead_time_ns,
             info.tx_time_ns,
-            info.tx_waveform_W.empty() ? std::vector<double>{} : info.tx_waveform_W.front()},
+            info.tx_waveform_W.empty() ? std::vector<double>{} : info.tx_waveform_W.front(),
+            settings.cloud_layers},
       shots_(info.shots) {
   if (info.bin_time_ns.size() >= 2) {
     const double bin_ns = info.bin_time_ns[1] - info.bin_time_ns[0];

@@ -807,7 +807,7 @@ NetcdfWriter::NetcdfWriter(std::filesystem::path final_path, const RunInfo& info
   if (info.orders < 0) impl.fail("orders must be >= 0, got " + std::to_string(info.orders));
   impl.shots = static_cast<std::size_t>(info.shots);
   impl.shape = {info.bands.size(), info.bin_time_ns.size(), static_cast<std::size_t>(info.orders),
-                info.photon_events};
+                info.photon_events, info.atmosphere};
   impl.tx_bins = info.tx_time_ns.size();
 
   const std::string part = impl.file.part_path().string();

@@ -408,6 +408,41 @@ const ProductField kProductFields[] = {
      .units = "m",
      .long_name = "highest vegetation above the ground over the footprint (simulation truth)",
      .standard_name = "canopy_height"},
+    // The atmosphere's truth (PRODUCT.md section 12): only with an `atmosphere` section.
+    {.name = "atmosphere_transmission",
+     .type = S::float64,
+     .field = &R::atmosphere_transmission,
+     .source = F::simulation,
+     .units = "1",
+     .long_name = "two-way direct transmission of the atmosphere's layers along the beam axis "
+                  "(simulation truth)",
+     .comment = "exp(-2 tau / mu): tau the layers' vertical extinction optical depth above the "
+                "scene, mu the cosine of the beam axis from the local vertical; light the layers "
+                "scatter forward into the field of view comes back beside it "
+                "(atmosphere_scattered_fraction)",
+     .geojson = GeojsonProperty::none,
+     .atmosphere_only = true},
+    {.name = "atmosphere_scattered_fraction",
+     .type = S::float64,
+     .field = &R::atmosphere_scattered_fraction,
+     .source = F::simulation,
+     .units = "1",
+     .long_name = "part of the energy returned in the window whose light the atmosphere's layers "
+                  "scattered, on the way down or back (simulation truth)",
+     .geojson = GeojsonProperty::none,
+     .atmosphere_only = true},
+    {.name = "atmosphere_delay_m",
+     .type = S::float64,
+     .field = &R::atmosphere_delay_m,
+     .source = F::simulation,
+     .units = "m",
+     .long_name = "energy-weighted extra path of the return from scattering in the atmosphere's "
+                  "layers (simulation truth)",
+     .comment = "over all the energy returned in the window, the unscattered light counting 0: "
+                "the light's path less the straight way to the point it returned from and back; "
+                "from orbit the return's mean range is late by half of it",
+     .geojson = GeojsonProperty::none,
+     .atmosphere_only = true},
     // A photon-counting receiver's events, a list a shot (ragged along `photon`).
     {.name = "photon_time",
      .type = S::float64,
@@ -533,6 +568,7 @@ std::size_t ProductShape::length(std::string_view name) const {
 
 std::vector<std::size_t> ProductShape::of(const ProductField& field) const {
   if (!field.per_band()) return {};  // a scalar, or a list of any length
+  if (field.atmosphere_only && !atmosphere) return {};
   std::vector<std::size_t> shape = {bands};
   for (const char* inner : field.inner_dims) {
     if (inner == nullptr) continue;

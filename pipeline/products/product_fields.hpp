@@ -72,6 +72,9 @@ struct ProductField {
   double fill = std::numeric_limits<double>::quiet_NaN();
   MetricField metric = {};
   GeojsonProperty geojson = GeojsonProperty::value;
+  // Only in a run with an `atmosphere` section (ProductShape::atmosphere): other runs' products
+  // keep their variables and bits.
+  bool atmosphere_only = false;
 
   // True for [band]... fields; false for per-shot scalars and ragged fields.
   bool per_band() const;
@@ -108,14 +111,15 @@ std::vector<GeojsonPropertyName> geojson_properties(const ProductField& field,
 struct ProductShape {
   std::size_t bands = 0;
   std::size_t bins = 0;
-  std::size_t orders = 0;  // 0 without per-order output
-  bool photons = false;    // the records carry photon events
+  std::size_t orders = 0;   // 0 without per-order output
+  bool photons = false;     // the records carry photon events
+  bool atmosphere = false;  // the run has an `atmosphere` section
 
   // Length of dimension `name` ("bin", "order", "gaussian", "percentile"); 0 when the run
   // has none.
   std::size_t length(std::string_view name) const;
   // [band] then the inner dimensions of `field`; empty for a scalar, a ragged field or a field
-  // the run lacks.
+  // the run lacks (a dimension, or its atmosphere).
   std::vector<std::size_t> of(const ProductField& field) const;
 };
 

@@ -84,6 +84,9 @@ struct ShotRecord {
   double cover_true = std::numeric_limits<double>::quiet_NaN();
   double pai_true = std::numeric_limits<double>::quiet_NaN();
   double canopy_height_true_m = std::numeric_limits<double>::quiet_NaN();
+  // [band], with an `atmosphere` section only (else empty, and not written): the layers' two-way
+  // transmission, the part of the return they scattered and its extra path (shot_transport.hpp).
+  std::vector<double> atmosphere_transmission, atmosphere_scattered_fraction, atmosphere_delay_m;
 
   // The beam's 1/e^2 contour on the terrain: closed ring of (lon, lat), counter-clockwise.
   std::vector<std::array<double, 2>> footprint_lonlat;
@@ -118,6 +121,7 @@ struct RunInfo {
   std::vector<std::vector<double>> tx_waveform_W;  // [band][tx_bin]
   int orders = 0;                                  // per-order output: orders 1..orders; 0 when off
   bool photon_events = false;  // the records carry photon events (the `photon` dimension)
+  bool atmosphere = false;     // an `atmosphere` section: its truth fields are written
   // Digitiser counts per W of recorded power, for the granules' waveforms in counts: the
   // detector's gain x (2^bits - 1) / saturation_W when it digitises, else 1 count per nW.
   double counts_per_W = 1e9;

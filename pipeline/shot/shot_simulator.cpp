@@ -130,6 +130,9 @@ void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const 
   if (ray_queries)
     *ray_queries += returns.waveforms.ray_queries + (outline_read() ? outline_vertices : 0);
   scale_pulse_energy(returns.waveforms, footprint.pulse_energy_scale);
+  record.atmosphere_transmission = returns.waveforms.atmosphere_transmission;
+  record.atmosphere_scattered_fraction = returns.waveforms.atmosphere_scattered_fraction;
+  record.atmosphere_delay_m = returns.waveforms.atmosphere_delay_m;
   returns.shot_number = footprint.shot_number;
   returns.beam = footprint.beam;
   returns.range_m = footprint.range_m;
@@ -189,7 +192,8 @@ void ShotSimulator::flag_off_terrain(ShotRecord& record, const Footprint& footpr
       transport.per_order ? static_cast<std::size_t>(transport.max_order) : 0;
   fill_flagged(record, {.bands = lidar_.band_count(),
                         .bins = static_cast<std::size_t>(lidar_.bins()),
-                        .orders = orders});
+                        .orders = orders,
+                        .atmosphere = transport.atmosphere.has_value()});
   // The shot keeps a position, as a trajectory's coordinates should: where the beam met the
   // terrain (over nodata), or else where it crosses the ellipsoid; no height when it met none.
   if (footprint.on_terrain) {

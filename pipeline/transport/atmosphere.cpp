@@ -68,6 +68,31 @@ double sample_phase_cosine(const AtmospherePhase& phase, double u1, double u2) {
   return 1.0;
 }
 
+std::vector<std::size_t> detected_layers(const AtmosphereSettings& settings, std::size_t band) {
+  // A layer's volume scattering coefficient (per m) and its backscatter (per m per sr).
+  auto scattering = [band](const AtmosphereLayer& layer) {
+    const double thickness = layer.top_m - layer.base_m;
+    return thickness > 0.0
+               ? layer.optical_depth[band] * layer.single_scattering_albedo[band] / thickness
+               : 0.0;
+  };
+  std::vector<std::size_t> found;
+  for (std::size_t i = 0; i < settings.layers.size(); ++i) {
+    const AtmosphereLayer& layer = settings.layers[i];
+    if (layer.phase.kind == AtmospherePhase::Kind::rayleigh) continue;
+    const double backscatter = scattering(layer) * phase_function(layer.phase, -1.0);
+    if (!(backscatter > 0.0)) continue;
+    const double middle_m = 0.5 * (layer.base_m + layer.top_m);
+    double molecules = 0.0;
+    for (const AtmosphereLayer& other : settings.layers)
+      if (other.phase.kind == AtmospherePhase::Kind::rayleigh && other.base_m <= middle_m &&
+          middle_m < other.top_m)
+        molecules += scattering(other) * phase_function(other.phase, -1.0);
+    if (backscatter >= molecules) found.push_back(i);
+  }
+  return found;
+}
+
 AtmosphereModel::AtmosphereModel(const AtmosphereSettings& settings, std::size_t bands,
                                  double ground_z_m, double ground_height_m, double floor_z_m)
     : bands_(bands), floor_z_m_(floor_z_m), column_(bands, 0.0) {
@@ -139,8 +164,17 @@ int AtmosphereModel::interval_at(double z, double dz) const {
 }
 
 bool AtmosphereModel::cross(Vec3& position, Vec3& direction, double& path_m,
-                            std::span<double> weight,
-                            const std::function<double()>& uniform) const {
+                            std::span<double> weight, const std::function<double()>& uniform,
+                            int* scatterings) const {
+  int scattered = 0;
+  // Told however the crossing ends.
+  struct Count {
+    int* out;
+    const int& value;
+    ~Count() {
+      if (out) *out = value;
+    }
+  } count{scatterings, scattered};
   if (intervals_.empty()) return true;
   const double top = intervals_.back().z1;
   const int n = static_cast<int>(intervals_.size());
@@ -153,7 +187,6 @@ bool AtmosphereModel::cross(Vec3& position, Vec3& direction, double& path_m,
     path_m += to_top;
   }
   int i = interval_at(position[2], direction[2]);
-  int scatterings = 0;
   while (i >= 0 && i < n) {
     const Interval& interval = intervals_[i];
     const double dz = direction[2];
@@ -173,7 +206,7 @@ bool AtmosphereModel::cross(Vec3& position, Vec3& direction, double& path_m,
       i += dz < 0.0 ? -1 : 1;
       continue;
     }
-    if (++scatterings > most_scatterings) return false;
+    if (++scattered > most_scatterings) return false;
     // Which slab scattered: by its share of the sampling coefficient.
     int chosen = interval.slabs.front();
     if (interval.slabs.size() > 1) {

@@ -19,6 +19,14 @@ double phase_function(const AtmospherePhase& phase, double cos_angle);
 // A cosine of the scattering angle drawn from the phase function with two uniform numbers.
 double sample_phase_cosine(const AtmospherePhase& phase, double u1, double u2);
 
+// The layers a space lidar's layer finder would report (ATL09's cloud and aerosol layers, GLAS's
+// GLA09), as the simulation decides it: those whose backscatter at `band`, scattering coefficient
+// times their phase function at 180 degrees, at least equals the molecules' at the layer's middle
+// (a scattering ratio of 2 or more), the molecules being the Rayleigh layers and above-ground
+// heights taken over sea level. Molecular layers are never reported. Indices into
+// settings.layers, in their order.
+std::vector<std::size_t> detected_layers(const AtmosphereSettings& settings, std::size_t band);
+
 class AtmosphereModel {
  public:
   // `ground_z_m` is the frame's z of the ground under the footprint centre, `ground_height_m` its
@@ -36,9 +44,10 @@ class AtmosphereModel {
   // Carries a ray from `position` (above the floor) along `direction` down to the floor: its
   // scatterings drawn (free paths by a band-independent scattering coefficient, each band's
   // weight carrying its own extinction and albedo), `path_m` lengthened by the way it went.
-  // False when it is lost: it leaves the top going up, or scatters too often.
+  // False when it is lost: it leaves the top going up, or scatters too often. `scatterings`, when
+  // given, receives how often it scattered.
   bool cross(Vec3& position, Vec3& direction, double& path_m, std::span<double> weight,
-             const std::function<double()>& uniform) const;
+             const std::function<double()>& uniform, int* scatterings = nullptr) const;
 
   // Single scattering on the way back, sampled for a lit point. A height drawn by the column's
   // scattering (all bands summed) on the detector ray `down` (from `sensor`, pointing down) gives

@@ -37,6 +37,7 @@ struct Tally {
         ground(bands * size, 0.0),
         squares(bands * size, 0.0),
         order(bands * orders * size, 0.0),
+        atmosphere(bands * atmosphere_sums, 0.0),
         marked(size, 0) {}
 
   // Only the bins `other` scored into are added: elsewhere it holds zeros, and adding a zero
@@ -59,6 +60,7 @@ struct Tally {
     add(ground, other.ground);
     add(squares, other.squares);
     add(order, other.order);
+    for (std::size_t i = 0; i < atmosphere.size(); ++i) atmosphere[i] += other.atmosphere[i];
     for (int bin : other.bins) mark(bin);
     return *this;
   }
@@ -74,6 +76,7 @@ struct Tally {
       for (std::size_t row = 0; row * size < part->size(); ++row)
         for (int bin : bins) (*part)[row * size + bin] = 0.0;
     }
+    std::fill(atmosphere.begin(), atmosphere.end(), 0.0);
     for (int bin : bins) marked[bin] = 0;
     bins.clear();
     ray_queries = 0;
@@ -91,6 +94,10 @@ struct Tally {
   std::size_t size;
   int orders;
   std::vector<double> total, canopy, ground, squares, order;
+  // With an atmosphere, per band: the returns' weight in the window, its part whose light the
+  // layers scattered, and the weight times the extra path the scattering made (m).
+  static constexpr std::size_t atmosphere_sums = 3;
+  std::vector<double> atmosphere;
   std::int64_t ray_queries = 0;
   std::vector<char> marked;  // per bin: scored into
   std::vector<int> bins;     // those bins, in the order first scored
@@ -149,6 +156,10 @@ struct Path {
   bool canopy_return = false;  // whether the first element met is foliage or a trunk
   int order = 0;               // of the last element met
   bool lost = false;           // scattered out of the atmosphere before reaching the scene
+  // Whether the layers turned the path on its way to the scene, and how much longer that made it
+  // than the straight line from the sensor to where it reached the scene.
+  bool atmosphere_scattered = false;
+  double atmosphere_extra_m = 0.0;
 };
 
 // The element a path meets.
@@ -330,8 +341,13 @@ Path PathTracer::sample_beam(bool beam_path, RayRandom& random) {
     // scene; the second path the detector's view, scattered on the way back (reciprocity).
     path.position = geometry_.sensor_m;
     path.direction = first_direction;
-    path.lost = !atmosphere_->cross(path.position, path.direction, path.path_m, throughput_,
-                                    [&random] { return random.uniform(); });
+    int scatterings = 0;
+    path.lost = !atmosphere_->cross(
+        path.position, path.direction, path.path_m, throughput_,
+        [&random] { return random.uniform(); }, &scatterings);
+    path.atmosphere_scattered = scatterings > 0;
+    if (path.atmosphere_scattered)
+      path.atmosphere_extra_m = path.path_m - norm(path.position - geometry_.sensor_m);
     return path;
   }
   const double start_m = (geometry_.sensor_m[2] - start_height_m_) / -first_direction[2];
@@ -436,10 +452,20 @@ void PathTracer::score_through_atmosphere(const Path& path, const Vertex& vertex
   const AtmosphereModel& atmosphere = *atmosphere_;
   const double range_m = geometry_.range_m;
   const Vec3 laser_light = -1.0 * up_to_laser;
-  auto score = [&](double path_m) {
+  // A return scored, its light scattered by the layers or not, `extra_m` longer for it.
+  auto score = [&](double path_m, bool scattered, double extra_m) {
     const double time_ns = (path_m - 2.0 * range_m) / speed_of_light_m_s * 1e9;
     const int tally_bin = lidar_.tally_index(time_ns);
-    if (tally_bin >= 0) bin(path, order, tally_bin, tally);
+    if (tally_bin >= 0) {
+      bin(path, order, tally_bin, tally);
+      for (std::size_t band = 0; band < bands_; ++band) {
+        double* sums = &tally.atmosphere[band * Tally::atmosphere_sums];
+        sums[0] += response_[band];
+        if (!scattered) continue;
+        sums[1] += response_[band];
+        sums[2] += response_[band] * extra_m;
+      }
+    }
     if (observer_) {
       RayEvent event = event_at(RayEventKind::score, path, vertex.point, &vertex);
       event.weight = response_;
@@ -459,7 +485,7 @@ void PathTracer::score_through_atmosphere(const Path& path, const Vertex& vertex
                                          vertex.normal, laser_light, toward_detector) *
                         direct_scale *
                         std::exp(-atmosphere.column_optical_depth(band) / up_to_laser[2]);
-    score(laser_m + path.path_m);
+    score(laser_m + path.path_m, path.atmosphere_scattered, path.atmosphere_extra_m);
     return;
   }
   // The element's response is per unit irradiance across the light's path; the light sent
@@ -478,7 +504,7 @@ void PathTracer::score_through_atmosphere(const Path& path, const Vertex& vertex
                                          vertex.normal, incoming, up_to_laser) *
                         (cos_out / cos_in) * direct_scale *
                         std::exp(-atmosphere.column_optical_depth(band) / up_to_laser[2]);
-    score(path.path_m + laser_m);
+    score(path.path_m + laser_m, path.atmosphere_scattered, path.path_m - laser_m);
   }
   if (!atmosphere.scatters()) return;
   const double u1 = random.uniform(), u2 = random.uniform(), u3 = random.uniform();
@@ -503,7 +529,8 @@ void PathTracer::score_through_atmosphere(const Path& path, const Vertex& vertex
         std::exp(-atmosphere.optical_depth(band, floor_z, at.z_m) / up[2] -
                  atmosphere.optical_depth(band, at.z_m, std::numeric_limits<double>::infinity()) /
                      -down[2]);
-  score(path.path_m + rise_m + norm(geometry_.sensor_m - at.point));
+  const double scattered_path_m = path.path_m + rise_m + norm(geometry_.sensor_m - at.point);
+  score(scattered_path_m, true, scattered_path_m - 2.0 * laser_m);
 }
 
 // Part of the laser's light that reaches the element: surfaces block it (beyond the first
@@ -716,6 +743,27 @@ ShotWaveforms shot_waveforms(const Tally& tally, const LidarModel& lidar, double
   return waveforms;
 }
 
+// The shot's truth of its atmosphere, when it has one: the layers' direct two-way transmission
+// along the beam's axis, and of the returns in the window the part the layers scattered and their
+// energy-weighted extra path (NaN without a return).
+void add_atmosphere_truth(const Tally& tally, const Scene& scene, const ShotGeometry& geometry,
+                          const TransportOptions& options, ShotWaveforms& waveforms) {
+  if (!options.atmosphere) return;
+  const std::size_t bands = tally.atmosphere.size() / Tally::atmosphere_sums;
+  // The layers as the tracer cuts them: above the scene's top, where its rays start.
+  const AtmosphereModel layers(*options.atmosphere, bands, geometry.ground_z_m,
+                               geometry.ground_height_m, scene.top_m() + 1.0);
+  const double mu = -geometry.axis[2];
+  for (std::size_t band = 0; band < bands; ++band) {
+    const double* sums = &tally.atmosphere[band * Tally::atmosphere_sums];
+    waveforms.atmosphere_transmission.push_back(
+        std::exp(-2.0 * layers.column_optical_depth(band) / mu));
+    const double none = std::numeric_limits<double>::quiet_NaN();
+    waveforms.atmosphere_scattered_fraction.push_back(sums[0] > 0.0 ? sums[1] / sums[0] : none);
+    waveforms.atmosphere_delay_m.push_back(sums[0] > 0.0 ? sums[2] / sums[0] : none);
+  }
+}
+
 }  // namespace
 
 const char* to_string(RayEventKind kind) {
@@ -776,7 +824,9 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
       tally += group_tally;
       group_tally.clear();
     }
-    return shot_waveforms(tally, lidar, geometry.range_m, options);
+    ShotWaveforms waveforms = shot_waveforms(tally, lidar, geometry.range_m, options);
+    add_atmosphere_truth(tally, scene, geometry, options, waveforms);
+    return waveforms;
   }
   Tally tally(lidar.band_count(), lidar.tally_size(), orders);
   std::vector<Tally> group_tallies(groups, Tally(lidar.band_count(), lidar.tally_size(), orders));
@@ -786,7 +836,9 @@ ShotWaveforms simulate_shot(const Scene& scene, const LidarModel& lidar,
       tracer.trace_ray(ray, group_tallies[group]);
   });
   for (const Tally& group : group_tallies) tally += group;
-  return shot_waveforms(tally, lidar, geometry.range_m, options);
+  ShotWaveforms waveforms = shot_waveforms(tally, lidar, geometry.range_m, options);
+  add_atmosphere_truth(tally, scene, geometry, options, waveforms);
+  return waveforms;
 }
 
 ShotWaveforms simulate_ray(const Scene& scene, const LidarModel& lidar,
@@ -797,7 +849,9 @@ ShotWaveforms simulate_ray(const Scene& scene, const LidarModel& lidar,
   PathTracer tracer(scene, lidar, geometry, optics, options, shot_number,
                     observer ? &observer : nullptr);
   tracer.trace_ray(ray, tally);
-  return shot_waveforms(tally, lidar, geometry.range_m, options);
+  ShotWaveforms waveforms = shot_waveforms(tally, lidar, geometry.range_m, options);
+  add_atmosphere_truth(tally, scene, geometry, options, waveforms);
+  return waveforms;
 }
 
 }  // namespace glaswave

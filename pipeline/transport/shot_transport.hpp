@@ -57,6 +57,11 @@ struct ShotWaveforms {
   // but for the pulse's tails beyond the window).
   std::vector<double> energy_J, canopy_energy_J, ground_energy_J;
   ScoredReturns scored;  // when TransportOptions::scored_energies
+  // [band], with an atmosphere only (else empty): the layers' direct two-way transmission along
+  // the beam's axis, exp(-2 tau / mu) of their column above the scene; of the energy returned in
+  // the window, the part whose light the layers scattered, and its energy-weighted extra path
+  // over the straight one (m, the unscattered light counting 0). NaN where nothing returned.
+  std::vector<double> atmosphere_transmission, atmosphere_scattered_fraction, atmosphere_delay_m;
   std::int64_t ray_queries = 0;
 };
 

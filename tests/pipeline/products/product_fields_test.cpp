@@ -85,14 +85,16 @@ std::set<std::string> words(const std::string& text) {
 }
 
 // Which variables of shots.nc have a band dimension, typed from PRODUCT.md section 4's table
-// (its dims column), and the granule and sun fields added since (per shot). A row whose member
-// changes shape, or a new row, has to agree with the contract written here.
+// (its dims column), the atmosphere's truth of section 12 ("per band"), and the granule and sun
+// fields added since (per shot). A row whose member changes shape, or a new row, has to agree
+// with the contract written here.
 TEST(ProductFields, PerBandFieldsAreThoseOfProductMdsTable) {
   const std::set<std::string> per_band = words(
       "rx_waveform rx_waveform_canopy rx_waveform_ground rx_waveform_order rx_energy "
       "rx_energy_canopy rx_energy_ground reflectance energy_tr energy_cr energy_gr waveform_index "
       "sig_begin_m sig_end_m centroid_m n_peaks gauss_amp gauss_center_m gauss_sigma_ns "
-      "gauss_area ground_elev_est canopy_height_est rh");
+      "gauss_area ground_elev_est canopy_height_est rh atmosphere_transmission "
+      "atmosphere_delay_m atmosphere_scattered_fraction");
   const std::set<std::string> per_shot = words(
       "shot shot_number quality_flag quality_reason time lat lon elev sc_lat sc_lon sc_alt "
       "off_nadir_deg range_m slope_deg aspect_deg elev_bin0 elev_lastbin cover_true pai_true "
@@ -107,6 +109,25 @@ TEST(ProductFields, PerBandFieldsAreThoseOfProductMdsTable) {
     EXPECT_EQ(field.per_band(), listed_per_band) << field.name;
   }
   EXPECT_EQ(fixed, per_band.size() + per_shot.size()) << "a variable of PRODUCT.md is missing";
+}
+
+// PRODUCT.md section 12: the atmosphere's truth only in a run with an atmosphere section, and
+// those three alone.
+TEST(ProductFields, AtmosphereTruthOnlyWithAnAtmosphere) {
+  std::set<std::string> only;
+  for (const ProductField& field : product_fields()) {
+    const std::vector<std::size_t> without = ProductShape{.bands = 2}.of(field);
+    const std::vector<std::size_t> with = ProductShape{.bands = 2, .atmosphere = true}.of(field);
+    if (field.atmosphere_only) {
+      only.insert(field.name);
+      EXPECT_TRUE(without.empty()) << field.name;
+      EXPECT_EQ(with, std::vector<std::size_t>{2}) << field.name;
+    } else {
+      EXPECT_EQ(without, with) << field.name;
+    }
+  }
+  EXPECT_EQ(only, words("atmosphere_transmission atmosphere_delay_m "
+                        "atmosphere_scattered_fraction"));
 }
 
 // Per-band properties carry the band's name as a suffix, band after band; per-shot scalars none.

@@ -85,6 +85,35 @@ TEST(Atmosphere, APurelyAbsorbingLayerPassesBeerLambertBothWays) {
         << band;
 }
 
+// The shot's truth through an absorbing layer seen 30 degrees off nadir: its transmission is
+// exp(-2 tau / mu), mu = cos 30, and the return is that of the clear one (the rays' mu spread
+// over GLAS's 0.2 mrad half view by 0.67 x 2e-4 in 1 / mu, which moves the ratio by 1e-4 at most
+// and by far less on average); nothing scattered, so no delay and no scattered part.
+TEST(Atmosphere, AnAbsorbingLayersTruthIsBeerLambertOffNadirWithoutDelay) {
+  LidarSettings sensor;
+  sensor.bands = {{532.0, 32.0, 1.0, "532"}, {1064.0, 72.0, 1.0, "1064"}};
+  GroundShot shot(sensor, 600000.0, 400.0);
+  const double angle = 30.0 * pi / 180.0, mu = std::cos(angle);
+  shot.geometry.sensor_m = {600000.0 * std::tan(angle), 0.0, 600000.0};
+  shot.geometry.range_m = norm(shot.geometry.sensor_m);
+  shot.geometry.axis = (-1.0 / shot.geometry.range_m) * shot.geometry.sensor_m;
+  TransportOptions options;
+  options.rays = 4000;
+  const ShotWaveforms clear = shot.run(options);
+  EXPECT_TRUE(clear.atmosphere_transmission.empty());
+  const std::vector<double> tau = {0.3, 0.1};
+  options.atmosphere = AtmosphereSettings{"", {layer(2000.0, 3000.0, tau, 0.0, hg(0.8))}};
+  const ShotWaveforms hazy = shot.run(options);
+  ASSERT_EQ(hazy.atmosphere_transmission.size(), 2u);
+  for (std::size_t band = 0; band < 2; ++band) {
+    const double expected = std::exp(-2.0 * tau[band] / mu);
+    EXPECT_NEAR(hazy.atmosphere_transmission[band], expected, 1e-12 * expected) << band;
+    EXPECT_NEAR(hazy.energy_J[band] / clear.energy_J[band], expected, 1e-4 * expected) << band;
+    EXPECT_EQ(hazy.atmosphere_scattered_fraction[band], 0.0) << band;
+    EXPECT_EQ(hazy.atmosphere_delay_m[band], 0.0) << band;
+  }
+}
+
 // The single scattering of a thin layer at height H (quadrature, exact geometry) over level
 // Lambertian ground, sensor at Z at nadir, Gaussian beam truncated at the field of view:
 //   clear  C = E_beam[cos^3 theta]                                   (return of a lit point)
@@ -95,6 +124,8 @@ TEST(Atmosphere, APurelyAbsorbingLayerPassesBeerLambertBothWays) {
 struct SingleScattering {
   double clear = 0.0, down = 0.0, up = 0.0;
   double clear_path_m = 0.0, down_path_m = 0.0, up_path_m = 0.0;  // weighted sums of paths
+  // Weighted sums of the scattered paths' excess over the straight way to the lit point and back.
+  double down_extra_m = 0.0, up_extra_m = 0.0;
 };
 
 SingleScattering single_scattering(double Z, double H, double tau, double g, double sigma,
@@ -133,6 +164,7 @@ SingleScattering single_scattering(double Z, double H, double tau, double g, dou
             w0 * tau / std::cos(t0) * hgp(dot(d0, QP) / dist) * domega * std::pow(cosP, 3);
         s.down += w;
         s.down_path_m += w * (norm(Q0 - L) + dist + norm(P - L));
+        s.down_extra_m += w * (norm(Q0 - L) + dist - norm(P - L));
       }
     // Up: every detector direction d in view, scattering at Q on it toward the detector.
     for (int ir = 0; ir < nr; ++ir)
@@ -147,6 +179,7 @@ SingleScattering single_scattering(double Z, double H, double tau, double g, dou
                          Z / (dist * dist) * domega;
         s.up += w;
         s.up_path_m += w * (norm(P0 - L) + dist + norm(Q - L));
+        s.up_extra_m += w * (dist + norm(Q - L) - norm(P0 - L));
       }
   }
   return s;
@@ -176,7 +209,8 @@ TEST(Atmosphere, AThinForwardScatteringLayerAddsItsSingleScatteringAndDelay) {
   options.scored_energies = true;
   const Moments clear = moments(shot.run(options), shot.lidar);
   options.atmosphere = AtmosphereSettings{"", {layer(1000.0, 1001.0, {tau}, 1.0, hg(g))}};
-  const Moments hazy = moments(shot.run(options), shot.lidar);
+  const ShotWaveforms truth = shot.run(options);
+  const Moments hazy = moments(truth, shot.lidar);
 
   const SingleScattering s =
       single_scattering(Z, H, tau, g, sensor.divergence_sigma_rad, 0.5 * sensor.ifov_rad);
@@ -191,6 +225,15 @@ TEST(Atmosphere, AThinForwardScatteringLayerAddsItsSingleScatteringAndDelay) {
       c_m_ns;
   EXPECT_GT(expected_delay_ns, 0.1);
   EXPECT_NEAR(hazy.mean_ns - clear.mean_ns, expected_delay_ns, 0.06 * expected_delay_ns);
+  // The shot's truth: the scattered part (D + U) / (C + D + U); its delay the scattered paths'
+  // mean excess over the straight way to the same lit point and back (0.027 m by quadrature; less
+  // than the mean time's shift, 0.037 m, as the down-scattered light lands across the whole view,
+  // whose edge is 3.7 m farther than its centre from 3 km); the direct transmission exp(-2 tau).
+  const double scattered = (s.down + s.up) / (s.clear + s.down + s.up);
+  EXPECT_NEAR(truth.atmosphere_scattered_fraction[0], scattered, 0.06 * scattered);
+  const double extra_m = (s.down_extra_m + s.up_extra_m) / (s.clear + s.down + s.up);
+  EXPECT_NEAR(truth.atmosphere_delay_m[0], extra_m, 0.06 * extra_m);
+  EXPECT_NEAR(truth.atmosphere_transmission[0], std::exp(-2.0 * tau), 1e-12);
 }
 
 // A thin cirrus (tau 0.3, g 0.77) at 10 km over a footprint seen from 600 km (GLAS's 0.4 mrad
@@ -233,6 +276,15 @@ TEST(Atmosphere, ACirrusDelaysTheTailByAtMostTheFieldOfViewsBound) {
   ASSERT_GT(tail_J, 0.0);
   EXPECT_LT(beyond_J, 0.05 * tail_J);
   EXPECT_LT(tail_m / tail_J, R * R / (2.0 * H));
+  // The shot's truth: the scattered light's mean extra path (delay over scattered part) is
+  // within the same bound, and the scattered part holds at least the bins' tail.
+  const double fraction = w.atmosphere_scattered_fraction[0];
+  ASSERT_GT(fraction, 0.0);
+  EXPECT_GT(w.atmosphere_delay_m[0], 0.0);
+  EXPECT_LT(w.atmosphere_delay_m[0] / fraction, R * R / (2.0 * H));
+  double total_J = 0.0;
+  for (const double e : w.scored.total_J[0]) total_J += e;
+  EXPECT_GE(fraction, tail_J / total_J);
 }
 
 }  // namespace
