@@ -178,7 +178,7 @@ def main():
              "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r[0]} | {r[1]} | {r[2]:.4f} ± {r[3]:.4f} | {r[4]:.4f} ± {r[5]:.4f} | "
-                     f"{r[6]:.4f} ± {r[7]:.4f} | {r[8]:.4f} ± {r[9]:.4f} | "
+                     f"{r[6]:.4f} ± {r[7]:.4f} | {r[8]:.5f} ± {r[9]:.5f} | "
                      f"{r[10]:.4f} ± {r[11]:.4f} | {r[12]:.4f} ± {r[13]:.4f} |")
     write_atomic(os.path.join(args.out, "rami.md"), "\n".join(lines) + "\n")
     write_csv(os.path.join(args.out, "brfpp.csv"), ["scene", "band", "signed_vza_deg", "brf",
