@@ -59,6 +59,12 @@ Forest::Forest(const CanopySettings& canopy, std::uint64_t seed,
       const double area_m2 = ((lat_max - lat_min) * lat_m + 2.0 * mean_radius_m) *
                              ((lon_max - lon_min) * lon_m + 2.0 * mean_radius_m);
       kind.area_density_m2_m3 = s.pai * area_m2 / crown_volume_m3;
+      // A crown with its own crown_lai holds that leaf area whatever `pai` says.
+      for (Tree& t : kind.explicit_trees)
+        if (t.crown_lai > 0.0)
+          t.area_density_m2_m3 =
+              t.crown_lai * std::numbers::pi * t.crown_radius_m * t.crown_radius_m /
+              glaswave::crown_volume_m3(s.crown_shape, t.crown_radius_m, t.crown_half_height_m);
     } else {
       kind.stand.emplace(s, seed, k);
       kind.area_density_m2_m3 = kind.stand->area_density_m2_m3();
@@ -128,10 +134,11 @@ constexpr double max_tree_m = 1000.0;
 
 // A crown from a row of the crowns file: degrees, or metres about the plane's origin.
 Tree read_crown(const CsvReader& csv, const std::vector<std::string_view>& fields,
-                const std::optional<GeographicLib::LocalCartesian>& origin) {
+                const std::optional<GeographicLib::LocalCartesian>& origin, std::size_t columns) {
   const std::string place = csv.place();
-  if (fields.size() != 5)
-    throw input_error(place, "expected 5 values, got " + std::to_string(fields.size()));
+  if (fields.size() != columns)
+    throw input_error(place, "expected " + std::to_string(columns) + " values, got " +
+                                 std::to_string(fields.size()));
   const std::vector<std::string_view>& names = origin ? metric_header : geographic_header;
   double values[5];
   for (int i = 0; i < 5; ++i) values[i] = csv.number(fields[i], names[i]);
@@ -163,6 +170,12 @@ Tree read_crown(const CsvReader& csv, const std::vector<std::string_view>& field
   tree.crown_base_m = values[2];
   tree.crown_radius_m = values[3];
   tree.crown_half_height_m = values[4];
+  if (columns == 6) {
+    tree.crown_lai = csv.number(fields[5], "crown_lai");
+    // A crown as dense as RAMI's spheres (LAI 5) or any forest's is far below 100.
+    if (!(tree.crown_lai > 0.0 && tree.crown_lai <= 100.0))
+      throw input_error(place, "crown_lai must be in (0, 100]");
+  }
   return tree;
 }
 
@@ -173,11 +186,17 @@ std::vector<Tree> read_crowns_file(const std::filesystem::path& file,
   CsvReader csv(file, "the crowns file");
   std::vector<std::string_view> fields;
   std::optional<GeographicLib::LocalCartesian> origin;
-  if (csv.next_row(fields) && fields != geographic_header) {
+  std::size_t columns = 5;
+  // An optional last column, crown_lai: the crown's own leaf area.
+  if (csv.next_row(fields) && fields.size() == 6 && fields[5] == "crown_lai") {
+    columns = 6;
+    fields.pop_back();
+  }
+  if (!fields.empty() && fields != geographic_header) {
     if (fields != metric_header)
       throw input_error(csv.place(),
                         "expected the header lon,lat,base_m,radius_m,half_height_m or "
-                        "x,y,base_m,radius_m,half_height_m");
+                        "x,y,base_m,radius_m,half_height_m (and optionally crown_lai)");
     if (!plane)
       throw input_error(
           csv.place(),
@@ -185,7 +204,7 @@ std::vector<Tree> read_crowns_file(const std::filesystem::path& file,
     origin.emplace(plane->origin_lat_deg, plane->origin_lon_deg, 0.0);
   }
   std::vector<Tree> trees;
-  while (csv.next_row(fields)) trees.push_back(read_crown(csv, fields, origin));
+  while (csv.next_row(fields)) trees.push_back(read_crown(csv, fields, origin, columns));
   if (trees.empty()) throw input_error(file.string(), "the crowns file lists no crowns");
   return trees;
 }

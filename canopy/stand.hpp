@@ -21,6 +21,10 @@ struct Tree {
   double crown_radius_m = 0.0;
   double crown_half_height_m = 0.0;
   int kind = 0;  // which foliage it bears (Forest's kinds)
+  // A crowns file's own leaf area: crown_lai (one-sided area over the crown's widest
+  // cross-section, pi r^2), and the density it gives; 0: the kind's density (from `pai`).
+  double crown_lai = 0.0;
+  double area_density_m2_m3 = 0.0;
 };
 
 // A box in longitude and latitude (degrees).

@@ -68,6 +68,16 @@ struct BrfView {
   double azimuth_deg = 0.0;
 };
 
+// RAMI's measurement set written by `glaswave brf` in ROMC's format (PRODUCT.md section 13):
+// `DIR/rami/<measurement>_<model>-<experiment>.mes`, one experiment a band.
+struct BrfRamiSettings {
+  std::vector<std::string> measurements = {"brfpp", "brfop", "fabs", "ftran", "falb"};
+  // ROMC's experiment identifier; "{band}" is replaced by each band's name (needed with more
+  // than one band, since an experiment is one band's).
+  std::string experiment;
+  std::string model = "glaswave";  // ROMC's model identifier: up to 10 letters and digits
+};
+
 // Settings of `glaswave brf` (FLIGHT's solar mode).
 struct BrfSettings {
   double sun_zenith_deg = 30.0;
@@ -76,6 +86,7 @@ struct BrfSettings {
   std::int64_t photons = 1000000;
   double image_resolution_m = 1.0;
   double scene_size_m = 300.0;  // tile side: 100 m (one draw of ~50 crowns) was 4.7 % off
+  std::optional<BrfRamiSettings> rami;
 
   // The tile's side in whole pixels (scene_size_m rounded up), as scene.tif and the traced tile
   // have it, and its half-size in m.

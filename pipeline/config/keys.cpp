@@ -947,6 +947,7 @@ Key detector_keys() {
 Key brf_keys() {
   const Fields<BrfSettings> b;
   const Fields<BrfView> v;
+  const Fields<BrfRamiSettings> r;
   const BrfView view;
   using S = BrfSettings;
   return object(
@@ -968,7 +969,23 @@ Key brf_keys() {
        b.number("scene_size_m", &S::scene_size_m, open_closed(0, run_limits::brf_scene_m), "m",
                 "side of the square scene around the track's first footprint that the sun "
                 "lights (periodic over a synthetic plane); rounded up to whole pixels, at most "
-                "8192 of them (see Limits)")});
+                "8192 of them (see Limits)"),
+       b.object("rami", &S::rami,
+                "RAMI's measurements in ROMC's format, written to `DIR/rami/` beside `brf.json` "
+                "(docs/guide/rami.md); absent: none",
+                {r.string_array("measurements", &BrfRamiSettings::measurements,
+                                "ROMC's measurement identifiers: `brfpp`, `brfop` (76 view "
+                                "zeniths from -75 to 75 deg in the principal and orthogonal "
+                                "planes), their parts `brfpp_co_sgl`, `brfpp_uc_sgl`, "
+                                "`brfpp_mlt` (and `brfop_`'s), `brf1` (the albedo), `fabs`, "
+                                "`ftran`, `falb`"),
+                 r.string("experiment", &BrfRamiSettings::experiment,
+                          "ROMC's experiment identifier (`HET01_DIS_UNI_NIR_20`); `{band}` is "
+                          "replaced by the band's name, as it must be with more than one band")
+                     .with_required(),
+                 r.string("model", &BrfRamiSettings::model,
+                          "ROMC's model identifier: 1 to 10 letters and digits")
+                     .with_default("glaswave")})});
 }
 
 Key table_keys() {

@@ -16,6 +16,7 @@
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/machine.hpp"
+#include "pipeline/engine/rami_measurements.hpp"
 #include "pipeline/products/raster_writer.hpp"
 #include "pipeline/shot/brf_shot.hpp"
 
@@ -49,9 +50,21 @@ nlohmann::json brf_document(const Config& config, const BrfResult& result) {
                        {"azimuth_deg", config.brf.views[v].azimuth_deg},
                        {"brf", result.brf[band][v]},
                        {"brf_stderr", result.brf_stderr[band][v]}});
-    bands.push_back({{"name", config.sensor.bands[band].name},
-                     {"albedo", result.albedo[band]},
-                     {"views", views}});
+    nlohmann::json entry = {{"name", config.sensor.bands[band].name},
+                            {"albedo", result.albedo[band]},
+                            {"views", views}};
+    // RAMI's fluxes, when its measurements are asked for (the products without stay as they were).
+    if (config.brf.rami) {
+      entry["albedo_stderr"] = result.albedo_stderr[band];
+      entry["fabs"] = result.absorbed[band];
+      entry["fabs_stderr"] = result.absorbed_stderr[band];
+      entry["ftran"] = result.transmitted[band];
+      entry["ftran_stderr"] = result.transmitted_stderr[band];
+      entry["closure"] = result.closure[band];
+      entry["closure_stderr"] = result.closure_stderr[band];
+      entry["rami_experiment"] = rami_experiment(*config.brf.rami, config.sensor.bands[band].name);
+    }
+    bands.push_back(entry);
   }
   return {{"bands", bands}};
 }
@@ -80,6 +93,9 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
   BrfOptions options;
   options.sun_direction = -1.0 * toward(config.brf.sun_zenith_deg, config.brf.sun_azimuth_deg);
   for (const BrfView& view : config.brf.views)
+    options.views.push_back(toward(view.zenith_deg, view.azimuth_deg));
+  // RAMI's planes after brf.views: brf.json's views are the configuration's alone.
+  for (const BrfView& view : rami_views(config.brf))
     options.views.push_back(toward(view.zenith_deg, view.azimuth_deg));
   options.photons = config.brf.photons;
   // Every order (BrfOptions' default): simulation.max_order is the lidar's.
@@ -113,6 +129,8 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
     image.bands = result.image;
     write_json(request.out_dir / "brf.json", summary.document);
     write_geotiff(request.out_dir / "scene.tif", image);
+    if (config.brf.rami)
+      write_rami_measurements(request.out_dir / "rami", config, result, config.brf.views.size());
     directory->keep();
   }
   summary.wall_s =

@@ -22,6 +22,7 @@
 #include "footprints/track.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/engine/inputs.hpp"
+#include "pipeline/engine/rami_measurements.hpp"
 #include "pipeline/products/ogr_writer.hpp"
 #include "pipeline/shot/brf_shot.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
@@ -231,6 +232,7 @@ BrfMemory estimate_brf_memory(const Config& c) {
 
 void check_brf(const Config& config) {
   const BrfSettings& b = config.brf;
+  if (b.rami) check_rami_request(*b.rami, config.sensor.bands.size());
   const double pixels = b.pixels();
   if (pixels > run_limits::brf_image_pixels)
     throw config_error("/brf/image_resolution_m",

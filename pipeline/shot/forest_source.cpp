@@ -75,7 +75,8 @@ Vegetation crowns_vegetation(const Forest& forest, const VegetationRegion& regio
     crown.base_m = foot + Vec3{0.0, 0.0, tree.crown_base_m};
     crown.radius_m = tree.crown_radius_m;
     crown.half_height_m = tree.crown_half_height_m;
-    crown.area_density_m2_m3 = forest.area_density_m2_m3(tree.kind);
+    crown.area_density_m2_m3 = tree.area_density_m2_m3 > 0.0 ? tree.area_density_m2_m3
+                                                             : forest.area_density_m2_m3(tree.kind);
     crown.material = tree.kind;
     vegetation.crowns.push_back(crown);
     if (canopy.dbh_m > 0.0 && tree.crown_base_m > 0.0)

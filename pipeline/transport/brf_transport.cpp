@@ -23,8 +23,23 @@ constexpr std::int64_t batches_per_group = 64;
 // small where a dense image per batch would not.
 struct BatchTally {
   BatchTally(std::size_t bands, std::size_t views)
-      : escaped(bands, 0.0), sum(bands * views, 0.0), sum_sq(bands * views, 0.0) {}
+      : escaped(bands, 0.0),
+        sum(bands * views, 0.0),
+        sum_sq(bands * views, 0.0),
+        escaped_sq(bands, 0.0),
+        absorbed(bands, 0.0),
+        absorbed_sq(bands, 0.0),
+        transmitted(bands, 0.0),
+        transmitted_sq(bands, 0.0),
+        closure(bands, 0.0),
+        closure_sq(bands, 0.0),
+        part_sum(brf_parts * bands * views, 0.0),
+        part_sum_sq(brf_parts * bands * views, 0.0) {}
   std::vector<double> escaped, sum, sum_sq;
+  // RAMI's fluxes and parts (brf_transport.hpp), with their squares.
+  std::vector<double> escaped_sq, absorbed, absorbed_sq, transmitted, transmitted_sq;
+  std::vector<double> closure, closure_sq;
+  std::vector<double> part_sum, part_sum_sq;  // [(part * bands + band) * views + view]
   std::vector<std::int64_t> pixels;
   std::vector<double> pixel_scores;  // [entry * bands + band]
   std::int64_t ray_queries = 0;
@@ -59,6 +74,10 @@ class SunTracer {
                tile.half_size_m * (std::abs(tile.ground_slope_x) + std::abs(tile.ground_slope_y))),
         throughput_(bands_),
         scores_(bands_ * views_),
+        part_scores_(brf_parts * bands_ * views_),
+        absorbed_(bands_),
+        transmitted_(bands_),
+        escaped_(bands_),
         projection_(optics.foliage.size()) {}
 
   void trace_photon(std::int64_t batch, std::int64_t photon, BatchTally& tally);
@@ -75,7 +94,8 @@ class SunTracer {
   Event next_event(Photon& photon, RandomStream& random, BatchTally& tally);
   double view_transmission(const Event& event, const Vec3& arriving, const Vec3& view,
                            BatchTally& tally);
-  void score(const Event& event, const Vec3& arriving, BatchTally& tally);
+  void score(const Event& event, const Vec3& arriving, int part, BatchTally& tally);
+  void tally_fluxes(const Event& event, const std::vector<double>& before, bool scattered);
   void project(const Vec3& direction) { project_foliage(optics_, direction[2], projection_); }
 
   const Scene& scene_;
@@ -85,6 +105,9 @@ class SunTracer {
   const std::size_t bands_, views_;
   const double top_m_;  // above the plane of the ground: the top of the scene
   std::vector<double> throughput_, scores_;
+  std::vector<double> part_scores_;                       // [(part * bands + band) * views + view]
+  std::vector<double> absorbed_, transmitted_, escaped_;  // this photon's, per band
+  std::vector<double> before_;                            // the throughput before an event
   std::vector<double> projection_;
   std::vector<VolumeSpan> spans_;
 };
@@ -212,7 +235,7 @@ double SunTracer::view_transmission(const Event& event, const Vec3& arriving, co
 // The local estimate: what the element sends toward each view (and nadir, for the image) per
 // photon, over the tile's area seen from the view (per unit area across: v.N, N = (-dz/dx,
 // -dz/dy, 1) the tile's upward normal scaled to unit horizontal area).
-void SunTracer::score(const Event& event, const Vec3& arriving, BatchTally& tally) {
+void SunTracer::score(const Event& event, const Vec3& arriving, int part, BatchTally& tally) {
   const Vec3 toward_sun = -1.0 * arriving;
   auto response = [&](std::size_t band, const Vec3& view) {
     return element_response(event.element, event.material, optics_, band, event.normal, -1.0 * view,
@@ -222,9 +245,12 @@ void SunTracer::score(const Event& event, const Vec3& arriving, BatchTally& tall
     const Vec3& view = options_.views[v];
     const double transmission = view_transmission(event, arriving, view, tally);
     if (!(transmission > 0.0)) continue;
-    for (std::size_t band = 0; band < bands_; ++band)
-      scores_[band * views_ + v] +=
+    for (std::size_t band = 0; band < bands_; ++band) {
+      const double value =
           throughput_[band] * response(band, view) * transmission / rise_rate(view);
+      scores_[band * views_ + v] += value;
+      part_scores_[(part * bands_ + band) * views_ + v] += value;
+    }
   }
   // The image: nadir, at the pixel under the event.
   const double h = tile_.half_size_m, pixel_m = 2.0 * h / options_.image_pixels;
@@ -240,10 +266,26 @@ void SunTracer::score(const Event& event, const Vec3& arriving, BatchTally& tall
     tally.pixel_scores.push_back(throughput_[band] * response(band, nadir) * transmission);
 }
 
+// What the event took: the ground is reached by the whole throughput before it (RAMI's ftran),
+// the canopy keeps what its scattering did not pass on (all of it when nothing scatters).
+void SunTracer::tally_fluxes(const Event& event, const std::vector<double>& before,
+                             bool scattered) {
+  for (std::size_t band = 0; band < bands_; ++band) {
+    if (event.element == RayElement::ground)
+      transmitted_[band] += before[band];
+    else
+      absorbed_[band] += scattered ? before[band] - throughput_[band] : before[band];
+  }
+}
+
 void SunTracer::trace_photon(std::int64_t batch, std::int64_t photon, BatchTally& tally) {
   RandomStream random(options_.seed, batch, photon, RandomPurpose::sun);
   std::fill(throughput_.begin(), throughput_.end(), 1.0);
   std::fill(scores_.begin(), scores_.end(), 0.0);
+  std::fill(part_scores_.begin(), part_scores_.end(), 0.0);
+  std::fill(absorbed_.begin(), absorbed_.end(), 0.0);
+  std::fill(transmitted_.begin(), transmitted_.end(), 0.0);
+  std::fill(escaped_.begin(), escaped_.end(), 0.0);
   // Uniform over the tile, entering at the top of the scene.
   const double h = tile_.half_size_m;
   const double x = (2.0 * random.uniform() - 1.0) * h, y = (2.0 * random.uniform() - 1.0) * h;
@@ -257,14 +299,23 @@ void SunTracer::trace_photon(std::int64_t batch, std::int64_t photon, BatchTally
     const Event event = next_event(path, random, tally);
     if (event.element == RayElement::none) {
       if (event.escaped_up)
-        for (std::size_t band = 0; band < bands_; ++band) tally.escaped[band] += throughput_[band];
+        for (std::size_t band = 0; band < bands_; ++band) {
+          tally.escaped[band] += throughput_[band];
+          tally.escaped_sq[band] += throughput_[band] * throughput_[band];
+          escaped_[band] = throughput_[band];
+        }
       break;
     }
     if (order > options_.max_order) break;
-    score(event, path.direction, tally);
-    if (!sample_scattering(event.element, event.material, optics_, event.normal, random,
-                           path.direction, throughput_))
-      break;
+    const int part = order > 1                             ? brf_many_times
+                     : event.element == RayElement::ground ? brf_soil_once
+                                                           : brf_canopy_once;
+    score(event, path.direction, part, tally);
+    before_ = throughput_;
+    const bool scattered = sample_scattering(event.element, event.material, optics_, event.normal,
+                                             random, path.direction, throughput_);
+    tally_fluxes(event, before_, scattered);
+    if (!scattered) break;
     path.position = event.point;
     path.min_distance_m = event.element == RayElement::leaf ? 0.0 : surface_offset_m;
     // Russian roulette on faint photons keeps the estimate unbiased and the work bounded.
@@ -279,6 +330,28 @@ void SunTracer::trace_photon(std::int64_t batch, std::int64_t photon, BatchTally
     tally.sum[i] += scores_[i];
     tally.sum_sq[i] += scores_[i] * scores_[i];
   }
+  for (std::size_t i = 0; i < part_scores_.size(); ++i) {
+    tally.part_sum[i] += part_scores_[i];
+    tally.part_sum_sq[i] += part_scores_[i] * part_scores_[i];
+  }
+  for (std::size_t band = 0; band < bands_; ++band) {
+    tally.absorbed[band] += absorbed_[band];
+    tally.absorbed_sq[band] += absorbed_[band] * absorbed_[band];
+    tally.transmitted[band] += transmitted_[band];
+    tally.transmitted_sq[band] += transmitted_[band] * transmitted_[band];
+    // Where this photon's energy went; 1 but for Russian roulette's draws.
+    const double closure = escaped_[band] + absorbed_[band] +
+                           transmitted_[band] * (1.0 - optics_.soil_reflectance[band]);
+    tally.closure[band] += closure;
+    tally.closure_sq[band] += closure * closure;
+  }
+}
+
+// The mean of n scores from their sum and sum of squares, and its standard error.
+std::pair<double, double> mean_and_stderr(double sum, double sum_sq, double n) {
+  const double mean = sum / n;
+  const double variance = n > 1.0 ? std::max(0.0, sum_sq / n - mean * mean) * n / (n - 1.0) : 0.0;
+  return {mean, std::sqrt(variance / n)};
 }
 
 }  // namespace
@@ -302,7 +375,20 @@ BrfResult simulate_brf(const Scene& scene, const SceneOptics& optics, const BrfT
         tracer.trace_photon(batch, photon, tallies[batch - first]);
     });
     for (const BatchTally& tally : tallies) {  // in batch order: the same bits for any threads
-      for (std::size_t i = 0; i < bands; ++i) total.escaped[i] += tally.escaped[i];
+      for (std::size_t i = 0; i < bands; ++i) {
+        total.escaped[i] += tally.escaped[i];
+        total.escaped_sq[i] += tally.escaped_sq[i];
+        total.absorbed[i] += tally.absorbed[i];
+        total.absorbed_sq[i] += tally.absorbed_sq[i];
+        total.transmitted[i] += tally.transmitted[i];
+        total.transmitted_sq[i] += tally.transmitted_sq[i];
+        total.closure[i] += tally.closure[i];
+        total.closure_sq[i] += tally.closure_sq[i];
+      }
+      for (std::size_t i = 0; i < total.part_sum.size(); ++i) {
+        total.part_sum[i] += tally.part_sum[i];
+        total.part_sum_sq[i] += tally.part_sum_sq[i];
+      }
       for (std::size_t i = 0; i < total.sum.size(); ++i) {
         total.sum[i] += tally.sum[i];
         total.sum_sq[i] += tally.sum_sq[i];
@@ -323,8 +409,30 @@ BrfResult simulate_brf(const Scene& scene, const SceneOptics& optics, const BrfT
   const double photons = static_cast<double>(options.photons);
   BrfResult result;
   result.ray_queries = total.ray_queries;
+  auto push = [photons](double sum, double sum_sq, std::vector<double>& mean,
+                        std::vector<double>& stderr_) {
+    const auto [m, e] = mean_and_stderr(sum, sum_sq, photons);
+    mean.push_back(m);
+    stderr_.push_back(e);
+  };
   for (std::size_t band = 0; band < bands; ++band) {
     result.albedo.push_back(total.escaped[band] / photons);
+    result.albedo_stderr.push_back(
+        mean_and_stderr(total.escaped[band], total.escaped_sq[band], photons).second);
+    push(total.absorbed[band], total.absorbed_sq[band], result.absorbed, result.absorbed_stderr);
+    push(total.transmitted[band], total.transmitted_sq[band], result.transmitted,
+         result.transmitted_stderr);
+    push(total.closure[band], total.closure_sq[band], result.closure, result.closure_stderr);
+    for (int part = 0; part < brf_parts; ++part) {
+      result.part_brf[part].emplace_back();
+      result.part_stderr[part].emplace_back();
+      for (std::size_t v = 0; v < views; ++v) {
+        const std::size_t i = (part * bands + band) * views + v;
+        const auto [m, e] = mean_and_stderr(total.part_sum[i], total.part_sum_sq[i], photons);
+        result.part_brf[part].back().push_back(m * photons / n);
+        result.part_stderr[part].back().push_back(e * photons / n);
+      }
+    }
     result.brf.emplace_back();
     result.brf_stderr.emplace_back();
     for (std::size_t v = 0; v < views; ++v) {

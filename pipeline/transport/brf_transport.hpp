@@ -47,10 +47,24 @@ struct BrfOptions {
 // that of a white Lambertian plane under the same sun) and its standard error (from the spread of
 // the photons' scores), and the nadir BRF of each pixel of the tile (row 0 to the north, column 0
 // to the west).
+//
+// RAMI's split and fluxes, per incident photon: each view's BRF in its parts (light scattered once
+// by the canopy, once by the soil alone, and two or more times: RAMI's co_sgl, uc_sgl and mlt,
+// which sum to the BRF), the canopy's absorption (every element but the ground) and the
+// transmission to the ground (every arrival there, direct and diffuse, before the soil reflects
+// it), each with its standard error. Energy closes: albedo + absorption + transmission times the
+// soil's absorptance = 1, within the Monte Carlo error (Russian roulette keeps it in expectation).
+enum BrfPart { brf_canopy_once = 0, brf_soil_once = 1, brf_many_times = 2, brf_parts = 3 };
+
 struct BrfResult {
-  std::vector<double> albedo;
-  std::vector<std::vector<double>> brf, brf_stderr;  // [band][view]
-  std::vector<std::vector<double>> image;            // [band][row * image_pixels + column]
+  std::vector<double> albedo, albedo_stderr;
+  std::vector<double> absorbed, absorbed_stderr;        // [band]: the canopy's absorption
+  std::vector<double> transmitted, transmitted_stderr;  // [band]: reaching the ground
+  // [band]: albedo + absorption + transmission (1 - soil reflectance), photon by photon
+  std::vector<double> closure, closure_stderr;
+  std::vector<std::vector<double>> brf, brf_stderr;                              // [band][view]
+  std::vector<std::vector<double>> part_brf[brf_parts], part_stderr[brf_parts];  // [band][view]
+  std::vector<std::vector<double>> image;  // [band][row * image_pixels + column]
   std::int64_t ray_queries = 0;
 };
 

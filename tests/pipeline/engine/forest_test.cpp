@@ -120,6 +120,49 @@ TEST_F(Forests, ExplicitCrownAtNadirMatchesItsOpticalDepth) {
   EXPECT_NEAR(shot.rx_energy_ground_J[1] / normalisation / (0.3 * std::exp(-tau)), 1.0, 0.02);
 }
 
+// The same crown given its own leaf area, crown_lai 2 (one-sided leaf area over pi r^2), whatever
+// `pai` says: u = 2 pi 8^2 / (4/3 pi 8^2 8) = 3/16 m2/m3, tau = G u 16 = 1.5 along the axis.
+TEST_F(Forests, CrownLaiGivesTheCrownItsOwnLeafArea) {
+  const std::string crowns =
+      write("crowns.csv", "x,y,base_m,radius_m,half_height_m,crown_lai\n0,0,5,8,8,2\n");
+  const double sigma = 2e-7, ifov = 8 * sigma;
+  const Config config = load({
+      {"sensor", {{"preset", "north2010"}, {"divergence_sigma_rad", sigma}, {"ifov_rad", ifov}}},
+      {"simulation", {{"rays_per_shot", 20000}, {"max_order", 1}}},
+      {"terrain", {{"plane", {{"elevation_m", 0.0}}}, {"soil_reflectance", 0.3}}},
+      {"canopy",
+       {{"crowns_file", crowns},
+        {"pai", 7.0},
+        {"green_fraction", 1.0},
+        {"leaf_reflectance", 0.45},
+        {"leaf_transmittance", 0.45},
+        {"dbh_m", 0.0},
+        {"leaf_size_m", 0.05}}},
+      {"track", {{"type", "points"}, {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}}}}},
+  });
+  const ShotRecord shot = simulate(config).at(0);
+  const double tau = 1.5;
+  const double f_fov = 1.0 - std::exp(-ifov * ifov / (8 * sigma * sigma));
+  const double normalisation =
+      72e-3 * 0.9 * 0.709 * f_fov / (std::numbers::pi * shot.range_m * shot.range_m);
+  EXPECT_NEAR(shot.rx_energy_canopy_J[1] / normalisation / (2 * 0.45 / 3 * (1 - std::exp(-tau))),
+              1.0, 0.02);
+  EXPECT_NEAR(shot.rx_energy_ground_J[1] / normalisation / (0.3 * std::exp(-tau)), 1.0, 0.02);
+
+  const std::string bad =
+      write("bad.csv", "x,y,base_m,radius_m,half_height_m,crown_lai\n0,0,5,8,8,0\n");
+  const Config refused = load(
+      {{"terrain", {{"plane", nlohmann::json::object()}}}, {"canopy", {{"crowns_file", bad}}}});
+  const auto terrain = make_terrain(refused.terrain);
+  try {
+    make_shot_simulator(refused, *terrain);
+    FAIL() << "a crown_lai of 0 was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::input);
+    EXPECT_EQ(std::string(e.what()), bad + ":2: crown_lai must be in (0, 100]");
+  }
+}
+
 // A stand east of the meridian with no plants: shots there see bare ground, shots west of it
 // the scene's forest.
 TEST_F(Forests, StandsOverrideTheCanopyInsideTheirPolygons) {
