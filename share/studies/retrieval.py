@@ -340,9 +340,12 @@ def metric_rows(shots, sensors):
     for low, high in SLOPE_CLASSES_DEG:
         strata.append((f"slope {low:g}-{high:g}",
                        lambda s, lo=low, hi=high: (s["slope_deg"] >= lo) & (s["slope_deg"] < hi)))
+    strata.append(("slope 0-20", lambda s: s["slope_deg"] < 20.0))
+    strata.append(("true PAI below 5", lambda s: s["pai_true"] < 5.0))
     strata.append(("cone crowns", lambda s: s["crown_shape"] == "cone"))
     strata.append(("inside the table's ranges", lambda s: s["in_table_ranges"]))
     strata.append(("rt flagged", lambda s: s["rt_flag"] != 0))
+    strata.append(("rt not flagged", lambda s: s["rt_flag"] == 0))
     for sensor in sensors:
         one = {k: v[shots["sensor"] == sensor] for k, v in shots.items()}
         if len(one["shot_number"]) == 0:
@@ -479,7 +482,7 @@ def plot_scatter(shots, sensors, path):
             unit = UNITS[variable]
             ax.set_xlabel(f"true {variable}" + (f" ({unit})" if unit else ""))
             ax.set_title(f"{sensor.upper()}: {variable}")
-            if r == 0 and c == 0:
+            if r == 0:
                 ax.legend(markerscale=3, fontsize=8)
     figure.tight_layout()
     save_figure(figure, path)
@@ -513,9 +516,14 @@ def plot_slope(shots, sensors, path):
             unit = UNITS[variable]
             ax.set_ylabel(f"error" + (f" ({unit})" if unit else ""))
             ax.set_title(f"{sensor.upper()}: {variable}")
-            if r == 0 and c == 0:
-                ax.legend(fontsize=7)
-    figure.tight_layout()
+    # One legend for every panel: the colour is the method, the line bias (solid) or RMSE.
+    from matplotlib.lines import Line2D
+    handles = [Line2D([], [], color=COLOURS[m], label=m) for m in METHODS]
+    handles += [Line2D([], [], color="0.3", ls="-", marker="o", ms=3, label="bias"),
+                Line2D([], [], color="0.3", ls="--", marker="s", ms=3, label="RMSE")]
+    figure.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=8,
+                  frameon=False)
+    figure.tight_layout(rect=(0, 0, 1, 0.95))
     save_figure(figure, path)
 
 
