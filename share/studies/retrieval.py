@@ -34,6 +34,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import netCDF4  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -45,7 +46,8 @@ RETRIEVE_METHODS = ["gedi_l2a", "gedi_l2b", "wi", "rt"]
 METHODS = ["gedi_l2a", "gedi_l2a_a1", "gedi_l2b", "wi", "rt"]
 VARIABLES = ["canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog"]
 UNITS = {"canopy_height": "m", "cover": "", "pai": "", "ground_elevation": "m", "rhov_rhog": ""}
-COLOURS = {"gedi_l2a": "tab:orange", "gedi_l2a_a1": "tab:purple", "gedi_l2b": "tab:blue", "wi": "tab:green", "rt": "tab:red"}
+COLOURS = {"gedi_l2a": "tab:orange", "gedi_l2a_a1": "tab:purple", "gedi_l2b": "tab:blue",
+           "wi": "tab:green", "rt": "tab:red"}
 SLOPE_CLASSES_DEG = [(0.0, 10.0), (10.0, 20.0), (20.0, 30.0)]
 
 # The table's forests: ellipsoid crowns, every range a Halton coordinate, the crown base one of
@@ -514,10 +516,9 @@ def plot_slope(shots, sensors, path):
             ax.axhline(0.0, color="k", lw=0.6)
             ax.set_xlabel("slope (deg)")
             unit = UNITS[variable]
-            ax.set_ylabel(f"error" + (f" ({unit})" if unit else ""))
+            ax.set_ylabel("error" + (f" ({unit})" if unit else ""))
             ax.set_title(f"{sensor.upper()}: {variable}")
     # One legend for every panel: the colour is the method, the line bias (solid) or RMSE.
-    from matplotlib.lines import Line2D
     handles = [Line2D([], [], color=COLOURS[m], label=m) for m in METHODS]
     handles += [Line2D([], [], color="0.3", ls="-", marker="o", ms=3, label="bias"),
                 Line2D([], [], color="0.3", ls="--", marker="s", ms=3, label="RMSE")]
