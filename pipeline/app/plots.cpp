@@ -114,8 +114,8 @@ void redirect(SpawnActions& actions, const Fd& stderr_fd) {
 
 }  // namespace
 
-void write_plots(const fs::path& out_dir) {
-  const fs::path script = share_dir() / "plots" / "plot_products.py";
+void write_plots(const fs::path& out_dir, const std::string& script_name) {
+  const fs::path script = share_dir() / "plots" / script_name;
   std::error_code ignored;
   if (!fs::is_regular_file(script, ignored)) {
     throw run_error("plots", "cannot find " + script.string() +
@@ -173,9 +173,9 @@ void write_plots(const fs::path& out_dir) {
                                (last.empty() ? "" : ": " + last) + log_note);
 }
 
-std::string plots_after_products(const fs::path& out_dir) {
+std::string plots_after_products(const fs::path& out_dir, const std::string& script_name) {
   try {
-    write_plots(out_dir);
+    write_plots(out_dir, script_name);
     return "";
   } catch (const Error& error) {
     return std::string(error.what()) + " (the products are complete, the plots not drawn)";

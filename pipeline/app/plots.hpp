@@ -15,10 +15,14 @@ namespace glaswave {
 // one that has Debian's matplotlib), else python3 on PATH. Throws Error (run, place "plots")
 // when the script cannot be started or fails: one line, the last of the script's stderr, the
 // whole of it in out_dir/plots.log.
-void write_plots(const std::filesystem::path& out_dir);
+// script_name: another script in <share>/plots/ run the same way (`glaswave retrieve --plots`
+// runs plot_retrieval.py on its DIR).
+void write_plots(const std::filesystem::path& out_dir,
+                 const std::string& script_name = "plot_products.py");
 
 // write_plots after a run's products are complete: a plot that fails does not fail the run
 // (issue 28), so its Error comes back as the warning to print (empty when the plots are drawn).
-std::string plots_after_products(const std::filesystem::path& out_dir);
+std::string plots_after_products(const std::filesystem::path& out_dir,
+                                 const std::string& script_name = "plot_products.py");
 
 }  // namespace glaswave

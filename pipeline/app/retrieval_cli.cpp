@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "core/excerpt.hpp"
+#include "pipeline/app/plots.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/retrieval/forward_table.hpp"
 #include "pipeline/retrieval/retrieve.hpp"
@@ -88,6 +89,10 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
       ->type_name("N");
   retrieve_->add_flag("--quiet", quiet, "no progress bar");
   retrieve_->add_flag("--json", json, "print the summary as one JSON object");
+  retrieve_->add_flag("--plots", plots,
+                      "also draw DIR/plots/: each method's estimates against the truth (or "
+                      "against L2A's and L2B's for real input), and a few shots over rt's best "
+                      "fits");
 }
 
 bool RetrievalCommands::chosen() const { return *table_ || *retrieve_; }
@@ -144,6 +149,10 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
   request.threads = threads_of(threads_text);
   request.command_line = command_line;
   const RetrieveSummary summary = run_retrieval(request, progress(quiet || json, "shots"));
+  // As `run` draws its plots: a plot that fails leaves the products complete and warns.
+  std::string plot_warning;
+  if (plots)
+    plot_warning = plots_after_products(summary.product.parent_path(), "plot_retrieval.py");
   const double rate = summary.wall_s > 0.0 ? summary.shots / summary.wall_s : 0.0;
   std::string names;
   for (const std::string& m : summary.methods) names += (names.empty() ? "" : ",") + m;
@@ -164,6 +173,7 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
         static_cast<long long>(summary.rt_flagged), summary.product.c_str());
     if (!summary.l2b_granule.empty()) std::printf("glaswave: %s\n", summary.l2b_granule.c_str());
   }
+  if (!plot_warning.empty()) std::fprintf(stderr, "glaswave: warning: %s\n", plot_warning.c_str());
   return 0;
 }
 

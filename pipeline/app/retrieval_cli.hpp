@@ -30,7 +30,7 @@ class RetrievalCommands {
   CLI::App* retrieve_ = nullptr;
   std::string config_file, out, table_file, methods, shots, threads_text;
   std::vector<std::string> overrides, inputs;
-  bool quiet = false, json = false;
+  bool quiet = false, json = false, plots = false;
 };
 
 }  // namespace glaswave

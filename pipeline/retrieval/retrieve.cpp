@@ -157,6 +157,10 @@ struct ShotResults {
   std::map<std::string, MethodEstimates> estimates;
   std::array<double, kL2bProfileBins> pavd_z{};
   RtResult rt;
+  // L2A's default group a1 on its own (its RH98 and ground), beside the selected group: the
+  // selection takes the lowest mode any group finds, which a5's 2 sigma may find in the
+  // multiply scattered tail below the ground.
+  double a1_rh98_m = kNaN, a1_ground_m = kNaN;
   // What gedi_l2b.h5 takes: the L2A group L2B ran on, its number, L2B's result.
   L2aGroupResult l2a{};
   int selected_algorithm = 0;
@@ -194,6 +198,10 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
   r.l2b = l2b;
   if (r.estimates.count("gedi_l2a") && selected.has_ground)
     r.estimates["gedi_l2a"] = {selected.rh_m[98], kNaN, kNaN, selected.elev_lowestmode_m, kNaN};
+  if (r.estimates.count("gedi_l2a") && l2a.groups[0].has_ground) {
+    r.a1_rh98_m = l2a.groups[0].rh_m[98];
+    r.a1_ground_m = l2a.groups[0].elev_lowestmode_m;
+  }
   if (r.estimates.count("gedi_l2b") && l2b.algorithmrun_flag) {
     r.estimates["gedi_l2b"] = {kNaN, l2b.cover, l2b.pai, selected.elev_lowestmode_m,
                                l2b.rhov / l2b.rhog};
@@ -311,6 +319,15 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
   }
   const bool l2b = std::find(methods.begin(), methods.end(), "gedi_l2b") != methods.end();
   const bool rt = std::find(methods.begin(), methods.end(), "rt") != methods.end();
+  const bool l2a = std::find(methods.begin(), methods.end(), "gedi_l2a") != methods.end();
+  if (l2a) {
+    nc.define_variable("canopy_height_gedi_l2a_a1", NC_DOUBLE, {"shot"}, "m",
+                       "canopy_height retrieved by gedi_l2a's default group a1 (its RH98)");
+    nc.define_variable("ground_elevation_gedi_l2a_a1", NC_DOUBLE, {"shot"}, "m",
+                       "ground_elevation retrieved by gedi_l2a's default group a1");
+    for (const char* name : {"canopy_height_gedi_l2a_a1", "ground_elevation_gedi_l2a_a1"})
+      nc.put_text(name, "coordinates", coordinates);
+  }
   if (l2b)
     nc.define_variable("pavd_z_gedi_l2b", NC_DOUBLE, {"shot", "height"}, "m^2 m^-3",
                        "plant area volume density per 5 m bin (GEDI L2B)");
@@ -323,6 +340,12 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
                 "misfit table_edge ground_search_edge not_run ground_off_guess");
     nc.define_variable("rt_chi2_per_dof", NC_DOUBLE, {"shot"}, "1",
                        "best chi-squared per degree of freedom of the rt fit");
+    // Where the best fit lies, so that it can be drawn over the shot: the table's entry
+    // (`waveform` at `height` above the ground) and the ground it was placed on.
+    nc.define_variable("rt_best_entry", NC_INT64, {"shot"}, "",
+                       "the rt table's entry of the best fit (-1: none)");
+    nc.define_variable("rt_best_ground_elevation", NC_DOUBLE, {"shot"}, "m",
+                       "ground elevation of the rt best fit");
   }
   if (input.simulated) {
     for (int v = 0; v < 5; ++v)
@@ -364,6 +387,12 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
       }
     }
   }
+  if (l2a) {
+    for (std::size_t i = 0; i < shots; ++i) column[i] = results[i].a1_rh98_m;
+    nc.write("canopy_height_gedi_l2a_a1", column);
+    for (std::size_t i = 0; i < shots; ++i) column[i] = results[i].a1_ground_m;
+    nc.write("ground_elevation_gedi_l2a_a1", column);
+  }
   if (l2b) {
     std::vector<double> pavd;
     for (const ShotResults& r : results) pavd.insert(pavd.end(), r.pavd_z.begin(), r.pavd_z.end());
@@ -377,6 +406,13 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
     }
     nc.write("rt_flag", flags);
     nc.write("rt_chi2_per_dof", column);
+    std::vector<std::int64_t> best(shots);
+    for (std::size_t i = 0; i < shots; ++i) {
+      best[i] = results[i].rt.best_entry;
+      column[i] = results[i].rt.best_ground_elevation_m;
+    }
+    nc.write("rt_best_entry", best);
+    nc.write("rt_best_ground_elevation", column);
   }
   if (input.simulated) {
     for (int v = 0; v < 5; ++v) {
@@ -434,7 +470,8 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   if (want_rt) {
     table = read_table(*request.table);
     rt.emplace(*table, request.rt);
-    rt->check_compatible(input.band_names, input.bin_ns, request.table->string());
+    rt->check_compatible(input.band_names, input.bin_ns, input.pulse_sigma_ns,
+                         request.table->string());
   }
   std::filesystem::create_directories(out_dir.empty() ? "." : out_dir);
 

@@ -73,7 +73,7 @@ RtStatistic weighted_statistic(const std::vector<double>& values, const std::vec
 RtResult RtResult::none() {
   RtResult r;
   r.canopy_height_m = r.cover = r.pai = r.ground_elevation_m = r.rhov_rhog = no_statistic();
-  r.chi2_min = r.dof = r.ground_guess_m = kNaN;
+  r.chi2_min = r.dof = r.ground_guess_m = r.best_ground_elevation_m = kNaN;
   r.flag = rt_not_run;
   return r;
 }
@@ -360,7 +360,7 @@ double RtInversion::log_det(const RtPreparedShot& shot, std::size_t entry) const
 }
 
 void RtInversion::check_compatible(const std::vector<std::string>& band_names, double bin_ns,
-                                   const std::string& table_place) const {
+                                   double pulse_sigma_ns, const std::string& table_place) const {
   std::string mine, theirs;
   for (const std::string& b : table_.band_names) mine += (mine.empty() ? "" : ",") + b;
   for (const std::string& b : band_names) theirs += (theirs.empty() ? "" : ",") + b;
@@ -370,6 +370,14 @@ void RtInversion::check_compatible(const std::vector<std::string>& band_names, d
   if (!(std::abs(bin_ns - table_.bin_ns) <= 1e-6 * table_.bin_ns))
     throw input_error(table_place, "the table's bins of " + std::to_string(table_.bin_ns) +
                                        " ns are not the shots' " + std::to_string(bin_ns) +
+                                       " ns: build it with the shots' sensor");
+  // Another sensor's pulse (a GLAS table for GEDI shots: 5 against 6.625 ns) fits every shot
+  // badly and silently.
+  if (std::isfinite(pulse_sigma_ns) &&
+      !(std::abs(pulse_sigma_ns - table_.pulse_sigma_ns) <= 1e-6 * table_.pulse_sigma_ns))
+    throw input_error(table_place, "the table's pulse sigma of " +
+                                       std::to_string(table_.pulse_sigma_ns) +
+                                       " ns is not the shots' " + std::to_string(pulse_sigma_ns) +
                                        " ns: build it with the shots' sensor");
 }
 
@@ -689,6 +697,7 @@ RtResult RtInversion::summarise(const RtPreparedShot& p, const std::vector<Cell>
   r.ground_elevation_m = weighted_statistic(grounds, shift_weight, order);
   r.chi2_min = top->chi2;
   r.best_entry = top->entry;
+  r.best_ground_elevation_m = ground_elevation_m(p, top->shift) + top->delta * p.dz_m;
   r.ground_guess_m = p.ground_guess_m;
   // Degrees of freedom: the bins of R where the shot or the best fit stands above the floor.
   std::size_t signal = 0;
@@ -905,6 +914,7 @@ RtResult RtInversion::invert(const RtShot& shot) const {
   if (best / std::max(1.0, r.dof) > settings_.chi2_dof_limit) r.flag |= rt_misfit;
   if (posterior_at_table_edge(entry_weight)) r.flag |= rt_table_edge;
   const int best_shift = static_cast<int>(best_index % shifts);
+  r.best_ground_elevation_m = ground_elevation_m(p, p.first_shift + best_shift);
   if (best_shift == 0 || best_shift == shifts - 1) r.flag |= rt_ground_search_edge;
   return r;
 }

@@ -122,8 +122,9 @@ struct RtResult {
   double dof = 0.0;
   std::uint8_t flag = 0;
   std::int64_t best_entry = -1;
-  double ground_guess_m = 0.0;  // the first guess the search started from
-  static RtResult none();       // NaN statistics, flag rt_not_run
+  double best_ground_elevation_m = 0.0;  // where the best fit puts the entry's ground
+  double ground_guess_m = 0.0;           // the first guess the search started from
+  static RtResult none();                // NaN statistics, flag rt_not_run
 };
 
 // A shot made ready for the search: its waveforms less their noise means, its sigma per band,
@@ -149,9 +150,10 @@ class RtInversion {
   // measured shots' (`band_names`, `bin_ns`).
   RtInversion(const ForwardTable& table, const RtSettings& settings);
 
-  // Checks that shots of these bands and bin width can be compared with the table.
+  // Checks that shots of these bands, bin width and pulse sigma (NaN: unknown, not checked) can
+  // be compared with the table.
   void check_compatible(const std::vector<std::string>& band_names, double bin_ns,
-                        const std::string& table_place) const;
+                        double pulse_sigma_ns, const std::string& table_place) const;
 
   RtPreparedShot prepare(const RtShot& shot) const;
   // The ground elevation of a shift.

@@ -145,8 +145,41 @@ TEST_F(RetrieveCli, RetrieveWritesEveryMethodBesideTheTruth) {
   EXPECT_EQ(again.status, 2) << again.output;
 }
 
-// A table of other bins, a missing input, rt without a table: one line, status 3, 3 and 2, and
-// no retrieval.nc (nor its .part).
+// --plots draws DIR/plots/ (the estimates against the truth, the shots over rt's best fits);
+// where the best fit lies is in retrieval.nc: on these noise-free layers its ground is the true
+// ground, and L2A's default group a1 (a 6 sigma back threshold on the 1 %
+// floor) finds the true ground too (both within 0.3 m, two bins, as rt's posterior mean above),
+// where the selected group may not.
+TEST_F(RetrieveCli, PlotsAndTheBestFitAreWritten) {
+  const fs::path out = dir_->path() / "plotted";
+  const CommandOutcome retrieve = run_glaswave(
+      "retrieve " + (dir_->path() / "pass" / "shots.nc").string() + " --table " +
+      (dir_->path() / "table.nc").string() + " --out " + out.string() + " --threads 2 --plots");
+  ASSERT_EQ(retrieve.status, 0) << retrieve.output;
+  EXPECT_EQ(retrieve.output.find("warning"), std::string::npos) << retrieve.output;
+  for (const char* png : {"retrieval_estimates.png", "retrieval_fits.png"})
+    EXPECT_GT(fs::file_size(out / "plots" / png), 1000u) << png;
+  int nc = -1;
+  ASSERT_EQ(nc_open((out / "retrieval.nc").c_str(), NC_NOWRITE, &nc), NC_NOERR);
+  const std::vector<double> entry = read_variable(nc, "rt_best_entry", 4);
+  const std::vector<double> best_ground = read_variable(nc, "rt_best_ground_elevation", 4);
+  const std::vector<double> a1_ground = read_variable(nc, "ground_elevation_gedi_l2a_a1", 4);
+  const std::vector<double> a1_height = read_variable(nc, "canopy_height_gedi_l2a_a1", 4);
+  const std::vector<double> ground_true = read_variable(nc, "ground_elevation_true", 4);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_GE(entry[i], 0.0);
+    EXPECT_LT(entry[i], 24.0);
+    EXPECT_NEAR(best_ground[i], ground_true[i], 0.3);
+    EXPECT_NEAR(a1_ground[i], ground_true[i], 0.3);
+    // RH98 of a layer 5-15 m: below its top, above its base.
+    EXPECT_GT(a1_height[i], 5.0);
+    EXPECT_LT(a1_height[i], 15.0 + 3.0);
+  }
+  nc_close(nc);
+}
+
+// A table of other bins or another pulse, a missing input, rt without a table: one line, status
+// 3, 3, 3 and 2, and no retrieval.nc (nor its .part).
 TEST_F(RetrieveCli, RefusalsAreOneLine) {
   json other = layer(2.0, 0.0, 1);
   other["sensor"]["bin_ns"] = 2.0;
@@ -165,6 +198,19 @@ TEST_F(RetrieveCli, RefusalsAreOneLine) {
   EXPECT_EQ(bins.status, 3) << bins.output;
   EXPECT_NE(bins.output.find("bins of 2"), std::string::npos) << bins.output;
   EXPECT_NE(bins.output.find(other_table.string()), std::string::npos) << bins.output;
+  // Another sensor's pulse (GLAS's 5 ns for GEDI's 6.625): refused, not fitted badly.
+  json pulse = layer(2.0, 0.0, 1);
+  pulse["sensor"]["pulse_sigma_ns"] = 5.0;
+  pulse["table"] = other["table"];
+  const fs::path pulse_table = dir_->path() / "pulse.nc";
+  ASSERT_EQ(run_glaswave("table " + write(dir_->path() / "pulse.json", pulse) + " --quiet --out " +
+                         pulse_table.string())
+                .status,
+            0);
+  const CommandOutcome pulses = run_glaswave("retrieve " + shots + " --quiet --table " +
+                                             pulse_table.string() + " --out " + out.string());
+  EXPECT_EQ(pulses.status, 3) << pulses.output;
+  EXPECT_NE(pulses.output.find("pulse sigma of 5"), std::string::npos) << pulses.output;
   const CommandOutcome missing = run_glaswave("retrieve " + (dir_->path() / "nothere.nc").string() +
                                               " --quiet --out " + out.string());
   EXPECT_EQ(missing.status, 3) << missing.output;
@@ -172,7 +218,7 @@ TEST_F(RetrieveCli, RefusalsAreOneLine) {
   const CommandOutcome no_table =
       run_glaswave("retrieve " + shots + " --methods rt --quiet --out " + out.string());
   EXPECT_EQ(no_table.status, 2) << no_table.output;
-  for (const CommandOutcome* refused : {&bins, &missing, &no_table}) {
+  for (const CommandOutcome* refused : {&bins, &pulses, &missing, &no_table}) {
     EXPECT_EQ(std::count(refused->output.begin(), refused->output.end(), '\n'), 1)
         << refused->output;
   }

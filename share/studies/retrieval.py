@@ -1,0 +1,591 @@
+#!/usr/bin/python3
+"""How wrong is each retrieval method? `glaswave retrieve` on held-out forests (issue 37, item 5).
+
+Usage: retrieval.py --glaswave BINARY [--quick] [--out DIR] [--threads N]
+
+For GEDI and GLAS in turn: a forward table of crowned forests (`glaswave table`, ellipsoid crowns
+over the ranges in TABLE_VARY, slopes 0-30 deg), then stands the table did not see (their own
+seeds and elevations, crown bases and tops off the table's three, radii and PAI partly beyond its
+ranges, a fifth of them conical crowns, slopes to 30 deg in any aspect), each simulated as a pass
+with the detector on (`glaswave run`) and retrieved by every method (`glaswave retrieve
+--methods gedi_l2a,gedi_l2b,wi,rt`). For every sensor, method and variable (canopy height,
+cover, PAI, ground elevation, rhov/rhog) against the products' truth: bias, RMSE and, for rt's
+posterior, the share of shots whose 5-95 % interval holds the truth, overall and by slope and
+crown class. Writes DIR/retrieval_metrics.csv and .md, retrieval_shots.csv (every shot),
+retrieval_scatter.png (estimate against truth), retrieval_slope.png (error against slope),
+summary.json. Runs are cached under DIR/runs/ by a hash of their configuration, as the seed's
+studies are.
+"""
+import argparse
+import csv
+import hashlib
+import json
+import math
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import time
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import netCDF4  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from studies import apply_set, format_value, save_figure, write_atomic  # noqa: E402
+
+RETRIEVE_METHODS = ["gedi_l2a", "gedi_l2b", "wi", "rt"]
+# gedi_l2a_a1: L2A's default group alone (retrieval.nc's canopy_height_gedi_l2a_a1 and
+# ground_elevation_gedi_l2a_a1), beside the selected group's gedi_l2a.
+METHODS = ["gedi_l2a", "gedi_l2a_a1", "gedi_l2b", "wi", "rt"]
+VARIABLES = ["canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog"]
+UNITS = {"canopy_height": "m", "cover": "", "pai": "", "ground_elevation": "m", "rhov_rhog": ""}
+COLOURS = {"gedi_l2a": "tab:orange", "gedi_l2a_a1": "tab:purple", "gedi_l2b": "tab:blue",
+           "wi": "tab:green", "rt": "tab:red"}
+SLOPE_CLASSES_DEG = [(0.0, 10.0), (10.0, 20.0), (20.0, 30.0)]
+
+# The table's forests: ellipsoid crowns, every range a Halton coordinate, the crown base one of
+# three layers (so canopy tops from 6 to 36 m).
+TABLE_VARY = {
+    "canopy.pai": [0.3, 5.0],
+    "canopy.cover": [0.15, 0.95],
+    "canopy.crown_radius_m": [2.0, 6.0],
+    "canopy.crown_half_height_m": [2.0, 8.0],
+    "terrain.plane.slope_deg": [0.0, 30.0],
+}
+TABLE_VALUES = {"canopy.crown_base_m": ["[2.0, 4.0]", "[6.0, 10.0]", "[12.0, 18.0]"]}
+
+# The detector of the held-out shots: a background and Gaussian noise of about 1 % of these
+# forests' peaks (4e-8 to 1e-7 W for GEDI, 1e-7 to 3e-7 W for GLAS at 1000 rays; a real GEDI
+# shot's noise_stddev_corrected is 1-3 % of a dense forest's peak). It also keeps L2A's lowest
+# threshold (a5's 2 sigma) above one Monte Carlo ray, about 0.25 % of the peak at 1000 rays.
+SENSORS = {
+    "gedi": {
+        "sensor": {"preset": "gedi"},
+        "detector": {"enabled": True, "background_W": 5.0e-10, "noise_rms_W": 5.0e-10},
+        "spacing_m": 60.0,
+    },
+    "glas": {
+        # One band (1064 nm, GLAS's waveform channel), so that every method reads the same one.
+        "sensor": {"preset": "glas", "bands": [
+            {"name": "1064", "wavelength_nm": 1064, "pulse_energy_mJ": 72,
+             "atmos_transmission_roundtrip": 0.9}]},
+        "detector": {"enabled": True, "background_W": 2.0e-9, "noise_rms_W": 2.0e-9},
+        "spacing_m": 172.0,
+    },
+}
+
+SIZES = {
+    # The table's cost is mostly each entry's scene (its crowns), not its rays.
+    "full": {"table_entries": {"gedi": 1500, "glas": 1000}, "table_rays": 1000,
+             "stands": {"gedi": 40, "glas": 30}, "shots": {"gedi": 50, "glas": 30},
+             "rays": 1000},
+    "quick": {"table_entries": {"gedi": 96, "glas": 64}, "table_rays": 1000,
+              "stands": {"gedi": 3, "glas": 2}, "shots": {"gedi": 8, "glas": 6}, "rays": 1000},
+}
+
+
+def log(message):
+    print("retrieval: " + message, file=sys.stderr, flush=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# The study's arithmetic (tests/studies/test_retrieval_study.py checks it by hand).
+
+
+def finite_pairs(estimate, truth):
+    """The shots where both the estimate and the truth are finite."""
+    estimate, truth = np.asarray(estimate, float), np.asarray(truth, float)
+    keep = np.isfinite(estimate) & np.isfinite(truth)
+    return estimate[keep], truth[keep]
+
+
+def bias(estimate, truth):
+    """Mean of estimate - truth over the shots where both are finite (NaN when none)."""
+    e, t = finite_pairs(estimate, truth)
+    return float(np.mean(e - t)) if e.size else math.nan
+
+
+def rmse(estimate, truth):
+    """Root mean square of estimate - truth over the shots where both are finite."""
+    e, t = finite_pairs(estimate, truth)
+    return float(np.sqrt(np.mean((e - t) ** 2))) if e.size else math.nan
+
+
+def coverage(low, high, truth):
+    """Share of shots whose interval [low, high] holds the truth (NaN bounds: not counted)."""
+    low, high, truth = (np.asarray(x, float) for x in (low, high, truth))
+    keep = np.isfinite(low) & np.isfinite(high) & np.isfinite(truth)
+    if not keep.any():
+        return math.nan
+    return float(np.mean((low[keep] <= truth[keep]) & (truth[keep] <= high[keep])))
+
+
+def metrics(shots, method, variable, mask=None):
+    """n, bias, RMSE and (rt only) 90 % coverage of one method's variable over the shots."""
+    estimate = shots.get(f"{variable}_{method}")
+    truth = shots.get(f"{variable}_true")
+    if estimate is None or truth is None:
+        return None
+    if mask is not None:
+        estimate, truth = estimate[mask], truth[mask]
+    e, _ = finite_pairs(estimate, truth)
+    if e.size == 0:
+        return None
+    row = {"n": int(e.size), "bias": bias(estimate, truth), "rmse": rmse(estimate, truth),
+           "coverage90": math.nan}
+    if method == "rt":
+        low, high = shots[f"{variable}_rt_p05"], shots[f"{variable}_rt_p95"]
+        if mask is not None:
+            low, high = low[mask], high[mask]
+        row["coverage90"] = coverage(low, high, truth)
+    return row
+
+
+# ---------------------------------------------------------------------------------------------
+# The forests: the table's and the held-out stands.
+
+
+def table_document(sensor, size):
+    spec = SENSORS[sensor]
+    return {
+        "seed": 37,
+        "sensor": spec["sensor"],
+        "simulation": {"rays_per_shot": size["table_rays"]},
+        "terrain": {"plane": {"origin_lat_deg": 0.0, "origin_lon_deg": 0.0, "elevation_m": 0.0},
+                    "soil_reflectance": 0.3},
+        "canopy": {"crown_shape": "ellipsoid", "crown_base_m": [6.0, 10.0],
+                   "crown_half_height_m": 5.0, "crown_radius_m": 4.0, "pai": 2.0, "cover": 0.5},
+        "track": {"type": "points", "altitude_m": 420000.0 if sensor == "gedi" else 600000.0,
+                  "points": [{"lat_deg": 0.0, "lon_deg": 0.0},
+                             {"lat_deg": 0.002, "lon_deg": 0.0}]},
+        "output": {"footprints": False},
+        "table": {"vary": TABLE_VARY, "values": TABLE_VALUES,
+                  "entries": size["table_entries"][sensor]},
+    }
+
+
+def held_out_stands(sensor, count):
+    """The stands the table did not see, drawn from their own generator: seeds from 1000,
+    crown bases anywhere in 2-16 m (the table's are three fixed layers), radii 1.5-7 m and PAI
+    0.3-6 (beyond the table's 2-6 m and 0.3-5 in part), a fifth conical (the table's are
+    ellipsoids), slope 0-30 deg in any aspect, the ground 0-800 m up."""
+    rng = np.random.default_rng(20260 + (0 if sensor == "gedi" else 1))
+    stands = []
+    for i in range(count):
+        base_low = float(rng.uniform(2.0, 14.0))
+        stands.append({
+            "seed": 1000 + i,
+            "canopy.pai": round(float(rng.uniform(0.3, 6.0)), 3),
+            "canopy.cover": round(float(rng.uniform(0.15, 0.95)), 3),
+            "canopy.crown_radius_m": round(float(rng.uniform(1.5, 7.0)), 2),
+            "canopy.crown_half_height_m": round(float(rng.uniform(2.0, 8.0)), 2),
+            "canopy.crown_base_m": [round(base_low, 2),
+                                    round(base_low + float(rng.uniform(0.5, 4.0)), 2)],
+            "canopy.crown_shape": "cone" if rng.uniform() < 0.2 else "ellipsoid",
+            "terrain.plane.slope_deg": round(float(rng.uniform(0.0, 30.0)), 2),
+            "terrain.plane.aspect_deg": round(float(rng.uniform(0.0, 360.0)), 1),
+            "terrain.plane.elevation_m": round(float(rng.uniform(0.0, 800.0)), 1),
+        })
+    return stands
+
+
+def stand_document(sensor, stand, size):
+    spec = SENSORS[sensor]
+    document = table_document(sensor, size)
+    del document["table"]
+    document["simulation"]["rays_per_shot"] = size["rays"]
+    document["detector"] = spec["detector"]
+    document["track"] = {"type": "pass", "start_lat_deg": 0.0, "start_lon_deg": 0.0,
+                         "heading_deg": 0.0, "shots": size["shots"][sensor],
+                         "spacing_m": spec["spacing_m"],
+                         "altitude_m": document["track"]["altitude_m"]}
+    for key, value in stand.items():
+        if key == "seed":
+            document["seed"] = value
+        else:
+            apply_set(document, key, value)
+    return document
+
+
+# ---------------------------------------------------------------------------------------------
+# glaswave, each run once under DIR/runs/.
+
+
+class Runs:
+    def __init__(self, glaswave, out_dir, threads):
+        self.glaswave = glaswave
+        self.dir = os.path.join(out_dir, "runs")
+        self.threads = threads
+        self.seconds = {"table": 0.0, "run": 0.0, "retrieve": 0.0}
+        os.makedirs(self.dir, exist_ok=True)
+
+    def _stem(self, command, document):
+        text = json.dumps(document, sort_keys=True, indent=1)
+        digest = hashlib.sha1((command + text).encode()).hexdigest()[:10]
+        stem = os.path.join(self.dir, f"{command}-{digest}")
+        if not os.path.exists(stem + ".json"):
+            write_atomic(stem + ".json", text)
+        return stem
+
+    def _call(self, command, args, label):
+        """glaswave's stdout; self.last_cpu_s the command's CPU seconds (user and system), a
+        measure of speed that a busy machine does not stretch as it does the wall time."""
+        start = time.monotonic()
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        result = subprocess.run([self.glaswave, command] + args + ["--quiet", "--threads",
+                                                                    str(self.threads)],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        if result.returncode != 0:
+            lines = result.stderr.strip().splitlines()
+            raise RuntimeError(f"glaswave {command} {label} failed ({result.returncode}): "
+                               f"{lines[-1] if lines else ''}")
+        seconds = time.monotonic() - start
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        self.last_cpu_s = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        self.seconds[command] += seconds
+        log(f"{command} {label}: {seconds:.1f} s ({self.last_cpu_s:.1f} s of CPU)")
+        return result.stdout
+
+    def table(self, document, label):
+        stem = self._stem("table", document)
+        path = stem + ".nc"
+        if not os.path.exists(path):
+            partial = stem + ".part.nc"
+            if os.path.exists(partial):
+                os.remove(partial)
+            self._call("table", [stem + ".json", "--out", partial], label)
+            os.replace(partial, path)
+        return path
+
+    def run(self, document, label):
+        stem = self._stem("run", document)
+        out = stem + ".out"
+        if not os.path.exists(os.path.join(out, "shots.nc")):
+            shutil.rmtree(out, ignore_errors=True)
+            self._call("run", [stem + ".json", "--out", out], label)
+        return os.path.join(out, "shots.nc")
+
+    def retrieve(self, shots_files, table_nc, label):
+        """DIR/retrieval.nc of every shots.nc retrieved at once (the table's emulator and its
+        tempering are made once a command), and the command's JSON summary with its whole wall
+        time (command_wall_s) beside the methods' (wall_s)."""
+        key = {"shots": [os.path.relpath(f, self.dir) for f in shots_files],
+               "table": os.path.relpath(table_nc, self.dir), "methods": RETRIEVE_METHODS}
+        stem = self._stem("retrieve", key)
+        out = stem + ".out"
+        if not os.path.exists(os.path.join(out, "retrieve.json")):
+            shutil.rmtree(out, ignore_errors=True)
+            start = time.monotonic()
+            text = self._call("retrieve", shots_files + ["--table", table_nc, "--out", out,
+                                                         "--methods", ",".join(RETRIEVE_METHODS),
+                                                         "--json"], label)
+            summary = json.loads(text.strip().splitlines()[-1])
+            summary["command_wall_s"] = time.monotonic() - start
+            summary["command_cpu_s"] = self.last_cpu_s
+            write_atomic(os.path.join(out, "retrieve.json"), json.dumps(summary) + "\n")
+        with open(os.path.join(out, "retrieve.json")) as f:
+            return os.path.join(out, "retrieval.nc"), json.load(f)
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading and summarising.
+
+
+def read_retrieval(path, shots_files, stands, sensor):
+    """Every shot of one sensor as a dict of arrays: each method's estimates, rt's bounds, the
+    truth, and its stand's index, slope and crown shape (retrieval.nc holds the shots of
+    shots_files in their order)."""
+    columns = {}
+    with netCDF4.Dataset(path) as nc:
+        for name, variable in nc.variables.items():
+            if variable.dimensions == ("shot",):
+                columns[name] = np.ma.filled(variable[:].astype(float), np.nan)
+    slope, stand_index = [], []
+    for i, shots_nc in enumerate(shots_files):
+        with netCDF4.Dataset(shots_nc) as nc:
+            slope.append(np.ma.filled(nc["slope_deg"][:].astype(float), np.nan))
+        stand_index.append(np.full(slope[-1].size, i))
+    columns["slope_deg"] = np.concatenate(slope)
+    columns["stand"] = np.concatenate(stand_index)
+    n = len(columns["shot_number"])
+    if columns["slope_deg"].size != n:
+        raise RuntimeError(f"{path}: {n} shots, its inputs {columns['slope_deg'].size}")
+    columns["sensor"] = np.array([sensor] * n)
+    columns["crown_shape"] = np.array([stands[i]["canopy.crown_shape"] for i in columns["stand"]])
+    columns["in_table_ranges"] = np.array([in_table_ranges(stands[i]) for i in columns["stand"]])
+    return columns
+
+
+def in_table_ranges(stand):
+    """Whether the stand's varied keys lie inside the table's ranges and its crowns are the
+    table's shape (its crown base is never one of the table's three)."""
+    if stand["canopy.crown_shape"] != "ellipsoid":
+        return False
+    return all(low <= stand[key] <= high for key, (low, high) in TABLE_VARY.items())
+
+
+def concatenate(parts):
+    keys = set.intersection(*(set(p) for p in parts))
+    return {k: np.concatenate([p[k] for p in parts]) for k in keys}
+
+
+def metric_rows(shots, sensors):
+    rows = []
+    strata = [("all", None)]
+    for low, high in SLOPE_CLASSES_DEG:
+        strata.append((f"slope {low:g}-{high:g}",
+                       lambda s, lo=low, hi=high: (s["slope_deg"] >= lo) & (s["slope_deg"] < hi)))
+    strata.append(("slope 0-20", lambda s: s["slope_deg"] < 20.0))
+    strata.append(("true PAI below 5", lambda s: s["pai_true"] < 5.0))
+    strata.append(("cone crowns", lambda s: s["crown_shape"] == "cone"))
+    strata.append(("inside the table's ranges", lambda s: s["in_table_ranges"]))
+    strata.append(("rt flagged", lambda s: s["rt_flag"] != 0))
+    strata.append(("rt not flagged", lambda s: s["rt_flag"] == 0))
+    for sensor in sensors:
+        one = {k: v[shots["sensor"] == sensor] for k, v in shots.items()}
+        if len(one["shot_number"]) == 0:
+            continue
+        for stratum, select in strata:
+            mask = None if select is None else np.asarray(select(one), bool)
+            for method in METHODS:
+                for variable in VARIABLES:
+                    m = metrics(one, method, variable, mask)
+                    if m is None:
+                        continue
+                    rows.append({"sensor": sensor, "stratum": stratum, "method": method,
+                                 "variable": variable, **m})
+    return rows
+
+
+def write_metrics_csv(path, rows):
+    header = ["sensor", "stratum", "method", "variable", "n", "bias", "rmse", "coverage90"]
+    temporary = path + ".part"
+    with open(temporary, "w", newline="") as f:
+        writer = csv.writer(f, lineterminator="\n")
+        writer.writerow(header)
+        for row in rows:
+            writer.writerow([format_value(row[h]) for h in header])
+    os.replace(temporary, path)
+
+
+def write_shots_csv(path, shots):
+    names = ["sensor", "stand", "shot_number", "crown_shape", "in_table_ranges", "slope_deg",
+             "rt_flag"]
+    names += [f"{v}_true" for v in VARIABLES]
+    names += [f"{v}_{m}" for m in METHODS for v in VARIABLES if f"{v}_{m}" in shots]
+    names += [f"{v}_rt_{p}" for v in VARIABLES for p in ("p05", "p95")]
+    temporary = path + ".part"
+    with open(temporary, "w", newline="") as f:
+        writer = csv.writer(f, lineterminator="\n")
+        writer.writerow(names)
+        for i in range(len(shots["shot_number"])):
+            row = []
+            for n in names:
+                value = shots[n][i]
+                if isinstance(value, (np.floating, float)):
+                    value = float(value)
+                elif isinstance(value, (np.integer,)):
+                    value = int(value)
+                elif isinstance(value, np.bool_):
+                    value = int(bool(value))
+                row.append(format_value(value))
+            writer.writerow(row)
+    os.replace(temporary, path)
+
+
+def markdown(rows, stratum="all"):
+    lines = ["| sensor | method | variable | n | bias | RMSE | 90 % coverage |",
+             "|---|---|---|---|---|---|---|"]
+    for row in rows:
+        if row["stratum"] != stratum:
+            continue
+        unit = UNITS[row["variable"]]
+        cov = row["coverage90"]
+        lines.append(
+            f"| {row['sensor'].upper()} | {row['method']} | {row['variable']}"
+            f"{' (' + unit + ')' if unit else ''} | {row['n']} | {row['bias']:+.3f} | "
+            f"{row['rmse']:.3f} | {'—' if not math.isfinite(cov) else f'{cov:.2f}'} |")
+    return "\n".join(lines) + "\n"
+
+
+def markdown_strata(rows, variables=("canopy_height", "cover", "pai", "ground_elevation")):
+    """RMSE (and rt's coverage) by stratum: where each method fails."""
+    strata = []
+    for row in rows:
+        if row["stratum"] != "all" and row["stratum"] not in strata:
+            strata.append(row["stratum"])
+    lines = ["| sensor | stratum | method | " + " | ".join(
+        f"{v} bias / RMSE" for v in variables) + " |", "|---|---|---|" + "---|" * len(variables)]
+    index = {(r["sensor"], r["stratum"], r["method"], r["variable"]): r for r in rows}
+    sensors = sorted({r["sensor"] for r in rows})
+    for sensor in sensors:
+        for stratum in strata:
+            for method in METHODS:
+                cells = []
+                for v in variables:
+                    r = index.get((sensor, stratum, method, v))
+                    if r is None:
+                        cells.append("")
+                        continue
+                    text = f"{r['bias']:+.2f} / {r['rmse']:.2f}"
+                    if math.isfinite(r["coverage90"]):
+                        text += f" ({r['coverage90']:.2f})"
+                    cells.append(text)
+                if any(cells):
+                    n = max(index[(sensor, stratum, method, v)]["n"] for v in variables
+                            if (sensor, stratum, method, v) in index)
+                    lines.append(f"| {sensor.upper()} | {stratum} (n {n}) | {method} | "
+                                 + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures.
+
+
+def plot_scatter(shots, sensors, path):
+    variables = ["canopy_height", "cover", "pai", "ground_elevation"]
+    figure, axes = plt.subplots(len(sensors), len(variables),
+                                figsize=(4.0 * len(variables), 3.8 * len(sensors)), squeeze=False)
+    for r, sensor in enumerate(sensors):
+        one = {k: v[shots["sensor"] == sensor] for k, v in shots.items()}
+        for c, variable in enumerate(variables):
+            ax = axes[r][c]
+            truth = one[f"{variable}_true"]
+            if variable == "ground_elevation":
+                # Elevations span the stands' 0-800 m: the error is what shows.
+                ax.set_ylabel("estimate − truth (m)")
+            else:
+                ax.set_ylabel("estimate")
+            low, high = np.nanmin(truth), np.nanmax(truth)
+            for method in METHODS:
+                estimate = one.get(f"{variable}_{method}")
+                if estimate is None or not np.isfinite(estimate).any():
+                    continue
+                y = estimate - truth if variable == "ground_elevation" else estimate
+                ax.scatter(truth, y, s=4, alpha=0.35, color=COLOURS[method], label=method,
+                           linewidths=0)
+            if variable == "ground_elevation":
+                ax.axhline(0.0, color="k", lw=0.8)
+                ax.set_ylim(-15, 15)
+            else:
+                ax.plot([low, high], [low, high], "k-", lw=0.8)
+                if variable == "cover":
+                    ax.set_ylim(-0.05, 1.05)
+                if variable == "pai":
+                    ax.set_ylim(-0.2, 12)
+            unit = UNITS[variable]
+            ax.set_xlabel(f"true {variable}" + (f" ({unit})" if unit else ""))
+            ax.set_title(f"{sensor.upper()}: {variable}")
+            if r == 0:
+                ax.legend(markerscale=3, fontsize=8)
+    figure.tight_layout()
+    save_figure(figure, path)
+
+
+def plot_slope(shots, sensors, path):
+    variables = ["canopy_height", "cover", "pai", "ground_elevation"]
+    edges = np.arange(0.0, 30.1, 5.0)
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    figure, axes = plt.subplots(len(sensors), len(variables),
+                                figsize=(4.0 * len(variables), 3.5 * len(sensors)), squeeze=False)
+    for r, sensor in enumerate(sensors):
+        one = {k: v[shots["sensor"] == sensor] for k, v in shots.items()}
+        for c, variable in enumerate(variables):
+            ax = axes[r][c]
+            for method in METHODS:
+                estimate = one.get(f"{variable}_{method}")
+                if estimate is None or not np.isfinite(estimate).any():
+                    continue
+                truth = one[f"{variable}_true"]
+                b, e = [], []
+                for lo, hi in zip(edges[:-1], edges[1:]):
+                    mask = (one["slope_deg"] >= lo) & (one["slope_deg"] < hi)
+                    b.append(bias(estimate[mask], truth[mask]))
+                    e.append(rmse(estimate[mask], truth[mask]))
+                ax.plot(centres, b, "o-", color=COLOURS[method], label=f"{method} bias", ms=3)
+                ax.plot(centres, e, "s--", color=COLOURS[method], label=f"{method} RMSE", ms=3,
+                        alpha=0.7)
+            ax.axhline(0.0, color="k", lw=0.6)
+            ax.set_xlabel("slope (deg)")
+            unit = UNITS[variable]
+            ax.set_ylabel("error" + (f" ({unit})" if unit else ""))
+            ax.set_title(f"{sensor.upper()}: {variable}")
+    # One legend for every panel: the colour is the method, the line bias (solid) or RMSE.
+    handles = [Line2D([], [], color=COLOURS[m], label=m) for m in METHODS]
+    handles += [Line2D([], [], color="0.3", ls="-", marker="o", ms=3, label="bias"),
+                Line2D([], [], color="0.3", ls="--", marker="s", ms=3, label="RMSE")]
+    figure.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=8,
+                  frameon=False)
+    figure.tight_layout(rect=(0, 0, 1, 0.95))
+    save_figure(figure, path)
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--glaswave", required=True, help="the glaswave binary")
+    parser.add_argument("--quick", action="store_true", help="small runs, for a check")
+    parser.add_argument("--out", default="out/studies/retrieval")
+    parser.add_argument("--threads", type=int, default=0)
+    args = parser.parse_args()
+    size = SIZES["quick" if args.quick else "full"]
+    os.makedirs(args.out, exist_ok=True)
+    runs = Runs(args.glaswave, args.out, args.threads)
+    started = time.monotonic()
+    sensors = list(SENSORS)
+    parts, speeds, tables = [], {}, {}
+    for sensor in sensors:
+        table = runs.table(table_document(sensor, size), f"{sensor} table")
+        with netCDF4.Dataset(table) as nc:
+            tables[sensor] = {"entries": len(nc.dimensions["entry"]),
+                              "rays_per_shot": int(nc.getncattr("rays_per_shot")),
+                              "shots_per_entry": int(nc.getncattr("shots_per_entry"))}
+        stands = held_out_stands(sensor, size["stands"][sensor])
+        shots_files = [runs.run(stand_document(sensor, stand, size), f"{sensor} stand {i}")
+                       for i, stand in enumerate(stands)]
+        product, summary = runs.retrieve(shots_files, table, f"{sensor}: {len(stands)} stands")
+        parts.append(read_retrieval(product, shots_files, stands, sensor))
+        speeds[sensor] = {"shots": summary["shots"], "methods_wall_s": summary["wall_s"],
+                          "shots_per_s": summary["shots_per_s"],
+                          "command_wall_s": summary["command_wall_s"],
+                          "command_cpu_s": summary.get("command_cpu_s", math.nan),
+                          "shots_per_cpu_s": summary["shots"] / summary.get("command_cpu_s",
+                                                                            math.nan)}
+    shots = concatenate(parts)
+    rows = metric_rows(shots, sensors)
+    write_metrics_csv(os.path.join(args.out, "retrieval_metrics.csv"), rows)
+    write_shots_csv(os.path.join(args.out, "retrieval_shots.csv"), shots)
+    text = ("# Retrieval study: every method against the truth\n\n"
+            f"{'quick' if args.quick else 'full'} size: {json.dumps(size)}\n\n"
+            "## All shots\n\n" + markdown(rows) +
+            "\n## By stratum (bias / RMSE, rt's 90 % coverage in brackets)\n\n" +
+            markdown_strata(rows))
+    write_atomic(os.path.join(args.out, "retrieval_metrics.md"), text)
+    plot_scatter(shots, sensors, os.path.join(args.out, "retrieval_scatter.png"))
+    plot_slope(shots, sensors, os.path.join(args.out, "retrieval_slope.png"))
+    summary = {
+        "size": "quick" if args.quick else "full",
+        "tables": tables,
+        "speed": speeds,
+        "glaswave_seconds": runs.seconds,
+        "wall_s": time.monotonic() - started,
+        "metrics": [r for r in rows if r["stratum"] == "all"],
+    }
+    write_atomic(os.path.join(args.out, "summary.json"),
+                 json.dumps(summary, indent=1, default=float) + "\n")
+    log(f"{len(shots['shot_number'])} shots in {summary['wall_s']:.0f} s; "
+        f"{os.path.join(args.out, 'retrieval_metrics.md')}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,70 @@
+"""Unit checks of share/studies/retrieval.py's arithmetic on arrays made by hand: bias, RMSE and
+the 90 % interval's coverage, NaN shots left out, and the strata's masks."""
+import math
+import os
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "share", "studies"))
+import retrieval  # noqa: E402
+
+NAN = float("nan")
+
+
+def test_bias_and_rmse_by_hand():
+    # Errors +1, -3, +2: bias 0, RMSE sqrt((1 + 9 + 4) / 3).
+    estimate = [2.0, 0.0, 5.0]
+    truth = [1.0, 3.0, 3.0]
+    assert retrieval.bias(estimate, truth) == pytest.approx(0.0, abs=1e-15)
+    assert retrieval.rmse(estimate, truth) == pytest.approx(math.sqrt(14.0 / 3.0), rel=1e-15)
+
+
+def test_nan_shots_are_left_out_of_both():
+    # Only the second and fourth pairs are finite: errors +0.5 and +1.5.
+    estimate = [NAN, 1.5, 7.0, 4.5]
+    truth = [1.0, 1.0, NAN, 3.0]
+    assert retrieval.bias(estimate, truth) == pytest.approx(1.0)
+    assert retrieval.rmse(estimate, truth) == pytest.approx(math.sqrt((0.25 + 2.25) / 2))
+    assert math.isnan(retrieval.bias([NAN], [1.0]))
+    assert math.isnan(retrieval.rmse([], []))
+
+
+def test_coverage_counts_closed_intervals():
+    low = [0.0, 1.0, 2.0, 0.0, NAN]
+    high = [1.0, 2.0, 3.0, 0.5, 9.0]
+    truth = [1.0, 0.5, 2.0, 0.7, 3.0]
+    # In: 1 in [0, 1] (the bound counts), 2 in [2, 3]. Out: 0.5, 0.7. The NaN bound: not counted.
+    assert retrieval.coverage(low, high, truth) == pytest.approx(2.0 / 4.0)
+    assert math.isnan(retrieval.coverage([NAN], [NAN], [1.0]))
+
+
+def test_metrics_give_coverage_for_rt_only_and_honour_a_mask():
+    shots = {
+        "pai_true": np.array([1.0, 2.0, 3.0, 4.0]),
+        "pai_gedi_l2b": np.array([0.5, 1.0, 2.0, NAN]),
+        "pai_rt": np.array([1.0, 2.5, 3.0, 3.0]),
+        "pai_rt_p05": np.array([0.5, 2.2, 2.0, 3.5]),
+        "pai_rt_p95": np.array([1.5, 3.0, 4.0, 4.5]),
+    }
+    l2b = retrieval.metrics(shots, "gedi_l2b", "pai")
+    assert l2b["n"] == 3
+    assert l2b["bias"] == pytest.approx((-0.5 - 1.0 - 1.0) / 3)
+    assert math.isnan(l2b["coverage90"])
+    rt = retrieval.metrics(shots, "rt", "pai")
+    assert rt["bias"] == pytest.approx((0.0 + 0.5 + 0.0 - 1.0) / 4)
+    assert rt["rmse"] == pytest.approx(math.sqrt((0.25 + 1.0) / 4))
+    assert rt["coverage90"] == pytest.approx(3.0 / 4.0)  # 2.0 lies below [2.2, 3.0]
+    masked = retrieval.metrics(shots, "rt", "pai", np.array([False, True, False, True]))
+    assert masked["n"] == 2
+    assert masked["coverage90"] == pytest.approx(0.5)
+    assert retrieval.metrics(shots, "wi", "pai") is None
+
+
+def test_a_stand_beyond_the_table_is_not_inside_its_ranges():
+    stand = {key: 0.5 * (low + high) for key, (low, high) in retrieval.TABLE_VARY.items()}
+    stand["canopy.crown_shape"] = "ellipsoid"
+    assert retrieval.in_table_ranges(stand)
+    assert not retrieval.in_table_ranges({**stand, "canopy.crown_shape": "cone"})
+    assert not retrieval.in_table_ranges({**stand, "canopy.pai": 5.5})
