@@ -44,6 +44,8 @@ here=$(cd "$(dirname "$0")" && pwd)
 for d in rGEDI ICESat2VegR read-ICESat-2 timescale trace; do
   [[ -d $src/$d ]] || { echo "run_readers.sh: $src/$d: no such folder" >&2; exit 2; }
 done
+# A snapshot without ICESat2VegR's readme/ GIFs stops `git archive HEAD` before src/.
+[[ -d $src/ICESat2VegR/src ]] || { echo "run_readers.sh: $src/ICESat2VegR/src: no such folder (extract with git archive HEAD -- . ':!readme')" >&2; exit 2; }
 [[ -x $glaswave ]] || { echo "run_readers.sh: $glaswave: not an executable" >&2; exit 2; }
 [[ -e $out ]] && { echo "run_readers.sh: $out exists; give a new folder" >&2; exit 2; }
 mkdir -p "$out"/{products,rows,scratch,py}
