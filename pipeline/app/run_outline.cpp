@@ -242,7 +242,7 @@ std::string run_outline(const Config& config, const CheckSummary& summary,
            " on " + plural(memory.threads, "thread", "threads") +
            " (scaled from the benchmark; expect within about 2x)");
   // A forest's scene in trees; a measured source's in bytes, with what it holds once.
-  const bool forest = memory.vegetation.empty() || memory.vegetation == "forest";
+  const bool forest = memory.vegetation.empty() || memory.tree_bytes > 0.0;
   const std::string scene = forest ? number(std::round(memory.trees), 12) + " trees"
                                    : bytes(memory.scene_bytes) + " of " + memory.vegetation;
   const std::string once =

@@ -691,6 +691,8 @@ OutputSettings read_output(JsonReader& root, std::vector<std::string>& warnings)
   OutputSettings o;
   JsonReader r = root.object("output");
   read_fields(r, {{"geojson", [&] { read_old_footprints_key(r, o, warnings); }}}, o);
+  for (const auto& entry : Registry<PartSwitch>::instance().entries())  // declared by the parts
+    if (entry.make.section == "output") o.switches[entry.name] = r.boolean(entry.name);
   r.finish();
   return o;
 }

@@ -13,6 +13,7 @@
 
 #include "canopy/canopy_settings.hpp"
 #include "core/error.hpp"
+#include "core/part_switch.hpp"
 #include "footprints/atmosphere_settings.hpp"
 #include "footprints/lidar_settings.hpp"
 #include "footprints/track_settings.hpp"
@@ -56,11 +57,13 @@ struct OutputSettings {
   bool per_order = false;
   bool metrics = true;                        // the waveform metrics and Gaussian decomposition
   std::string footprints_format = "GeoJSON";  // "GeoJSON" or "GPKG"
-  bool gedi_l1b = false, gedi_l2a = false;    // DIR/gedi_l1b.h5, DIR/gedi_l2a.h5
   bool glah01 = false, glah14 = false;        // DIR/glah01.h5, DIR/glah14.h5
   std::string glas_ellipsoid = "wgs84";       // "wgs84" or "topex": the GLAS granules' heights
   // The ICESat-2 granules (atl03.h5, atl08.h5); absent: on with the photon-counting receiver.
   std::optional<bool> atl03, atl08;
+  // The switches product writers declare in their own files (core/part_switch.hpp): the GEDI
+  // granules' gedi_l1b and gedi_l2a, and a new writer's.
+  PartSwitches switches;
 };
 
 struct BrfView {

@@ -8,6 +8,7 @@
 #include <typeinfo>
 
 #include "canopy/canopy_settings.hpp"
+#include "core/part_switch.hpp"
 #include "footprints/atmosphere_settings.hpp"
 #include "footprints/track_settings.hpp"
 #include "pipeline/config/atmosphere_presets.hpp"
@@ -870,6 +871,16 @@ Key track_keys() {
            .with_default_text("all")});
 }
 
+// `section` with the switches parts declare in it (core/part_switch.hpp) after its own keys;
+// its reader reads them into its settings' `switches`.
+Key with_part_switches(Key section) {
+  for (const auto& entry : Registry<PartSwitch>::instance().entries())
+    if (entry.make.section == section.name)
+      section.children.push_back(
+          declare::boolean(entry.name, entry.make.fallback, entry.make.description));
+  return section;
+}
+
 Key output_keys() {
   const Fields<OutputSettings> o;
   using S = OutputSettings;
@@ -896,12 +907,6 @@ Key output_keys() {
        o.choice("footprints_format", &S::footprints_format, {"GeoJSON", "GPKG"},
                 "the footprints' format: `footprints.geojson`, or `footprints.gpkg` "
                 "(GeoPackage)"),
-       o.boolean("gedi_l1b", &S::gedi_l1b,
-                 "write `gedi_l1b.h5`, a GEDI L1B-style granule (waveforms in counts; "
-                 "docs/granules.md)"),
-       o.boolean("gedi_l2a", &S::gedi_l2a,
-                 "write `gedi_l2a.h5`, a GEDI L2A-style granule (elevations, rh); itself "
-                 "a valid `granule` track"),
        o.boolean("glah01", &S::glah01,
                  "write `glah01.h5`, a GLAS GLAH01-style granule (waveforms)"),
        o.boolean("glah14", &S::glah14,
@@ -1027,7 +1032,8 @@ const Key& configuration_keys() {
                           "random seed: a shot's waveform depends only on the configuration, the "
                           "seed and its shot number"),
          sensor_keys(), atmosphere_keys(), simulation_keys(), terrain_keys(), canopy_keys(),
-         track_keys(), output_keys(), detector_keys(), brf_keys(), table_keys()});
+         track_keys(), with_part_switches(output_keys()), detector_keys(), brf_keys(),
+         table_keys()});
   }();
   return root;
 }

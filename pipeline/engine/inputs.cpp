@@ -25,15 +25,16 @@ ShotSettings shot_settings(const Config& config) {
   settings.transport.rays = config.simulation.rays_per_shot;
   settings.transport.max_order = config.simulation.max_order;
   settings.transport.quasi_random = config.simulation.quasi_random;
-  // The photon-counting receiver gives each photon its scattering order: it needs them all.
-  settings.transport.per_order =
-      config.output.per_order || config.sensor.receiver == "photon_counting";
+  // A receiver may need every order (photon counting gives each photon its own).
+  const ReceiverTraits receiver =
+      at_section("/sensor", [&] { return receiver_traits(config.sensor.receiver); });
+  settings.transport.per_order = config.output.per_order || receiver.every_order;
   settings.transport.seed = config.seed;
   settings.transport.atmosphere = config.atmosphere;
   settings.soil_reflectance = config.terrain.soil_reflectance;
   settings.roughness = config.terrain.roughness;
   // Photon counting's 10 kHz footprints overlap almost entirely: they share their stretch's scene.
-  if (config.sensor.receiver == "photon_counting") settings.stretch_shots = stretch_shots;
+  if (receiver.shares_scenes) settings.stretch_shots = stretch_shots;
   return settings;
 }
 
@@ -62,7 +63,8 @@ std::vector<PhotonCountingSettings> photon_settings(const Config& config) {
 ReceiverSettings receiver_settings(const Config& config) {
   ReceiverSettings settings;
   settings.kind = config.sensor.receiver;
-  if (settings.kind == "photon_counting") settings.photons = photon_settings(config);
+  if (at_section("/sensor", [&] { return receiver_traits(settings.kind); }).atlas_beams)
+    settings.photons = photon_settings(config);
   settings.lidar = config.sensor;
   settings.metrics = config.output.metrics;
   settings.seed = config.seed;
@@ -102,8 +104,10 @@ std::unique_ptr<ShotSimulator> make_shot_simulator(const Config& config, const T
 }
 
 bool products_read_shot_fields(const OutputSettings& output) {
-  return output.netcdf || output.footprints || output.gedi_l1b || output.gedi_l2a ||
-         output.glah01 || output.glah14;
+  // A writer that declares its own switch is taken to read them (the GEDI granules do).
+  bool switched = false;
+  for (const auto& [name, on] : output.switches) switched = switched || on;
+  return output.netcdf || output.footprints || output.glah01 || output.glah14 || switched;
 }
 
 std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
@@ -145,7 +149,7 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
 }
 
 std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain) {
-  if (config.sensor.receiver != "photon_counting")
+  if (!at_section("/sensor", [&] { return receiver_traits(config.sensor.receiver); }).atlas_beams)
     return at_section("/track", [&] { return std::make_unique<Track>(config.track, terrain); });
   // A photon-counting pass: each beam flies its own ground track about the reference one, its
   // footprints carrying its spot number, the receiver's key for it.

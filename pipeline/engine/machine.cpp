@@ -26,7 +26,6 @@
 #include "pipeline/products/ogr_writer.hpp"
 #include "pipeline/shot/brf_shot.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
-#include "pipeline/shot/forest_source.hpp"
 #include "pipeline/shot/photon_receiver.hpp"
 #include "pipeline/shot/vegetation_source.hpp"
 #include "terrain/terrain.hpp"
@@ -54,10 +53,11 @@ double highest_spacecraft_m(const Config& c) {
 }
 
 // What a run's vegetation takes: a region `side_m` across (which every thread's shot holds),
-// what its source holds once, the trees of a forest on the region (for the message), and the
-// key that makes it large. None without a canopy.
+// what its source holds once, the plants on the region where its source counts them (a forest's
+// trees, for the message) and the bytes of one, and the key that makes it large. None without a
+// canopy.
 struct VegetationMemory {
-  double region_bytes = 0.0, source_bytes = 0.0, trees = 0.0;
+  double region_bytes = 0.0, source_bytes = 0.0, trees = 0.0, tree_bytes = 0.0;
   std::string key = "/canopy", kind;
 };
 
@@ -69,16 +69,20 @@ VegetationMemory vegetation_memory(const Config& c, double side_m) {
   m.source_bytes = vegetation_source_bytes(settings);
   m.key = vegetation_memory_key(settings);
   m.kind = c.canopy->kind;
-  if (m.kind == "forest") m.trees = m.region_bytes / forest_tree_bytes;
+  m.tree_bytes = vegetation_plant_bytes(settings);
+  if (m.tree_bytes > 0.0) m.trees = m.region_bytes / m.tree_bytes;
   return m;
 }
 
-// A scene's vegetation in words: a forest's trees, else its source's bytes in a region.
-std::string scene_words(const std::string& kind, double trees, double region_bytes, double side_m) {
+// A scene's vegetation in words: its plants where its source counts them (a forest's trees),
+// else its source's bytes in a region; none on bare ground.
+std::string scene_words(const std::string& kind, double trees, double tree_bytes,
+                        double region_bytes, double side_m) {
   const std::string across = " over " + format_number(std::round(side_m)) + " m across";
-  if (kind.empty() || kind == "forest")
+  if (kind.empty()) return "no vegetation" + across;
+  if (tree_bytes > 0.0)
     return format_number(std::round(trees)) + " trees" + across + ", at " +
-           format_number(forest_tree_bytes / 1024.0) + " KiB a tree";
+           format_number(tree_bytes / 1024.0) + " KiB a tree";
   return mebibytes(region_bytes) + " of " + kind + across;
 }
 
@@ -131,6 +135,7 @@ RunMemory estimate_run_memory(const Config& c) {
   m.scene_half_size_m = shot_patch_half_size_m(c, range_m);
   const VegetationMemory vegetation = vegetation_memory(c, 2.0 * m.scene_half_size_m);
   m.trees = vegetation.trees;
+  m.tree_bytes = vegetation.tree_bytes;
   m.scene_bytes = vegetation.region_bytes;
   m.source_bytes = vegetation.source_bytes;
   m.vegetation = vegetation.kind;
@@ -164,8 +169,8 @@ RunMemory estimate_run_memory(const Config& c) {
 constexpr double max_background_photons = 1.0e4;
 
 void check_background(const Config& c) {
-  if (c.sensor.receiver != "photon_counting" || c.sensor.bands.empty()) return;
-  const ReceiverSettings settings = receiver_settings(c);
+  if (c.sensor.bands.empty()) return;
+  const ReceiverSettings settings = receiver_settings(c);  // photons for ATLAS's beams alone
   const double window_ns = static_cast<double>(c.sensor.bins) * c.sensor.bin_ns;
   for (const PhotonCountingSettings& p : settings.photons) {
     const double rate_Hz = most_background_rate_Hz(settings, p);
@@ -189,7 +194,7 @@ void check_run(const Config& config) {
     std::ostringstream why;
     why << "a run would hold about " << gibibytes(memory.bytes) << " (" << memory.threads
         << " threads x a shot's scene of "
-        << scene_words(memory.vegetation, memory.trees, memory.scene_bytes,
+        << scene_words(memory.vegetation, memory.trees, memory.tree_bytes, memory.scene_bytes,
                        2.0 * memory.scene_half_size_m)
         << ", and its waveforms' " << mebibytes(memory.waveform_bytes);
     if (memory.source_bytes > 0.0)
@@ -216,6 +221,7 @@ BrfMemory estimate_brf_memory(const Config& c) {
   m.scene_side_m = 2.0 * brf_scene_half_size_m(0.5 * tile_m, c.terrain.plane.has_value());
   const VegetationMemory vegetation = vegetation_memory(c, m.scene_side_m);
   m.trees = vegetation.trees;
+  m.tree_bytes = vegetation.tree_bytes;
   m.scene_bytes = vegetation.region_bytes + vegetation.source_bytes;
   m.vegetation = vegetation.kind;
   m.image_bytes = static_cast<double>(c.sensor.bands.size()) * m.pixels * m.pixels * 8.0 *
@@ -244,7 +250,8 @@ void check_brf(const Config& config) {
   if (memory.bytes <= memory.available_bytes) return;
   std::ostringstream why;
   why << "brf's scene would hold about " << gibibytes(memory.bytes) << " ("
-      << scene_words(memory.vegetation, memory.trees, memory.scene_bytes, memory.scene_side_m)
+      << scene_words(memory.vegetation, memory.trees, memory.tree_bytes, memory.scene_bytes,
+                     memory.scene_side_m)
       << ", and scene.tif's " << config.sensor.bands.size() << " bands of "
       << format_number(memory.pixels) << " x " << format_number(memory.pixels) << " pixels, "
       << mebibytes(memory.image_bytes) << "), more than the " << gibibytes(memory.available_bytes)

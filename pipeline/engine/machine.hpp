@@ -26,6 +26,7 @@ int threads_of_process(int threads, int processes_here);
 struct RunMemory {
   double scene_half_size_m = 0.0;  // half the side of the ground patch a shot's rays can reach
   double trees = 0.0;              // a forest's trees on it (the densest stand's density)
+  double tree_bytes = 0.0;         // of one, where the source counts its scene in trees; else 0
   double scene_bytes = 0.0;        // its vegetation's (a DEM's mesh is capped: ground_mesh.cpp)
   double source_bytes = 0.0;       // what the vegetation source holds once (a point cloud, models)
   std::string vegetation;          // the canopy's kind; empty for bare ground
@@ -49,6 +50,7 @@ struct BrfMemory {
   double pixels = 0.0;        // scene.tif's side: brf.scene_size_m in whole pixels
   double scene_side_m = 0.0;  // the ground the scene is built over
   double trees = 0.0;         // a forest's on it, at the densest stand's density
+  double tree_bytes = 0.0;    // of one, where the source counts its scene in trees; else 0
   double scene_bytes = 0.0;   // its vegetation's, and what the vegetation source holds once
   std::string vegetation;     // the canopy's kind; empty for bare ground
   double image_bytes = 0.0;   // scene.tif's bands, brf_image_copies times

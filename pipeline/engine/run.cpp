@@ -358,7 +358,7 @@ namespace {
 // for its beams.
 Icesat2ProductSettings icesat2_product_settings(const Config& config) {
   Icesat2ProductSettings s;
-  if (config.sensor.receiver != "photon_counting") return s;
+  if (!receiver_traits(config.sensor.receiver).atlas_beams) return s;
   s.atl03 = config.output.atl03.value_or(true);
   s.atl08 = config.output.atl08.value_or(true);
   s.beams.clear();
@@ -411,11 +411,10 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
   ProductSettings settings{config.output.netcdf, config.output.footprints,
                            config.output.footprints_format == "GPKG" ? FootprintsFormat::gpkg
                                                                      : FootprintsFormat::geojson};
-  settings.gedi_l1b = config.output.gedi_l1b;
-  settings.gedi_l2a = config.output.gedi_l2a;
   settings.glah01 = config.output.glah01;
   settings.glah14 = config.output.glah14;
   settings.glas_topex = config.output.glas_ellipsoid == "topex";
+  settings.switches = config.output.switches;  // the writers' own keys
   output->writers = make_writers(request.out_dir, settings, info, icesat2_product_settings(config));
   if (output->resumed) {
     RunOutput& out = *output;

@@ -370,14 +370,25 @@ void GediGranuleWriter::write_l2a_beam(Hdf5Writer& f, const std::string& g,
 
 namespace {
 
+// Each granule's key, output.gedi_l1b and output.gedi_l2a, declared here beside its writer.
+const Registration<PartSwitch> gedi_l1b_key(
+    "gedi_l1b", 30,
+    {"output", false,
+     "write `gedi_l1b.h5`, a GEDI L1B-style granule (waveforms in counts; docs/granules.md)"});
+const Registration<PartSwitch> gedi_l2a_key(
+    "gedi_l2a", 31,
+    {"output", false,
+     "write `gedi_l2a.h5`, a GEDI L2A-style granule (elevations, rh); itself a valid `granule` "
+     "track"});
+
 const Registration<ProductWriter> gedi_l1b_writer(
     "gedi_l1b.h5", 30, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
-      if (!c.settings.gedi_l1b) return nullptr;
+      if (!switched_on(c.settings.switches, "gedi_l1b")) return nullptr;
       return std::make_unique<GediGranuleWriter>(c.out_dir / "gedi_l1b.h5", GediLevel::l1b, c.info);
     });
 const Registration<ProductWriter> gedi_l2a_writer(
     "gedi_l2a.h5", 31, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
-      if (!c.settings.gedi_l2a) return nullptr;
+      if (!switched_on(c.settings.switches, "gedi_l2a")) return nullptr;
       return std::make_unique<GediGranuleWriter>(c.out_dir / "gedi_l2a.h5", GediLevel::l2a, c.info);
     });
 

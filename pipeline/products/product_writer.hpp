@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/part_switch.hpp"
 #include "pipeline/products/icesat2_products.hpp"
 #include "pipeline/products/shot_record.hpp"
 
@@ -74,11 +75,12 @@ struct ProductSettings {
   bool footprints = true;  // DIR/footprints.geojson or DIR/footprints.gpkg
   FootprintsFormat footprints_format = FootprintsFormat::geojson;
   // The HDF5 granules in the real products' layouts (PRODUCT.md section 10, docs/granules.md).
-  bool gedi_l1b = false;    // DIR/gedi_l1b.h5
-  bool gedi_l2a = false;    // DIR/gedi_l2a.h5
   bool glah01 = false;      // DIR/glah01.h5
   bool glah14 = false;      // DIR/glah14.h5
   bool glas_topex = false;  // GLAS heights on the TOPEX/Poseidon ellipsoid, not WGS84
+  // The switches writers declare in their own files (core/part_switch.hpp), as the configuration's
+  // `output` set them: DIR/gedi_l1b.h5, DIR/gedi_l2a.h5 and a new writer's.
+  PartSwitches switches;
 };
 
 // What a writer's Factory is given: the run's output directory (which exists), the products it

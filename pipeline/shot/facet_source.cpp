@@ -116,4 +116,11 @@ double FacetSource::source_bytes(const VegetationSettings& settings) {
   return bytes;
 }
 
+namespace {
+const Registration<VegetationSource> facets(
+    "facets", 0,
+    {[](const VegetationSettings& s) { return std::make_unique<FacetSource>(s); },
+     &FacetSource::region_bytes, &FacetSource::source_bytes, "/canopy/facets/models"});
+}  // namespace
+
 }  // namespace glaswave

@@ -157,4 +157,11 @@ double ForestSource::region_bytes(const VegetationSettings& settings, double sid
   return density * side_m * side_m * forest_tree_bytes;
 }
 
+namespace {
+const Registration<VegetationSource> forest(
+    "forest", 0,
+    {[](const VegetationSettings& s) { return std::make_unique<ForestSource>(s); },
+     &ForestSource::region_bytes, nullptr, "/canopy/crown_radius_m", forest_tree_bytes});
+}  // namespace
+
 }  // namespace glaswave

@@ -154,4 +154,11 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
   }
 }
 
+namespace {
+const Registration<Receiver> photon_counting(
+    "photon_counting", 0,
+    {[](const ReceiverSettings& s) { return std::make_unique<PhotonCountingReceiver>(s); },
+     {.every_order = true, .shares_scenes = true, .atlas_beams = true}});
+}  // namespace
+
 }  // namespace glaswave

@@ -1,29 +1,19 @@
-// The registry of receivers, with the analog waveform receiver registered from the start.
+// Looking a receiver up by its kind among those registered (each from its own .cpp), and the
+// scaling of a pulse's returns.
 #include "pipeline/shot/receiver.hpp"
 
-#include <map>
-#include <mutex>
-
 #include "core/error.hpp"
-#include "pipeline/shot/photon_receiver.hpp"
-#include "pipeline/shot/waveform_receiver.hpp"
 
 namespace glaswave {
 namespace {
 
-struct Registry {
-  std::mutex mutex;
-  std::map<std::string, ReceiverFactory> kinds;
-};
-
-Registry& registry() {
-  static Registry receivers{
-      {},
-      {{"waveform",
-        [](const ReceiverSettings& s) { return std::make_unique<WaveformReceiver>(s); }},
-       {"photon_counting",
-        [](const ReceiverSettings& s) { return std::make_unique<PhotonCountingReceiver>(s); }}}};
-  return receivers;
+ReceiverKind kind_of(const std::string& name) {
+  const Registry<Receiver>& receivers = Registry<Receiver>::instance();
+  if (std::optional<ReceiverKind> kind = receivers.find(name)) return *std::move(kind);
+  std::string known;
+  for (const auto& entry : receivers.entries()) known += (known.empty() ? "" : ", ") + entry.name;
+  throw setting_error(ErrorKind::config, "kind",
+                      "no receiver \"" + name + "\" (there are: " + known + ")");
 }
 
 }  // namespace
@@ -47,29 +37,10 @@ void scale_pulse_energy(ShotWaveforms& w, double scale) {
   times(w.ground_energy_J, scale);
 }
 
-void register_receiver(const std::string& name, ReceiverFactory make) {
-  Registry& receivers = registry();
-  const std::lock_guard lock(receivers.mutex);
-  if (!receivers.kinds.emplace(name, std::move(make)).second)
-    throw run_error("receiver \"" + name + "\"", "registered twice");
+std::unique_ptr<Receiver> make_receiver(const ReceiverSettings& settings) {
+  return kind_of(settings.kind).make(settings);
 }
 
-std::unique_ptr<Receiver> make_receiver(const ReceiverSettings& settings) {
-  Registry& receivers = registry();
-  ReceiverFactory make;
-  {
-    const std::lock_guard lock(receivers.mutex);
-    const auto found = receivers.kinds.find(settings.kind);
-    if (found == receivers.kinds.end()) {
-      std::string known;
-      for (const auto& [name, factory] : receivers.kinds)
-        known += (known.empty() ? "" : ", ") + name;
-      throw setting_error(ErrorKind::config, "kind",
-                          "no receiver \"" + settings.kind + "\" (there are: " + known + ")");
-    }
-    make = found->second;
-  }
-  return make(settings);
-}
+ReceiverTraits receiver_traits(const std::string& kind) { return kind_of(kind).traits; }
 
 }  // namespace glaswave

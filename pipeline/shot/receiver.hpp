@@ -7,8 +7,8 @@
 // and writes them to the record's variable-length fields (ShotRecord::photon_*, stored in
 // shots.nc as CF contiguous ragged arrays along the `photon` dimension).
 //
-// A new receiver is one class and one registration (register_receiver, keyed by
-// ReceiverSettings::kind): the engine and the transport do not change.
+// A new receiver is one class and one registration in its own .cpp (Registration<Receiver>,
+// core/registry.hpp, keyed by ReceiverSettings::kind): the engine and the transport do not change.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "core/registry.hpp"
 #include "pipeline/products/shot_record.hpp"
 #include "pipeline/transport/detector.hpp"
 #include "pipeline/transport/lidar_model.hpp"
@@ -46,8 +47,14 @@ struct ShotReturns {
 // variance with its square.
 void scale_pulse_energy(ShotWaveforms& waveforms, double scale);
 
+struct ReceiverKind;
+
 class Receiver {
  public:
+  // What a registration holds (core/registry.hpp): how to make one, and what the run around it
+  // must know before it is made.
+  using Factory = ReceiverKind;
+
   virtual ~Receiver() = default;
 
   // Fills the record's receiver fields from the returns (the record already holds the shot's
@@ -72,7 +79,7 @@ class Receiver {
 
 // What a receiver is made from.
 struct ReceiverSettings {
-  std::string kind = "waveform";               // register_receiver's name
+  std::string kind = "waveform";               // the registered receiver's name
   LidarSettings lidar;                         // bands, bins, pulse, telescope
   std::optional<Detector::Settings> detector;  // none: the noise-free received power
   bool metrics = true;                         // the waveform processing (decomposition, metrics)
@@ -87,13 +94,32 @@ struct ReceiverSettings {
   std::vector<PhotonCountingSettings> photons;
 };
 
+// What the run around a receiver must know of its kind before one is made, so that the engine asks
+// the kind instead of naming it.
+struct ReceiverTraits {
+  bool every_order =
+      false;  // it takes the returns of every scattering order (photons carry theirs)
+  bool shares_scenes = false;  // its footprints overlap (10 kHz): shots share their stretch's scene
+  // It flies ATLAS's beams (sensor.beams, sc_orient): a pass's beams fly their own ground tracks,
+  // each received with its own ReceiverSettings::photons, and the ICESat-2 granules are its own.
+  bool atlas_beams = false;
+};
+
 using ReceiverFactory = std::function<std::unique_ptr<Receiver>(const ReceiverSettings&)>;
 
-// Registers a receiver under `name`; a name registered twice is an error. "waveform" is there
-// from the start.
-void register_receiver(const std::string& name, ReceiverFactory make);
+// One kind of receiver. Each registers itself from its own .cpp, by its ReceiverSettings::kind:
+//   const Registration<Receiver> waveform("waveform", 0, {[](const ReceiverSettings& s) {...}});
+// (waveform_receiver.cpp, photon_receiver.cpp; the shot library is linked whole).
+struct ReceiverKind {
+  ReceiverFactory make;
+  ReceiverTraits traits;
+};
 
 // The receiver of `settings.kind`. Throws a setting error at `kind` for an unknown name.
 std::unique_ptr<Receiver> make_receiver(const ReceiverSettings& settings);
+
+// What the receiver kind `kind` says of itself. Throws a setting error at `kind` for an unknown
+// name.
+ReceiverTraits receiver_traits(const std::string& kind);
 
 }  // namespace glaswave

@@ -3,8 +3,9 @@
 // volumes: crowns, a layer; surfaces: triangles with one material each), the optical materials
 // that geometry's material numbers index, the truth under the beam and a memory estimate.
 //
-// A new source is one class and one registration (register_vegetation_source, keyed by the
-// configuration's canopy kind): the engine and the transport do not change. The built-in sources
+// A new source is one class and one registration in its own .cpp (Registration<VegetationSource>,
+// core/registry.hpp, keyed by the configuration's canopy kind): the engine and the transport do
+// not change. The built-in sources
 // (crowns and layers, facet trees, voxel grids, point clouds) add what they need to `Vegetation`
 // and the scene; the transport's VolumeSpan and SurfaceHit stay as they are.
 #pragma once
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "canopy/canopy_settings.hpp"
+#include "core/registry.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/scene/vegetation.hpp"
 #include "pipeline/transport/scattering.hpp"
@@ -44,8 +46,14 @@ struct RegionVegetation {
   std::vector<Foliage> materials;
 };
 
+struct VegetationKind;
+
 class VegetationSource {
  public:
+  // What a registration holds (core/registry.hpp): how to make a source of its kind, and what
+  // one takes in memory.
+  using Factory = VegetationKind;
+
   virtual ~VegetationSource() = default;
 
   // What grows in the region. Thread-safe: every thread of a run asks at once.
@@ -90,18 +98,19 @@ struct VegetationSettings {
 // estimate, which reads at most the headers of its files): bytes of a region `side_m` across,
 // which every thread's shot holds; bytes the source itself holds once for the run, at its peak
 // (a point cloud's voxelisation, facet models; none when empty); and the key that makes it
-// large, where a run too large for the machine is refused.
+// large, where a run too large for the machine is refused. A source whose region is counted in
+// plants (a forest's trees) gives the bytes of one, so that a message may say how many.
+//
+// Each kind registers itself from its own .cpp, by its CanopySettings::kind:
+//   const Registration<VegetationSource> forest("forest", 0, VegetationKind{...});
+// (forest_source.cpp, voxel_source.cpp, facet_source.cpp; the shot library is linked whole).
 struct VegetationKind {
   std::function<std::unique_ptr<VegetationSource>(const VegetationSettings&)> make;
   std::function<double(const VegetationSettings&, double side_m)> region_bytes;
   std::function<double(const VegetationSettings&)> source_bytes;
   std::string memory_key = "/canopy";
+  double plant_bytes = 0.0;  // of one plant, where the region is counted in plants; else 0
 };
-
-// Registers a kind of source under `name` (CanopySettings::kind); a name registered twice is an
-// error. "forest" (canopy/forest.hpp: random crowns, a crowns file, stands, a layer) is there
-// from the start.
-void register_vegetation_source(const std::string& name, VegetationKind kind);
 
 // The source of `settings.canopy.kind`. Throws a setting error at `kind` for an unknown name.
 std::unique_ptr<VegetationSource> make_vegetation_source(const VegetationSettings& settings);
@@ -112,5 +121,8 @@ double vegetation_region_bytes(const VegetationSettings& settings, double side_m
 // Bytes the source of `settings` holds once for the run, and the key that makes it large.
 double vegetation_source_bytes(const VegetationSettings& settings);
 std::string vegetation_memory_key(const VegetationSettings& settings);
+
+// Bytes of one plant of the source of `settings`, where it counts its region in plants; else 0.
+double vegetation_plant_bytes(const VegetationSettings& settings);
 
 }  // namespace glaswave

@@ -138,4 +138,16 @@ double VoxelSource::source_bytes(const VegetationSettings& settings) {
   return std::max(reading, inverting) + tiles;
 }
 
+namespace {
+// A voxel file and a point cloud voxelised when the run starts: one source, two kinds.
+const Registration<VegetationSource> voxels(
+    "voxels", 0,
+    {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
+     &VoxelSource::region_bytes, &VoxelSource::source_bytes, "/canopy/voxels/file"});
+const Registration<VegetationSource> point_cloud(
+    "point_cloud", 0,
+    {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
+     &VoxelSource::region_bytes, &VoxelSource::source_bytes, "/canopy/point_cloud/voxel_size_m"});
+}  // namespace
+
 }  // namespace glaswave

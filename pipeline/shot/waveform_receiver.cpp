@@ -95,4 +95,10 @@ std::vector<double> WaveformReceiver::surface_reflectance(const ShotRecord& reco
   return reflectance;
 }
 
+namespace {
+const Registration<Receiver> waveform(
+    "waveform", 0,
+    {[](const ReceiverSettings& s) { return std::make_unique<WaveformReceiver>(s); }, {}});
+}  // namespace
+
 }  // namespace glaswave

@@ -49,16 +49,13 @@ class HalfPeakPhotons : public Receiver {
   LidarModel lidar_;
 };
 
-const bool registered = [] {
-  register_receiver("half_peak_photons",
-                    [](const ReceiverSettings& s) { return std::make_unique<HalfPeakPhotons>(s); });
-  return true;
-}();
+const Registration<Receiver> half_peak_photons(
+    "half_peak_photons", 0,
+    {[](const ReceiverSettings& s) { return std::make_unique<HalfPeakPhotons>(s); }, {}});
 
 // Over bare ground at nadir the pulse (sigma 5 ns) is above half its peak within 1.18 sigma of
 // the ground's return: 11 or 12 one-ns bins, within c / 2 * 5.9 ns = 0.88 m of the ground.
 TEST(Receiver, PhotonEventsThroughTheShot) {
-  ASSERT_TRUE(registered);
   const std::unique_ptr<Terrain> terrain = plane_terrain(0.3);
   const ShotSettings settings = shot_settings(0.3, 500);
   const ShotSimulator simulator(settings, *terrain, nullptr,

@@ -68,16 +68,17 @@ class PlateSource : public VegetationSource {
 
 double region_bytes(const VegetationSettings&, double side_m) { return 64.0 * side_m; }
 
-// Each test double registered once, as a new source is: one line.
-const bool registered = [] {
-  register_vegetation_source(
-      "one_voxel", {[](const VegetationSettings&) { return std::make_unique<OneVoxelSource>(); },
-                    region_bytes, nullptr, "/canopy/one_voxel"});
-  register_vegetation_source(
-      "plate", {[](const VegetationSettings&) { return std::make_unique<PlateSource>(); },
-                region_bytes, nullptr, "/canopy/plate"});
-  return true;
-}();
+// Each test double registered once, as a new source is, from its own file.
+const Registration<VegetationSource> one_voxel("one_voxel", 0,
+                                               {[](const VegetationSettings&) {
+                                                  return std::make_unique<OneVoxelSource>();
+                                                },
+                                                region_bytes, nullptr, "/canopy/one_voxel"});
+const Registration<VegetationSource> plate("plate", 0,
+                                           {[](const VegetationSettings&) {
+                                              return std::make_unique<PlateSource>();
+                                            },
+                                            region_bytes, nullptr, "/canopy/plate"});
 
 ShotRecord simulate(const std::string& kind, double soil_reflectance) {
   const std::unique_ptr<Terrain> terrain = plane_terrain(soil_reflectance);
@@ -94,11 +95,10 @@ ShotRecord simulate(const std::string& kind, double soil_reflectance) {
 }
 
 TEST(VegetationSource, RegistersOnceByKind) {
-  ASSERT_TRUE(registered);
   VegetationSettings settings;
   settings.canopy.kind = "one_voxel";
   EXPECT_EQ(vegetation_region_bytes(settings, 100.0), 6400.0);
-  EXPECT_THROW(register_vegetation_source("one_voxel", {}), Error);
+  EXPECT_THROW(Registration<VegetationSource>("one_voxel", 0, {}), std::logic_error);
   settings.canopy.kind = "no_such_source";
   EXPECT_THROW(make_vegetation_source(settings), Error);
 }
