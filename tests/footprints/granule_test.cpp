@@ -7,6 +7,8 @@
 #include <chrono>
 #include <fstream>
 #include <limits>
+#include <sstream>
+#include <string>
 
 #include "core/error.hpp"
 #include "core/glas_time.hpp"
@@ -311,6 +313,64 @@ TEST(GranuleTrack, TheFuzzCorpusIsReadOrRefusedAsInputErrors) {
   }
   EXPECT_GE(refused, 6);
   EXPECT_GE(read, 3);
+}
+
+}  // namespace
+}  // namespace glaswave
+
+namespace glaswave {
+namespace {
+
+// Issue 42: any root group whose name began with BEAM was read as a GEDI beam (BEAM2222,
+// BEAMXXXX); only the L2A dictionary's eight names are beams now.
+TEST(GranuleTrack, OnlyGedisEightBeamNamesAreBeams) {
+  test_support::ScratchDir dir;
+  const auto file = dir.path() / "beams.h5";
+  {
+    testing::Hdf5Writer h5(file);
+    for (const char* beam : {"BEAM0101", "BEAM2222", "BEAMXXXX"}) {
+      const std::string group(beam);
+      h5.uint64s(group + "/shot_number", {7});
+      h5.doubles(group + "/lat_lowestmode", {1.0});
+      h5.doubles(group + "/lon_lowestmode", {1.0});
+      h5.doubles(group + "/delta_time", {1.0});
+    }
+  }
+  const std::vector<GranuleShot> shots = read_granule(file, {});
+  ASSERT_EQ(shots.size(), 1u);
+  EXPECT_EQ(shots[0].beam, 5);  // BEAM0101
+  const std::string message =
+      input_error_of([&] { read_granule(file, {"BEAM2222"}); }, file.string() + ": BEAM2222");
+  EXPECT_NE(message.find("the 8 are BEAM0000"), std::string::npos) << message;
+}
+
+// Issue 42: the granule was read in a forked child, and the Python API's child deadlocked in
+// PROJ's fork handler while another thread held PROJ's lock. A library must not fork: the read
+// leaves the process's children as they were (none), which a forked reader cannot.
+TEST(GranuleTrack, TheGranuleIsReadWithoutAChildProcess) {
+  const std::filesystem::path gedi =
+      std::filesystem::path(GLASWAVE_SOURCE_DIR) / "tests/fuzz/corpus/granule/gedi.h5";
+  // A forked reader is a child this process reaps, and a reaped child's page faults are added
+  // to the parent's cminflt (/proc/self/stat, field 11): it grows with any child that ran.
+  auto children_faults = [] {
+    std::ifstream stat("/proc/self/stat");
+    std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+    std::istringstream fields(text.substr(text.rfind(')') + 2));
+    std::string field;
+    for (int i = 3; i <= 11; ++i) fields >> field;  // field 11: cminflt
+    return std::stoll(field);
+  };
+  const long long before = children_faults();
+  EXPECT_FALSE(read_granule(gedi, {}).empty());
+  // The file the child process was there for (HDF5 1.10.8 crashes on its root group's symbol
+  // table of undefined addresses) is refused on its bytes, before HDF5 reads it.
+  const auto crashes = gedi.parent_path() / "broken-hdf5-crashes-h5literate.h5";
+  const std::string refused = input_error_of([&] { read_granule(crashes, {}); }, crashes.string());
+  EXPECT_NE(refused.find("the HDF5 file is corrupt: its root group's symbol table names an "
+                         "address beyond the file's end"),
+            std::string::npos)
+      << refused;
+  EXPECT_EQ(children_faults(), before);
 }
 
 }  // namespace
