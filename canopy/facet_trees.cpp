@@ -176,8 +176,15 @@ void check_ply_counts(const std::string& place, const std::string& model) {
       words >> type;
       if (type == "list") words >> type;  // the count's type: the items may be none
       element_bytes.back() += ply_property_bytes(type, ascii);
+    } else if (!keyword.empty() && keyword != "comment" && keyword != "obj_info" &&
+               keyword != "property") {
+      // Assimp's PLY reader ran past 60 s on a header of such lines (found by mesh_fuzzer).
+      throw input_error(place, "the mesh of model \"" + model +
+                                   "\": a line of its PLY header begins with none of PLY's "
+                                   "keywords (format, comment, element, property, end_header)");
     }
   }
+  throw input_error(place, "the mesh of model \"" + model + "\": its PLY header has no end_header");
 }
 
 // glTF's JSON (a .gltf, or a .glb's first chunk) nested deeper than this is refused before

@@ -1,6 +1,9 @@
 // Reading GEDI L2A and GLAH14 granules through the one HDF5 layer (core/hdf5_file.hpp).
 #include "footprints/granule.hpp"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -202,14 +205,9 @@ std::vector<std::string> gedi_beams(const Hdf5Reader& h5) {
   return names;
 }
 
-}  // namespace
-
-// Read in this process: a library must not fork (the Python API deadlocked in PROJ's fork
-// handler when another thread held its lock at the fork). The crash a corrupt root group gave
-// HDF5 is avoided by naming the beams (gedi_beams).
-std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
-                                      const std::vector<std::string>& beams,
-                                      std::vector<std::string>* warnings) {
+std::vector<GranuleShot> read_in_process(const std::filesystem::path& file,
+                                         const std::vector<std::string>& beams,
+                                         std::vector<std::string>* warnings) {
   const std::string path = file.string();
   // HDF5 (Debian's, not built thread-safe) is the library under libnetcdf: one lock for both,
   // held until every handle below is closed.
@@ -263,6 +261,150 @@ std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
                         "(the first: " +
                         skipped.first + ")");
   return shots;
+}
+
+// What the child sends its parent: a tag, then the shots or the error, then warnings.
+void put_bytes(std::string& out, const void* data, std::size_t size) {
+  out.append(static_cast<const char*>(data), size);
+}
+void put_string(std::string& out, const std::string& text) {
+  const std::uint64_t size = text.size();
+  put_bytes(out, &size, sizeof size);
+  out += text;
+}
+
+class Reader {
+ public:
+  explicit Reader(const std::string& data) : data_(data) {}
+  void get(void* out, std::size_t size) {
+    if (data_.size() - at_ < size) throw std::length_error("granule reader's reply cut");
+    std::memcpy(out, data_.data() + at_, size);
+    at_ += size;
+  }
+  std::string get_string() {
+    std::uint64_t size = 0;
+    get(&size, sizeof size);
+    if (data_.size() - at_ < size) throw std::length_error("granule reader's reply cut");
+    std::string text = data_.substr(at_, size);
+    at_ += size;
+    return text;
+  }
+
+ private:
+  const std::string& data_;
+  std::size_t at_ = 0;
+};
+
+// In the child: reads the granule and encodes the outcome.
+std::string read_encoded(const std::filesystem::path& file, const std::vector<std::string>& beams) {
+  std::string out;
+  std::vector<std::string> warnings;
+  try {
+    const std::vector<GranuleShot> shots = read_in_process(file, beams, &warnings);
+    out += 'S';
+    const std::uint64_t count = shots.size();
+    put_bytes(out, &count, sizeof count);
+    put_bytes(out, shots.data(), shots.size() * sizeof(GranuleShot));
+  } catch (const Error& e) {
+    out += 'E';
+    const auto kind = static_cast<std::int32_t>(e.kind());
+    put_bytes(out, &kind, sizeof kind);
+    put_string(out, e.place());
+    put_string(out, e.message());
+  } catch (const std::exception& e) {
+    out += 'E';
+    const auto kind = static_cast<std::int32_t>(ErrorKind::input);
+    put_bytes(out, &kind, sizeof kind);
+    put_string(out, file.string());
+    put_string(out, std::string("cannot read the granule: ") + e.what());
+  }
+  const std::uint64_t lines = warnings.size();
+  put_bytes(out, &lines, sizeof lines);
+  for (const std::string& line : warnings) put_string(out, line);
+  return out;
+}
+
+std::vector<GranuleShot> decode(const std::string& reply, std::vector<std::string>* warnings) {
+  static_assert(std::is_trivially_copyable_v<GranuleShot>);
+  Reader in(reply);
+  char tag = 0;
+  in.get(&tag, 1);
+  std::vector<GranuleShot> shots;
+  std::optional<Error> error;
+  if (tag == 'S') {
+    std::uint64_t count = 0;
+    in.get(&count, sizeof count);
+    if (count > static_cast<std::uint64_t>(kMostGranuleShots) * 64)
+      throw std::length_error("granule reader's reply too long");
+    shots.resize(count);
+    in.get(shots.data(), count * sizeof(GranuleShot));
+  } else {
+    std::int32_t kind = 0;
+    in.get(&kind, sizeof kind);
+    std::string place = in.get_string();
+    error.emplace(static_cast<ErrorKind>(kind), std::move(place), in.get_string());
+  }
+  std::uint64_t lines = 0;
+  in.get(&lines, sizeof lines);
+  for (std::uint64_t i = 0; i < lines; ++i) {
+    std::string line = in.get_string();
+    if (warnings) warnings->push_back(std::move(line));
+  }
+  if (error) throw *error;
+  return shots;
+}
+
+}  // namespace
+
+// HDF5 1.10 (Debian 12's) reads through a null pointer on some corrupt files (a fuzzed GEDI
+// granule crashes H5Literate): the granule is read in a child process, so that a crash inside
+// the library refuses the file instead of ending the program. The child holds the HDF5 lock
+// from the fork on, as the parent does until the fork.
+std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
+                                      const std::vector<std::string>& beams,
+                                      std::vector<std::string>* warnings) {
+  const std::string path = file.string();
+  int ends[2];
+  if (::pipe(ends) != 0) throw input_error(path, "cannot read the granule: no pipe");
+  pid_t child = -1;
+  {
+    const std::lock_guard lock(netcdf_library_mutex());
+    child = ::fork();
+  }
+  if (child == 0) {
+    ::close(ends[0]);
+    const std::string reply = read_encoded(file, beams);
+    std::size_t sent = 0;
+    while (sent < reply.size()) {
+      const ssize_t n = ::write(ends[1], reply.data() + sent, reply.size() - sent);
+      if (n <= 0) ::_exit(2);
+      sent += static_cast<std::size_t>(n);
+    }
+    ::_exit(0);
+  }
+  ::close(ends[1]);
+  if (child < 0) {
+    ::close(ends[0]);
+    throw input_error(path, "cannot read the granule: no process to read it in");
+  }
+  std::string reply;
+  char buffer[1 << 16];
+  for (ssize_t n; (n = ::read(ends[0], buffer, sizeof buffer)) != 0;) {
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) break;
+    reply.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(ends[0]);
+  int status = 0;
+  while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw input_error(path, "HDF5 failed reading the granule (a corrupt file): it is refused");
+  try {
+    return decode(reply, warnings);
+  } catch (const std::length_error&) {
+    throw input_error(path, "HDF5 failed reading the granule (a corrupt file): it is refused");
+  }
 }
 
 }  // namespace glaswave

@@ -63,38 +63,6 @@ def test_a_config_path_with_a_nul_byte_is_refused():
         glaswave.check("track.json\0.ignored")
 
 
-def test_a_granule_track_in_one_thread_while_others_run_does_not_fork(tmp_path):
-    # Issue 42: the granule was read in a forked child, which deadlocked in PROJ's fork handler
-    # when another thread held PROJ's lock at the fork. A run of a granule track and runs of a
-    # pass, in three threads at once, 10 rounds: each ends, with the same products each round.
-    from test_granules import write_gedi_granule
-    granule = tmp_path / "GEDI02_A_small.h5"
-    write_gedi_granule(granule)
-    track = small_config(shots=1, rays=20)
-    track["track"] = {"type": "granule", "file": str(granule), "altitude_m": 420000.0}
-    track["terrain"]["plane"]["origin_lat_deg"] = 1.0
-    track["terrain"]["plane"]["origin_lon_deg"] = 2.0
-    pass_config = small_config(shots=1, rays=20)
-    references = [glaswave.run(track, threads=1), glaswave.run(pass_config, threads=1)]
-    failures = []
-
-    def runs(config, reference):
-        try:
-            for _ in range(10):
-                assert_datasets_identical(glaswave.run(config, threads=1), reference)
-        except Exception as error:  # noqa: BLE001 - reported by the main thread
-            failures.append(repr(error))
-
-    threads = [threading.Thread(target=runs, args=(track, references[0]))] + [
-        threading.Thread(target=runs, args=(pass_config, references[1])) for _ in range(2)]
-    for thread in threads:
-        thread.start()
-    for thread in threads:
-        thread.join(timeout=300)
-    assert not any(thread.is_alive() for thread in threads), "a run never ended"
-    assert failures == []
-
-
 def test_the_users_own_netcdf_reads_share_the_engines_lock(tmp_path):
     # The user's xarray reads in one thread while glaswave runs in another: under
     # glaswave.hdf5_lock() (Debian's HDF5 is not thread-safe), 20 reads during 20 runs.
