@@ -44,19 +44,46 @@ void write_ground_raster(const CloudGround& cloud, const std::string& path,
   if (status != CE_None) throw input_error(place, "cannot hold the cloud's ground in memory");
 }
 
+// `text` with GDAL's in-memory file named as what it holds: the cloud's ground.
+std::string with_cloud_named(std::string text, const std::string& memory_path,
+                             const std::string& cloud) {
+  const std::string named = cloud + " (its ground, gridded from the class-2 points)";
+  for (std::size_t at = text.find(memory_path); at != std::string::npos;
+       at = text.find(memory_path, at + named.size()))
+    text.replace(at, memory_path.size(), named);
+  return text;
+}
+
+// `f`, its errors naming the LAS file where they named the ground's file in GDAL's memory, which
+// the user never gave.
+template <typename F>
+auto naming_the_cloud(const std::string& memory_path, const std::string& cloud, F&& f)
+    -> decltype(f()) {
+  try {
+    return f();
+  } catch (const Error& e) {
+    throw Error(e.kind(), with_cloud_named(e.place(), memory_path, cloud),
+                with_cloud_named(e.message(), memory_path, cloud));
+  }
+}
+
 // A DEM terrain over a file in GDAL's memory, removed with it, and the grid it was written from.
 class CloudTerrain final : public Terrain {
  public:
-  CloudTerrain(const TerrainSettings& settings, std::string path,
+  CloudTerrain(const TerrainSettings& settings, std::string path, std::string cloud,
                std::shared_ptr<const CloudGround> ground)
-      : path_(std::move(path)), ground_(std::move(ground)), dem_(settings) {}
+      : path_(std::move(path)),
+        cloud_(std::move(cloud)),
+        ground_(std::move(ground)),
+        dem_(naming_the_cloud(path_, cloud_, [&] { return DemTerrain(settings); })) {}
   ~CloudTerrain() override { VSIUnlink(path_.c_str()); }
   double height_m(double lat_deg, double lon_deg) const override {
-    return dem_.height_m(lat_deg, lon_deg);
+    return naming_the_cloud(path_, cloud_, [&] { return dem_.height_m(lat_deg, lon_deg); });
   }
   double detail_m() const override { return dem_.detail_m(); }
   GroundMesh mesh(const LocalFrame& frame, double half_size_m, double spacing_m) const override {
-    return dem_.mesh(frame, half_size_m, spacing_m);
+    return naming_the_cloud(path_, cloud_,
+                            [&] { return dem_.mesh(frame, half_size_m, spacing_m); });
   }
   bool has_data(const LocalFrame& frame, double radius_m) const override {
     return dem_.has_data(frame, radius_m);
@@ -66,6 +93,7 @@ class CloudTerrain final : public Terrain {
 
  private:
   std::string path_;
+  std::string cloud_;
   std::shared_ptr<const CloudGround> ground_;
   DemTerrain dem_;
 };
@@ -85,7 +113,7 @@ std::unique_ptr<Terrain> point_cloud_terrain(const TerrainSettings& terrain,
   dem.dem = path;
   try {
     write_ground_raster(*ground, path, canopy.point_cloud_file);
-    return std::make_unique<CloudTerrain>(dem, path, std::move(ground));
+    return std::make_unique<CloudTerrain>(dem, path, canopy.point_cloud_file, std::move(ground));
   } catch (...) {
     VSIUnlink(path.c_str());
     throw;

@@ -47,6 +47,12 @@ void add_mesh(const aiMesh& mesh, const std::string& material, FacetMesh& out,
                           "finite (model units are metres, the stem's foot at 0, 0, 0)");
     out.vertices_m.insert(out.vertices_m.end(), {p.x, p.y, p.z});
   }
+  // A triangle's material is a 16-bit index: one more would wrap onto the first.
+  constexpr std::size_t kMostMaterials = std::numeric_limits<std::uint16_t>::max();
+  if (out.material_names.size() >= kMostMaterials && !material_numbers.count(material))
+    throw input_error(place, "the mesh names more than " + std::to_string(kMostMaterials) +
+                                 " materials, the most a model may hold (its triangles' "
+                                 "material index has 16 bits)");
   const auto [entry, added] =
       material_numbers.emplace(material, static_cast<std::uint16_t>(out.material_names.size()));
   if (added) out.material_names.push_back(material);
@@ -170,8 +176,15 @@ void check_ply_counts(const std::string& place, const std::string& model) {
       words >> type;
       if (type == "list") words >> type;  // the count's type: the items may be none
       element_bytes.back() += ply_property_bytes(type, ascii);
+    } else if (!keyword.empty() && keyword != "comment" && keyword != "obj_info" &&
+               keyword != "property") {
+      // Assimp's PLY reader ran past 60 s on a header of such lines (found by mesh_fuzzer).
+      throw input_error(place, "the mesh of model \"" + model +
+                                   "\": a line of its PLY header begins with none of PLY's "
+                                   "keywords (format, comment, element, property, end_header)");
     }
   }
+  throw input_error(place, "the mesh of model \"" + model + "\": its PLY header has no end_header");
 }
 
 // glTF's JSON (a .gltf, or a .glb's first chunk) nested deeper than this is refused before
@@ -441,6 +454,41 @@ std::vector<FacetTree> read_csv_trees(const std::filesystem::path& file,
   return trees;
 }
 
+// A number attribute: a number field, or a text field that is a number written whole; refused
+// otherwise, as the CSV reader refuses it (OGR reads "abc" as 0).
+double number_field(const OGRFeature& feature, int index, const char* name,
+                    const std::string& place) {
+  if (!feature.IsFieldSetAndNotNull(index))
+    throw input_error(place, std::string(name) + " is empty");
+  const OGRFieldType type = feature.GetFieldDefnRef(index)->GetType();
+  if (type == OFTReal || type == OFTInteger || type == OFTInteger64)
+    return feature.GetFieldAsDouble(index);
+  const std::string text = feature.GetFieldAsString(index);
+  double value = 0.0;
+  const char* end = text.data() + text.size();
+  const auto [stop, error] = std::from_chars(text.data(), end, value);
+  if (type != OFTString || text.empty() || error != std::errc() || stop != end)
+    throw input_error(place, std::string(name) + " is " + field_excerpt(text) + ", not a number");
+  return value;
+}
+
+// Why a layer lacks one of the trees' attributes: a Shapefile cuts field names to 10 characters
+// (its dBase table's limit), so that it cannot hold rotation_deg at all.
+std::string missing_attribute(const GDALDataset& dataset, const OGRFeatureDefn& definition,
+                              int layer, const std::string& name) {
+  std::string why = "layer " + std::to_string(layer) + " has no attribute " + name +
+                    " (trees need model, rotation_deg and scale)";
+  const GDALDriver* driver = const_cast<GDALDataset&>(dataset).GetDriver();
+  if (driver && std::string(driver->GetDescription()) == "ESRI Shapefile" && name.size() > 10) {
+    const std::string cut = name.substr(0, 10);
+    why += ": a Shapefile cuts field names to 10 characters";
+    if (definition.GetFieldIndex(cut.c_str()) >= 0) why += " (it holds " + cut + ")";
+    why +=
+        ", so it cannot hold " + name + "; write the trees as GeoPackage (.gpkg), GeoJSON or CSV";
+  }
+  return why;
+}
+
 std::vector<FacetTree> read_ogr_trees(const std::filesystem::path& file,
                                       const std::vector<std::string>& models) {
   prepare_gdal();
@@ -466,8 +514,7 @@ std::vector<FacetTree> read_ogr_trees(const std::filesystem::path& file,
     for (int i = 0; i < 3; ++i) {
       fields[i] = definition->GetFieldIndex(names[i]);
       if (fields[i] < 0)
-        throw input_error(path, "layer " + std::to_string(l) + " has no attribute " + names[i] +
-                                    " (trees need model, rotation_deg and scale)");
+        throw input_error(path, missing_attribute(*dataset, *definition, l, names[i]));
     }
     const int height = definition->GetFieldIndex("z_m");  // optional
     layer->ResetReading();
@@ -484,9 +531,10 @@ std::vector<FacetTree> read_ogr_trees(const std::filesystem::path& file,
       tree.lon_deg = point.getX();
       tree.lat_deg = point.getY();
       tree.model = model_number(feature->GetFieldAsString(fields[0]), models, place);
-      tree.rotation_deg = feature->GetFieldAsDouble(fields[1]);
-      tree.scale = feature->GetFieldAsDouble(fields[2]);
-      if (height >= 0) tree.z_m = feature->GetFieldAsDouble(height);
+      tree.rotation_deg = number_field(*feature, fields[1], "rotation_deg", place);
+      tree.scale = number_field(*feature, fields[2], "scale", place);
+      if (height >= 0 && feature->IsFieldSetAndNotNull(height))
+        tree.z_m = number_field(*feature, height, "z_m", place);
       check_tree(tree, place);
       trees.push_back(tree);
     }

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <system_error>
@@ -116,6 +117,46 @@ std::string wkt_of(const std::string& definition) {
   }
   OSRDestroySpatialReference(srs);
   return wkt;
+}
+
+// Why a CRS cannot place a cloud's voxels, which are cubes in the cloud's own x, y and z: a
+// geographic one (x, y in degrees) or a linear unit other than the metre (US survey feet read as
+// metres); empty when it can.
+std::string short_number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.10g", x);
+  return text;
+}
+
+std::string unusable_crs(const std::string& wkt) {
+  OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+  std::string why;
+  {
+    const GdalErrorTrap trap;
+    if (OSRSetFromUserInput(srs, wkt.c_str()) == OGRERR_NONE) {
+      char* name = nullptr;
+      if (OSRIsGeographic(srs) || OSRIsGeocentric(srs)) {
+        why =
+            "is geographic (x and y in degrees), and voxels are cubes in metres: reproject "
+            "the cloud to a projected CRS in metres first (`pdal translate` with "
+            "filters.reprojection, or las2las -target_epsg)";
+      } else if (const double metres = OSRGetLinearUnits(srs, &name); metres != 1.0) {
+        why = "measures x and y in " + std::string(name ? name : "an unnamed unit") + " (" +
+              short_number(metres) +
+              " m), and voxels and heights are in metres: reproject the cloud to a CRS in "
+              "metres first";
+      } else if (OSRIsVertical(srs) || OSRIsCompound(srs)) {
+        const double z_metres = OSRGetTargetLinearUnits(srs, "VERT_CS", &name);
+        if (z_metres != 1.0)
+          why = "measures heights in " + std::string(name ? name : "an unnamed unit") + " (" +
+                short_number(z_metres) +
+                " m), and voxels are in metres: convert the cloud's "
+                "heights to metres first";
+      }
+    }
+  }
+  OSRDestroySpatialReference(srs);
+  return why;
 }
 
 }  // namespace
@@ -351,6 +392,13 @@ void LasFile::read_points(std::uint64_t first, std::uint64_t count,
         point.scan_angle_deg = static_cast<std::int8_t>(p[16]);
         if (has_time) point.gps_time = f64(p + 20);
       }
+      // The specification's angles lie within 90 degrees of nadir; beyond, the gap fraction's
+      // cosine weights turn negative and every voxel's density 0.
+      if (!(std::abs(point.scan_angle_deg) <= 90.0))
+        throw input_error(path_.string(),
+                          "point " + std::to_string(first + done + i) + " has a scan angle of " +
+                              short_number(point.scan_angle_deg) +
+                              " degrees, beyond the LAS specification's -90 to 90 (from nadir)");
       points.push_back(point);
     }
     done += n;
@@ -360,7 +408,11 @@ void LasFile::read_points(std::uint64_t first, std::uint64_t count,
 std::string las_crs(const LasFile& file, const std::string& fallback,
                     const std::string& fallback_place) {
   std::string wkt = file.crs_wkt();
-  if (!wkt.empty()) return wkt;
+  if (!wkt.empty()) {
+    if (const std::string why = unusable_crs(wkt); !why.empty())
+      throw input_error(file.path().string(), "the point cloud's CRS " + why);
+    return wkt;
+  }
   if (fallback.empty())
     throw input_error(file.path().string(),
                       "the point cloud has no CRS (no WKT or GeoTIFF-keys record) and none is "
@@ -369,6 +421,8 @@ std::string las_crs(const LasFile& file, const std::string& fallback,
   if (wkt.empty())
     throw config_error(fallback_place,
                        "\"" + fallback.substr(0, 60) + "\" is not a CRS GDAL reads");
+  if (const std::string why = unusable_crs(wkt); !why.empty())
+    throw config_error(fallback_place, "\"" + fallback.substr(0, 60) + "\" " + why);
   return wkt;
 }
 

@@ -5,18 +5,22 @@
 #include <cpl_error.h>
 #include <gdal.h>
 #include <netcdf.h>
+#include <ogr_spatialref.h>
 #include <ogr_srs_api.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <optional>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/gdal_layer.hpp"
+#include "core/length_units.hpp"
 #include "core/netcdf_lock.hpp"
 #include "terrain/gdal_source.hpp"
 
@@ -64,6 +68,11 @@ void check_layers(const std::vector<double>& edges, const std::string& place) {
     if (!(edges[k + 1] > edges[k]))
       throw input_error(place,
                         "the layers' heights do not increase (layer " + std::to_string(k) + ")");
+  // Heights are above the ground under each column: a layer below it holds plants in the soil.
+  if (edges.front() < -1e-6)
+    throw input_error(place, "layer 0's bottom is " + std::to_string(edges.front()) +
+                                 " m, under the ground (heights are above the ground under "
+                                 "each column, from 0)");
 }
 
 // The first bad value among [from, to): an input error naming its voxel.
@@ -138,6 +147,29 @@ std::string text_attribute(int ncid, int varid, const char* name) {
   return text;
 }
 
+// The metres in a unit of a coordinate variable's `units` (absent: metres); an input error
+// naming the variable and the unit when it is no length known here.
+double length_unit(int ncid, int var, const std::string& name, const std::string& place) {
+  const std::string units = text_attribute(ncid, var, "units");
+  const std::optional<double> metres = metres_per_unit(units);
+  if (!metres)
+    throw input_error(place, "the units of " + name + " are \"" + units.substr(0, 40) +
+                                 "\", not a length glaswave knows (m, dm, cm, mm, km, ft, US "
+                                 "survey ft)");
+  return *metres;
+}
+
+// m^-1 in a unit of plant area density `units` (absent: m2 m-3); an input error naming `what`
+// otherwise (cm2 cm-3 is 100 m2 m-3).
+double density_unit(const std::string& units, const std::string& what, const std::string& place) {
+  const std::optional<double> per_metre = per_metre_per_density_unit(units);
+  if (!per_metre)
+    throw input_error(place, what + "'s units are \"" + units.substr(0, 40) +
+                                 "\", not a plant area density glaswave knows (an area per "
+                                 "volume of m, cm, mm, km or ft: m2 m-3, cm2 cm-3, m-1)");
+  return *per_metre;
+}
+
 // The axis ('X', 'Y', 'Z') a coordinate variable says it is, by CF's `axis`, its standard_name,
 // `positive` or its name; 0 when it says none.
 char coordinate_axis(int ncid, int var, const std::string& name) {
@@ -210,6 +242,16 @@ double height_metadata(const char* text, int band, const char* key, const std::s
 }  // namespace
 
 struct VoxelGridFile::Impl {
+  // Closed here, so that a grid refused while it is opened (the constructor throwing, the
+  // VoxelGridFile never made) leaves no file open: NetCDF kept it, and HDF5 refused to write it
+  // again.
+  ~Impl() {
+    if (ncid >= 0) {
+      std::lock_guard lock(netcdf_library_mutex());
+      nc_close(ncid);
+    }
+    if (dataset) GDALClose(dataset);
+  }
   std::string place;
   VoxelBlock shape;
   bool netcdf = false;
@@ -226,6 +268,7 @@ struct VoxelGridFile::Impl {
 
   void open_netcdf(const std::filesystem::path& file);
   void open_gdal(const std::filesystem::path& file);
+  void convert_xy_to_crs_units(const std::array<double, 2>& xy_metres);
 };
 
 void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
@@ -283,6 +326,23 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
         }
         if (first != sizes[0] || second != 2 || nc_get_var_double(ncid, bvar, b.data()) != NC_NOERR)
           throw input_error(place, "the z bounds are not (z, 2)");
+        // The bounds' own units, else z's (CF lets bounds leave them out).
+        const double metres = text_attribute(ncid, bvar, "units").empty()
+                                  ? length_unit(ncid, var, name, place)
+                                  : length_unit(ncid, bvar, bounds, place);
+        for (double& v : b) v *= metres;
+        const double z_metres = length_unit(ncid, var, name, place);
+        // Each centre within its layer (CF's rule): centres repeated or out of order, with
+        // bounds that increase, say the grid is not what its bounds say.
+        for (std::size_t k = 0; k < sizes[0]; ++k) {
+          const double centre = coords[0][k] * z_metres;
+          if (!(centre >= std::min(b[2 * k], b[2 * k + 1]) - 1e-6 &&
+                centre <= std::max(b[2 * k], b[2 * k + 1]) + 1e-6))
+            throw input_error(place, "z centre " + std::to_string(k) + " (" +
+                                         std::to_string(centre) + " m) lies outside its bounds [" +
+                                         std::to_string(b[2 * k]) + ", " +
+                                         std::to_string(b[2 * k + 1]) + "] m");
+        }
         edges.assign(1, b[0]);
         for (std::size_t k = 0; k < sizes[0]; ++k) {
           if (std::abs(b[2 * k] - edges.back()) > 1e-6)
@@ -291,7 +351,9 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
           edges.push_back(b[2 * k + 1]);
         }
       } else {
-        const auto& c = coords[0];
+        std::vector<double> c = coords[0];
+        const double z_metres = length_unit(ncid, var, name, place);
+        for (double& v : c) v *= z_metres;
         if (c.size() < 2)
           throw input_error(place, "one layer and no z bounds: its thickness is unknown");
         edges.push_back(c[0] - (c[1] - c[0]) / 2);
@@ -304,6 +366,20 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
   shape.nz = static_cast<int>(sizes[0]);
   shape.ny = static_cast<int>(sizes[1]);
   shape.nx = static_cast<int>(sizes[2]);
+  std::array<double, 2> xy_metres = {0.0, 0.0};  // y's and x's metres a unit; 0: the CRS's
+  // x and y in the CRS's units: a length unit of their own (x in km over a CRS in metres) is
+  // converted to the CRS's (read below), degrees left as they are.
+  for (int d = 1; d < 3; ++d) {
+    int var = -1;
+    char name[NC_MAX_NAME + 1] = {};
+    nc_inq_dimname(ncid, dims[d], name);
+    nc_inq_varid(ncid, name, &var);
+    std::string units = text_attribute(ncid, var, "units");
+    std::transform(units.begin(), units.end(), units.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (units.empty() || units.rfind("degree", 0) == 0) continue;  // the CRS's own
+    xy_metres[d - 1] = length_unit(ncid, var, name, place);
+  }
   shape.dy = regular_step(coords[1], place, "y");
   shape.dx = regular_step(coords[2], place, "x");
   if (shape.dx < 0.0) throw input_error(place, "x must increase");
@@ -355,6 +431,44 @@ void VoxelGridFile::Impl::open_netcdf(const std::filesystem::path& file) {
   }
   if (shape.crs_wkt.empty())
     throw input_error(place, "no CRS (a grid_mapping variable with crs_wkt or spatial_ref)");
+  convert_xy_to_crs_units(xy_metres);
+  // pad's units: an area per volume, as m2 m-3 (cm2 cm-3 is 100 of them).
+  const double per_metre = density_unit(text_attribute(ncid, pad_var, "units"), "`pad`", place);
+  if (per_metre != 1.0) {
+    if (scale.empty()) {
+      scale.assign(sizes[0], 1.0);
+      offset.assign(sizes[0], 0.0);
+    }
+    for (double& f : scale) f *= per_metre;
+    for (double& a : offset) a *= per_metre;
+  }
+}
+
+// x and y from the units their variables give (metres each: xy_metres) to the CRS's own: the
+// grid's corner and steps scaled; an input error when the CRS measures no length (geographic).
+void VoxelGridFile::Impl::convert_xy_to_crs_units(const std::array<double, 2>& xy_metres) {
+  if (xy_metres[0] == 0.0 && xy_metres[1] == 0.0) return;  // no length units given
+  OGRSpatialReference crs;
+  double crs_metres = 0.0;
+  {
+    const GdalErrorTrap trap;
+    if (crs.SetFromUserInput(shape.crs_wkt.c_str(),
+                             OGRSpatialReference::SET_FROM_USER_INPUT_LIMITATIONS_get()) !=
+        OGRERR_NONE)
+      return;  // said when placed
+    if (crs.IsGeographic())
+      throw input_error(place,
+                        "x and y are in units of length, and the CRS is geographic "
+                        "(degrees)");
+    crs_metres = crs.GetLinearUnits();
+  }
+  if (!(crs_metres > 0.0)) return;
+  const double fy = xy_metres[0] > 0.0 ? xy_metres[0] / crs_metres : 1.0;
+  const double fx = xy_metres[1] > 0.0 ? xy_metres[1] / crs_metres : 1.0;
+  shape.x0 *= fx;
+  shape.dx *= fx;
+  shape.y0 *= fy;
+  shape.dy *= fy;
 }
 
 void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
@@ -408,9 +522,16 @@ void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
     const double nodata = GDALGetRasterNoDataValue(GDALGetRasterBand(dataset, b), &has_nodata);
     if (has_nodata) fill = nodata;
     int has_scale = 0, has_offset = 0;
-    const double band_scale = GDALGetRasterScale(GDALGetRasterBand(dataset, b), &has_scale);
-    const double band_offset = GDALGetRasterOffset(GDALGetRasterBand(dataset, b), &has_offset);
-    if ((has_scale && band_scale != 1.0) || (has_offset && band_offset != 0.0)) {
+    double band_scale = GDALGetRasterScale(GDALGetRasterBand(dataset, b), &has_scale);
+    double band_offset = GDALGetRasterOffset(GDALGetRasterBand(dataset, b), &has_offset);
+    if (!has_scale) band_scale = 1.0;
+    if (!has_offset) band_offset = 0.0;
+    // The band's unit: an area per volume, as m2 m-3 (cm2 cm-3 is 100 of them).
+    const double per_metre = density_unit(GDALGetRasterUnitType(GDALGetRasterBand(dataset, b)),
+                                          "band " + std::to_string(b), place);
+    band_scale *= per_metre;
+    band_offset *= per_metre;
+    if (band_scale != 1.0 || band_offset != 0.0) {
       if (!(std::isfinite(band_scale) && std::isfinite(band_offset)))
         throw input_error(place, "band " + std::to_string(b) + "'s scale or offset is not finite");
       scale.resize(bands, 1.0);
@@ -449,13 +570,7 @@ VoxelGridFile::VoxelGridFile(VoxelBlock grid) : impl_(std::make_unique<Impl>()) 
   impl_->shape = std::move(grid);
 }
 
-VoxelGridFile::~VoxelGridFile() {
-  if (impl_->ncid >= 0) {
-    std::lock_guard lock(netcdf_library_mutex());
-    nc_close(impl_->ncid);
-  }
-  if (impl_->dataset) GDALClose(impl_->dataset);
-}
+VoxelGridFile::~VoxelGridFile() = default;
 
 const VoxelBlock& VoxelGridFile::shape() const { return impl_->shape; }
 

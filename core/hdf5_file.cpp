@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/hdf5_root_check.hpp"
 
 namespace glaswave {
 namespace {
@@ -292,6 +293,10 @@ bool Hdf5Reader::is_hdf5(const std::filesystem::path& path) {
 }
 
 Hdf5Reader::Hdf5Reader(const std::filesystem::path& path) : impl_(std::make_unique<Impl>()) {
+  // What HDF5 1.10 crashes on is refused before it reads the file (a library must not fork to
+  // survive it).
+  if (const auto fault = hdf5_root_fault(path))
+    throw input_error(path.string(), "the HDF5 file is corrupt: " + *fault);
   quiet_hdf5_in_this_thread();
   impl_->file = Handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!impl_->file.valid()) throw input_error(path.string(), "cannot open the HDF5 file");

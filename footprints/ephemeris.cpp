@@ -1,6 +1,7 @@
 // Reading ephemeris CSV files; every error names the file and line.
 #include "footprints/ephemeris.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -108,10 +109,14 @@ EphemerisRow read_row(const CsvReader& csv, const std::vector<std::string_view>&
   }
   if (columns.has_pointing) {
     const Vec3 pointing{value(px_column), value(py_column), value(pz_column)};
-    const double length = norm(pointing);
-    if (!(length > 0.0) || !std::isfinite(length))
-      throw input_error(place, "the pointing vector is zero");
-    row.pointing_ecef = (1.0 / length) * pointing;
+    // Any length: scaled by its largest component first, so that a vector of 1e300 (whose
+    // squares overflow) points as one of 1 does.
+    const double largest =
+        std::max({std::abs(pointing[0]), std::abs(pointing[1]), std::abs(pointing[2])});
+    if (!std::isfinite(largest)) throw input_error(place, "the pointing vector is not finite");
+    if (!(largest > 0.0)) throw input_error(place, "the pointing vector is zero");
+    const Vec3 scaled = (1.0 / largest) * pointing;
+    row.pointing_ecef = (1.0 / norm(scaled)) * scaled;
   }
   return row;
 }

@@ -192,11 +192,16 @@ void read_glah14(const Hdf5Reader& h5, const std::string& path, std::vector<Gran
   }
 }
 
-// The root's groups named BEAM..., in name order.
+// GEDI's eight beams (the L2A dictionary's BEAM0000 to BEAM1011), in name order: a root group
+// of any other name (BEAM2222) is no beam. Asked by name: listing the root (H5Literate) is what
+// Debian 12's HDF5 1.10.8 crashes in on a corrupted local heap.
+constexpr const char* kGediBeams[] = {"BEAM0000", "BEAM0001", "BEAM0010", "BEAM0011",
+                                      "BEAM0101", "BEAM0110", "BEAM1000", "BEAM1011"};
+
 std::vector<std::string> gedi_beams(const Hdf5Reader& h5) {
   std::vector<std::string> names;
-  for (std::string& name : h5.children("/"))
-    if (name.rfind("BEAM", 0) == 0) names.push_back(std::move(name));
+  for (const char* name : kGediBeams)
+    if (h5.has(name)) names.push_back(name);
   return names;
 }
 
@@ -224,9 +229,12 @@ std::vector<GranuleShot> read_in_process(const std::filesystem::path& file,
   if (!all_beams.empty()) {
     for (const std::string& beam : beams)
       if (std::find(all_beams.begin(), all_beams.end(), beam) == all_beams.end())
-        throw input_error(path + ": " + beam, "no such beam in the GEDI granule (it has " +
-                                                  std::to_string(all_beams.size()) +
-                                                  " BEAM groups, from " + all_beams.front() + ")");
+        throw input_error(path + ": " + beam,
+                          "no such beam in the GEDI granule (it has " +
+                              std::to_string(all_beams.size()) + " of GEDI's 8, from " +
+                              all_beams.front() +
+                              "; the 8 are BEAM0000, BEAM0001, BEAM0010, BEAM0011, BEAM0101, "
+                              "BEAM0110, BEAM1000 and BEAM1011)");
     for (const std::string& beam : beams.empty() ? all_beams : beams) {
       read_gedi_beam(h5, beam, path, shots, skipped);
       if (shots.size() > static_cast<std::size_t>(kMostGranuleShots))
@@ -241,7 +249,8 @@ std::vector<GranuleShot> read_in_process(const std::filesystem::path& file,
     read_glah14(h5, path, shots, skipped);
   } else {
     throw input_error(path,
-                      "neither a GEDI L2A granule (no BEAMxxxx group) nor a GLAH14 granule (no "
+                      "neither a GEDI L2A granule (no group named as a GEDI beam, BEAM0000 to "
+                      "BEAM1011) nor a GLAH14 granule (no "
                       "Data_40HZ group)");
   }
   if (shots.empty())

@@ -181,6 +181,13 @@ std::int64_t Track::size() const {
                                             : sequence_length_ * beams_per_shot();
 }
 
+std::int64_t Track::largest_source_shot_number() const {
+  std::int64_t largest = std::max<std::int64_t>(0, sequence_length_ - 1);
+  if (settings_.type == TrackType::granule)
+    for (const GranuleShot& g : granule_) largest = std::max(largest, g.shot_number);
+  return largest;
+}
+
 std::int64_t Track::shot_number(std::int64_t record) const {
   return settings_.type == TrackType::orbit ? kept_shots_.at(static_cast<std::size_t>(record))
                                             : record / beams_per_shot();

@@ -97,6 +97,10 @@ class Track {
   // each.
   const std::vector<std::string>& warnings() const { return warnings_; }
 
+  // The largest instrument's shot number of the track (Footprint::source_shot_number): a
+  // granule's, or the sequence's last.
+  std::int64_t largest_source_shot_number() const;
+
   // The beams that fire each shot: 1 but for a pass flown by several.
   std::int64_t beams_per_shot() const {
     return beams_.empty() ? 1 : static_cast<std::int64_t>(beams_.size());

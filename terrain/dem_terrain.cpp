@@ -25,6 +25,7 @@
 
 #include "core/error.hpp"
 #include "core/gdal_layer.hpp"
+#include "core/length_units.hpp"
 #include "core/netcdf_lock.hpp"
 #include "terrain/crs_transform.hpp"
 #include "terrain/gdal_source.hpp"
@@ -45,35 +46,13 @@ std::string format_value(double value) {
 // height_m exactly; a shot's patch is a few hundred nodes of a 1 m DEM.
 constexpr int max_mesh_nodes_per_side = 2048;
 
-// Metres per unit of a band's heights, for the units DEMs are written in (GDAL's unit type is
-// free text: "m", "metre", "cm", "ft", "US survey foot"...); empty for a unit not known here.
-// No unit at all is metres.
-std::optional<double> metres_per_unit(const char* unit) {
-  std::string u;
-  for (const char* c = unit ? unit : ""; *c; ++c)
-    u += static_cast<char>(std::tolower(static_cast<unsigned char>(*c)));
-  u.erase(0, u.find_first_not_of(" \t"));
-  u.erase(u.find_last_not_of(" \t") + 1);
-  const auto any = [&](std::initializer_list<const char*> names) {
-    return std::find(names.begin(), names.end(), u) != names.end();
-  };
-  if (any({"", "m", "metre", "metres", "meter", "meters"})) return 1.0;
-  if (any({"dm", "decimetre", "decimetres", "decimeter", "decimeters"})) return 0.1;
-  if (any({"cm", "centimetre", "centimetres", "centimeter", "centimeters"})) return 0.01;
-  if (any({"mm", "millimetre", "millimetres", "millimeter", "millimeters"})) return 0.001;
-  if (any({"km", "kilometre", "kilometres", "kilometer", "kilometers"})) return 1000.0;
-  if (any({"ft", "foot", "feet", "international foot", "international feet", "ft_i"}))
-    return 0.3048;
-  if (any({"us survey foot", "us survey feet", "ft-us", "us-ft", "ft_us", "us_ft", "foot_us",
-           "survey foot", "us foot"}))
-    return 1200.0 / 3937.0;
-  return std::nullopt;
-}
-
 // Beyond these a DEM's scale (metres per stored unit, after its unit) or offset gives no height on
 // the Earth: refused as such, before PROJ is handed infinities.
 constexpr double max_scale_m = 1e4;
 constexpr double max_offset_m = 1e5;
+constexpr double max_height_m = 1e5;  // a height (after scale and offset) beyond: no terrain
+// Nodes closer than this are a geotransform's fault (a pixel of 1e-300 degrees), no DEM's.
+constexpr double min_spacing_m = 1e-3;
 
 // One tile of the raster's nodes, in WGS84: longitude, latitude (deg) and ellipsoidal height
 // (m; NaN where there is no data).
@@ -299,7 +278,7 @@ void DemTerrain::Impl::read_encoding() {
   // A vertical CRS carries the unit of its heights; without one, the band's unit says.
   if (!dataset->GetSpatialRef()->IsCompound()) {
     const char* unit = band->GetUnitType();
-    const std::optional<double> metres = metres_per_unit(unit);
+    const std::optional<double> metres = metres_per_unit(unit ? unit : "");
     if (!metres)
       throw input_error(path, "the DEM's heights are in \"" + std::string(unit).substr(0, 40) +
                                   "\", a unit glaswave does not know (it converts m, dm, cm, mm, "
@@ -326,8 +305,19 @@ void DemTerrain::Impl::measure_spacing() {
   const Vec3 s = frame.to_local({south.lat_deg, south.lon_deg, 0.0});
   detail_m = std::min(std::hypot(e[0], e[1]), std::hypot(s[0], s[1]));
   cell_m = std::max(std::hypot(e[0], e[1]), std::hypot(s[0], s[1]));
-  if (!std::isfinite(detail_m) || detail_m <= 0.0)
+  const bool placed = std::isfinite(centre.lat_deg) && std::isfinite(centre.lon_deg) &&
+                      std::isfinite(east.lat_deg) && std::isfinite(east.lon_deg) &&
+                      std::isfinite(south.lat_deg) && std::isfinite(south.lon_deg);
+  if (!placed || !std::isfinite(detail_m))
     throw input_error(path, "PROJ cannot place the DEM's nodes on the Earth (is its CRS right?)");
+  // Placed, but (nearly) on one another: the geotransform's pixel size is the fault, not PROJ.
+  if (detail_m < min_spacing_m)
+    throw input_error(path, "the DEM's nodes are " + format_value(detail_m) +
+                                " m apart (its geotransform's pixel is " +
+                                format_value(geotransform[1]) + " by " +
+                                format_value(std::abs(geotransform[5])) +
+                                " in its CRS's units), under the " + format_value(min_spacing_m) +
+                                " m a DEM may have: is its geotransform right?");
 }
 
 TilePtr DemTerrain::Impl::load(int tx, int ty) {
@@ -373,6 +363,15 @@ TilePtr DemTerrain::Impl::load(int tx, int ty) {
       t->lon_deg[k] = g[0] + col * g[1] + row * g[2];
       t->lat_deg[k] = g[3] + col * g[4] + row * g[5];
       t->h_m[k] = ok ? v * scale + offset : 0.0;
+      // Heights of 1e38 m (a fill value not declared as nodata) ended in "the track never meets
+      // the terrain", or in Embree: what no terrain holds is named at its pixel.
+      if (ok && !(std::abs(t->h_m[k]) <= max_height_m))
+        throw input_error(path, "the height at pixel (" + std::to_string(t->col0 + c) + ", " +
+                                    std::to_string(t->row0 + r) + ") is " +
+                                    format_value(t->h_m[k]) + " m, beyond +-" +
+                                    format_value(max_height_m) +
+                                    " m: no height on the Earth (a fill value the DEM does not "
+                                    "declare as nodata? set it with gdal_edit.py -a_nodata)");
     }
   }
   crs->to_wgs84(n, t->lon_deg.data(), t->lat_deg.data(), t->h_m.data());

@@ -9,9 +9,12 @@
 #include <cpl_vsi.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <array>
+#include <filesystem>
 #include <memory>
 #include <string_view>
+#include <vector>
 
 #include "core/input_file.hpp"
 
@@ -38,10 +41,12 @@ std::string local_file_of(const std::string& rest) {
   }
 }
 
-void check(const std::string& path, const std::string& what, ErrorKind kind, int depth);
+// `chain`: the VRTs being read, from the one the user gave to the one naming `path`.
+using VrtChain = std::vector<std::string>;
+void check(const std::string& path, const std::string& what, ErrorKind kind, VrtChain& chain);
 
 // A /vsi path: a stream is refused, a wrapped local file checked.
-void check_vsi(const std::string& path, const std::string& what, ErrorKind kind, int depth) {
+void check_vsi(const std::string& path, const std::string& what, ErrorKind kind, VrtChain& chain) {
   const std::size_t slash = path.find('/', 1);
   const std::string prefix = path.substr(0, slash == std::string::npos ? path.size() : slash + 1);
   if (prefix == "/vsistdin/" || prefix == "/vsistdin" || starts_with(prefix, "/vsistdout") ||
@@ -64,13 +69,14 @@ void check_vsi(const std::string& path, const std::string& what, ErrorKind kind,
     rest = rest.substr(1, close == std::string::npos ? std::string::npos : close - 1);
   }
   if (!rest.empty() && rest.front() != '/') rest = "/" + rest;  // /vsizip/ takes "/" as a root
-  if (starts_with(rest, "/vsi")) return check(rest, what, kind, depth + 1);
+  if (starts_with(rest, "/vsi")) return check(rest, what, kind, chain);
   const std::string file = local_file_of(rest);
   if (!file.empty()) require_input_file(file, what, kind);
 }
 
 // A VRT's source files, checked before GDAL opens the VRT (which may open them at once).
-void check_vrt_sources(const std::string& vrt, const std::string& what, ErrorKind kind, int depth) {
+void check_vrt_sources(const std::string& vrt, const std::string& what, ErrorKind kind,
+                       VrtChain& chain) {
   VSIStatBufL status{};
   if (VSIStatL(vrt.c_str(), &status) != 0 ||
       static_cast<vsi_l_offset>(status.st_size) > kMaxVrtBytes)
@@ -88,6 +94,11 @@ void check_vrt_sources(const std::string& vrt, const std::string& what, ErrorKin
                                                                 CPLDestroyXMLNode);
   if (!root) return;  // GDAL says what is wrong with it
   const std::string folder = CPLGetPath(vrt.c_str());
+  // A source's "what" says once that it is a VRT's source, however deep.
+  constexpr std::string_view kSource = "'s VRT source";
+  const std::string source_what =
+      std::string_view(what).ends_with(kSource) ? what : what + std::string(kSource);
+  chain.push_back(std::filesystem::path(vrt).lexically_normal().string());
   // Every element that names a source file, wherever it is (sources, overviews, masks).
   const auto visit = [&](const auto& self, const CPLXMLNode* node) -> void {
     for (; node; node = node->psNext) {
@@ -100,22 +111,34 @@ void check_vrt_sources(const std::string& vrt, const std::string& what, ErrorKin
         if (starts_with(source, "vrt://")) source = source.substr(6, source.find('?') - 6);
         if (relative && !source.empty() && source.front() != '/')
           source = CPLFormFilename(folder.c_str(), source.c_str(), nullptr);
-        if (!source.empty()) check(source, what + "'s VRT source", kind, depth + 1);
+        if (!source.empty()) check(source, source_what, kind, chain);
       }
       self(self, node->psChild);
     }
   };
   visit(visit, root.get());
+  chain.pop_back();
 }
 
-void check(const std::string& path, const std::string& what, ErrorKind kind, int depth) {
-  if (depth > kMaxDepth)
-    throw Error(kind, printable_path(path),
+void check(const std::string& path, const std::string& what, ErrorKind kind, VrtChain& chain) {
+  // Named at the file the user gave, with the VRTs that lead there.
+  const auto through = [&](const std::string& last) {
+    std::string text;
+    for (const std::string& vrt : chain)
+      text += std::filesystem::path(vrt).filename().string() + " -> ";
+    return text + std::filesystem::path(last).filename().string();
+  };
+  const std::string normal = std::filesystem::path(path).lexically_normal().string();
+  if (std::find(chain.begin(), chain.end(), normal) != chain.end())
+    throw Error(kind, printable_path(chain.front()),
+                "cannot read " + what + ": its VRTs source each other (" + through(path) + ")");
+  if (static_cast<int>(chain.size()) > kMaxDepth)
+    throw Error(kind, printable_path(chain.front()),
                 "cannot read " + what + ": VRTs nested deeper than " + std::to_string(kMaxDepth) +
-                    " (does one name itself?)");
+                    " (" + through(path) + ")");
   require_no_nul(path, printable_path(path), kind);
   if (starts_with(path, "/vsi")) {
-    check_vsi(path, what, kind, depth);
+    check_vsi(path, what, kind, chain);
   } else {
     // "NETCDF:file.nc:var" and the like: the file is the part after the driver's name.
     std::string file = path;
@@ -130,13 +153,14 @@ void check(const std::string& path, const std::string& what, ErrorKind kind, int
     }
     require_input_file(file, what, kind);
   }
-  check_vrt_sources(path, what, kind, depth);
+  check_vrt_sources(path, what, kind, chain);
 }
 
 }  // namespace
 
 void require_gdal_source(const std::string& path, const std::string& what, ErrorKind kind) {
-  check(path, what, kind, 0);
+  VrtChain chain;
+  check(path, what, kind, chain);
 }
 
 }  // namespace glaswave

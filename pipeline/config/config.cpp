@@ -140,6 +140,11 @@ void read_bands(JsonReader& r, SensorSettings& s, bool atmosphere, bool bands_gi
 
 // The beams of the photon-counting receiver: ATLAS's, one a run for now.
 void check_beams(JsonReader& r, SensorSettings& s) {
+  // Given empty, it asks for no beam: gt2l in its place would run without a word.
+  if (s.beams.empty() && r.has("beams"))
+    r.fail("beams",
+           "names no beam: name one or more of gt1l gt1r gt2l gt2r gt3l gt3r, or leave it out "
+           "for gt2l");
   if (s.beams.empty()) s.beams = SensorSettings{}.beams;
   r.resolved()["beams"] = s.beams;
   if (s.receiver != "photon_counting") return;
@@ -846,6 +851,13 @@ Config parse_config(const json& document) {
   c.canopy = read_canopy(root, c.sensor.bands);
   c.track = read_track(root, c.sensor);
   c.output = read_output(root, c.warnings);
+  // The ICESat-2 granules are the photon-counting receiver's: asked of the waveform's, nothing.
+  if (c.sensor.receiver != "photon_counting")
+    for (const auto& [key, asked] : {std::pair{"atl03", c.output.atl03}, {"atl08", c.output.atl08}})
+      if (asked.value_or(false))
+        c.warnings.push_back("/output/" + std::string(key) + ": the " + c.sensor.receiver +
+                             " receiver writes no ICESat-2 granule; it is written with "
+                             "sensor.receiver \"photon_counting\"");
   c.detector = read_detector(root);
   c.brf = read_brf(root);
   c.table = read_table(root);

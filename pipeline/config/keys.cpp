@@ -601,7 +601,7 @@ Key terrain_keys() {
                               "deg", "latitude of the origin"),
                      p.number("origin_lon_deg", &PlaneSettings::origin_lon_deg, closed(-180, 360),
                               "deg", "longitude of the origin"),
-                     p.number("elevation_m", &PlaneSettings::elevation_m, any_finite(), "m",
+                     p.number("elevation_m", &PlaneSettings::elevation_m, closed(-1e5, 1e5), "m",
                               "height of the origin above WGS84"),
                      p.number("slope_deg", &PlaneSettings::slope_deg, closed(0, 89), "deg",
                               "slope of the plane"),
@@ -858,9 +858,10 @@ Key track_keys() {
               "it the beam points by `off_nadir_deg` and `pointing_azimuth_deg`. Lines starting "
               "with `#` are skipped; errors name `file:line`"),
        t.path("file", &S::granule,
-              "`granule`: a GEDI L2A granule (groups `BEAMxxxx` with `shot_number`, "
-              "`lat_lowestmode`, `lon_lowestmode`, `delta_time`) or a GLAS GLAH14 granule "
-              "(`Data_40HZ` with `Geolocation/d_lat`, `d_lon`, `Time/d_UTCTime_40`, `i_rec_ndx`), "
+              "`granule`: a GEDI L2A granule (groups `BEAM0000` to `BEAM1011`, GEDI's eight "
+              "beams, with `shot_number`, `lat_lowestmode`, `lon_lowestmode`, `delta_time`) or a "
+              "GLAS GLAH14 granule (`Data_40HZ` with `Geolocation/d_lat`, `d_lon`, "
+              "`Time/d_UTCTime_40`, `i_rec_ndx`, `i_shot_count`: all required), "
               "HDF5: one shot per footprint, aimed at its latitude and longitude from `altitude_m` "
               "as a point is, at its time, its `shot_number` the granule's (GLAH14: `i_rec_ndx` * "
               "40 + the shot in its record); footprints whose position is a fill value are "

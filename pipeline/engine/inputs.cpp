@@ -148,9 +148,34 @@ RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int6
   return info;
 }
 
+namespace {
+
+// GLAH01's and GLAH14's i_rec_ndx is a 4-byte integer (the GLAH dictionary's): a shot number
+// past 40 x (2^31 - 1) + 39 has no record index the granule can hold.
+void check_glas_record_index(const Config& config, const Track& track) {
+  const OutputSettings& o = config.output;
+  if (!o.glah01 && !o.glah14) return;
+  constexpr std::int64_t most = std::int64_t{std::numeric_limits<std::int32_t>::max()} * 40 + 39;
+  const std::int64_t largest = track.largest_source_shot_number();
+  if (largest <= most) return;
+  throw config_error(o.glah14 ? "/output/glah14" : "/output/glah01",
+                     "the track's shot numbers reach " + std::to_string(largest) +
+                         " (a GEDI granule's), and a GLAS granule numbers a shot by its 1 s "
+                         "record, i_rec_ndx, a 4-byte integer up to 2147483647 (shot numbers to " +
+                         std::to_string(most) +
+                         "): every shot would have the same record; write GEDI products "
+                         "(output.gedi_l1b, gedi_l2a) for this track");
+}
+
+}  // namespace
+
 std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain) {
-  if (!at_section("/sensor", [&] { return receiver_traits(config.sensor.receiver); }).atlas_beams)
-    return at_section("/track", [&] { return std::make_unique<Track>(config.track, terrain); });
+  if (!at_section("/sensor", [&] { return receiver_traits(config.sensor.receiver); }).atlas_beams) {
+    auto track =
+        at_section("/track", [&] { return std::make_unique<Track>(config.track, terrain); });
+    check_glas_record_index(config, *track);
+    return track;
+  }
   // A photon-counting pass: each beam flies its own ground track about the reference one, its
   // footprints carrying its spot number, the receiver's key for it.
   const std::vector<AtlasBeam> beams =
@@ -218,11 +243,26 @@ std::optional<std::string> crowns_off_track(const Config& config,
   if (!(nearest_m > margin_m)) return std::nullopt;
   char distance[32];
   std::snprintf(distance, sizeof distance, "%.3g km", nearest_m / 1000.0);
+  const std::string within = " within " + std::to_string(static_cast<int>(margin_m)) +
+                             " m of any of the " + std::to_string(shots.size()) +
+                             " footprints (the nearest is " + distance + " away); ";
+  // Each source's key and words: the warning names the file the user gave.
+  const CanopySettings& c = *config.canopy;
+  if (!c.facet_trees_file.empty())
+    return "/canopy/facets/trees_file: none of the " + std::to_string(trees.size()) + " trees of " +
+           c.facet_trees_file + " lies" + within +
+           "check its coordinates (lon,lat in degrees, x,y in metres from terrain.plane's origin, "
+           "or its layer's CRS)";
+  if (!c.voxels_file.empty() || !c.point_cloud_file.empty()) {
+    const bool grid = !c.voxels_file.empty();
+    return std::string(grid ? "/canopy/voxels/file: the grid of " : "/canopy/point_cloud/file: ") +
+           (grid ? c.voxels_file : "the cloud " + c.point_cloud_file) + " lies nowhere" + within +
+           "the shots see bare ground; check its CRS and where the track runs";
+  }
   return "/canopy/crowns_file: none of the " + std::to_string(trees.size()) + " crowns of " +
-         config.canopy->crowns_file + " lies within " + std::to_string(static_cast<int>(margin_m)) +
-         " m of any of the " + std::to_string(shots.size()) + " footprints (the nearest is " +
-         distance + " away); check its coordinates (lon,lat in degrees, or x,y in metres from " +
-         "terrain.plane's origin)";
+         c.crowns_file + " lies" + within +
+         "check its coordinates (lon,lat in degrees, or x,y in metres from terrain.plane's "
+         "origin)";
 }
 
 }  // namespace glaswave

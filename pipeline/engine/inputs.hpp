@@ -42,6 +42,10 @@ std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
 // What the products need to know besides the shots.
 RunInfo run_info(const Config& config, const ShotSimulator& simulator, std::int64_t shots,
                  const std::string& command_line);
+// The planned track, and what its shot numbers allow: GLAS granules (output.glah01, glah14)
+// number a shot by a 4-byte record index, i_rec_ndx (the GLAH dictionary's type), so a track
+// whose shot numbers pass 40 x (2^31 - 1) (a GEDI granule's) is refused at the key (a config
+// error), where each shot became the same record.
 std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain);
 
 // A warning, at the stands' JSON path, when the configuration has stands and no shot falls
@@ -51,11 +55,12 @@ std::unique_ptr<Track> plan_track(const Config& config, const Terrain& terrain);
 std::optional<std::string> stands_off_track(const Config& config,
                                             const std::vector<std::array<double, 2>>& shots);
 
-// A warning, at the crowns file's JSON path, when the vegetation has plants a file placed (a
-// crowns file's crowns) and no footprint centre (lat, lon) lies within 100 m of their bounding box
-// widened by the largest crown: crowns placed far away (x,y from another origin, latitude and
-// longitude swapped) would otherwise leave every shot over bare ground without a word. Empty
-// otherwise, and when no footprint is on the terrain.
+// A warning, at the source's file's JSON path, when the vegetation has plants a file placed (a
+// crowns file's crowns, facet trees, a voxel grid's or point cloud's corners) and no footprint
+// centre (lat, lon) lies within 100 m of their bounding box widened by the largest crown: crowns
+// placed far away (x,y from another origin, latitude and longitude swapped) would otherwise leave
+// every shot over bare ground without a word. Empty otherwise, and when no footprint is on the
+// terrain.
 std::optional<std::string> crowns_off_track(const Config& config,
                                             const VegetationSource* vegetation,
                                             const std::vector<std::array<double, 2>>& shots);

@@ -1,4 +1,5 @@
-// The run journal on disk: a 16-byte header (magic, identity hash), then frames: a marker, the
+// The run journal on disk: a header (magic, identity hash, the input files' stamps: their bytes'
+// length, then encode_stamps' words), then frames: a marker, the
 // index in the run of the frame's first record, the record count, the ray queries, the payload's
 // size and its size uncompressed, the payload (records as record_codec writes them, compressed with
 // LZ4) and an FNV-1a checksum of all that. Written with POSIX calls so that every write and flush
@@ -26,7 +27,7 @@
 namespace glaswave {
 namespace {
 
-constexpr std::uint64_t kMagic = 0x34304c4e524a5747;  // "GWJRNL04"
+constexpr std::uint64_t kMagic = 0x35304c4e524a5747;  // "GWJRNL05"
 constexpr std::uint64_t kFrameMarker = 0x454d415246574721;
 // A run's longest wait between flushes of the journal to the disk.
 constexpr double kSyncInterval_s = 1.0;
@@ -65,13 +66,18 @@ RunJournal::RunJournal(std::filesystem::path path, int fd) : path_(std::move(pat
   last_sync_s_ = now_s();
 }
 
-RunJournal::RunJournal(std::filesystem::path path, const std::string& identity)
+RunJournal::RunJournal(std::filesystem::path path, const std::string& identity,
+                       const std::vector<InputStamp>& inputs)
     : path_(std::move(path)) {
   fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0) throw run_error(path_.string(), std::string("cannot create: ") + strerror(errno));
   std::string header;
   put_word(kMagic, header);
   put_word(fnv1a(identity.data(), identity.size()), header);
+  std::string stamps;
+  encode_stamps(inputs, stamps);
+  put_word(stamps.size(), header);
+  header += stamps;
   write_all(header.data(), header.size());
   sync();
   sync_directory(path_);
@@ -155,11 +161,12 @@ void RunJournal::remove() {
 
 namespace {
 
-// The journal's header, checked against this version and this run's identity: false when it is
-// not whole (killed before it was).
-bool read_header(std::ifstream& in, const std::filesystem::path& path,
-                 const std::string& identity) {
-  std::array<std::uint64_t, 2> header{};
+// The journal's header, checked against this version, this run's identity and its input files
+// now: false when it is not whole (killed before it was). `header_bytes` receives its length.
+bool read_header(std::ifstream& in, const std::filesystem::path& path, std::uint64_t file_bytes,
+                 const std::string& identity, const std::vector<InputStamp>& inputs,
+                 std::uint64_t& header_bytes) {
+  std::array<std::uint64_t, 3> header{};
   if (!in.read(reinterpret_cast<char*>(header.data()), sizeof header)) return false;
   // "GWJRNL" and two digits: the digits say the format.
   constexpr std::uint64_t kMagicName = 0xffffffffffff;
@@ -174,6 +181,14 @@ bool read_header(std::ifstream& in, const std::filesystem::path& path,
                        "the interrupted run there was made with another configuration, --set, "
                        "--seed or --shots (or another glaswave version): --resume must repeat "
                        "its command; or remove the directory");
+  // The stamps' length is checked against the file before it is allocated.
+  if (header[2] > file_bytes - sizeof header) return false;
+  std::string bytes(header[2], '\0');
+  if (!in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()))) return false;
+  std::vector<InputStamp> journalled;
+  if (!decode_stamps(bytes, journalled)) return false;
+  require_unchanged_inputs(journalled, inputs);
+  header_bytes = sizeof header + header[2];
   return true;
 }
 
@@ -205,7 +220,8 @@ bool read_frame(std::ifstream& in, std::uint64_t file_bytes, std::array<std::uin
 
 std::unique_ptr<RunJournal> RunJournal::resume(
     const std::filesystem::path& path, const std::string& identity,
-    const std::function<void(const ShotRecord&)>& consume, std::int64_t& ray_queries) {
+    const std::function<void(const ShotRecord&)>& consume, std::int64_t& ray_queries,
+    const std::vector<InputStamp>& inputs) {
   ray_queries = 0;
   // A journal replaced by a FIFO would be waited on for ever.
   require_input_file(path.native(), "the run journal", ErrorKind::config);
@@ -214,8 +230,10 @@ std::unique_ptr<RunJournal> RunJournal::resume(
   if (size_error) throw run_error(path.string(), "cannot read its size: " + size_error.message());
   std::ifstream in(path, std::ios::binary);
   // A journal killed before its header was whole holds no shot: begin it again.
-  if (!read_header(in, path, identity)) return std::make_unique<RunJournal>(path, identity);
-  std::uint64_t valid_end = 2 * sizeof(std::uint64_t);
+  std::uint64_t valid_end = 0;
+  if (file_bytes < 3 * sizeof(std::uint64_t) ||
+      !read_header(in, path, file_bytes, identity, inputs, valid_end))
+    return std::make_unique<RunJournal>(path, identity, inputs);
   std::uint64_t records = 0;  // handed on so far: the index the next frame must begin at
   std::string frame, raw;
   for (std::uint64_t number = 0;; ++number) {

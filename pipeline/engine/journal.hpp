@@ -1,7 +1,8 @@
 // The run journal: the records of the shots a run has finished, kept beside the products'
 // .part files so that a run killed at any moment (SIGKILL, a machine lost) can be finished
 // with --resume and still write products identical to an uninterrupted run. It is a header
-// (the run's identity: a hash of the configuration and the shots) and frames of records, one
+// (the run's identity: a hash of the configuration and the shots; its input files' stamps) and
+// frames of records, one
 // per batch, each with its checksum and the index of its first record; a frame torn by the kill
 // is dropped on resume, and a whole frame out of its place (repeated, missing, swapped) refuses
 // the journal. Frames are
@@ -15,7 +16,9 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
+#include "pipeline/engine/input_stamps.hpp"
 #include "pipeline/products/shot_record.hpp"
 
 namespace glaswave {
@@ -28,20 +31,24 @@ class RunJournal {
   // LZ4 (2 GB at most at once) takes any batch.
   static constexpr std::size_t kFrameBytes = std::size_t{8} << 20;
 
-  // Creates `path` for a run of identity `identity` (any text; only its hash is kept).
-  RunJournal(std::filesystem::path path, const std::string& identity);
+  // Creates `path` for a run of identity `identity` (any text; only its hash is kept) reading
+  // the input files `inputs` (their stamps are kept).
+  RunJournal(std::filesystem::path path, const std::string& identity,
+             const std::vector<InputStamp>& inputs = {});
   ~RunJournal();
   RunJournal(const RunJournal&) = delete;
   RunJournal& operator=(const RunJournal&) = delete;
 
   // Opens the journal at `path` to go on with it: checks that it belongs to a run of the same
-  // identity (Error (config) naming --resume if not), hands every record it holds to `consume`
-  // in order, drops a torn last frame, and returns the journal ready to append.
+  // identity (Error (config) naming --resume if not) and the same input files (`inputs`, their
+  // stamps now: Error (config) naming the first file that changed), hands every record it holds to
+  // `consume` in order, drops a torn last frame, and returns the journal ready to append.
   // `ray_queries` receives the ray queries of the records handed on.
   static std::unique_ptr<RunJournal> resume(const std::filesystem::path& path,
                                             const std::string& identity,
                                             const std::function<void(const ShotRecord&)>& consume,
-                                            std::int64_t& ray_queries);
+                                            std::int64_t& ray_queries,
+                                            const std::vector<InputStamp>& inputs = {});
 
   // Appends a frame of records (the next of the run, in order) and the ray queries they took.
   // Throws Error (run) naming the journal when it cannot be written (a full disk).

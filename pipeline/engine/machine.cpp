@@ -27,6 +27,7 @@
 #include "pipeline/shot/brf_shot.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
 #include "pipeline/shot/photon_receiver.hpp"
+#include "pipeline/shot/receiver.hpp"
 #include "pipeline/shot/vegetation_source.hpp"
 #include "terrain/terrain.hpp"
 
@@ -128,6 +129,25 @@ int threads_of_process(int threads, int processes_here) {
   return threads > 0 ? std::min(threads, cores) : std::max(1, cores / std::max(1, processes_here));
 }
 
+// The ICESat-2 granules (ATL03, ATL08) hold every shot's photons and records until the run
+// ends, to write them in beam groups: 0.8 kB a shot and beam, as issue 42 measured it (a run's
+// peak RSS against its shots). A track whose shots are not known before it is planned (an
+// ephemeris's or a granule's rows) counts none here.
+constexpr double icesat2_bytes_per_shot = 800.0;
+
+double icesat2_granule_bytes(const Config& c) {
+  const OutputSettings& o = c.output;
+  if (!receiver_traits(c.sensor.receiver).atlas_beams ||
+      !(o.atl03.value_or(true) || o.atl08.value_or(true)))
+    return 0.0;
+  const TrackSettings& t = c.track;
+  double shots = 0.0;
+  if (t.type == TrackType::pass || t.type == TrackType::orbit) shots = double(t.shots);
+  if (t.type == TrackType::points) shots = double(t.points.size());
+  const double beams = t.type == TrackType::pass ? double(c.sensor.beams.size()) : 1.0;
+  return icesat2_bytes_per_shot * shots * beams;
+}
+
 RunMemory estimate_run_memory(const Config& c) {
   RunMemory m;
   const double range_m =
@@ -141,12 +161,15 @@ RunMemory estimate_run_memory(const Config& c) {
   m.vegetation = vegetation.kind;
   m.waveform_bytes = shot_size(c).bytes * shot_waveform_copies;
   m.threads = usable_cores();
-  m.bytes = m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes);
+  m.granule_bytes = icesat2_granule_bytes(c);
+  m.bytes = m.source_bytes + m.granule_bytes + m.threads * (m.scene_bytes + m.waveform_bytes);
   m.available_bytes = available_memory_bytes();
   // The key to change: the vegetation's when what its source holds weighs most, or when its
   // region does on a scene of a usual size; the waveforms when they weigh most; else what makes
   // the scene wide.
-  if (m.source_bytes > m.threads * (m.scene_bytes + m.waveform_bytes))
+  if (m.granule_bytes > m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes))
+    m.place = "/track/shots";
+  else if (m.source_bytes > m.threads * (m.scene_bytes + m.waveform_bytes))
     m.place = vegetation.key;
   else if (m.waveform_bytes > m.scene_bytes)
     m.place = "/sensor/bins";
@@ -200,6 +223,9 @@ void check_run(const Config& config) {
     if (memory.source_bytes > 0.0)
       why << "; the " << memory.vegetation << " source's " << mebibytes(memory.source_bytes)
           << " once";
+    if (memory.granule_bytes > 0.0)
+      why << "; the ICESat-2 granules' photons, " << mebibytes(memory.granule_bytes)
+          << " held to the end";
     why << "), more than the " << gibibytes(memory.available_bytes)
         << " of memory this process may have";
     throw config_error(memory.place, why.str());

@@ -31,8 +31,9 @@ struct RunMemory {
   double source_bytes = 0.0;       // what the vegetation source holds once (a point cloud, models)
   std::string vegetation;          // the canopy's kind; empty for bare ground
   double waveform_bytes = 0.0;     // the tallies of a shot's waveforms
+  double granule_bytes = 0.0;      // ATL03's and ATL08's photons and records, held to the end
   int threads = 1;                 // the cores this process may use: a run's default
-  double bytes = 0.0;              // source + threads x (scene + waveforms)
+  double bytes = 0.0;              // source + granules + threads x (scene + waveforms)
   double available_bytes = 0.0;    // the machine's memory (or the cgroup's limit when lower)
   std::string place;               // the key that makes it large, when it is too large
 };

@@ -314,8 +314,13 @@ CheckSummary check_inputs(const Config& config) {
   check_run(config);  // what run refuses before simulating
   check_brf(config);  // ... and brf
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
-  // The vegetation reads its crowns file and checks what the configuration cannot alone.
-  const std::unique_ptr<VegetationSource> vegetation = grow_vegetation(config, terrain.get());
+  // The shot simulator as run makes it: its vegetation reads its files (a crowns file, a voxel
+  // grid's header) and checks what the configuration cannot alone.
+  const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
+  const VegetationSource* vegetation = simulator->vegetation();
+  // A voxel grid's values are read where the beams are, as run reads them (NaN under a beam).
+  const bool read_vegetation =
+      config.canopy && (config.canopy->kind == "voxels" || config.canopy->kind == "point_cloud");
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
   CheckSummary summary;
   summary.shots = track->size();
@@ -330,6 +335,8 @@ CheckSummary check_inputs(const Config& config) {
     summary.shots_off_terrain += footprint.on_terrain ? 0 : 1;
     if (footprint.on_terrain)
       centres.push_back({footprint.ground.lat_deg, footprint.ground.lon_deg});
+    if (footprint.on_terrain && read_vegetation)
+      at_section("/canopy", [&] { simulator->check_vegetation(footprint); });
   }
   if (summary.shots_located < summary.shots && summary.shots_off_terrain > 0)
     summary.shots_off_terrain = static_cast<std::int64_t>(std::llround(
@@ -337,14 +344,13 @@ CheckSummary check_inputs(const Config& config) {
   if (const auto warning = stands_off_track(config, centres)) summary.warnings.push_back(*warning);
   if (const auto warning = brf_tile_off_terrain(config, *terrain, *track))
     summary.warnings.push_back(*warning);
-  if (const auto warning = crowns_off_track(config, vegetation.get(), centres))
+  if (const auto warning = crowns_off_track(config, vegetation, centres))
     summary.warnings.push_back(*warning);
   // Roughness too fine to mesh under the beam is refused where a shot builds its ground: the
   // first footprint's scene is built here, so that check refuses it as run does.
   if (config.terrain.roughness.rms_m > 0.0) {
     for (std::int64_t record = 0; record < track->size(); ++record)
       if (const Footprint footprint = track->footprint(record); footprint.on_terrain) {
-        const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
         at_section("/terrain", [&] { simulator->check_scene(footprint); });
         break;
       }
@@ -401,7 +407,10 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
   const fs::path journal_path = request.out_dir / RunJournal::kFileName;
   const std::string identity = run_identity(info, setup.first, setup.last);
   output->resumed = output->directory->has_journal();
-  if (!output->resumed) output->journal = std::make_unique<RunJournal>(journal_path, identity);
+  // Each input file read whole once more for its hash: a resume over changed inputs is refused.
+  const std::vector<InputStamp> inputs = stamp_input_files(run_input_files(setup.used));
+  if (!output->resumed)
+    output->journal = std::make_unique<RunJournal>(journal_path, identity, inputs);
   // The products are written again from the journal: an interrupted run's parts go.
   std::error_code ignored;
   if (request.resume)
@@ -420,7 +429,7 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
     RunOutput& out = *output;
     out.journal = RunJournal::resume(
         journal_path, identity, [&](const ShotRecord& shot) { out.take(shot, summary); },
-        summary.ray_queries);
+        summary.ray_queries, inputs);
     summary.shots_resumed = out.written;
   }
   return output;
@@ -466,6 +475,8 @@ RunSummary run_simulation(const Config& config, const RunRequest& request,
   info.vertical_datum = setup->terrain->vertical_datum().description;
   RunSummary summary;
   summary.warnings = config.warnings;
+  // The track's own (a granule's fill positions skipped), as check says them.
+  for (const std::string& warning : setup->track->warnings()) summary.warnings.push_back(warning);
   std::unique_ptr<RunOutput> output;
   try {
     if (cluster.rank() == 0) output = open_output(*setup, request, info, summary);

@@ -692,6 +692,7 @@ std::vector<std::size_t> nearest_to_centres(const BeamTrack& beam, double first_
 SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t count,
                            double segment_m) {
   SegmentTruth t;
+  const std::int32_t last_id = segment_of(beam.shots.back().along_m);  // ATL03's last segment
   std::vector<double> n(count, 0.0), h(count, 0.0), ch(count, 0.0), cv(count, 0.0), pai(count, 0.0);
   for (const BeamShot& s : beam.shots) {
     const std::size_t j = static_cast<std::size_t>(
@@ -708,7 +709,9 @@ SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t co
                       pai[j]);
     const double start = first_m + static_cast<double>(j) * segment_m;
     t.id_beg.push_back(segment_of(start));
-    t.id_end.push_back(segment_of(start + segment_m) - 1);
+    // The last land segment ends at the ATL03 segment of the last shot: past it there is none
+    // (its end was one past whenever the track stopped inside its last 20 m).
+    t.id_end.push_back(std::min(segment_of(start + segment_m) - 1, last_id));
   }
   for (const std::size_t k : nearest_to_centres(beam, first_m, 5 * count, segment_m / 5.0)) {
     const bool any = k < beam.shots.size();

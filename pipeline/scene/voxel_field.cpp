@@ -426,9 +426,19 @@ VoxelFieldSource::VoxelFieldSource(const VoxelGridFile& grid, const std::string&
 
 VoxelFieldSource::~VoxelFieldSource() = default;
 
+void VoxelFieldSource::check_values(const LocalFrame& frame, double half_size_m) const {
+  window(frame, nullptr, half_size_m, 0);
+}
+
 std::shared_ptr<const VoxelField> VoxelFieldSource::field(const LocalFrame& frame,
                                                           const Terrain& terrain,
                                                           double half_size_m, int material) const {
+  return window(frame, &terrain, half_size_m, material);
+}
+
+std::shared_ptr<const VoxelField> VoxelFieldSource::window(const LocalFrame& frame,
+                                                           const Terrain* terrain,
+                                                           double half_size_m, int material) const {
   auto field = std::make_shared<VoxelField>();
   field->material = material;
   const VoxelBlock& shape = impl_->grid->shape();
@@ -463,10 +473,14 @@ std::shared_ptr<const VoxelField> VoxelFieldSource::field(const LocalFrame& fram
   field->ny = nj;
   field->nz = shape.nz;
   field->z_edges_m = shape.z_edges_m;
-  fill_ground(*field, frame, terrain, std::min(cell_i_m, cell_j_m));
   // The window's columns from the grid's packed tiles, which the field shares.
   const int t = tile_columns;
   const int ti0 = i0 / t, ti1 = (i0 + ni - 1) / t, tj0 = j0 / t, tj1 = (j0 + nj - 1) / t;
+  if (!terrain) {  // checked: the tiles read (their values refused as a shot refuses them)
+    impl_->tiles(ti0, ti1, tj0, tj1);
+    return field;
+  }
+  fill_ground(*field, frame, *terrain, std::min(cell_i_m, cell_j_m));
   const std::vector<std::shared_ptr<const PackedTile>> tiles = impl_->tiles(ti0, ti1, tj0, tj1);
   const int tiles_across = ti1 - ti0 + 1;
   for (const auto& tile : tiles) field->blocks.push_back(tile->pad);

@@ -103,8 +103,14 @@ class VoxelFieldSource {
   // Columns over terrain without data are left empty.
   std::shared_ptr<const VoxelField> field(const LocalFrame& frame, const Terrain& terrain,
                                           double half_size_m, int material) const;
+  // Reads the tiles field() would read, and refuses their values as it does (an input error
+  // naming the voxel), without the ground or the field: for `check`.
+  void check_values(const LocalFrame& frame, double half_size_m) const;
 
  private:
+  // field(), or with no terrain check_values() (an empty field).
+  std::shared_ptr<const VoxelField> window(const LocalFrame& frame, const Terrain* terrain,
+                                           double half_size_m, int material) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

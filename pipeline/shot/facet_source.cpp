@@ -39,9 +39,17 @@ FacetSource::FacetSource(const VegetationSettings& settings)
       const auto found =
           std::find_if(materials_.begin(), materials_.end(),
                        [&](const FacetMaterialSettings& m) { return m.name == material; });
+      // Assimp names a mesh without a material DefaultMaterial, and a material whose name it
+      // cannot hold (aiString's 1,023 bytes) too: the user never wrote that name.
+      const std::string why =
+          material == "DefaultMaterial" || material.empty()
+              ? " (Assimp's name for a mesh with no material, or with one whose name is longer "
+                "than the 1,023 bytes Assimp holds: give the mesh's materials short names, or "
+                "give DefaultMaterial)"
+              : "";
       if (found == materials_.end())
         throw input_error(file, "model \"" + name + "\" has the material \"" + material +
-                                    "\", which canopy.facets.materials does not give");
+                                    "\", which canopy.facets.materials does not give" + why);
       numbers.push_back(static_cast<int>(found - materials_.begin()));
     }
     std::vector<int> triangle_materials(mesh.materials.size());

@@ -57,6 +57,18 @@ ShotSimulator::~ShotSimulator() = default;
 
 void ShotSimulator::check_scene(const Footprint& footprint) const { build_scene(footprint); }
 
+void ShotSimulator::check_vegetation(const Footprint& footprint) const {
+  if (!vegetation_) return;
+  const Terrain& terrain = scenes_.terrain();
+  const FootprintFrame where = footprint_frame(terrain, lidar_, footprint);
+  // The half size build_scene gives the region.
+  const double half_size_m =
+      traced_patch_half_size_m(terrain, lidar_, footprint, where.frame, lidar_.max_angle_rad()) +
+      vegetation_margin_m;
+  vegetation_->check_region(
+      {terrain, where.frame, half_size_m, where.orientation, lidar_.band_count()});
+}
+
 void ShotSimulator::share_scenes_along(const Track& track) {
   stretches_.reset();
   if (settings_.stretch_shots <= 0 || scenes_.roughness().enabled() ||

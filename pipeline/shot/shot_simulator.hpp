@@ -62,6 +62,11 @@ class ShotSimulator {
   // Builds the footprint's scene and drops it: what a shot refuses before tracing (roughness
   // too fine to mesh under the beam), for `check`.
   void check_scene(const Footprint& footprint) const;
+  // Reads the vegetation the footprint's scene would hold and refuses its values as a shot
+  // does (a voxel grid's missing values under the beam), without building the scene: for
+  // `check`, over every footprint it locates.
+  void check_vegetation(const Footprint& footprint) const;
+  const VegetationSource* vegetation() const { return vegetation_.get(); }
 
   // The footprints to come are the track's: consecutive shots of a beam share a stretch's scene
   // when settings.stretch_shots asks for it and the scene allows (no roughness, which is meshed

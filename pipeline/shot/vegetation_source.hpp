@@ -80,6 +80,11 @@ class VegetationSource {
     double lat_deg = 0.0, lon_deg = 0.0, radius_m = 0.0;
   };
   virtual std::vector<Placed> placed() const { return {}; }
+
+  // Reads what grow() would read for the region and refuses what it refuses (a voxel grid's
+  // missing or negative values under the beam), without making the geometry: `check` refuses
+  // what `run` does. Nothing for sources whose values were checked when made.
+  virtual void check_region(const VegetationRegion& /*region*/) const {}
 };
 
 struct CloudGround;

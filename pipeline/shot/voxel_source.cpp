@@ -1,6 +1,8 @@
 // Voxel grids and point clouds behind the VegetationSource interface.
 #include "pipeline/shot/voxel_source.hpp"
 
+#include <ogr_spatialref.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -8,6 +10,7 @@
 #include "canopy/gap_fraction.hpp"
 #include "canopy/las_reader.hpp"
 #include "core/error.hpp"
+#include "core/gdal_layer.hpp"
 
 namespace glaswave {
 
@@ -50,6 +53,33 @@ RegionVegetation VoxelSource::grow(const VegetationRegion& region) const {
   foliage.leaf_size_m = canopy_.leaf_size_m;
   grown.materials.push_back(foliage);
   return grown;
+}
+
+void VoxelSource::check_region(const VegetationRegion& region) const {
+  fields_->check_values(region.frame, region.half_size_m);
+}
+
+std::vector<VegetationSource::Placed> VoxelSource::placed() const {
+  const VoxelBlock& g = grid_->shape();
+  OGRSpatialReference crs;
+  crs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  std::vector<Placed> points;
+  {
+    const GdalErrorTrap trap;
+    if (crs.SetFromUserInput(g.crs_wkt.c_str(),
+                             OGRSpatialReference::SET_FROM_USER_INPUT_LIMITATIONS_get()) !=
+        OGRERR_NONE)
+      return points;
+    const auto to_wgs84 = transformation_to_wgs84(crs);
+    if (!to_wgs84) return points;
+    for (int a = 0; a <= 2; ++a)
+      for (int b = 0; b <= 2; ++b) {
+        double x = g.x0 + g.dx * g.nx * a / 2.0, y = g.y0 + g.dy * g.ny * b / 2.0;
+        if (to_wgs84->Transform(1, &x, &y) && std::isfinite(x) && std::isfinite(y))
+          points.push_back({y, x, 0.0});
+      }
+  }
+  return points;
 }
 
 namespace {

@@ -24,6 +24,9 @@ class VoxelSource : public VegetationSource {
   ~VoxelSource() override;
 
   RegionVegetation grow(const VegetationRegion& region) const override;
+  // The grid's corners and edges' midpoints in WGS 84: a grid under no shot is warned about.
+  std::vector<Placed> placed() const override;
+  void check_region(const VegetationRegion& region) const override;
 
   const VoxelGridFile& grid() const { return *grid_; }
 

@@ -10,6 +10,10 @@ The C++ engine does the work (with the GIL released; Ctrl-C stops it); errors co
 ConfigError (a bad configuration, a ValueError), InputError (unusable input data, a ValueError)
 and RunError (a failure while running, a RuntimeError), each with the message of the command
 line's `glaswave: error:` line and the `place` it names.
+
+HDF5 as Debian builds it (under libnetcdf, netCDF4-python, Debian's h5py) is not thread-safe: a
+program that reads NetCDF or HDF5 files in one thread (xarray, h5py) while glaswave runs in
+another must hold glaswave.hdf5_lock() around its own reads (see hdf5_lock).
 """
 
 import json
@@ -23,7 +27,8 @@ from . import _glaswave
 from ._glaswave import ConfigError, InputError, RunError
 
 __version__ = _glaswave.__version__
-__all__ = ["run", "brf", "check", "ConfigError", "InputError", "RunError", "__version__"]
+__all__ = ["run", "brf", "check", "hdf5_lock", "ConfigError", "InputError", "RunError",
+           "__version__"]
 
 
 def _config_error(place, reason):
@@ -174,6 +179,23 @@ def run(config, shots=None, threads=0, overrides=None):
         # under the engine's lock, so that another thread's run is not writing meanwhile.
         with _glaswave.netcdf_lock():
             return xarray.load_dataset(os.path.join(out_dir, "shots.nc"))
+
+
+def hdf5_lock():
+    """The engine's lock on libnetcdf and HDF5, as a context manager, for your own reads.
+
+    HDF5 as Debian builds it is not thread-safe, and glaswave's calls into it (a run's shots.nc,
+    a granule track, a NetCDF voxel grid) hold this lock: while glaswave runs in another thread,
+    hold it around your own calls into the same libraries (xarray.open_dataset/load_dataset,
+    netCDF4.Dataset, h5py.File from Debian's python3-h5py), or both may crash or hang:
+
+        with glaswave.hdf5_lock():
+            ds = xarray.load_dataset("other.nc")   # read whole while the lock is held
+
+    Lazily loaded datasets read on access: load them inside the block. Waiting for the lock
+    releases the GIL. An h5py from pip carries its own HDF5 and needs no lock.
+    """
+    return _glaswave.netcdf_lock()
 
 
 def brf(config, threads=0, overrides=None):

@@ -1,10 +1,13 @@
 // Disc leaf files (PRODUCT.md section 13: RAMI's `*.def`, one disc a line `radius x y z nx ny nz`)
 // and the trees file's z_m column: read back to float precision, and every malformed line
 // refused in one line naming the file and the line.
+#include <gdal_priv.h>
 #include <gtest/gtest.h>
+#include <ogrsf_frmts.h>
 
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <string>
 
 #include "canopy/facet_trees.hpp"
@@ -104,6 +107,61 @@ TEST(DiscLeaves, TheTreesFilesHeightColumnFloatsAModel) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
   }
+}
+
+// Issue 42: a trees layer OGR reads took a non-numeric rotation_deg as 0 (the CSV reader refuses
+// it); a Shapefile, whose field names are cut to 10 characters, cannot hold rotation_deg, and the
+// error named the attribute missing without saying why.
+TEST(FacetTreesLayer, NumbersAreReadWholeAndAShapefileSaysWhyItCannotHoldRotation) {
+  test_support::ScratchDir dir;
+  auto geojson = [&](const std::string& rotation) {
+    return write(dir.path() / "trees.geojson",
+                 R"({"type": "FeatureCollection", "features": [{"type": "Feature", )"
+                 R"("geometry": {"type": "Point", "coordinates": [7, 45]}, "properties": )"
+                 R"({"model": "sphere", "rotation_deg": )" +
+                     rotation + R"(, "scale": 1}}]})");
+  };
+  auto message = [](const std::filesystem::path& file) -> std::string {
+    try {
+      read_facet_trees(file, {"sphere"}, std::nullopt);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::input);
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(read_facet_trees(geojson("30"), {"sphere"}, std::nullopt).at(0).rotation_deg, 30.0);
+  EXPECT_EQ(read_facet_trees(geojson("\"12.5\""), {"sphere"}, std::nullopt).at(0).rotation_deg,
+            12.5);
+  for (const char* text : {"\"abc\"", "\"12 deg\"", "\"\""}) {
+    const std::string refused = message(geojson(text));
+    EXPECT_NE(refused.find("trees.geojson: feature 0: rotation_deg is"), std::string::npos)
+        << text << " | " << refused;
+  }
+  EXPECT_NE(message(geojson("null")).find("rotation_deg is empty"), std::string::npos);
+
+  // A Shapefile written with a rotation_deg field: GDAL cuts it to rotation_d.
+  const std::string shapefile = (dir.path() / "trees.shp").string();
+  {
+    GDALAllRegister();
+    GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("ESRI Shapefile");
+    ASSERT_NE(driver, nullptr);
+    GDALDataset* data = driver->Create(shapefile.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
+    ASSERT_NE(data, nullptr);
+    OGRLayer* layer = data->CreateLayer("trees", nullptr, wkbPoint, nullptr);
+    for (const char* name : {"model", "rotation_deg", "scale"}) {
+      OGRFieldDefn field(name, std::string(name) == "model" ? OFTString : OFTReal);
+      layer->CreateField(&field);
+    }
+    GDALClose(data);
+  }
+  EXPECT_NE(message(shapefile).find("layer 0 has no attribute rotation_deg (trees need model, "
+                                    "rotation_deg and scale): a Shapefile cuts field names to 10 "
+                                    "characters (it holds rotation_d), so it cannot hold "
+                                    "rotation_deg; write the trees as GeoPackage (.gpkg), "
+                                    "GeoJSON or CSV"),
+            std::string::npos)
+      << message(shapefile);
 }
 
 }  // namespace

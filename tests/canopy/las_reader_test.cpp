@@ -126,6 +126,60 @@ TEST(LasReader, CrsFromWktGeoKeysOrFallback) {
   EXPECT_NE(refusal(dir.path() / "user.las").find("user-defined"), std::string::npos);
 }
 
+// Issue 42: scan angles beyond 90 degrees gave every voxel a density of 0; a cloud in a
+// geographic CRS was voxelised in degrees, one in US survey feet read as metres.
+TEST(LasReader, ScanAnglesBeyondNadirsQuarterTurnAndCrsNotInMetresAreRefused) {
+  test_support::ScratchDir dir;
+  LasFixture wide = three_points(4, 6);
+  wide.points[1].scan_angle_deg = 120.0;
+  test::write_las(dir.path() / "wide.las", wide);
+  EXPECT_NE(refusal(dir.path() / "wide.las")
+                .find("point 1 has a scan angle of 120 degrees, beyond the LAS specification's"),
+            std::string::npos)
+      << refusal(dir.path() / "wide.las");
+  LasFixture legacy = three_points(2, 1);
+  legacy.points[2].scan_angle_deg = -100.0;  // an int8 holds it; the specification does not
+  test::write_las(dir.path() / "legacy.las", legacy);
+  EXPECT_NE(refusal(dir.path() / "legacy.las").find("scan angle of -100 degrees"),
+            std::string::npos);
+  legacy.points[2].scan_angle_deg = -90.0;
+  test::write_las(dir.path() / "edge.las", legacy);
+  EXPECT_EQ(refusal(dir.path() / "edge.las"), "");
+
+  auto crs_refusal = [](const LasFile& cloud, const std::string& fallback) -> std::string {
+    try {
+      las_crs(cloud, fallback, "/canopy/point_cloud/crs");
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  LasFixture g = three_points(2, 1);
+  g.geo_keys = {1024, 2, 2048, 4326};  // geographic, from the file
+  test::write_las(dir.path() / "geo.las", g);
+  EXPECT_NE(crs_refusal(LasFile(dir.path() / "geo.las"), "")
+                .find("the point cloud's CRS is "
+                      "geographic (x and y in degrees)"),
+            std::string::npos);
+  test::write_las(dir.path() / "none.las", three_points(2, 0));
+  const LasFile bare(dir.path() / "none.las");
+  EXPECT_EQ(crs_refusal(bare, "EPSG:4326")
+                .rfind("/canopy/point_cloud/crs: \"EPSG:4326\" is "
+                       "geographic",
+                       0),
+            0u);
+  // NAD83 / New York Long Island (ftUS): x and y in US survey feet, 1200/3937 m.
+  EXPECT_NE(
+      crs_refusal(bare, "EPSG:2263").find("measures x and y in US survey foot (0.3048006096 m)"),
+      std::string::npos)
+      << crs_refusal(bare, "EPSG:2263");
+  // UTM in metres over NAVD88 heights in US survey feet (EPSG:6360).
+  EXPECT_NE(crs_refusal(bare, "EPSG:32618+6360").find("measures heights in US survey foot"),
+            std::string::npos)
+      << crs_refusal(bare, "EPSG:32618+6360");
+  EXPECT_EQ(crs_refusal(bare, "EPSG:32618+5703"), "");  // NAVD88 in metres
+}
+
 TEST(LasReader, RefusesMalformedFiles) {
   test_support::ScratchDir dir;
   LasFixture f = three_points(4, 7);

@@ -13,9 +13,11 @@
 #include <ogr_srs_api.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <string>
+#include <tuple>
 
 #include "core/error.hpp"
 #include "tests/scratch_dir.hpp"
@@ -220,7 +222,9 @@ std::filesystem::path write_hand_grid(const std::filesystem::path& file, const H
   c.clear();
   for (int j = 0; j < 4; ++j) c.push_back(b.y0 + (j + 0.5) * b.dy);
   nc_put_var_double(nc, vy, c.data());
-  const double zc[3] = {0.5, 2.0, 4.5};
+  // The bounds' middles; without bounds, 1 m layers from the ground (centres 0.5, 2 and 4.5
+  // would make the first layer's bottom -0.25 m, under the ground).
+  const double zc[3] = {0.5, vzb >= 0 ? 2.0 : 1.5, vzb >= 0 ? 4.5 : 2.5};
   nc_put_var_double(nc, vz, zc);
   if (vzb >= 0) {
     std::vector<double> zb(g.z_bounds.begin(), g.z_bounds.begin() + 2 * g.z_bounds_rows);
@@ -315,6 +319,60 @@ TEST(VoxelGrid, CfPackingIsAppliedAndAStringAttributeRead) {
   g.crs_as_nc_string = true;
   const VoxelGridFile named(write_hand_grid(dir.path() / "string.nc", g));
   EXPECT_EQ(named.shape().crs_wkt, b.crs_wkt);
+}
+
+// Issue 42: units were not read (pad in cm2 cm-3, z in cm, x in km all taken as metres). Known
+// units are converted: cm2 cm-3 is 100 m2 m-3, a cm 0.01 m, a km 1000 m; others refused naming
+// the variable; a layer under the ground and a centre outside its bounds refused.
+TEST(VoxelGrid, UnitsAreReadAndLayersBelowTheGroundRefused) {
+  test_support::ScratchDir dir;
+  const VoxelBlock b = sample_block();
+  const auto with_units = [](const char* variable, const char* units) {
+    return [=](int nc, int pad) {
+      int var = pad;
+      if (std::string(variable) != "pad") nc_inq_varid(nc, variable, &var);
+      nc_put_att_text(nc, var, "units", std::strlen(units), units);
+    };
+  };
+  HandGrid g;
+  g.z_bounds_rows = 3;
+  g.extra = with_units("pad", "cm2 cm-3");
+  const VoxelGridFile cm(write_hand_grid(dir.path() / "cm.nc", g));
+  const VoxelBlock all = cm.window(-1e9, 1e9, -1e9, 1e9);
+  ASSERT_EQ(all.pad.size(), b.pad.size());
+  for (std::size_t n = 0; n < b.pad.size(); ++n) EXPECT_FLOAT_EQ(all.pad[n], 100 * b.pad[n]) << n;
+  g.extra = with_units("z", "cm");  // bounds 0-1-3-6 cm, without units of their own
+  EXPECT_EQ(VoxelGridFile(write_hand_grid(dir.path() / "z.nc", g)).shape().z_edges_m,
+            (std::vector<double>{0.0, 0.01, 0.03, 0.06}));
+  g.extra = with_units("x", "km");  // x centres of 500001 km... over a CRS in metres
+  const VoxelBlock km = VoxelGridFile(write_hand_grid(dir.path() / "km.nc", g)).shape();
+  EXPECT_DOUBLE_EQ(km.x0, 1000 * b.x0);
+  EXPECT_DOUBLE_EQ(km.dx, 1000 * b.dx);
+  EXPECT_DOUBLE_EQ(km.dy, b.dy);
+  for (const auto& [variable, units, says] :
+       {std::tuple<const char*, const char*, const char*>{"pad", "furlong-1", "`pad`'s units"},
+        {"pad", "m2 m-2", "not a plant area density"},
+        {"z", "hands", "the units of z are \"hands\""},
+        {"y", "leagues", "the units of y"}}) {
+    g.extra = with_units(variable, units);
+    EXPECT_NE(refusal(write_hand_grid(dir.path() / "unknown.nc", g)).find(says), std::string::npos)
+        << units;
+  }
+  g.extra = {};
+  g.z_bounds = {-2, 1, 1, 3, 3, 6};  // the first layer's centre 0.5 lies in it
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "under.nc", g)).find("under the ground"),
+            std::string::npos);
+  g.z_bounds = {0, 1, 1, 3, 3, 6};
+  g.put_pad = [&](int nc, int pad) {  // centres 0.5, 0.5, 0.5: the second outside [1, 3]
+    int z = -1;
+    nc_inq_varid(nc, "z", &z);
+    const double repeated[3] = {0.5, 0.5, 0.5};
+    nc_put_var_double(nc, z, repeated);
+    nc_put_var_float(nc, pad, b.pad.data());
+  };
+  EXPECT_NE(refusal(write_hand_grid(dir.path() / "repeated.nc", g))
+                .find("z centre 1 (0.500000 m) lies outside its bounds [1.000000, 3.000000] m"),
+            std::string::npos);
 }
 
 // A GeoTIFF of one band 0-`top` m, with a scale of its own.

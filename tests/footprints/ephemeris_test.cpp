@@ -92,6 +92,29 @@ TEST_F(Ephemeris, ShotsComeFromTheRowsWithTheirTimesPositionsAndPointing) {
   EXPECT_NEAR(std::sqrt(east * east + north * north + up * up), second.range_m, 0.01);
 }
 
+// Issue 42: "any length" held up to about 1e154, where the squares overflowed and a vector of
+// 1e300 was called zero. Scaled by 1e300 and by 1e-300, it points 2 degrees east of nadir.
+TEST_F(Ephemeris, APointingVectorOfAnyLengthPointsAlike) {
+  const Geodetic b{45.01, 7.0, 600000.0};
+  const auto axes = enu_axes(b.lat_deg, b.lon_deg);
+  const double tilt = 2.0 * std::numbers::pi / 180.0;
+  const Vec3 pointing = std::sin(tilt) * axes[0] + (-std::cos(tilt)) * axes[2];
+  for (const char* scale : {"e300", "e-300"}) {
+    char text[160];
+    std::snprintf(text, sizeof text, "%.15f%s,%.15f%s,%.15f%s", pointing[0], scale, pointing[1],
+                  scale, pointing[2], scale);
+    const fs::path file = write("time,x_m,y_m,z_m,pointing_x,pointing_y,pointing_z\n0," +
+                                position_text(b) + "," + text + "\n");
+    TrackSettings settings;
+    settings.type = TrackType::ephemeris;
+    settings.ephemeris = file.string();
+    const testing::LevelTerrain terrain(250.0);
+    const Track track(settings, terrain);
+    ASSERT_EQ(track.size(), 1);
+    EXPECT_NEAR(track.footprint(0).off_nadir_deg, 2.0, 1e-6) << scale;
+  }
+}
+
 TEST_F(Ephemeris, WithoutPointingShotsPointAsAPassDoes) {
   const Geodetic a{-33.0, 151.0, 590000.0};
   const fs::path file = write("time,x_m,y_m,z_m\n0," + position_text(a) + "\n");

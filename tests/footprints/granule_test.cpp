@@ -7,6 +7,8 @@
 #include <chrono>
 #include <fstream>
 #include <limits>
+#include <sstream>
+#include <string>
 
 #include "core/error.hpp"
 #include "core/glas_time.hpp"
@@ -311,6 +313,48 @@ TEST(GranuleTrack, TheFuzzCorpusIsReadOrRefusedAsInputErrors) {
   }
   EXPECT_GE(refused, 6);
   EXPECT_GE(read, 3);
+}
+
+}  // namespace
+}  // namespace glaswave
+
+namespace glaswave {
+namespace {
+
+// Issue 42: any root group whose name began with BEAM was read as a GEDI beam (BEAM2222,
+// BEAMXXXX); only the L2A dictionary's eight names are beams now.
+TEST(GranuleTrack, OnlyGedisEightBeamNamesAreBeams) {
+  test_support::ScratchDir dir;
+  const auto file = dir.path() / "beams.h5";
+  {
+    testing::Hdf5Writer h5(file);
+    for (const char* beam : {"BEAM0101", "BEAM2222", "BEAMXXXX"}) {
+      const std::string group(beam);
+      h5.uint64s(group + "/shot_number", {7});
+      h5.doubles(group + "/lat_lowestmode", {1.0});
+      h5.doubles(group + "/lon_lowestmode", {1.0});
+      h5.doubles(group + "/delta_time", {1.0});
+    }
+  }
+  const std::vector<GranuleShot> shots = read_granule(file, {});
+  ASSERT_EQ(shots.size(), 1u);
+  EXPECT_EQ(shots[0].beam, 5);  // BEAM0101
+  const std::string message =
+      input_error_of([&] { read_granule(file, {"BEAM2222"}); }, file.string() + ": BEAM2222");
+  EXPECT_NE(message.find("the 8 are BEAM0000"), std::string::npos) << message;
+}
+
+// The file HDF5 1.10.8 crashes on (its root group's symbol table of undefined addresses) is
+// refused on its bytes, before HDF5 reads it.
+TEST(GranuleTrack, ARootGroupOfUndefinedAddressesIsRefusedBeforeHdf5ReadsIt) {
+  const std::filesystem::path crashes =
+      std::filesystem::path(GLASWAVE_SOURCE_DIR) /
+      "tests/fuzz/corpus/granule/broken-hdf5-crashes-h5literate.h5";
+  const std::string refused = input_error_of([&] { read_granule(crashes, {}); }, crashes.string());
+  EXPECT_NE(refused.find("the HDF5 file is corrupt: its root group's symbol table names an "
+                         "address beyond the file's end"),
+            std::string::npos)
+      << refused;
 }
 
 }  // namespace

@@ -62,10 +62,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       // The damage: whole frames moved (found by their marker words), a cut, a flipped byte.
       std::string bytes = read_bytes(file);
       std::vector<std::size_t> starts;
-      for (std::size_t at = 16; at + 8 <= bytes.size(); ++at) {
+      // The header of no input files: magic, identity, the stamps' length and their count.
+      constexpr std::size_t kHeader = 32;
+      for (std::size_t at = kHeader; at + 8 <= bytes.size(); ++at) {
         std::uint64_t word = 0;
         std::memcpy(&word, bytes.data() + at, sizeof word);
-        if (at + 48 <= bytes.size() && word != 0 && bytes.compare(at, 8, bytes, 16, 8) == 0)
+        if (at + 48 <= bytes.size() && word != 0 && bytes.compare(at, 8, bytes, kHeader, 8) == 0)
           starts.push_back(at);
       }
       starts.push_back(bytes.size());

@@ -286,6 +286,94 @@ def journal_corpus():
     write("journal", "raw-marker-only", b"GWJRNL" + (0x454d415246574721).to_bytes(8, "little"))
 
 
+def mesh_corpus():
+    """The mesh target's first byte picks the extension (0 .ply, 1 .obj, 2 .gltf, 3 .glb, 4 .stl,
+    5 .off); the rest is the file."""
+    import base64
+    import struct
+    ply = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+           "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+           "0 0 0\n1 0 0\n0 1 0\n")
+    write("mesh", "triangle-ply", b"\x00" + (ply + "3 0 1 2\n").encode())
+    binary = ply.replace("ascii", "binary_little_endian").split("0 0 0")[0].encode() + \
+        struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack("<B3i", 3, 0, 1, 2)
+    write("mesh", "triangle-binary-ply", b"\x00" + binary)
+    write("mesh", "broken-index-ply", b"\x00" + (ply + "3 0 1 100000000\n").encode())
+    write("mesh", "broken-count-ply", b"\x00" + ply.replace("face 1", "face 1000000000").encode())
+    write("mesh", "plate-obj", b"\x01" + b"mtllib plate.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+          b"usemtl leaf\nf 1 2 3\nf 1 2 -7\n")
+    vertices = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
+    gltf = {"asset": {"version": "2.0"},
+            "buffers": [{"uri": "data:application/octet-stream;base64," +
+                         base64.b64encode(vertices).decode(), "byteLength": 36}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                           "min": [0, 0, 0], "max": [1, 1, 0]}],
+            "materials": [{"name": "leaf"}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+            "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0}
+    write("mesh", "plate-gltf", b"\x02" + json.dumps(gltf).encode())
+    text = json.dumps(dict(gltf, buffers=[{"byteLength": 36}])).encode()
+    text += b" " * (-len(text) % 4)
+    glb = (struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(text) + 8 + 36) +
+           struct.pack("<I4s", len(text), b"JSON") + text + struct.pack("<I4s", 36, b"BIN\0") +
+           vertices)
+    write("mesh", "plate-glb", b"\x03" + glb)
+    write("mesh", "plate-stl", b"\x04" + b"solid plate\nfacet normal 0 0 1\nouter loop\n"
+          b"vertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid plate\n")
+    write("mesh", "plate-off", b"\x05" + b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+
+
+def voxel_corpus():
+    """The voxel target's first byte picks the format (even .nc, odd .tif); the rest is the file.
+    Grids of 3 layers over 4 x 4 columns in UTM 32N, as netCDF4-python and GDAL write them."""
+    import os
+    import shutil
+    import tempfile
+
+    import netCDF4
+    import numpy
+    utm = osr.SpatialReference()
+    utm.ImportFromEPSG(32632)
+    folder = tempfile.mkdtemp()
+    path = os.path.join(folder, "grid.nc")
+    for name, packed in (("grid-nc", False), ("packed-nc", True)):
+        with netCDF4.Dataset(path, "w") as nc:
+            for d, n in (("z", 3), ("y", 4), ("x", 4), ("nv", 2)):
+                nc.createDimension(d, n)
+            nc.createVariable("x", "f8", ("x",))[:] = 430000.0 + numpy.arange(4)
+            nc.createVariable("y", "f8", ("y",))[:] = 5090000.0 + numpy.arange(4)
+            z = nc.createVariable("z", "f8", ("z",))
+            z[:] = [1.0, 3.0, 5.0]
+            z.bounds = "z_bounds"
+            nc.createVariable("z_bounds", "f8", ("z", "nv"))[:] = [[0, 2], [2, 4], [4, 6]]
+            crs = nc.createVariable("crs", "i4")
+            crs.crs_wkt = utm.ExportToWkt()
+            pad = nc.createVariable("pad", "i2" if packed else "f4", ("z", "y", "x"),
+                                    fill_value=-1 if packed else None)
+            if packed:
+                pad.scale_factor = 0.01
+            pad.grid_mapping = "crs"
+            pad[:] = numpy.full((3, 4, 4), 0.5)
+        with open(path, "rb") as f:
+            write("voxel", name, b"\x00" + f.read())
+    path = os.path.join(folder, "grid.tif")
+    raster = gdal.GetDriverByName("GTiff").Create(path, 4, 4, 3, gdal.GDT_Float32)
+    raster.SetGeoTransform([430000.0, 1.0, 0.0, 5090004.0, 0.0, -1.0])
+    raster.SetProjection(utm.ExportToWkt())
+    for b in range(3):
+        band = raster.GetRasterBand(b + 1)
+        band.WriteArray(numpy.full((4, 4), 0.5, dtype=numpy.float32))
+        band.SetMetadataItem("z_bottom_m", str(2 * b))
+        band.SetMetadataItem("z_top_m", str(2 * b + 2))
+    raster = None
+    with open(path, "rb") as f:
+        tif = f.read()
+    write("voxel", "grid-tif", b"\x01" + tif)
+    write("voxel", "broken-truncated-tif", b"\x01" + tif[: len(tif) // 2])
+    shutil.rmtree(folder)
+
+
 if __name__ == "__main__":
     config_corpus()
     csv_corpus()
@@ -295,3 +383,5 @@ if __name__ == "__main__":
     las_corpus()
     granule_corpus()
     journal_corpus()
+    mesh_corpus()
+    voxel_corpus()

@@ -286,6 +286,18 @@ def segment_photons(atl03, atl08, beam):
         yield k, p, inside, joined[mine], flag[mine], ph_h[mine]
 
 
+def test_land_segments_name_only_atl03_segments_that_exist(granules):
+    # Issue 42: the last land segment's segment_id_end named the ATL03 segment one past the
+    # track's last (280 m: segments 1..14, and the third land segment ended at 15).
+    atl03, atl08 = granules
+    for beam in BEAMS:
+        ids = set(dataset(atl03[beam], "geolocation/segment_id", "i4").tolist())
+        land = atl08[f"{beam}/land_segments"]
+        for name in ("segment_id_beg", "segment_id_end"):
+            named = set(dataset(land, name, "i4").tolist())
+            assert named <= ids, (beam, name, sorted(named - ids))
+
+
 def test_land_segments_read_as_spacelidar_reads_them(granules):
     _, atl08 = granules
     for beam in BEAMS:

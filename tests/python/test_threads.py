@@ -61,3 +61,30 @@ def test_numpy_integers_select_shots_and_too_large_a_shot_is_a_value_error():
 def test_a_config_path_with_a_nul_byte_is_refused():
     with pytest.raises(glaswave.ConfigError, match="NUL byte"):
         glaswave.check("track.json\0.ignored")
+
+
+def test_the_users_own_netcdf_reads_share_the_engines_lock(tmp_path):
+    # The user's xarray reads in one thread while glaswave runs in another: under
+    # glaswave.hdf5_lock() (Debian's HDF5 is not thread-safe), 20 reads during 20 runs.
+    import xarray
+    config = small_config(shots=1, rays=20)
+    reference = glaswave.run(config, threads=1)
+    theirs = tmp_path / "theirs.nc"
+    reference.to_netcdf(theirs)
+    failures = []
+
+    def runs():
+        try:
+            for _ in range(20):
+                assert_datasets_identical(glaswave.run(config, threads=1), reference)
+        except Exception as error:  # noqa: BLE001
+            failures.append(repr(error))
+
+    thread = threading.Thread(target=runs)
+    thread.start()
+    for _ in range(20):
+        with glaswave.hdf5_lock():
+            read = xarray.load_dataset(theirs)
+        assert (read["shot_number"].values == reference["shot_number"].values).all()
+    thread.join()
+    assert failures == []

@@ -914,9 +914,9 @@ except ValueError as error:
         t.rows[-1] = tuple(row)
 
 
-def write_las(path, points, scale=0.01):
+def write_las(path, points, scale=0.01, scan_deg=0):
     """A LAS 1.2 cloud of point format 0 (no CRS: give --crs), points (x, y, z, class), each a
-    pulse's single return."""
+    pulse's single return at the scan angle scan_deg."""
     import struct
     xs, ys, zs = ([p[i] for p in points] for i in range(3))
     header = struct.pack(
@@ -925,7 +925,8 @@ def write_las(path, points, scale=0.01):
         scale, scale, scale, 0.0, 0.0, 0.0, max(xs), min(xs), max(ys), min(ys), max(zs), min(zs))
     assert len(header) == 227
     body = b"".join(struct.pack("<iiiHBBbBH", round(x / scale), round(y / scale),
-                                round(z / scale), 0, 9, c, 0, 0, 0) for x, y, z, c in points)
+                                round(z / scale), 0, 9, c, scan_deg, 0, 0)
+                    for x, y, z, c in points)
     pathlib.Path(path).write_bytes(header + body)
     return str(path)
 
@@ -1118,13 +1119,16 @@ def round_four_inputs(t):
 
 def journal_frames(journal):
     """The (start, end) byte offsets of a run journal's whole frames (pipeline/engine/journal.cpp:
-    a 16-byte header, then frames of six 64-bit words, the payload and a checksum)."""
+    a header of three 64-bit words, the third the length of the input files' stamps after it, then
+    frames of six 64-bit words, the payload and a checksum)."""
     import struct
     try:
         data = journal.read_bytes()
     except OSError:
         return []
-    frames, at = [], 16
+    if len(data) < 24:
+        return []
+    frames, at = [], 24 + struct.unpack_from("<3Q", data)[2]
     while at + 48 <= len(data):
         words = struct.unpack_from("<6Q", data, at)
         end = at + 48 + words[4] + 8
@@ -1145,8 +1149,10 @@ def main():
     glaswave = os.path.abspath(arguments.glaswave)
     with tempfile.TemporaryDirectory(prefix="glaswave_inputs_") as scratch:
         t = Trial(glaswave, scratch)
+        from inputs_round_five import round_five_inputs  # beside this file
         for group in (issue_items, configuration_cases, data_cases, granule_cases,
-                      round_three_config, round_three_inputs, round_four_inputs):
+                      round_three_config, round_three_inputs, round_four_inputs,
+                      round_five_inputs):
             if arguments.only in group.__name__:
                 group(t)
         pathlib.Path(arguments.out).write_text(t.table())

@@ -189,5 +189,40 @@ TEST(DemInputs, WhatIsNoRegularFileIsRefusedBeforeGdalOpensIt) {
               HasSubstr("a path must not hold a NUL byte"));
 }
 
+// Issue 42: two VRTs sourcing each other were refused at the second, named "the DEM's VRT
+// source's VRT source's ..." nine times; a pixel of 1e-300 degrees was blamed on PROJ.
+TEST(DemInputs, VrtsSourcingEachOtherAndAPixelOfNothingAreNamedForWhatTheyAre) {
+  const TempFolder dir;
+  const auto vrt_over = [&](const std::string& name, const std::string& source) {
+    const std::string file = (dir / name).string();
+    std::ofstream(file) << R"(<VRTDataset rasterXSize="20" rasterYSize="20">
+  <SRS>EPSG:4326</SRS><GeoTransform>7.995, 0.0005, 0, 46.005, 0, -0.0005</GeoTransform>
+  <VRTRasterBand dataType="Float32" band="1"><SimpleSource>
+    <SourceFilename relativeToVRT="1">)"
+                        << source << R"(</SourceFilename><SourceBand>1</SourceBand>
+  </SimpleSource></VRTRasterBand></VRTDataset>)";
+    return file;
+  };
+  const std::string a = vrt_over("a.vrt", "b.vrt");
+  vrt_over("b.vrt", "a.vrt");
+  EXPECT_EQ(refusal(settings_of(a)),
+            a + ": cannot read the DEM's VRT source: its VRTs source each other (a.vrt -> b.vrt "
+                "-> a.vrt)");
+  // A chain of ten, each naming the next: deeper than 8, named at the first.
+  const auto chained = [](int i) { return std::string("c").append(std::to_string(i)) + ".vrt"; };
+  for (int i = 0; i < 10; ++i) vrt_over(chained(i), chained(i + 1));
+  write_dem(dir, "c10.vrt", 900.0);
+  EXPECT_THAT(refusal(settings_of((dir / "c0.vrt").string())),
+              HasSubstr("c0.vrt: cannot read the DEM's VRT source: VRTs nested deeper than 8 "
+                        "(c0.vrt -> c1.vrt"));
+
+  RasterSpec tiny = geographic();
+  tiny.geotransform = {kLon, 1e-300, 0.0, kLat, 0.0, -1e-300};
+  const std::string pixel = write_dem(dir, "tiny.tif", 900.0, {}, tiny);
+  EXPECT_THAT(refusal(settings_of(pixel)),
+              HasSubstr("tiny.tif: the DEM's nodes are 0 m apart (its geotransform's pixel is "
+                        "1e-300 by 1e-300 in its CRS's units), under the 0.001 m a DEM may have"));
+}
+
 }  // namespace
 }  // namespace glaswave

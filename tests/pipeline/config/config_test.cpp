@@ -177,6 +177,9 @@ TEST(PhotonCountingKeys, ReceiverBeamsBackgroundAndGranules) {
   EXPECT_THAT(
       error_of(doc(R"({"sensor": {"receiver": "photon_counting", "beams": ["gt1l", "gt1l"]}})")),
       HasSubstr("/sensor/beams: names \"gt1l\" twice"));
+  // Issue 42: an empty list ran gt2l without a word.
+  EXPECT_THAT(error_of(doc(R"({"sensor": {"receiver": "photon_counting", "beams": []}})")),
+              HasSubstr("/sensor/beams: names no beam: name one or more of gt1l"));
   EXPECT_THAT(error_of(doc(R"({"simulation": {"background": "moon"}})")),
               HasSubstr("/simulation/background: must be"));
   EXPECT_THAT(error_of(doc(R"({"simulation": {"background": {"rate_MHz": -1}}})")),
@@ -291,6 +294,18 @@ TEST(OldNames, OutputGeojsonIsOutputFootprintsWithAWarning) {
   EXPECT_FALSE(fresh.output.footprints);
   EXPECT_TRUE(fresh.warnings.empty());
   EXPECT_THROW(parse_config(doc(R"({"output": {"geojson": true, "footprints": true}})")), Error);
+}
+
+// Issue 42: output.atl03 asked of the waveform receiver was accepted and wrote nothing.
+TEST(OutputKeys, IcesatGranulesAskedOfTheWaveformReceiverAreWarnedAbout) {
+  const Config waveform = parse_config(doc(R"({"output": {"atl03": true, "atl08": false}})"));
+  ASSERT_EQ(waveform.warnings.size(), 1u);
+  EXPECT_EQ(waveform.warnings[0],
+            "/output/atl03: the waveform receiver writes no ICESat-2 granule; it is written with "
+            "sensor.receiver \"photon_counting\"");
+  EXPECT_TRUE(
+      parse_config(doc(R"({"sensor": {"receiver": "photon_counting"}, "output": {"atl03": true}})"))
+          .warnings.empty());
 }
 
 TEST(Defaults, EverythingElse) {

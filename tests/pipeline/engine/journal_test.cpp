@@ -6,7 +6,9 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -24,7 +26,8 @@ namespace {
 
 using test_support::ScratchDir;
 
-// The file's header and its frames, walked by their sizes: a 16-byte header, then per frame six
+// The file's header and its frames, walked by their sizes: a header (three words, the third the
+// length of the input files' stamps after it), then per frame six
 // words (marker, first record, records, ray queries, payload size, raw size), the payload and a
 // checksum word.
 struct JournalBytes {
@@ -35,8 +38,11 @@ struct JournalBytes {
 JournalBytes split_frames(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   JournalBytes bytes;
-  bytes.header.resize(16);
-  in.read(bytes.header.data(), 16);
+  std::array<std::uint64_t, 3> head{};
+  in.read(reinterpret_cast<char*>(head.data()), sizeof head);
+  bytes.header.assign(reinterpret_cast<const char*>(head.data()), sizeof head);
+  bytes.header.resize(sizeof head + head[2]);
+  in.read(bytes.header.data() + sizeof head, static_cast<std::streamsize>(head[2]));
   std::array<std::uint64_t, 6> words{};
   while (in.read(reinterpret_cast<char*>(words.data()), sizeof words)) {
     std::string frame(reinterpret_cast<const char*>(words.data()), sizeof words);
@@ -196,6 +202,96 @@ TEST(RunJournal, AFrameLongerThanTheFileIsTornAndNotAllocated) {
   EXPECT_EQ(shots, (std::vector<std::int64_t>{0}));
   EXPECT_EQ(std::filesystem::file_size(path), bytes.header.size() + bytes.frames[0].size());
   EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 256L * 1024);  // kB: nowhere near the 2 GB
+}
+
+// Issue 42: --resume checked the configuration, not its input files: a voxel grid or trees file
+// changed between the killed run and its resume gave products half of each. The journal keeps
+// each input's size, time and hash; a changed size or content is refused naming the file, a
+// touched file of the same bits resumes.
+TEST(RunJournal, AResumeOverAChangedInputIsRefusedNamingTheFile) {
+  const ScratchDir dir;
+  const auto path = dir.path() / RunJournal::kFileName;
+  const auto grid = dir.path() / "grid.nc";
+  const auto crowns = dir.path() / "crowns.csv";
+  const std::string grid_bytes(3 << 20, 'g');  // three of the hash's 1 MiB reads
+  std::ofstream(grid, std::ios::binary) << grid_bytes;
+  std::ofstream(crowns, std::ios::binary) << "x,y\n1,2\n";
+  const std::vector<std::string> files = {grid.string(), crowns.string()};
+  {
+    RunJournal journal(path, "identity", stamp_input_files(files));
+    std::vector<ShotRecord> records(1);
+    journal.append(records, 10);
+  }
+  const std::string saved = [&] {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }();
+  auto resume = [&]() -> std::string {
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << saved;
+    std::int64_t ray_queries = 0, records = 0;
+    try {
+      RunJournal::resume(
+          path, "identity", [&](const ShotRecord&) { ++records; }, ray_queries,
+          stamp_input_files(files));
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "resumed " + std::to_string(records);
+  };
+  EXPECT_EQ(resume(), "resumed 1");
+  // Touched: another time, the same bits.
+  const auto when = std::filesystem::last_write_time(grid);
+  std::filesystem::last_write_time(grid, when + std::chrono::hours(1));
+  EXPECT_EQ(resume(), "resumed 1");
+  // One byte of the last MiB changed, the size and time kept.
+  {
+    std::fstream out(grid, std::ios::binary | std::ios::in | std::ios::out);
+    out.seekp(static_cast<std::streamoff>(grid_bytes.size() - 5));
+    out.put('h');
+  }
+  std::filesystem::last_write_time(grid, when);
+  EXPECT_EQ(
+      resume().rfind(
+          grid.string() + ": changed since the interrupted run began (its content: modified ", 0),
+      0u)
+      << resume();
+  std::ofstream(grid, std::ios::binary | std::ios::trunc) << grid_bytes;
+  EXPECT_EQ(resume(), "resumed 1");
+  // A row added to the crowns.
+  std::ofstream(crowns, std::ios::binary | std::ios::app) << "3,4\n";
+  EXPECT_EQ(resume(), crowns.string() +
+                          ": changed since the interrupted run began (12 bytes, were 8): --resume "
+                          "would write products half from the old file and half from the new; "
+                          "restore the file, or run again into a new output directory");
+}
+
+// The hash of a file read in pieces of any length is that of the file read at once (the
+// reads' 1 MiB do not decide it), and differs with any one byte, or one byte more.
+TEST(RunJournal, AnInputsHashIsThatOfItsBytesWhateverThePieces) {
+  std::mt19937_64 rng(3);
+  std::string bytes(100003, '\0');
+  for (char& c : bytes) c = static_cast<char>(rng());
+  ContentHash whole;
+  whole.update(bytes.data(), bytes.size());
+  for (std::size_t piece : {1, 7, 31, 32, 33, 4096}) {
+    ContentHash pieces;
+    for (std::size_t at = 0; at < bytes.size(); at += piece)
+      pieces.update(bytes.data() + at, std::min(piece, bytes.size() - at));
+    EXPECT_EQ(pieces.digest(), whole.digest()) << piece;
+  }
+  std::vector<std::uint64_t> digests = {whole.digest()};
+  for (std::size_t at : {std::size_t{0}, std::size_t{40}, bytes.size() - 1}) {
+    std::string changed = bytes;
+    changed[at] ^= 1;
+    ContentHash h;
+    h.update(changed.data(), changed.size());
+    digests.push_back(h.digest());
+  }
+  ContentHash longer;
+  longer.update((bytes + '\0').data(), bytes.size() + 1);
+  digests.push_back(longer.digest());
+  std::sort(digests.begin(), digests.end());
+  EXPECT_EQ(std::unique(digests.begin(), digests.end()), digests.end());
 }
 
 }  // namespace

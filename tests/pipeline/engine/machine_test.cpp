@@ -243,3 +243,34 @@ TEST(BrfMemory, ATileThatCannotBePhysicalOrFitIsRefusedAtItsKey) {
 
 }  // namespace
 }  // namespace glaswave
+
+namespace glaswave {
+namespace {
+
+// Issue 42: check's estimate left out the ICESat-2 granules' photons, held to the end of a run
+// (7.6 MiB whatever the pass; 0.8 kB a shot and beam measured). A pass of 10^6 shots of two
+// beams holds 1.6 GB of them; 10^9 shots of six beams (4.8 TB) are refused at /track/shots.
+TEST(RunMemory, CountsTheIcesatGranulesPhotonsHeldToTheEnd) {
+  const Config pass = parse_config(doc(R"({"sensor": {"preset": "atlas",
+      "beams": ["gt1l", "gt2l"]}, "track": {"shots": 1000000}})"));
+  const RunMemory m = estimate_run_memory(pass);
+  EXPECT_DOUBLE_EQ(m.granule_bytes, 800.0 * 1e6 * 2);
+  EXPECT_DOUBLE_EQ(
+      m.bytes, m.source_bytes + m.granule_bytes + m.threads * (m.scene_bytes + m.waveform_bytes));
+  const Config without = parse_config(doc(R"({"sensor": {"preset": "atlas"},
+      "track": {"shots": 1000000}, "output": {"atl03": false, "atl08": false,
+      "netcdf": true}})"));
+  EXPECT_EQ(estimate_run_memory(without).granule_bytes, 0.0);
+  const Config huge = parse_config(doc(R"({"sensor": {"preset": "atlas", "beams": ["gt1l",
+      "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"]}, "track": {"shots": 1000000000}})"));
+  try {
+    check_run(huge);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.place(), "/track/shots");
+    EXPECT_THAT(e.message(), HasSubstr("the ICESat-2 granules' photons, "));
+  }
+}
+
+}  // namespace
+}  // namespace glaswave
