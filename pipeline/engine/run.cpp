@@ -319,8 +319,7 @@ CheckSummary check_inputs(const Config& config) {
   const std::unique_ptr<ShotSimulator> simulator = make_shot_simulator(config, *terrain);
   const VegetationSource* vegetation = simulator->vegetation();
   // A voxel grid's values are read where the beams are, as run reads them (NaN under a beam).
-  const bool read_vegetation =
-      config.canopy && (config.canopy->kind == "voxels" || config.canopy->kind == "point_cloud");
+  const bool read_vegetation = vegetation && vegetation->checks_regions();
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
   CheckSummary summary;
   summary.shots = track->size();
@@ -417,9 +416,12 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
     for (const auto& entry : fs::directory_iterator(request.out_dir, ignored))
       if (is_part(entry)) fs::remove(entry.path(), ignored);
   const Config& config = setup.used;
-  ProductSettings settings{config.output.netcdf, config.output.footprints,
-                           config.output.footprints_format == "GPKG" ? FootprintsFormat::gpkg
-                                                                     : FootprintsFormat::geojson};
+  ProductSettings settings;
+  settings.netcdf = config.output.netcdf;
+  settings.footprints = config.output.footprints;
+  settings.footprints_format = config.output.footprints_format == "GPKG"
+                                   ? FootprintsFormat::gpkg
+                                   : FootprintsFormat::geojson;
   settings.glah01 = config.output.glah01;
   settings.glah14 = config.output.glah14;
   settings.glas_topex = config.output.glas_ellipsoid == "topex";

@@ -85,6 +85,8 @@ class VegetationSource {
   // missing or negative values under the beam), without making the geometry: `check` refuses
   // what `run` does. Nothing for sources whose values were checked when made.
   virtual void check_region(const VegetationRegion& /*region*/) const {}
+  // Whether check_region reads anything: `check` sizes a region per footprint only for those.
+  virtual bool checks_regions() const { return false; }
 };
 
 struct CloudGround;

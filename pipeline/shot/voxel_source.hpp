@@ -27,6 +27,7 @@ class VoxelSource : public VegetationSource {
   // The grid's corners and edges' midpoints in WGS 84: a grid under no shot is warned about.
   std::vector<Placed> placed() const override;
   void check_region(const VegetationRegion& region) const override;
+  bool checks_regions() const override { return true; }
 
   const VoxelGridFile& grid() const { return *grid_; }
 
