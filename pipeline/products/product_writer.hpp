@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,9 @@ struct ProductSettings {
   bool glah01 = false;      // DIR/glah01.h5
   bool glah14 = false;      // DIR/glah14.h5
   bool glas_topex = false;  // GLAS heights on the TOPEX/Poseidon ellipsoid, not WGS84
+  // GLAH14's elv_cloud_flg: with an `atmosphere` section, the layers its layer finder reports
+  // at the band nearest 1064 nm (maybe none); without, absent.
+  std::optional<std::vector<CloudLayer>> glas_cloud_layers;
 };
 
 // What a writer's Factory is given: the run's output directory (which exists), the products it
