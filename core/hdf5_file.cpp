@@ -66,6 +66,7 @@ GLASWAVE_HDF5_TYPE(std::uint8_t, H5T_STD_U8LE, H5T_NATIVE_UINT8)
 // Arrays above this many values are chunked and deflated.
 constexpr std::size_t kChunkedFrom = 4096;
 constexpr hsize_t kChunkValues = 65536;
+constexpr hsize_t kGranuleChunkRows = 10000;  // Hdf5Chunking::every
 
 // A fixed-length, null-terminated text type of `text`'s length (one byte for none).
 Handle text_type(const std::string& text) {
@@ -90,6 +91,7 @@ struct Hdf5Writer::Impl {
   std::string path;
   Handle file{-1, H5Fclose};
   Handle object{-1, H5Pclose};  // groups without time stamps
+  Hdf5Chunking chunking = Hdf5Chunking::large;
 
   // Makes the groups on `path` above its last part, each without time stamps (groups HDF5
   // made itself as intermediates would carry them).
@@ -113,12 +115,17 @@ struct Hdf5Writer::Impl {
     Handle create(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
     check(create.valid() && H5Pset_obj_track_times(create.get(), false) >= 0,
           "cannot set a dataset's properties");
-    if (count > kChunkedFrom) {
-      // Chunks of whole rows (a shot's 101 rh, its bins), about 64k values each.
+    // An empty dataset stays contiguous: a chunk may not exceed its fixed dimensions.
+    const bool every = chunking == Hdf5Chunking::every && count > 0;
+    if (count > kChunkedFrom || every) {
+      // Chunks of whole rows (a shot's 101 rh, its bins): about 64k values each, or
+      // kGranuleChunkRows rows.
       std::vector<hsize_t> chunk = dims;
       const hsize_t row = static_cast<hsize_t>(count) / dims[0];
-      chunk[0] = std::max<hsize_t>(
-          1, std::min<hsize_t>(dims[0], kChunkValues / std::max<hsize_t>(row, 1)));
+      chunk[0] = every
+                     ? std::min<hsize_t>(dims[0], kGranuleChunkRows)
+                     : std::max<hsize_t>(
+                           1, std::min<hsize_t>(dims[0], kChunkValues / std::max<hsize_t>(row, 1)));
       H5Pset_chunk(create.get(), static_cast<int>(chunk.size()), chunk.data());
       H5Pset_shuffle(create.get());
       H5Pset_deflate(create.get(), 4);
@@ -132,8 +139,10 @@ struct Hdf5Writer::Impl {
   }
 };
 
-Hdf5Writer::Hdf5Writer(const std::filesystem::path& path) : impl_(std::make_unique<Impl>()) {
+Hdf5Writer::Hdf5Writer(const std::filesystem::path& path, Hdf5Chunking chunking)
+    : impl_(std::make_unique<Impl>()) {
   impl_->path = path.string();
+  impl_->chunking = chunking;
   quiet_hdf5_in_this_thread();
   // The root group too is made without time stamps (a file's creation properties are a
   // group's).

@@ -19,13 +19,20 @@ struct Hdf5Attribute {
   std::string name, value;
 };
 
+// How a writer lays out its datasets. large: arrays of more than 4096 values chunked by whole
+// rows (about 64k values a chunk), the rest contiguous. every: as the missions' granules, every
+// non-empty dataset chunked, min(rows, 10000) rows a chunk (ATL03's and GEDI's 10000), so that
+// readers copying a dataset's chunk_dims (rGEDI's and ICESat2VegR's clips) find some. Chunked
+// datasets are shuffled and deflated; the values are the same either way.
+enum class Hdf5Chunking { large, every };
+
 // A new HDF5 file, written one whole dataset at a time; the groups on a path are made as needed.
-// Arrays of more than 4096 values are chunked by whole rows (about 64k values a chunk), shuffled
-// and deflated. Every failure throws a run Error naming the file and the object.
+// Every failure throws a run Error naming the file and the object.
 class Hdf5Writer {
  public:
   // Creates `path`, replacing a file there.
-  explicit Hdf5Writer(const std::filesystem::path& path);
+  explicit Hdf5Writer(const std::filesystem::path& path,
+                      Hdf5Chunking chunking = Hdf5Chunking::large);
   ~Hdf5Writer();
   Hdf5Writer(const Hdf5Writer&) = delete;
   Hdf5Writer& operator=(const Hdf5Writer&) = delete;

@@ -25,6 +25,7 @@
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/journal.hpp"
 #include "pipeline/engine/machine.hpp"
+#include "pipeline/products/hdf5_granule_writer.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/record_codec.hpp"
 #include "pipeline/transport/atmosphere.hpp"
@@ -426,6 +427,14 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
   settings.glah14 = config.output.glah14;
   settings.glas_topex = config.output.glas_ellipsoid == "topex";
   settings.switches = config.output.switches;  // the writers' own keys
+  // GLAH14's cloud flag: the layers found at GLAS's 1064 nm channel, as ATL08's at 532 nm.
+  if (config.atmosphere && settings.glah14) {
+    std::vector<CloudLayer>& layers = settings.glas_cloud_layers.emplace();
+    for (const std::size_t i : detected_layers(*config.atmosphere, nearest_band(info, 1064.0))) {
+      const AtmosphereLayer& layer = config.atmosphere->layers[i];
+      layers.push_back({layer.base_m, layer.above_ellipsoid});
+    }
+  }
   output->writers = make_writers(request.out_dir, settings, info, icesat2_product_settings(config));
   if (output->resumed) {
     RunOutput& out = *output;

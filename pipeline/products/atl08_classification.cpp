@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <map>
 #include <numeric>
 
 namespace glaswave {
@@ -342,6 +343,25 @@ void sub_segment_metrics(LandSegment& segment, const SegmentPhotons& p, const At
   }
 }
 
+// Heights to 0.1 m bins: the fullest bin's centre, the lowest of ties.
+double histogram_mode(const std::vector<double>& heights_m) {
+  constexpr double bin_m = 0.1;
+  std::map<long long, int> counts;
+  for (const double h : heights_m) ++counts[std::llround(h / bin_m)];
+  long long best = 0;
+  int most = 0;
+  for (const auto& [bin, n] : counts)
+    if (n > most) best = bin, most = n;
+  return static_cast<double>(best) * bin_m;
+}
+
+std::int8_t canopy_confidence(double canopy, double ground) {
+  const double classified = canopy + ground;
+  if (classified <= 0.0) return -1;
+  if (canopy < 0.05 * classified) return 0;
+  return ground < 0.05 * classified ? 1 : 2;
+}
+
 void no_canopy(LandSegment& segment) {
   segment.h_canopy = segment.canopy_openness = segment.h_mean_canopy = segment.h_mean_canopy_abs =
       segment.h_min_canopy = segment.h_median_canopy = segment.h_max_canopy =
@@ -392,8 +412,10 @@ std::vector<LandSegment> land_segments(std::span<const CloudPhoton> photons,
     else
       segment.h_te_mean = segment.h_te_median = segment.h_te_min = segment.h_te_max =
           segment.h_te_uncertainty = segment.terrain_slope = segment.h_te_std = nan;
+    segment.h_te_mode = members[k].ground_h_m.empty() ? nan : histogram_mode(members[k].ground_h_m);
     const double canopy = static_cast<double>(members[k].canopy_m.size());
     const double signal = canopy + segment.n_te_photons;
+    segment.canopy_rh_conf = canopy_confidence(canopy, segment.n_te_photons);
     if (canopy < settings.min_canopy_photons || canopy < settings.min_canopy_fraction * signal)
       no_canopy(segment);
     else

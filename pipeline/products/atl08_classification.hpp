@@ -89,6 +89,13 @@ struct LandSegment {
   double h_mean_canopy_abs = 0.0;  // the mean of their heights above the ellipsoid
   std::int32_t n_te_photons = 0, n_ca_photons = 0, n_toc_photons = 0;
   std::int32_t n_noise_photons = 0;  // the segment's photons classified noise
+  // The mode of the ground photons' heights in 0.1 m bins centred on multiples of 0.1 m (real
+  // ATL08's h_te_mode lies on that grid), the lowest of tied bins; NaN without ground photons.
+  double h_te_mode = 0.0;
+  // ATL08's canopy_rh_conf from the shares of canopy (canopy and top of canopy) and ground
+  // photons among the classified ones: 0 canopy < 5 %, 1 canopy >= 5 % and ground < 5 %, 2 both
+  // >= 5 %; -1 (fill) without classified photons.
+  std::int8_t canopy_rh_conf = -1;
 };
 
 // The land segments covering [first_m, end_m) every segment_m, from the classified photons:

@@ -85,6 +85,8 @@ void GediGranuleWriter::keep(std::int64_t index, const ShotRecord& r) {
   s.elev_highest = at(r.sig_begin_m);
   s.lowest = beam_point(r, s.elev_lowest);
   s.highest = beam_point(r, s.elev_highest);
+  s.elev_lowest_return = at(r.sig_end_m);
+  s.lowest_return = beam_point(r, s.elev_lowest_return);
   s.cover = r.cover_true;
   s.pai = r.pai_true;
   s.height = r.canopy_height_true_m;
@@ -307,6 +309,43 @@ void GediGranuleWriter::write_l1b_beam(Hdf5Writer& f, const std::string& g,
   write_footprint_truth(f, truth, shots);
 }
 
+// ancillary/l2a_alg_count and geolocation/*_a1, as rGEDI's clipLevel2A reads them (it clips
+// geolocation/{lat,lon}_{highest,lowest}return_aN for N in 1..l2a_alg_count): glaswave runs one
+// setting group (the signal's start and end, the lowest mode of the product's own), so the
+// count is 1, not real L2A's 6, and a1 is the beam group's own.
+void GediGranuleWriter::write_l2a_algorithm(Hdf5Writer& f, const std::string& g,
+                                            const std::vector<const Shot*>& shots) {
+  write_dataset(f, g + "/ancillary/l2a_alg_count", std::vector<std::uint8_t>{1},
+                {"counter", "Number of algorithm setting groups (glaswave runs one)"});
+  const std::string geo = g + "/geolocation/";
+  struct Return {
+    const char* name;
+    LatLon Shot::*where;
+    double Shot::*elev;
+    const char *lat, *lon, *height;
+  };
+  for (const Return& r :
+       {Return{"highestreturn", &Shot::highest, &Shot::elev_highest,
+               "Latitude of the highest detected return (the signal's start)",
+               "Longitude of the highest detected return (the signal's start)",
+               "Elevation of the highest detected return above the WGS84 ellipsoid"},
+        Return{"lowestreturn", &Shot::lowest_return, &Shot::elev_lowest_return,
+               "Latitude of the lowest detected return (the signal's end)",
+               "Longitude of the lowest detected return (the signal's end)",
+               "Elevation of the lowest detected return above the WGS84 ellipsoid"}}) {
+    const std::string suffix = std::string(r.name) + "_a1";
+    write_dataset(f, geo + "lat_" + suffix,
+                  of<double>(shots, [&](const Shot& s) { return or_fill((s.*r.where).lat_deg); }),
+                  {"degrees", r.lat, kGediFill});
+    write_dataset(f, geo + "lon_" + suffix,
+                  of<double>(shots, [&](const Shot& s) { return or_fill((s.*r.where).lon_deg); }),
+                  {"degrees", r.lon, kGediFill});
+    write_dataset(f, geo + "elev_" + suffix,
+                  of<float>(shots, [&](const Shot& s) { return or_fill(s.*r.elev); }),
+                  {"meters", r.height, kGediFill});
+  }
+}
+
 void GediGranuleWriter::write_l2a_beam(Hdf5Writer& f, const std::string& g,
                                        const std::vector<const Shot*>& shots) {
   write_shot_ids(f, g, shots, "Transmit time of the shot since 2018-01-01T00:00:00Z");
@@ -360,6 +399,7 @@ void GediGranuleWriter::write_l2a_beam(Hdf5Writer& f, const std::string& g,
       f, g + "/digital_elevation_model",
       of<float>(shots, [](const Shot& s) { return or_fill(s.dem); }),
       {"meters", "The simulation's terrain under the footprint centre, above WGS84", kGediFill});
+  write_l2a_algorithm(f, g, shots);
   const std::string truth = g + "/glaswave_truth/";
   described_group(
       f, g + "/glaswave_truth",

@@ -40,7 +40,8 @@ class GediGranuleWriter : public Hdf5GranuleWriter {
     std::uint8_t degrade = 0, quality = 0, modes = 0;
     std::uint64_t shot_number = 0;
     double delta_time = 0, dem = 0, elev_bin0 = 0, elev_lastbin = 0;
-    LatLon bin0{}, lastbin{}, lowest{}, highest{};
+    LatLon bin0{}, lastbin{}, lowest{}, highest{}, lowest_return{};
+    double elev_lowest_return = 0;  // the signal's end
     double solar_elevation = 0, solar_azimuth = 0, elev_lowest = 0, elev_highest = 0;
     double sensitivity = 0, noise_mean = 0, noise_stddev = 0, rx_energy = 0;
     double cover = 0, pai = 0, height = 0, energy_canopy_J = 0, energy_ground_J = 0;
@@ -48,6 +49,7 @@ class GediGranuleWriter : public Hdf5GranuleWriter {
   };
   void keep(std::int64_t index, const ShotRecord& shot) override;
   void write_file(Hdf5Writer& file) override;
+  Hdf5Chunking chunking() const override { return Hdf5Chunking::every; }
   // What both levels' beam groups begin with: shot_number, delta_time, beam, channel.
   static void write_shot_ids(Hdf5Writer& file, const std::string& group,
                              const std::vector<const Shot*>& shots, const char* delta_time_meaning);
@@ -55,6 +57,8 @@ class GediGranuleWriter : public Hdf5GranuleWriter {
                       const std::vector<const Shot*>& shots);
   void write_l2a_beam(Hdf5Writer& file, const std::string& group,
                       const std::vector<const Shot*>& shots);
+  static void write_l2a_algorithm(Hdf5Writer& file, const std::string& group,
+                                  const std::vector<const Shot*>& shots);
 
   GediLevel level_;
   std::size_t band_;

@@ -137,10 +137,12 @@ double glas_delta_ellipsoid_m(double lat_deg, double lon_deg, double h_m) {
 }
 
 GlasGranuleWriter::GlasGranuleWriter(const std::filesystem::path& final_path, GlasLevel level,
-                                     bool topex, const RunInfo& info)
+                                     bool topex, const RunInfo& info,
+                                     std::optional<std::vector<CloudLayer>> cloud_layers)
     : Hdf5GranuleWriter(final_path, info),
       level_(level),
       topex_(topex),
+      cloud_layers_(std::move(cloud_layers)),
       band_(nearest_band(info, 1064.0)) {
   shots_.resize(static_cast<std::size_t>(info.shots));
 }
@@ -385,7 +387,8 @@ void write_glah14_truth(Hdf5Writer& f, const std::string& d, const std::vector<S
 // reference range, the waveform's skewness, peaks and the receiver's gain.
 template <typename Shot>
 void write_glah14_reader_fields(Hdf5Writer& f, const std::string& d, const std::vector<Shot>& shots,
-                                double gain) {
+                                double gain,
+                                const std::optional<std::vector<CloudLayer>>& cloud_layers) {
   auto valid = [](const Shot& s) { return std::isfinite(s.elev); };
   write_dataset(
       f, d + "Elevation_Corrections/d_satElevCorr",
@@ -405,10 +408,15 @@ void write_glah14_reader_fields(Hdf5Writer& f, const std::string& d, const std::
                  "reached the digitiser's full scale; glaswave computes no correction)"});
   write_dataset(f, d + "Quality/sigma_att_flg", std::vector<std::int8_t>(shots.size(), 0),
                 {"1", "Attitude quality: 0 good (the simulation's pointing is exact)"});
-  write_dataset(f, d + "Elevation_Flags/elv_cloud_flg", std::vector<std::int8_t>(shots.size(), 0),
-                {"1",
-                 "Cloud contamination: 0, no cloud detected (glaswave does not flag clouds from "
-                 "the atmosphere)"});
+  // The atmosphere's layers are horizontally uniform: a reported one lies in every shot's column.
+  const bool clouds = cloud_layers && !cloud_layers->empty();
+  write_dataset(f, d + "Elevation_Flags/elv_cloud_flg",
+                std::vector<std::int8_t>(shots.size(), clouds ? 1 : 0),
+                {"1", cloud_layers ? "Cloud contamination: 1 where a cloud or aerosol layer the "
+                                     "layer finder reports at 1064 nm lies in the column, else 0"
+                                   // Runs without an atmosphere keep main's bits.
+                                   : "Cloud contamination: 0, no cloud detected (glaswave does "
+                                     "not flag clouds from the atmosphere)"});
   const std::int32_t gain_value =
       std::isfinite(gain) && gain < 2e9 ? static_cast<std::int32_t>(std::lround(gain)) : kInt32Fill;
   write_dataset(
@@ -514,7 +522,7 @@ void GlasGranuleWriter::write_file(Hdf5Writer& f) {
   }
   write_glah14_surfaces(f, d, shots_, heights);
   write_glah14_offsets(f, d, shots_);
-  write_glah14_reader_fields(f, d, shots_, info().detector_gain);
+  write_glah14_reader_fields(f, d, shots_, info().detector_gain, cloud_layers_);
   write_glah14_truth(f, d, shots_);
 }
 
@@ -530,7 +538,8 @@ const Registration<ProductWriter> glah14_writer(
     "glah14.h5", 41, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
       if (!c.settings.glah14) return nullptr;
       return std::make_unique<GlasGranuleWriter>(c.out_dir / "glah14.h5", GlasLevel::glah14,
-                                                 c.settings.glas_topex, c.info);
+                                                 c.settings.glas_topex, c.info,
+                                                 c.settings.glas_cloud_layers);
     });
 
 }  // namespace

@@ -10,9 +10,11 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <vector>
 
 #include "pipeline/products/hdf5_granule_writer.hpp"
+#include "pipeline/products/icesat2_products.hpp"
 
 namespace glaswave {
 
@@ -28,8 +30,10 @@ double glas_delta_ellipsoid_m(double lat_deg, double lon_deg, double h_m);
 class GlasGranuleWriter : public Hdf5GranuleWriter {
  public:
   // Writes the band nearest 1064 nm (GLAS's waveforms are its 1064 nm channel's).
+  // `cloud_layers`: GLAH14's elv_cloud_flg, 1 with any (ProductSettings::glas_cloud_layers).
   GlasGranuleWriter(const std::filesystem::path& final_path, GlasLevel level, bool topex,
-                    const RunInfo& info);
+                    const RunInfo& info,
+                    std::optional<std::vector<CloudLayer>> cloud_layers = std::nullopt);
 
  private:
   struct Shot {
@@ -54,6 +58,7 @@ class GlasGranuleWriter : public Hdf5GranuleWriter {
 
   GlasLevel level_;
   bool topex_;
+  std::optional<std::vector<CloudLayer>> cloud_layers_;
   std::size_t band_;
   std::vector<Shot> shots_;
 };

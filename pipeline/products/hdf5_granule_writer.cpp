@@ -82,7 +82,7 @@ void Hdf5GranuleWriter::finish(const RunStats&) {
   {
     // libhdf5 is libnetcdf's too, and neither is thread-safe: one lock for both.
     std::lock_guard lock(netcdf_library_mutex());
-    Hdf5Writer file(file_.part_path());
+    Hdf5Writer file(file_.part_path(), chunking());
     write_file(file);
     file.close();
   }

@@ -84,6 +84,8 @@ class Hdf5GranuleWriter : public ProductWriter {
   virtual void keep(std::int64_t index, const ShotRecord& shot) = 0;
   // Writes every dataset; `file` is closed and renamed after.
   virtual void write_file(Hdf5Writer& file) = 0;
+  // The datasets' layout (GEDI's granules chunk every one, as the real ones).
+  virtual Hdf5Chunking chunking() const { return Hdf5Chunking::large; }
 
   const RunInfo& info() const { return info_; }
 

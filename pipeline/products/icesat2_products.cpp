@@ -45,7 +45,8 @@ class Group {
 // when finished.
 class Granule {
  public:
-  explicit Granule(const std::filesystem::path& path) : file_(path), h5_(file_.part_path()) {}
+  explicit Granule(const std::filesystem::path& path)
+      : file_(path), h5_(file_.part_path(), Hdf5Chunking::every) {}
 
   const std::string& file() const { return root_; }
 
@@ -235,6 +236,38 @@ void write_beam_attributes(Granule& g, const std::string& beam_group, const Beam
                    sc_orient == atlas_sc_orient_forward ? "Forward" : "Backward");
 }
 
+// orbit_info/bounding_polygon_{lat1, lon1}: the granule's photons' latitude-longitude box (the
+// shots' without photons), closed, counter-clockwise from its south-west corner; the fill value
+// (one element) with neither.
+void write_bounding_polygon(Granule& g, const std::string& orbit_info,
+                            const std::vector<BeamTrack>& beams) {
+  double south = 90.0, north = -90.0, west = 180.0, east = -180.0;
+  const auto widen = [&](double lat, double lon) {
+    south = std::min(south, lat), north = std::max(north, lat);
+    west = std::min(west, lon), east = std::max(east, lon);
+  };
+  for (const BeamTrack& beam : beams) {
+    for (const BeamPhoton& p : beam.photons) widen(p.lat_deg, p.lon_deg);
+    if (beam.photons.empty())
+      for (const BeamShot& s : beam.shots) widen(s.lat_deg, s.lon_deg);
+  }
+  std::vector<double> lat{fill_of<double>()}, lon{fill_of<double>()};
+  if (south <= north) {
+    lat = {south, south, north, north, south};
+    lon = {west, east, east, west, west};
+  }
+  g.dataset(orbit_info, "bounding_polygon_lat1", lat,
+            {"degrees_north", "Bounding Polygon Latitude", "referenceInformation",
+             "The granule's photons' latitude-longitude box, closed, counter-clockwise from its "
+             "south-west corner"},
+            0, true);
+  g.dataset(orbit_info, "bounding_polygon_lon1", lon,
+            {"degrees_east", "Bounding Polygon Longitude", "referenceInformation",
+             "The granule's photons' latitude-longitude box, closed, counter-clockwise from its "
+             "south-west corner"},
+            0, true);
+}
+
 // What the granules' ancillary_data/ and orbit_info/ hold beside Granule::ancillary's, as
 // read-ICESat-2's read_granule reads them (each a one-element array): the GPS week and seconds
 // of week of the first and last shots, the first and last 20 m segments, the granule's UTC span
@@ -306,6 +339,7 @@ void write_ancillary_rest(Granule& g, const std::vector<BeamTrack>& beams) {
             {"degrees_east", "Ascending Node Longitude", "referenceInformation",
              "Not simulated: the fill value"},
             0, true);
+  write_bounding_polygon(g, o.get(), beams);
 }
 
 // ATL03's calibrations and impulse response, as read-ICESat-2's read_granule reads them:
@@ -893,6 +927,10 @@ void write_segment_flags(Granule& g, const std::string& h, const std::vector<flo
               {"1", "Consolidated Cloud Flag", "qualityInformation",
                "0 (clear): the simulated atmosphere has no clouds or blowing snow"});
   }
+  g.dataset(h, "segment_watermask", std::vector<std::int32_t>(count, 0),  // int32 as real ATL08
+            {"1", "Water mask", "referenceInformation",
+             "0 (no water): the simulated scenes have no inland water"},
+            0, true);
   g.dataset(h, "ph_removal_flag", zero,
             {"1", "Photon Removal Flag", "qualityInformation",
              "0: no signal photons are removed between the classification's two steps"});
@@ -939,11 +977,13 @@ void write_terrain(Granule& g, const std::string& h, const std::vector<LandSegme
            {"meters", "Standard deviation of terrain points", "modelResult",
             "Standard deviation (n - 1) of the segment's ground photons' heights"}},
       });
-  g.dataset(h, "h_te_mode", std::vector<float>(s.size(), fill_float),
-            {"meters", "Mode of terrain height", "modelResult",
-             "Not computed (the mode needs a histogram bin the data dictionary does not give): "
-             "the fill value"},
-            0, true);
+  write_segment_fields(g, h, s,
+                       {{"h_te_mode",
+                         &LandSegment::h_te_mode,
+                         {"meters", "Mode of terrain height", "modelResult",
+                          "Mode of the segment's ground photons' heights: the centre of the "
+                          "fullest 0.1 m bin (bins centred on multiples of 0.1 m), the lowest "
+                          "of ties"}}});
   g.dataset(h, "n_te_photons", as_int(s, &LandSegment::n_te_photons),
             {"1", "Number of ground photons", "modelResult", "The segment's ground photons"});
 }
@@ -1011,11 +1051,43 @@ void write_canopy(Granule& g, const std::string& h, const std::vector<LandSegmen
                          {"meters", "Top of canopy roughness", "modelResult",
                           "Standard deviation (n - 1) of the top-of-canopy photons' heights above "
                           "the fitted ground"}}});
-  g.dataset(h, "canopy_rh_conf",
-            std::vector<std::int8_t>(3 * s.size(), std::numeric_limits<std::int8_t>::max()),
+  std::vector<std::int8_t> confidence;
+  for (const LandSegment& x : s)
+    confidence.push_back(x.canopy_rh_conf < 0 ? fill_of<std::int8_t>() : x.canopy_rh_conf);
+  g.dataset(h, "canopy_rh_conf", confidence,
             {"1", "Canopy relative height confidence", "qualityInformation",
-             "Not assessed (segments x 3): the fill value"},
-            3, true);
+             "From the shares of canopy (canopy and top of canopy) and ground photons among the "
+             "segment's classified photons: 0 canopy < 5 %, 1 canopy >= 5 % and ground < 5 %, "
+             "2 canopy >= 5 % and ground >= 5 %; the fill value without classified photons"},
+            0, true);
+}
+
+// land_segments/{ph_ndx_beg, n_seg_ph}: each segment's first photon in signal_photons/ (1-based,
+// as ATL08 writes it; the fill value without one) and its count there. signal_photons/ holds
+// the classified photons in photon order, which is along-track order (write_signal_photons).
+void write_segment_photons(Granule& g, const std::string& h, const BeamTrack& beam,
+                           const Atl08Classes& classes, double first_m, double segment_m,
+                           std::size_t count) {
+  std::vector<std::int64_t> first(count, fill_of<std::int64_t>());
+  std::vector<std::int32_t> n(count, 0);
+  const std::vector<CloudPhoton> cloud = cloud_of(beam);
+  std::int64_t signal = 0;  // classified photons before this one
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (classes.classes[i] == 0) continue;
+    ++signal;
+    const double k = std::floor((cloud[i].along_m - first_m) / segment_m);
+    if (k < 0.0 || k >= static_cast<double>(count)) continue;
+    const auto j = static_cast<std::size_t>(k);
+    if (n[j]++ == 0) first[j] = signal;
+  }
+  g.dataset(h, "ph_ndx_beg", first,
+            {"1", "Photon Index Begin", "referenceInformation",
+             "1-based index in signal_photons/ of the segment's first classified photon"},
+            0, true);
+  g.dataset(h, "n_seg_ph", n,
+            {"1", "Number of photons in segment", "referenceInformation",
+             "The segment's classified photons in signal_photons/ (ground, canopy, top of "
+             "canopy)"});
 }
 
 void write_segment_truth(Granule& g, const std::string& land, const SegmentTruth& t) {
@@ -1046,6 +1118,7 @@ void write_land_segments(Granule& g, const std::string& beam_group, const BeamTr
   const SegmentTruth t = segment_truth(beam, first_m, s.size(), settings.segment_m);
   const Group land = g.group(beam_group, "land_segments");
   write_segment_place(g, land.get(), s, t);
+  write_segment_photons(g, land.get(), beam, classes, first_m, settings.segment_m, s.size());
   write_segment_flags(g, land.get(), t.dem_h, info);
   const Group terrain = g.group(land.get(), "terrain");
   const Group canopy = g.group(land.get(), "canopy");

@@ -306,7 +306,7 @@ void write_gedi_l2b(const std::filesystem::path& path, const std::vector<GediL2b
   AtomicFile file(path);
   {
     std::lock_guard lock(netcdf_library_mutex());
-    Hdf5Writer writer(file.part_path());
+    Hdf5Writer writer(file.part_path(), Hdf5Chunking::every);  // as real L2B
     for (const auto& [beam, members] : beams) {
       const std::string group = gedi_beam_group(beam);
       described_group(writer, group, beam < 4 ? "Coverage beam" : "Full power beam");

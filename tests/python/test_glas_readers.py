@@ -57,8 +57,9 @@ GLAH14_SPACELIDAR = [
     ("Geophysical/d_DEM_elv", np.float64)]
 
 
-def run_glas(tmp_path):
-    """Four GLAS shots at nadir over a flat bare plane, the detector adding a known noise."""
+def run_glas(tmp_path, atmosphere=None):
+    """Four GLAS shots at nadir over a flat bare plane, the detector adding a known noise
+    (through `atmosphere`, a section or preset name, where given)."""
     config = {
         "seed": 5, "sensor": {"preset": "glas"},
         "simulation": {"rays_per_shot": 400, "max_order": 2},
@@ -70,6 +71,8 @@ def run_glas(tmp_path):
                   "heading_deg": 10.0, "shots": 4, "spacing_m": 172.0},
         "output": {"netcdf": True, "footprints": False, "glah01": True, "glah14": True},
     }
+    if atmosphere is not None:
+        config["atmosphere"] = atmosphere
     path = tmp_path / "glas.json"
     path.write_text(json.dumps(config))
     out = tmp_path / "glas"
@@ -171,3 +174,16 @@ def test_glas_granules_read_as_the_glas_readers_read_them(tmp_path):
             np.testing.assert_allclose(dist[:, -1], g14["Data_40HZ/Elevation_Surfaces/d_refRng"][:],
                                        atol=0.08)
         np.testing.assert_array_equal(f["Data_40HZ/DS_UTCTime_40"][:], shots["time"][:])
+
+
+def test_glah14_cloud_flag_is_the_layer_finders(tmp_path):
+    """elv_cloud_flg (issue 38): 1 where a layer the atmosphere's layer finder reports lies in
+    the column. The `cirrus` preset's layer 9 km above the ellipsoid, over this plane at 1600 m,
+    is reported (docs/guide/atmosphere.md; ATL08's layer_flag is 1 for it,
+    tests/pipeline/app/atmosphere_flags_test.cpp); without a section the flag stays 0
+    (test_glas_granules_read_as_the_glas_readers_read_them)."""
+    out = run_glas(tmp_path, atmosphere="cirrus")
+    with h5py.File(out / "glah14.h5") as f:
+        flag = f["Data_40HZ/Elevation_Flags/elv_cloud_flg"]
+        assert flag.dtype == np.int8 and flag.shape == (4,)
+        assert list(flag[:]) == [1] * 4

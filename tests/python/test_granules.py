@@ -146,6 +146,58 @@ def test_gedi_l2a_reads_as_rgedi_reads_it_and_is_a_granule_track(tmp_path):
     np.testing.assert_allclose(again["time"][:], shots["time"][:], atol=1e-6)
 
 
+def chunked_as_real_granules(f):
+    """Every non-empty dataset chunked, min(rows, 10000) rows a chunk: rGEDI's and
+    ICESat2VegR's clips copy each dataset's chunk_dims (NA for a contiguous one)."""
+    def check(name, d):
+        if isinstance(d, h5py.Dataset) and d.size > 0:
+            assert d.chunks is not None, name
+            assert d.chunks[0] == min(d.shape[0], 10000) and d.chunks[1:] == d.shape[1:], name
+    f.visititems(check)
+
+
+def test_gedi_l2a_has_what_rgedi_clip_level2a_reads(tmp_path):
+    """rGEDI's clipLevel2A (getSpatialData2A): BEAMxxxx/ancillary/l2a_alg_count, then for each
+    group j up to it geolocation/{lat,lon}_{highest,lowest}return_aj (float64), and
+    elev_highestreturn_aj's length; then it copies every dataset with its chunk_dims.
+    glaswave runs one setting group, the beam group's own: the count is 1 (real L2A: 6)."""
+    granule = tmp_path / "GEDI02_A_small.h5"
+    write_gedi_granule(granule)
+    out = run(tmp_path, "gedi", granule, gedi_l1b=True, gedi_l2a=True)
+    shots = netCDF4.Dataset(out / "shots.nc")
+    number = shots["shot_number"][:]
+    band = int(np.argmin(np.abs(shots["wavelength"][:] - 1064)))
+    with h5py.File(out / "gedi_l2a.h5") as f:
+        chunked_as_real_granules(f)
+        for g in beams(f):
+            b = f[g]
+            count = b["ancillary/l2a_alg_count"]
+            assert count.dtype == np.uint8 and list(count[()]) == [1]
+            n = len(b["shot_number"])
+            geo = {}
+            for name in ("lat_highestreturn", "lon_highestreturn", "lat_lowestreturn",
+                         "lon_lowestreturn"):
+                geo[name] = b[f"geolocation/{name}_a1"]
+                assert geo[name].dtype == np.float64 and geo[name].shape == (n,), name
+            for name in ("elev_highestreturn", "elev_lowestreturn"):
+                assert b[f"geolocation/{name}_a1"].dtype == np.float32
+            np.testing.assert_array_equal(geo["lat_highestreturn"], b["lat_highestreturn"])
+            np.testing.assert_array_equal(geo["lon_highestreturn"], b["lon_highestreturn"])
+            np.testing.assert_array_equal(b["geolocation/elev_highestreturn_a1"],
+                                          b["elev_highestreturn"])
+            for i, shot_number in enumerate(b["shot_number"][:]):
+                k = int(np.flatnonzero(number == shot_number)[0])
+                # The lowest return is the signal's end, below the lowest mode's centre.
+                low = b["geolocation/elev_lowestreturn_a1"][i]
+                np.testing.assert_allclose(low, shots["sig_end_m"][k, band], atol=1e-3)
+                assert low < b["elev_lowestmode"][i]
+                # Its point lies on the beam near the footprint centre (a 25 m footprint).
+                assert abs(geo["lat_lowestreturn"][i] - shots["lat"][k]) < 1e-3
+    with h5py.File(out / "gedi_l1b.h5") as f:
+        chunked_as_real_granules(f)
+        assert f[beams(f)[0] + "/rx_sample_start_index"].chunks is not None
+
+
 def test_glah14_keeps_the_true_record_and_shot_count(tmp_path):
     granule = tmp_path / "GLAH14_small.H5"
     write_glah14_granule(granule)

@@ -497,3 +497,81 @@ def test_atl03_segments_read_as_icesat2vegr_seg_metadata_reads_them(granules):
         for name in ("tx_pulse_width_lower", "tx_pulse_width_upper", "full_sat_fract",
                      "near_sat_fract", "neutat_ht"):
             assert np.all(columns[name] == fill), name
+
+
+def test_land_segments_mode_confidence_and_photon_index(granules):
+    """ICESat2VegR's ATL08_seg_attributes_dt and ATL08_h5_clipBox (issue 38):
+    terrain/h_te_mode, the mode of the ground photons' heights (float32; glaswave's bins: 0.1 m
+    centred on multiples of 0.1 m, as real ATL08's values lie on that grid, the lowest of ties);
+    canopy/canopy_rh_conf, int8 (segments), by the ATL08 dictionary from the shares of canopy and
+    ground photons among the classified ones: 0 canopy < 5 %, 1 canopy >= 5 % and ground < 5 %,
+    2 both >= 5 %; land_segments/ph_ndx_beg (int64, 1-based) and n_seg_ph (int32), whose slice
+    ph_ndx_beg .. ph_ndx_beg + n_seg_ph - 1 of signal_photons/ the clip takes as the segment's
+    photons (and whose cumsum it writes back), and segment_watermask, whose length it takes as the
+    segments'."""
+    atl03, atl08 = granules
+    fill = np.float32(3.4028235e38)
+    for beam in BEAMS:
+        land = atl08[f"{beam}/land_segments"]
+        n = len(land["longitude"])
+        mode = dataset(land, "terrain/h_te_mode", "f4")
+        conf = dataset(land, "canopy/canopy_rh_conf", "i1")
+        beg = dataset(land, "ph_ndx_beg", "i8")
+        count = dataset(land, "n_seg_ph", "i4")
+        assert len(mode) == len(conf) == len(beg) == len(count) == n
+        # The clip takes the segments' length from segment_watermask (int32 as real ATL08's
+        # atl08_clip.h5; no water here).
+        assert np.all(dataset(land, "segment_watermask", "i4") == 0)
+        assert len(land["segment_watermask"]) == n
+        ph_segment = atl08[f"{beam}/signal_photons/ph_segment_id"][()]
+        assert beg[0] == 1 and count.sum() == len(ph_segment)
+        np.testing.assert_array_equal(beg, np.cumsum(np.concatenate([[1], count[:-1]])))
+        for k, p, inside, joined, flag, ph_h in segment_photons(atl03, atl08, beam):
+            mine = ph_segment[beg[k] - 1:beg[k] - 1 + count[k]]
+            assert count[k] == len(joined)
+            assert np.all((mine >= land["segment_id_beg"][k]) & (mine <= land["segment_id_end"][k]))
+            ground = p["h"][joined[flag == 1]].astype(np.float64)
+            canopy = np.sum(flag >= 2)
+            share_canopy, share_ground = canopy / len(flag), len(ground) / len(flag)
+            expected = 0 if share_canopy < 0.05 else (1 if share_ground < 0.05 else 2)
+            assert conf[k] == expected, (beam, k)
+            if len(ground) == 0:
+                assert mode[k] == fill
+                continue
+            bins, votes = np.unique(np.round(ground / 0.1).astype(np.int64), return_counts=True)
+            assert mode[k] == pytest.approx(bins[np.argmax(votes)] * 0.1, abs=1e-3), (beam, k)
+            assert ground.min() - 0.05 <= mode[k] <= ground.max() + 0.05
+        # A forest of 50 % cover on a plane: canopy and ground in every segment.
+        assert set(conf) == {2}
+
+
+def test_bounding_polygon_is_the_photons_extent(granules):
+    """orbit_info/bounding_polygon_{lat1, lon1} (float64 degrees; ICESat2VegR's rgt_extract):
+    glaswave's is its photons' latitude-longitude box, closed, counter-clockwise from the
+    south-west corner, against the ATL03 photons of every beam."""
+    atl03, atl08 = granules
+    lat = np.concatenate([atl03[f"{b}/heights/lat_ph"][()] for b in BEAMS])
+    lon = np.concatenate([atl03[f"{b}/heights/lon_ph"][()] for b in BEAMS])
+    for f in (atl03, atl08):
+        plat = dataset(f, "orbit_info/bounding_polygon_lat1", "f8")
+        plon = dataset(f, "orbit_info/bounding_polygon_lon1", "f8")
+        np.testing.assert_array_equal(plat, [lat.min(), lat.min(), lat.max(), lat.max(),
+                                             lat.min()])
+        np.testing.assert_array_equal(plon, [lon.min(), lon.max(), lon.max(), lon.min(),
+                                             lon.min()])
+        # Counter-clockwise: a positive signed (shoelace) area.
+        area = 0.5 * np.sum(plon[:-1] * plat[1:] - plon[1:] * plat[:-1])
+        assert area > 0
+
+
+def test_granules_are_chunked_as_real_ones(granules):
+    """ATL03's and ATL08's datasets are chunked (10000 rows, gzip): ICESat2VegR's
+    ATL03_h5_clipBox copies each dataset's chunk_dims, NA for a contiguous one."""
+    for f in granules:
+        def check(name, d):
+            if isinstance(d, h5py.Dataset) and d.size > 0:
+                assert d.chunks is not None, name
+                assert d.chunks[0] == min(d.shape[0], 10000), name
+                assert d.chunks[1:] == d.shape[1:], name
+                assert d.compression == "gzip", name
+        f.visititems(check)

@@ -273,7 +273,7 @@ run_icesat2 <- function(atl03_file, atl08_file, scratch) {
          ATL08_seg_attributes_dt(atl08, attributes = more), table_check(more))
   record(R, "ATL08_seg_attributes_dt (h_te_min: not in its name map)",
          ATL08_seg_attributes_dt(atl08, attributes = "h_te_min"), table_check("h_te_min"))
-  record(R, "ATL08_seg_attributes_dt (canopy_rh_conf: segments x 3)",
+  record(R, "ATL08_seg_attributes_dt (canopy_rh_conf)",
          ATL08_seg_attributes_dt(atl08, attributes = "canopy_rh_conf"),
          table_check("canopy_rh_conf"))
   l08p <- record(R, "ATL08_photons_attributes_dt", ATL08_photons_attributes_dt(atl08),
