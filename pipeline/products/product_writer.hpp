@@ -81,10 +81,10 @@ struct ProductSettings {
   bool glas_topex = false;  // GLAS heights on the TOPEX/Poseidon ellipsoid, not WGS84
   // The switches writers declare in their own files (core/part_switch.hpp), as the configuration's
   // `output` set them: DIR/gedi_l1b.h5, DIR/gedi_l2a.h5 and a new writer's.
-  PartSwitches switches;
+  PartSwitches switches{};
   // GLAH14's elv_cloud_flg: with an `atmosphere` section, the layers its layer finder reports
   // at the band nearest 1064 nm (maybe none); without, absent.
-  std::optional<std::vector<CloudLayer>> glas_cloud_layers;
+  std::optional<std::vector<CloudLayer>> glas_cloud_layers{};
 };
 
 // What a writer's Factory is given: the run's output directory (which exists), the products it
