@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "pipeline/config/config.hpp"
-#include "pipeline/transport/brf_transport.hpp"
+#include "pipeline/shot/brf_shot.hpp"
 
 namespace glaswave {
 

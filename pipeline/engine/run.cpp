@@ -28,7 +28,7 @@
 #include "pipeline/products/hdf5_granule_writer.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/record_codec.hpp"
-#include "pipeline/transport/atmosphere.hpp"
+#include "pipeline/shot/cloud_layers.hpp"
 
 namespace glaswave {
 namespace {
@@ -381,13 +381,7 @@ Icesat2ProductSettings icesat2_product_settings(const Config& config) {
   s.sc_orient = static_cast<std::int8_t>(orientation);
   s.dead_time_ns = config.sensor.dead_time_ns;
   // ATL08's cloud flags: the layers ATL09 would report, at the beams' one band.
-  if (config.atmosphere) {
-    std::vector<CloudLayer>& layers = s.cloud_layers.emplace();
-    for (const std::size_t i : detected_layers(*config.atmosphere, 0)) {
-      const AtmosphereLayer& layer = config.atmosphere->layers[i];
-      layers.push_back({layer.base_m, layer.above_ellipsoid});
-    }
-  }
+  if (config.atmosphere) s.cloud_layers = reported_cloud_layers(*config.atmosphere, 0);
   return s;
 }
 
@@ -428,13 +422,9 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
   settings.glas_topex = config.output.glas_ellipsoid == "topex";
   settings.switches = config.output.switches;  // the writers' own keys
   // GLAH14's cloud flag: the layers found at GLAS's 1064 nm channel, as ATL08's at 532 nm.
-  if (config.atmosphere && settings.glah14) {
-    std::vector<CloudLayer>& layers = settings.glas_cloud_layers.emplace();
-    for (const std::size_t i : detected_layers(*config.atmosphere, nearest_band(info, 1064.0))) {
-      const AtmosphereLayer& layer = config.atmosphere->layers[i];
-      layers.push_back({layer.base_m, layer.above_ellipsoid});
-    }
-  }
+  if (config.atmosphere && settings.glah14)
+    settings.glas_cloud_layers =
+        reported_cloud_layers(*config.atmosphere, nearest_band(info, 1064.0));
   output->writers = make_writers(request.out_dir, settings, info, icesat2_product_settings(config));
   if (output->resumed) {
     RunOutput& out = *output;
