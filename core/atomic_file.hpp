@@ -3,6 +3,7 @@
 // section 2). Shared by every product writer so the rule lives in one place.
 #pragma once
 
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -51,5 +52,15 @@ class AtomicFile {
   std::filesystem::path part_path_;
   bool committed_ = false;
 };
+
+// A whole text product (a CSV, a ROMC file) written through an AtomicFile.
+inline void write_text_atomically(const std::filesystem::path& path, const std::string& text) {
+  AtomicFile file(path);
+  std::FILE* out = std::fopen(file.part_path().c_str(), "w");
+  if (!out) throw run_error(path.string(), "cannot write");
+  const bool written = std::fwrite(text.data(), 1, text.size(), out) == text.size();
+  if (std::fclose(out) != 0 || !written) throw run_error(path.string(), "cannot write");
+  file.commit();
+}
 
 }  // namespace glaswave

@@ -46,15 +46,6 @@ std::string model_name(const BrfRamiSettings& rami) {
   return rami.model.empty() ? "glaswave" : rami.model;
 }
 
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  AtomicFile file(path);
-  std::FILE* out = std::fopen(file.part_path().c_str(), "w");
-  if (!out) throw run_error(path.string(), "cannot write");
-  const bool written = std::fwrite(text.data(), 1, text.size(), out) == text.size();
-  if (std::fclose(out) != 0 || !written) throw run_error(path.string(), "cannot write");
-  file.commit();
-}
-
 std::string row(double sza, double vza, double relative_azimuth, double value, double error) {
   char line[160];
   std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f %.6f\n", sza, vza, relative_azimuth, value,
@@ -157,7 +148,7 @@ void write_rami_measurements(const std::filesystem::path& dir, const Config& con
         std::snprintf(line, sizeof line, "%.6f\t%.6f\n", value, error);
         text = line;
       }
-      write_text(dir / rami_file_name(rami, m, name), text);
+      write_text_atomically(dir / rami_file_name(rami, m, name), text);
     }
   }
 }

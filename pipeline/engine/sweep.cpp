@@ -82,15 +82,6 @@ std::string csv_field(const std::string& text) {
   return quoted + "\"";
 }
 
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  AtomicFile file(path);
-  std::FILE* out = std::fopen(file.part_path().c_str(), "w");
-  if (!out) throw run_error(path.string(), "cannot write");
-  const bool written = std::fwrite(text.data(), 1, text.size(), out) == text.size();
-  if (std::fclose(out) != 0 || !written) throw run_error(path.string(), "cannot write");
-  file.commit();
-}
-
 }  // namespace
 
 Variation parse_variation(const std::string& text) {
@@ -203,10 +194,10 @@ void run_sweep(const SweepRequest& request, const ProgressCallback& progress) {
       cases.push_back(simulate_case(request, variation.key, value, case_progress));
     }
 
-  write_text(request.out_dir / "sensitivity.csv",
-             sensitivity_csv(base_config.sensor.bands, base, cases));
-  write_text(request.out_dir / "sensitivity.md",
-             sensitivity_markdown(base_config, request.variations, base, cases));
+  write_text_atomically(request.out_dir / "sensitivity.csv",
+                        sensitivity_csv(base_config.sensor.bands, base, cases));
+  write_text_atomically(request.out_dir / "sensitivity.md",
+                        sensitivity_markdown(base_config, request.variations, base, cases));
   directory.keep();
 }
 
