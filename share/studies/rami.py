@@ -15,7 +15,6 @@ discs' radius and their diameter), the ROMC files of every run under runs/, and 
 """
 import argparse
 import copy
-import csv
 import hashlib
 import json
 import math
@@ -34,6 +33,7 @@ import numpy as np  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "rami"))
 import make_scenes  # noqa: E402
+from studies import write_atomic, write_csv  # noqa: E402  (the seed driver's writers)
 
 SCENES = ["hom_tur_pla", "hom_tur_ere", "hom_tur_uni", "hom_dis_pla", "hom_dis_ere",
           "hom_dis_uni", "het01", "het02", "het03"]
@@ -44,23 +44,6 @@ PATH_KEYS = [("canopy", "crowns_file"), ("canopy", "facets", "trees_file")]
 
 def log(message):
     print("rami: " + message, file=sys.stderr, flush=True)
-
-
-def write_atomic(path, text):
-    temporary = path + ".part"
-    with open(temporary, "w") as f:
-        f.write(text)
-    os.replace(temporary, path)
-
-
-def write_csv(path, header, rows):
-    temporary = path + ".part"
-    with open(temporary, "w", newline="") as f:
-        writer = csv.writer(f, lineterminator="\n")
-        writer.writerow(header)
-        for row in rows:
-            writer.writerow([f"{v:.6g}" if isinstance(v, float) else v for v in row])
-    os.replace(temporary, path)
 
 
 def absolute_paths(document, folder):
