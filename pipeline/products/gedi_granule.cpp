@@ -15,6 +15,9 @@ namespace {
 
 constexpr double kGediFill = -9999.0;
 
+// The L1B's sample-indexed truth, glaswave_truth/BEAMxxxx/ (docs/granules.md).
+constexpr const char* kWaveformTruthGroup = "glaswave_truth";
+
 double or_fill(double value) { return std::isfinite(value) ? value : kGediFill; }
 
 std::uint8_t channel_of(std::uint16_t beam) {
@@ -120,6 +123,13 @@ void GediGranuleWriter::write_file(Hdf5Writer& file) {
   // Beam groups in the order of their numbers, each with its shots in record (shot) order.
   std::map<std::uint16_t, std::vector<const Shot*>> beams;
   for (const Shot& s : shots_) beams[s.beam].push_back(&s);
+  if (level_ == GediLevel::l1b)
+    described_group(
+        file, kWaveformTruthGroup,
+        "The simulation's truth, not a GEDI product field: per beam, the parts of rxwaveform last "
+        "scattered by vegetation and by the ground, indexed as the beam's rxwaveform "
+        "(rx_sample_start_index, rx_sample_count). Outside the beams because rGEDI's "
+        "clipLevel1B takes any beam dataset of rxwaveform's length for rxwaveform itself");
   for (const auto& [beam, shots] : beams) {
     const std::string group = gedi_beam_group(beam);
     described_group(file, group, beam < 4 ? "Coverage beam" : "Full power beam");
@@ -292,13 +302,15 @@ void GediGranuleWriter::write_l1b_beam(Hdf5Writer& f, const std::string& g,
   const std::string truth = g + "/glaswave_truth/";
   described_group(
       f, g + "/glaswave_truth",
-      "The simulation's truth, not a GEDI product field: the parts of rxwaveform last "
-      "scattered by vegetation and by the ground, and the footprint's cover, PAI and height");
+      "The simulation's truth, not a GEDI product field: the received energy last scattered by "
+      "vegetation and by the ground, and the footprint's cover, PAI and height (the waveform's "
+      "parts are in /glaswave_truth/BEAMxxxx)");
+  const std::string parts = std::string(kWaveformTruthGroup) + "/" + g + "/";
   write_dataset(
-      f, truth + "rxwaveform_canopy", w.canopy,
+      f, parts + "rxwaveform_canopy", w.canopy,
       {"counts", "The part of rxwaveform last scattered by vegetation (same indices)", kGediFill});
   write_dataset(
-      f, truth + "rxwaveform_ground", w.ground,
+      f, parts + "rxwaveform_ground", w.ground,
       {"counts", "The part of rxwaveform last scattered by the ground (same indices)", kGediFill});
   write_dataset(f, truth + "rx_energy_canopy",
                 of<double>(shots, [](const Shot& s) { return or_fill(s.energy_canopy_J); }),

@@ -228,3 +228,38 @@ def test_glah14_keeps_the_true_record_and_shot_count(tmp_path):
     with h5py.File(out / "glah01.h5") as f:
         assert f["Data_40HZ/Waveform/RecWaveform/r_rng_wf"].shape[0] == 3
         assert list(f["Data_40HZ/Time/i_shot_count"][:]) == [39, 40, 1]
+
+
+def test_gedi_l1b_has_one_dataset_per_sample_index_as_rgedi_clip_level1b_needs(tmp_path):
+    """rGEDI's clipLevel1B (clipByMask1B) walks every group under a beam; a 1-D dataset whose
+    length is the beam's sum of rx_sample_count or tx_sample_count (or a multiple of its shots)
+    is taken for a waveform: it writes BEAMxxxx/{rx,tx}_sample_start_index for it, by the name's
+    first two letters, and fails on a second one ("already exists"). So a beam holds one such
+    dataset per prefix, rxwaveform and txwaveform; the truth's waveform parts lie outside the
+    beams, in glaswave_truth/BEAMxxxx/, indexed as rxwaveform and summing to it."""
+    granule = tmp_path / "GEDI02_A_small.h5"
+    write_gedi_granule(granule)
+    out = run(tmp_path, "gedi", granule, gedi_l1b=True)
+    with h5py.File(out / "gedi_l1b.h5") as f:
+        for g in beams(f):
+            b = f[g]
+            shots = len(b["shot_number"])
+            sizes = {int(b["rx_sample_count"][:].sum()), int(b["tx_sample_count"][:].sum())}
+            taken = {"rx": [], "tx": []}
+
+            def visit(name, d):
+                if not isinstance(d, h5py.Dataset) or d.ndim != 1 or d.shape[0] in (1, shots):
+                    return
+                if name.endswith("_sample_start_index"):
+                    return
+                if d.shape[0] in sizes or d.shape[0] % shots == 0:
+                    taken["rx" if name.split("/")[-1][:2] == "rx" else "tx"].append(name)
+            b.visititems(visit)
+            assert taken == {"rx": ["rxwaveform"], "tx": ["txwaveform"]}, taken
+            # The truth's parts: the beam's indices; no detector is configured (no noise), so
+            # the parts last scattered by vegetation and by the ground sum to rxwaveform.
+            canopy = f[f"glaswave_truth/{g}/rxwaveform_canopy"][:]
+            ground = f[f"glaswave_truth/{g}/rxwaveform_ground"][:]
+            assert canopy.shape == ground.shape == b["rxwaveform"].shape
+            np.testing.assert_allclose(canopy + ground, b["rxwaveform"][:], rtol=1e-5,
+                                       atol=1e-3)
