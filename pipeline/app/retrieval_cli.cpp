@@ -85,6 +85,12 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
                    "one the input allows; rt with --table)")
       ->type_name("NAME,...");
   retrieve_->add_option("--shots", shots, "shot numbers A to B-1 only")->type_name("A:B");
+  retrieve_
+      ->add_option("--rt-search", rt_search,
+                   "rt's search: projected (the default: principal components pick the entries "
+                   "that get the exact likelihood), two_stage (the exact likelihood of every "
+                   "entry) or direct (every entry at every bin about L2A's ground)")
+      ->type_name("NAME");
   retrieve_->add_option("--threads", threads_text, "threads; 0 (the default) uses every core")
       ->type_name("N");
   retrieve_->add_flag("--quiet", quiet, "no progress bar");
@@ -146,6 +152,13 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
     request.first_shot = decimal(shots.substr(0, colon), "--shots", usage);
     request.last_shot = decimal(shots.substr(colon + 1), "--shots", usage);
   }
+  if (rt_search == "two_stage")
+    request.rt.search = RtSearch::two_stage;
+  else if (rt_search == "direct")
+    request.rt.search = RtSearch::direct;
+  else if (!rt_search.empty() && rt_search != "projected")
+    throw config_error("--rt-search",
+                       "expected projected, two_stage or direct, got " + quoted_excerpt(rt_search));
   request.threads = threads_of(threads_text);
   request.command_line = command_line;
   const RetrieveSummary summary = run_retrieval(request, progress(quiet || json, "shots"));

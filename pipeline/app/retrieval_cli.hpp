@@ -28,7 +28,7 @@ class RetrievalCommands {
 
   CLI::App* table_ = nullptr;
   CLI::App* retrieve_ = nullptr;
-  std::string config_file, out, table_file, methods, shots, threads_text;
+  std::string config_file, out, table_file, methods, shots, threads_text, rt_search;
   std::vector<std::string> overrides, inputs;
   bool quiet = false, json = false, plots = false;
 };

@@ -40,6 +40,23 @@
 // widened while the window's edge holds posterior mass. RtSearch::direct: every entry at every
 // whole bin within search_half_width_bins of the guess (the first cut's).
 //
+// RtSearch::projected (the default) is two_stage whose every-entry step runs on a few principal
+// components: each band's waveform is put through the variance-stabilising transform of the
+// noise model, g(x) = integral of dx / sqrt(V(x)), so that (g(m) - g(T))^2 ~ (m - T)^2 / V and
+// chi2 is a Euclidean distance; its `projection_components` leading components (of the
+// transformed entries and their slopes, per quarter octave of detector noise, built when first
+// needed) bound, up to the transform's error, every entry's chi2 profiled to first order over the
+// sub-bin offset, from below and above through the parts of the shot and the entry outside the
+// components, (|r_m| -+ |r_e|)^2.
+// Only the entries whose lower bound lies within prune_log_likelihood + prefilter_margin of the
+// best upper bound get the exact likelihood: the same cells as two_stage wherever the transform
+// keeps its error within the margin (retrieval_benchmark measures how often the posteriors are
+// identical), at a fraction of the cost for tables of 10^4 entries. Where more than
+// max_exact_entries stay within reach (a dense table, a wide posterior), only the design's
+// first of them are: the posterior of a coarser design over the same region. Tables of fewer
+// than projection_min_entries, and shots whose waveform the table's window overhangs at the
+// found ground, are searched exactly.
+//
 // Posterior. Uniform over the table's entries (the design is the prior) and over the ground:
 // w(e, s) ∝ exp(l(e, s)). Each variable's mean, sd, 5 % and 95 % come from the entries'
 // marginal weights (the ground's from the shifts').
@@ -52,6 +69,9 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <span>
 #include <vector>
 
@@ -69,14 +89,25 @@ enum RtFlag : std::uint8_t {
 };
 
 enum class RtLikelihood { calibrated, constant_sd };
-enum class RtSearch { two_stage, direct };
+enum class RtSearch { projected, two_stage, direct };
 
 struct RtSettings {
   double chi2_dof_limit = 4.0;
   double edge_fraction = 0.05;
   double edge_mass = 0.5;
   RtLikelihood likelihood = RtLikelihood::calibrated;
-  RtSearch search = RtSearch::two_stage;
+  RtSearch search = RtSearch::projected;
+  // projected: the principal components kept, and the margin (log-likelihood) beyond
+  // prune_log_likelihood below which an entry's lower bound sends it to the exact likelihood.
+  int projection_components = 24;
+  double prefilter_margin_log_likelihood = 10.0;
+  // projected: the most entries given the exact likelihood (0: all). Beyond it, the design's
+  // first of those the components cannot rule out: a Halton design's prefix is a coarser design
+  // of the same region, so that a dense table's posterior costs what a coarser one's does.
+  int max_exact_entries = 192;
+  // projected: tables of fewer entries are searched exactly (two_stage): there the exact
+  // likelihood of every entry costs less than the components' setup, about a second.
+  int projection_min_entries = 1000;
   // Whole bins searched either side of the first guess of the ground (direct); 0: 1.5 pulse
   // sigma, at least 4.
   int search_half_width_bins = 0;
@@ -190,6 +221,25 @@ class RtInversion {
     const double* slope;
     const double* curvature;
   };
+  // The transformed entries' principal components at one level of detector noise per band.
+  struct Projection {
+    std::size_t components = 0, width = 0;  // K, bands x bins
+    // Per band: g on x = floor + (top - floor) (i / G)^2, i = 0..G, and its slope below the
+    // floor and above the top.
+    std::vector<std::vector<double>> g;
+    std::vector<double> floor, top, slope_low, slope_high;
+    std::vector<double> mean, basis;            // width; width x K (column k contiguous)
+    std::vector<double> coords, slope_coords;   // entries x K
+    std::vector<double> residual, slope_norm2;  // |r_e|, |c'_e|^2 per entry
+    std::vector<double> scale, log_det;         // chi2 scale rho_ref / rho_e, sum log V
+    double transform(std::size_t band, double x) const;
+  };
+  const Projection& projection(const RtPreparedShot& shot) const;
+  std::unique_ptr<Projection> build_projection(const std::vector<double>& noise2) const;
+  // The entries whose projected bounds leave them within reach of the best at `shift` (all
+  // entries, `ok` false, where the table's window at that shift leaves the shot's bins).
+  std::vector<std::size_t> prefilter(const RtPreparedShot& shot, int shift, std::int64_t excluded,
+                                     bool* ok) const;
   void build_emulator();
   void fit_noise_model();
   void build_variances();
@@ -228,6 +278,9 @@ class RtInversion {
   std::vector<double> var_linear_, var_quadratic_, signal_floor_W_, out_var_;
   double measured_factor_ = 1.0;  // r_m
   double tempering_ = 1.0;
+  // The projections, one per quarter octave of each band's detector noise.
+  mutable std::mutex projections_mutex_;
+  mutable std::map<std::vector<int>, std::unique_ptr<const Projection>> projections_;
 };
 
 }  // namespace glaswave

@@ -4,10 +4,12 @@
 // seeds whose PAI is drawn uniformly over the table's range (so that a calibrated posterior's
 // 90 % interval holds the truth in 90 % of them, averaged over the prior), over a plane 75 m
 // up. Each alternative (the first cut's likelihood and search, the calibrated likelihood
-// searched directly and in two stages, without the emulator, without tempering) retrieves the
-// same shots on --threads threads: the 90 % interval's coverage of PAI and cover, PAI's bias
-// and RMSE, the ground's, the flags, and shots a second, with each alternative's speed as a
-// ratio to the first cut's, measured in this one run.
+// searched directly, in two stages, and in two stages through the principal components'
+// prefilter, without the emulator, without tempering) retrieves the same shots on --threads
+// threads: the 90 % interval's coverage of PAI and cover, PAI's bias and RMSE, the ground's, the
+// flags, shots a second (with each alternative's speed as a ratio to the first cut's, measured in
+// this one run) and CPU seconds, and how many shots' posteriors equal the exact two-stage
+// search's to the bit (`same`).
 // Not a test: `--quick` is the short mode that ctest runs (a small table, few shots).
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -17,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -107,11 +110,24 @@ struct Figures {
   double pai_coverage = 0, cover_coverage = 0, pai_bias = 0, pai_rmse = 0, pai_sd = 0;
   double ground_bias = 0, ground_rmse = 0, ground_mad = 0;
   int ground_far = 0, ground_far_flagged = 0, flagged = 0, shots = 0;
-  double shots_per_s = 0, setup_s = 0, tempering = 0;
+  double shots_per_s = 0, cpu_s = 0, setup_s = 0, tempering = 0;
+  int same = -1;  // shots whose result equals the reference's to the bit (-1: no reference)
 };
 
+bool same_result(const RtResult& a, const RtResult& b) {
+  const auto eq = [](const RtStatistic& x, const RtStatistic& y) {
+    return std::memcmp(&x, &y, sizeof(RtStatistic)) == 0;
+  };
+  return eq(a.pai, b.pai) && eq(a.cover, b.cover) && eq(a.canopy_height_m, b.canopy_height_m) &&
+         eq(a.ground_elevation_m, b.ground_elevation_m) && eq(a.rhov_rhog, b.rhov_rhog) &&
+         a.flag == b.flag && a.best_entry == b.best_entry;
+}
+
+double cpu_seconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
 Figures evaluate(const ForwardTable& table, const RtSettings& settings,
-                 const std::vector<HeldOut>& shots, int threads) {
+                 const std::vector<HeldOut>& shots, int threads, std::vector<RtResult>* keep,
+                 const std::vector<RtResult>* reference) {
   Figures f;
   const auto t0 = Clock::now();
   const RtInversion rt(table, settings);
@@ -126,11 +142,19 @@ Figures evaluate(const ForwardTable& table, const RtSettings& settings,
   std::vector<RtResult> results(shots.size());
   tbb::task_arena arena(threads);
   const auto t1 = Clock::now();
+  const double c1 = cpu_seconds();
   arena.execute([&] {
     tbb::parallel_for(std::size_t{0}, shots.size(),
                       [&](std::size_t i) { results[i] = rt.invert(inputs[i]); });
   });
   f.shots_per_s = shots.size() / std::chrono::duration<double>(Clock::now() - t1).count();
+  f.cpu_s = cpu_seconds() - c1;
+  if (reference && reference->size() == results.size()) {
+    f.same = 0;
+    for (std::size_t i = 0; i < results.size(); ++i)
+      f.same += same_result(results[i], (*reference)[i]);
+  }
+  if (keep) *keep = results;
   std::vector<double> ground_errors;
   if (std::getenv("RT_DEBUG")) {
     for (double bin : {0.0, 0.25, 0.5, 0.75, 1.0, 2.0, 3.0, 4.0}) {
@@ -193,6 +217,9 @@ int main(int argc, char** argv) {
   int entries = 1000, shots = 600, rays = 2000, threads = 2;
   fs::path table_path = "retrieval_benchmark_table.nc";
   std::string only;
+  int components = RtSettings{}.projection_components;
+  double margin = RtSettings{}.prefilter_margin_log_likelihood;
+  int exact_entries = RtSettings{}.max_exact_entries;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
@@ -210,6 +237,12 @@ int main(int argc, char** argv) {
       table_path = next();
     else if (a == "--only")
       only = next();
+    else if (a == "--components")
+      components = std::stoi(next());
+    else if (a == "--margin")
+      margin = std::stod(next());
+    else if (a == "--exact-entries")
+      exact_entries = std::stoi(next());
   }
   if (quick) {
     entries = 64;
@@ -258,36 +291,58 @@ int main(int argc, char** argv) {
     RtSettings direct;
     direct.search = RtSearch::direct;
     alternatives.push_back({"calibrated_direct", direct});
-    alternatives.push_back({"calibrated_two_stage", RtSettings{}});
+    RtSettings two_stage;
+    two_stage.search = RtSearch::two_stage;
+    alternatives.push_back({"calibrated_two_stage", two_stage});
+    RtSettings projected;
+    projected.projection_components = components;
+    projected.prefilter_margin_log_likelihood = margin;
+    projected.max_exact_entries = exact_entries;
+    alternatives.push_back({"calibrated_projected", projected});
     RtSettings raw;
+    raw.search = RtSearch::two_stage;
     raw.emulator_neighbours = 1;
     alternatives.push_back({"no_emulator", raw});
     RtSettings untempered;
+    untempered.search = RtSearch::two_stage;
     untempered.tempering = 1.0;
     alternatives.push_back({"untempered", untempered});
   }
-  std::printf("%-22s %6s %6s %7s %6s %6s %7s %7s %6s %5s %5s %6s %9s %6s %6s\n", "alternative",
-              "cov90", "covC", "bias", "rmse", "sd", "g_bias", "g_rmse", "g_mad", "g>1m", "flag",
-              "tau", "shots/s", "ratio", "setup");
+  std::printf("%-22s %6s %6s %7s %6s %6s %7s %7s %6s %5s %5s %6s %9s %6s %7s %6s %5s\n",
+              "alternative", "cov90", "covC", "bias", "rmse", "sd", "g_bias", "g_rmse", "g_mad",
+              "g>1m", "flag", "tau", "shots/s", "ratio", "cpu_s", "setup", "same");
   double base_speed = 0.0;
   int measured_figures = 0;
+  std::vector<RtResult> reference;  // the exact two-stage search's, for `same`
   for (const Alternative& alternative : alternatives) {
-    if (!only.empty() && std::string(alternative.name).find(only) == std::string::npos &&
-        std::string(alternative.name) != "first_cut")
-      continue;
-    const Figures f = evaluate(table, alternative.settings, held, threads);
+    // --only a,b: the alternatives whose names hold one of these (the ratio's base is then the
+    // first of them).
+    bool wanted = only.empty();
+    for (std::size_t from = 0; !wanted && from <= only.size();) {
+      const std::size_t to = std::min(only.find(',', from), only.size());
+      const std::string token = only.substr(from, to - from);
+      wanted = !token.empty() && std::string(alternative.name).find(token) != std::string::npos;
+      from = to + 1;
+    }
+    if (!wanted) continue;
+    const bool is_reference = std::string(alternative.name) == "calibrated_two_stage";
+    const Figures f =
+        evaluate(table, alternative.settings, held, threads, is_reference ? &reference : nullptr,
+                 reference.empty() ? nullptr : &reference);
     if (base_speed == 0.0) base_speed = f.shots_per_s;
     std::printf(
         "%-22s %6.3f %6.3f %+7.3f %6.3f %6.3f %+7.3f %7.3f %6.3f %2d/%-2d %5d %6.1f %9.0f %6.2f "
-        "%6.2f\n",
+        "%7.2f %6.2f %5d\n",
         alternative.name, f.pai_coverage, f.cover_coverage, f.pai_bias, f.pai_rmse, f.pai_sd,
         f.ground_bias, f.ground_rmse, f.ground_mad, f.ground_far, f.ground_far_flagged, f.flagged,
-        f.tempering, f.shots_per_s, f.shots_per_s / base_speed, f.setup_s);
+        f.tempering, f.shots_per_s, f.shots_per_s / base_speed, f.cpu_s, f.setup_s, f.same);
     measured_figures += f.shots > 0 && std::isfinite(f.pai_rmse);
   }
   std::printf(
       "(cov90: the 90 %% interval holds the truth; g>1m: grounds over 1 m off / of them "
-      "flagged; ratio: shots a second over the first cut's)\n");
+      "flagged; ratio: shots a second over the first cut's; cpu_s: CPU seconds of the process "
+      "while "
+      "retrieving; same: shots equal to calibrated_two_stage's to the bit, -1 before it)\n");
   if (quick) fs::remove(table_path);
   std::printf(measured_figures > 0 ? "every figure measured\n" : "a figure is missing\n");
   return 0;

@@ -218,7 +218,13 @@ TEST_F(RetrieveCli, RefusalsAreOneLine) {
   const CommandOutcome no_table =
       run_glaswave("retrieve " + shots + " --methods rt --quiet --out " + out.string());
   EXPECT_EQ(no_table.status, 2) << no_table.output;
-  for (const CommandOutcome* refused : {&bins, &pulses, &missing, &no_table}) {
+  // rt's search is one of three names.
+  const CommandOutcome search =
+      run_glaswave("retrieve " + shots + " --rt-search nearest --table " +
+                   (dir_->path() / "table.nc").string() + " --quiet --out " + out.string());
+  EXPECT_EQ(search.status, 2) << search.output;
+  EXPECT_NE(search.output.find("--rt-search"), std::string::npos) << search.output;
+  for (const CommandOutcome* refused : {&bins, &pulses, &missing, &no_table, &search}) {
     EXPECT_EQ(std::count(refused->output.begin(), refused->output.end(), '\n'), 1)
         << refused->output;
   }
