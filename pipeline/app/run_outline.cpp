@@ -247,7 +247,8 @@ std::string run_outline(const Config& config, const CheckSummary& summary,
                                    : bytes(memory.scene_bytes) + " of " + memory.vegetation;
   const std::string once =
       memory.source_bytes > 0.0 ? ", and the source's " + bytes(memory.source_bytes) + " once" : "";
-  line("memory:", "about " + bytes(memory.bytes) + " (" + number(memory.threads, 12) +
+  line("memory:", "about " + bytes(memory.bytes) + " (the program's " +
+                      bytes(memory.program_bytes) + ", " + number(memory.threads, 12) +
                       " x a scene of " + scene + " and its waveforms" + once + "), of " +
                       bytes(memory.available_bytes) + " available");
   line("products:", products_line(resolved.value("output", json::object()), config_file));
