@@ -23,7 +23,11 @@ struct LidarBand {
 struct LidarSettings {
   double pulse_sigma_ns = 5.0;
   double divergence_sigma_rad = 0.00011;  // beam angular RMS width per axis
-  double ifov_rad = 0.0004;               // detector full field of view (top-hat cone)
+  // "gaussian" (intensity ∝ exp(-θ²/2σ²)) or "uniform": a top-hat cone of half-angle
+  // 2 divergence_sigma_rad, the same RMS per axis and the Gaussian's 1/e² edge (RAMI-IV's lidar
+  // lights a disc uniformly).
+  std::string beam_profile = "gaussian";
+  double ifov_rad = 0.0004;  // detector full field of view (top-hat cone)
   double telescope_area_m2 = 0.709;
   double bin_ns = 1.0;
   int bins = 544;

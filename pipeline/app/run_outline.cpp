@@ -97,9 +97,11 @@ std::string sensor_line(const json& sensor, const json& track) {
   line += ", " + plural(static_cast<double>(bands.size()), "band", "bands") + " (";
   for (std::size_t i = 0; i < bands.size(); ++i) line += (i ? ", " : "") + bands[i];
   line += " nm)";
-  // The beam's 1/e^2 diameter on level ground below: 4 sigma_theta H.
+  // The beam's 1/e^2 diameter on level ground below, 4 sigma_theta H: a uniform beam's edge.
   const double diameter_m = 4.0 * sensor.value("divergence_sigma_rad", 0.0) * height_m(track);
-  line += ", a beam about " + number(std::round(diameter_m), 12) + " m across at 1/e2, " +
+  const bool uniform = sensor.value("beam_profile", "gaussian") == "uniform";
+  line += std::string(uniform ? ", a uniform beam about " : ", a beam about ") +
+          number(std::round(diameter_m), 12) + (uniform ? " m across, " : " m across at 1/e2, ") +
           number(sensor.value("bins", 0.0), 12) + " bins of " +
           number(sensor.value("bin_ns", 1.0)) + " ns";
   return line;
@@ -247,7 +249,8 @@ std::string run_outline(const Config& config, const CheckSummary& summary,
                                    : bytes(memory.scene_bytes) + " of " + memory.vegetation;
   const std::string once =
       memory.source_bytes > 0.0 ? ", and the source's " + bytes(memory.source_bytes) + " once" : "";
-  line("memory:", "about " + bytes(memory.bytes) + " (" + number(memory.threads, 12) +
+  line("memory:", "about " + bytes(memory.bytes) + " (the program's " +
+                      bytes(memory.program_bytes) + ", " + number(memory.threads, 12) +
                       " x a scene of " + scene + " and its waveforms" + once + "), of " +
                       bytes(memory.available_bytes) + " available");
   line("products:", products_line(resolved.value("output", json::object()), config_file));

@@ -3,7 +3,9 @@
 #include "pipeline/config/config.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -870,12 +872,69 @@ Config parse_config(const json& document) {
   return c;
 }
 
+namespace {
+
+// RAMI-IV's lidar measurements: names ROMC knows, a model and experiment that make file names, and
+// height bins that hold whole window bins.
+void check_rami_lidar(const Config& config) {
+  const RamiLidarSettings& rami = *config.output.rami;
+  if (rami.measurements.empty())
+    throw config_error("/output/rami/measurements", "names no measurement");
+  for (const std::string& m : rami.measurements) {
+    if (m != "lidar_sgl_co" && m != "lidar_tot")
+      throw config_error("/output/rami/measurements",
+                         "'" + m +
+                             "' is not a lidar measurement glaswave writes (lidar_sgl_co, "
+                             "lidar_tot)");
+    if (m == "lidar_sgl_co" && !config.output.per_order)
+      throw config_error("/output/per_order",
+                         "lidar_sgl_co is the light scattered once: output.rami needs "
+                         "output.per_order true for it");
+  }
+  const std::string model = rami.model.empty() ? "glaswave" : rami.model;  // absent: its default
+  if (model.size() > 10 || !std::all_of(model.begin(), model.end(),
+                                        [](unsigned char c) { return std::isalnum(c) != 0; }))
+    throw config_error("/output/rami/model",
+                       "ROMC's model identifier is 1 to 10 letters and digits");
+  if (rami.experiment.empty()) throw config_error("/output/rami/experiment", "is required");
+  if (rami.experiment.find_first_of("/\\ ") != std::string::npos)
+    throw config_error("/output/rami/experiment",
+                       "must not hold '/', '\\' or spaces (a file name)");
+  if (config.sensor.bands.size() > 1 && rami.experiment.find("{band}") == std::string::npos)
+    throw config_error("/output/rami/experiment",
+                       "needs '{band}' with more than one band: an experiment is one band's");
+  if (config.sensor.receiver != "waveform")
+    throw config_error("/output/rami", "RAMI's lidar measurements need the waveform receiver");
+  if (config.atmosphere)
+    throw config_error("/output/rami",
+                       "RAMI's lidar measurements are of the canopy alone: not beside "
+                       "`atmosphere`");
+  if (config.detector.enabled)
+    throw config_error("/output/rami",
+                       "RAMI's lidar measurements are the noise-free return: not with "
+                       "detector.enabled");
+  // A window bin spans c bin_ns / 2 of height at nadir.
+  const double window_bin_m = 0.5 * 299792458.0 * config.sensor.bin_ns * 1e-9;
+  const double ratio = rami.height_bin_m / window_bin_m;
+  if (ratio < 1.0 - 1e-6 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio) {
+    char why[240];
+    std::snprintf(why, sizeof why,
+                  "%.6g m is not a whole number of the window's bins of %.6g m (c bin_ns / 2); "
+                  "sensor.bin_ns %.9g gives 10 of them",
+                  rami.height_bin_m, window_bin_m,
+                  rami.height_bin_m / 10.0 * 2.0 / 299792458.0 * 1e9);
+    throw config_error("/output/rami/height_bin_m", why);
+  }
+}
+
+}  // namespace
+
 void check_outputs(const Config& config) {
   const OutputSettings& o = config.output;
   // A photon-counting run's ICESat-2 granules are products of their own.
   const bool granules = config.sensor.receiver == "photon_counting" &&
                         (o.atl03.value_or(true) || o.atl08.value_or(true));
-  if (!o.netcdf && !o.footprints && !granules)
+  if (!o.netcdf && !o.footprints && !granules && !o.rami)
     throw config_error("/output",
                        "nothing to write: output.netcdf and output.footprints are both false");
   if (o.plots && !(o.netcdf && o.footprints))
@@ -892,6 +951,7 @@ void check_outputs(const Config& config) {
                        "plots are drawn from footprints.geojson: output.plots needs "
                        "footprints_format \"GeoJSON\", got \"" +
                            o.footprints_format + "\"");
+  if (o.rami) check_rami_lidar(config);
 }
 
 Config load_config(const std::filesystem::path& file, const std::vector<std::string>& overrides) {

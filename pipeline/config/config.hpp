@@ -50,6 +50,16 @@ struct SimulationSettings {
   double background_rate_MHz = 0.0;
 };
 
+// RAMI-IV's lidar measurements written by `glaswave run` in ROMC's format (docs/guide/rami.md):
+// `DIR/rami/<measurement>_<model>-<experiment>.mes`, the return binned by height from the ground
+// up, one experiment a band.
+struct RamiLidarSettings {
+  std::vector<std::string> measurements = {"lidar_sgl_co", "lidar_tot"};
+  std::string experiment;          // ROMC's identifier; "{band}" is replaced by the band's name
+  std::string model = "glaswave";  // ROMC's model identifier: up to 10 letters and digits
+  double height_bin_m = 0.5;       // RAMI's height interval: a whole number of window bins
+};
+
 struct OutputSettings {
   bool netcdf = true;
   bool footprints = true;  // the footprints' layer, in footprints_format
@@ -64,6 +74,7 @@ struct OutputSettings {
   // The switches product writers declare in their own files (core/part_switch.hpp): the GEDI
   // granules' gedi_l1b and gedi_l2a, and a new writer's.
   PartSwitches switches;
+  std::optional<RamiLidarSettings> rami;  // RAMI-IV's lidar measurements; absent: none
 };
 
 struct BrfView {

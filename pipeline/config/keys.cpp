@@ -415,6 +415,10 @@ Key sensor_keys() {
        s.number("divergence_sigma_rad", &S::divergence_sigma_rad,
                 open_closed(0, run_limits::angle_rad), "rad",
                 "beam angular RMS width per axis (intensity ∝ exp(−θ²/2σ²))"),
+       s.choice("beam_profile", &S::beam_profile, {"gaussian", "uniform"},
+                "the beam's intensity across it: `gaussian` (∝ exp(−θ²/2σ²)) or `uniform` (the "
+                "same over a cone of half-angle 2 `divergence_sigma_rad`: the same RMS per axis, "
+                "its edge at the Gaussian's 1/e² contour; RAMI-IV's lidar footprint)"),
        s.number("ifov_rad", &S::ifov_rad, open_closed(0, run_limits::angle_rad), "rad",
                 "detector full field of view (top-hat cone); the scene a shot builds grows with "
                 "it (see Limits)"),
@@ -884,6 +888,7 @@ Key with_part_switches(Key section) {
 
 Key output_keys() {
   const Fields<OutputSettings> o;
+  const Fields<RamiLidarSettings> r;
   using S = OutputSettings;
   const std::string photon_counting = "true with `sensor.receiver: photon_counting`, else false";
   return object(
@@ -918,7 +923,33 @@ Key output_keys() {
        o.boolean("atl03", &S::atl03, "the ATL03-like photons `atl03.h5` (photon counting)",
                  photon_counting),
        o.boolean("atl08", &S::atl08, "the ATL08-like land segments `atl08.h5` (photon counting)",
-                 photon_counting)});
+                 photon_counting),
+       o.object(
+           "rami", &S::rami,
+           "RAMI-IV's lidar measurements in ROMC's format, the return binned by height from the "
+           "ground up, written to `DIR/rami/` (docs/guide/rami.md); absent: none",
+           {r.bind(declare::string_array("measurements",
+                                         "ROMC's measurement identifiers: `lidar_sgl_co` (light "
+                                         "scattered once: needs `per_order`) and `lidar_tot` "
+                                         "(all of it)")
+                       .with_default(RamiLidarSettings{}.measurements),
+                   &RamiLidarSettings::measurements,
+                   // Absent: both (an empty list given is refused by the checks).
+                   [](JsonReader& reader, const std::string& key) {
+                     const bool given = reader.has(key);
+                     std::vector<std::string> names = reader.string_array(key);
+                     return given ? names : RamiLidarSettings{}.measurements;
+                   }),
+            r.string("experiment", &RamiLidarSettings::experiment,
+                     "ROMC's experiment identifier; `{band}` is replaced by the band's name, as "
+                     "it must be with more than one band")
+                .with_required(),
+            r.string("model", &RamiLidarSettings::model,
+                     "ROMC's model identifier: 1 to 10 letters and digits")
+                .with_default("glaswave"),
+            r.number("height_bin_m", &RamiLidarSettings::height_bin_m, open_closed(0, 1000), "m",
+                     "the files' height interval: a whole number of the window's bins "
+                     "(c `bin_ns` / 2 each)")})});
 }
 
 Key detector_keys() {

@@ -162,7 +162,9 @@ RunMemory estimate_run_memory(const Config& c) {
   m.waveform_bytes = shot_size(c).bytes * shot_waveform_copies;
   m.threads = usable_cores();
   m.granule_bytes = icesat2_granule_bytes(c);
-  m.bytes = m.source_bytes + m.granule_bytes + m.threads * (m.scene_bytes + m.waveform_bytes);
+  m.program_bytes = program_resident_bytes;
+  m.bytes = m.program_bytes + m.source_bytes + m.granule_bytes +
+            m.threads * (m.scene_bytes + m.waveform_bytes);
   m.available_bytes = available_memory_bytes();
   // The key to change: the vegetation's when what its source holds weighs most, or when its
   // region does on a scene of a usual size; the waveforms when they weigh most; else what makes
@@ -252,7 +254,8 @@ BrfMemory estimate_brf_memory(const Config& c) {
   m.vegetation = vegetation.kind;
   m.image_bytes = static_cast<double>(c.sensor.bands.size()) * m.pixels * m.pixels * 8.0 *
                   run_limits::brf_image_copies;
-  m.bytes = m.scene_bytes + m.image_bytes;
+  m.program_bytes = program_resident_bytes;
+  m.bytes = m.program_bytes + m.scene_bytes + m.image_bytes;
   m.available_bytes = available_memory_bytes();
   // The key to change: the pixels when the image weighs most, else the tile when it is wide,
   // else the vegetation that crowds it.

@@ -23,6 +23,13 @@ int threads_of_process(int threads, int processes_here);
 // allocated: each thread simulates a shot, holding its scene (the vegetation and ground under
 // the field of view, as its source's region_bytes says) and its waveforms' tallies; the
 // vegetation source holds its own once (a point cloud's voxelisation, facet models).
+// What glaswave holds before any scene: its libraries (GDAL, PROJ, HDF5, NetCDF, Embree, TBB),
+// Embree's device, the threads' stacks, the writers' buffers. A run of one shot over bare ground
+// peaked at 57.2 MiB (`/usr/bin/time -v`, Debian 12's build), of which its scenes and waveforms
+// are 4.5 MiB; a `brf` of one photon over HET02's turbid spheres 61.9 MiB. Without it the estimate
+// of a small scene was 7x low (issue 41: a turbid HET03 run, 8.9 MiB for 59.7 measured).
+inline constexpr double program_resident_bytes = 52.0 * 1048576.0;
+
 struct RunMemory {
   double scene_half_size_m = 0.0;  // half the side of the ground patch a shot's rays can reach
   double trees = 0.0;              // a forest's trees on it (the densest stand's density)
@@ -33,7 +40,8 @@ struct RunMemory {
   double waveform_bytes = 0.0;     // the tallies of a shot's waveforms
   double granule_bytes = 0.0;      // ATL03's and ATL08's photons and records, held to the end
   int threads = 1;                 // the cores this process may use: a run's default
-  double bytes = 0.0;              // source + granules + threads x (scene + waveforms)
+  double program_bytes = 0.0;      // the program's own (program_resident_bytes)
+  double bytes = 0.0;              // program + source + granules + threads x (scene + waveforms)
   double available_bytes = 0.0;    // the machine's memory (or the cgroup's limit when lower)
   std::string place;               // the key that makes it large, when it is too large
 };
@@ -48,14 +56,15 @@ void check_run(const Config& config);
 // threads), the vegetation on its tile and beyond its sides (5 m over a periodic plane, 100 m
 // over a DEM) with what its source holds, and scene.tif's bands of doubles.
 struct BrfMemory {
-  double pixels = 0.0;        // scene.tif's side: brf.scene_size_m in whole pixels
-  double scene_side_m = 0.0;  // the ground the scene is built over
-  double trees = 0.0;         // a forest's on it, at the densest stand's density
-  double tree_bytes = 0.0;    // of one, where the source counts its scene in trees; else 0
-  double scene_bytes = 0.0;   // its vegetation's, and what the vegetation source holds once
-  std::string vegetation;     // the canopy's kind; empty for bare ground
-  double image_bytes = 0.0;   // scene.tif's bands, brf_image_copies times
-  double bytes = 0.0;         // scene + image
+  double pixels = 0.0;         // scene.tif's side: brf.scene_size_m in whole pixels
+  double scene_side_m = 0.0;   // the ground the scene is built over
+  double trees = 0.0;          // a forest's on it, at the densest stand's density
+  double tree_bytes = 0.0;     // of one, where the source counts its scene in trees; else 0
+  double scene_bytes = 0.0;    // its vegetation's, and what the vegetation source holds once
+  std::string vegetation;      // the canopy's kind; empty for bare ground
+  double image_bytes = 0.0;    // scene.tif's bands, brf_image_copies times
+  double program_bytes = 0.0;  // the program's own (program_resident_bytes)
+  double bytes = 0.0;          // program + scene + image
   double available_bytes = 0.0;
   std::string place;  // the key that makes it large, when it is too large
 };

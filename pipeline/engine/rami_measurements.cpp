@@ -99,6 +99,14 @@ std::string rami_file_name(const BrfRamiSettings& rami, const std::string& measu
   return measurement + "_" + model_name(rami) + "-" + rami_experiment(rami, band) + ".mes";
 }
 
+std::string rami_file_name(const std::string& model, const std::string& experiment,
+                           const std::string& measurement, const std::string& band) {
+  BrfRamiSettings rami;
+  rami.model = model;
+  rami.experiment = experiment;
+  return rami_file_name(rami, measurement, band);
+}
+
 void write_rami_measurements(const std::filesystem::path& dir, const Config& config,
                              const BrfResult& result, std::size_t first_rami_view) {
   const BrfRamiSettings& rami = *config.brf.rami;

@@ -30,8 +30,10 @@ void write_rami_measurements(const std::filesystem::path& dir, const Config& con
 // The experiment of one band: `{band}` replaced by its name.
 std::string rami_experiment(const BrfRamiSettings& rami, const std::string& band);
 
-// The file name of one measurement for one band.
+// The file name of one measurement for one band: `<measurement>_<model>-<experiment>.mes`.
 std::string rami_file_name(const BrfRamiSettings& rami, const std::string& measurement,
                            const std::string& band);
+std::string rami_file_name(const std::string& model, const std::string& experiment,
+                           const std::string& measurement, const std::string& band);
 
 }  // namespace glaswave

@@ -25,6 +25,7 @@
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/engine/journal.hpp"
 #include "pipeline/engine/machine.hpp"
+#include "pipeline/engine/rami_lidar.hpp"
 #include "pipeline/products/hdf5_granule_writer.hpp"
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/record_codec.hpp"
@@ -426,6 +427,8 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
     settings.glas_cloud_layers =
         reported_cloud_layers(*config.atmosphere, nearest_band(info, 1064.0));
   output->writers = make_writers(request.out_dir, settings, info, icesat2_product_settings(config));
+  if (config.output.rami)
+    output->writers.push_back(make_rami_lidar_writer(request.out_dir, config, info));
   if (output->resumed) {
     RunOutput& out = *output;
     out.journal = RunJournal::resume(

@@ -119,7 +119,10 @@ double FacetSource::source_bytes(const VegetationSettings& settings) {
   for (const auto& [name, file] : settings.canopy.facet_models) {
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(file, error);
-    if (!error) bytes += facet_model_bytes_per_file_byte * static_cast<double>(size);
+    if (!error)
+      bytes += (is_disc_leaf_file(file) ? disc_model_bytes_per_file_byte
+                                        : facet_model_bytes_per_file_byte) *
+               static_cast<double>(size);
   }
   return bytes;
 }

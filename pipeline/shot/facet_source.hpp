@@ -22,6 +22,11 @@ namespace glaswave {
 // (about 210 MiB above its start; 131 MiB kept after the read). Binary meshes (PLY, glb) hold
 // about twice the triangles a byte: their estimate may be half what they take.
 inline constexpr double facet_model_bytes_per_file_byte = 20.0;
+// A disc leaf file (RAMI's `.def`, about 65 bytes a disc) is read without Assimp: each disc's
+// centre, normal and radius, and Embree's point and BVH, came to 1.2 bytes a byte of the file
+// (HET01's sphere of 49 999 discs, 3.27 MB: a run's peak 3.9 MB above bare ground's) and 1.7
+// (a HOM layer's 2.53 MB, with its region's copies); 2, to stay above both.
+inline constexpr double disc_model_bytes_per_file_byte = 2.0;
 
 class FacetSource : public VegetationSource {
  public:
@@ -44,7 +49,8 @@ class FacetSource : public VegetationSource {
   // A region's instances, at a tree every 20 m² (a dense plot) and 256 bytes a tree (the models
   // themselves are shared by every shot).
   static double region_bytes(const VegetationSettings& settings, double side_m);
-  // Every model, read once for the run: facet_model_bytes_per_file_byte times its file's size.
+  // Every model, read once for the run: facet_model_bytes_per_file_byte times its file's size
+  // (disc_model_bytes_per_file_byte for a disc leaf file).
   static double source_bytes(const VegetationSettings& settings);
 
  private:

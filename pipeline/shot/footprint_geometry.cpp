@@ -18,6 +18,10 @@ double estimated_patch_half_size_m(double range_m, double ifov_rad, double slope
   return patch_half_size_m(reach_m) + (vegetation ? vegetation_margin_m : 0.0);
 }
 
+double beam_fraction_in_view(const LidarSettings& lidar) {
+  return LidarModel(lidar).fov_fraction();
+}
+
 double brf_scene_half_size_m(double tile_half_size_m, bool periodic) {
   return tile_half_size_m + (periodic ? 5.0 : 100.0);
 }

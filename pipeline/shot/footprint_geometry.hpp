@@ -38,6 +38,10 @@ inline constexpr double shot_waveform_copies = transport_waveform_copies;
 // tile (5 m), or the light wandering out over a DEM (100 m).
 double brf_scene_half_size_m(double tile_half_size_m, bool periodic);
 
+// The part of the beam's energy the detector's field of view holds (LidarModel::fov_fraction),
+// for what normalises a return beyond the shot (RAMI's lidar files).
+double beam_fraction_in_view(const LidarSettings& lidar);
+
 // One footprint in its local east-north-up frame.
 struct FootprintFrame {
   LocalFrame frame;

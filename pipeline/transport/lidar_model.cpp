@@ -7,10 +7,25 @@
 
 namespace glaswave {
 
-LidarModel::LidarModel(const LidarSettings& sensor) : sensor_(sensor) {
+namespace {
+
+// Solid angle of a cone of half-angle a: 2 pi (1 - cos a) = 4 pi sin^2(a / 2), in sines that keep
+// their precision at microradians.
+double cone_solid_angle_sr(double half_angle_rad) {
+  const double s = std::sin(0.5 * half_angle_rad);
+  return 4.0 * std::numbers::pi * s * s;
+}
+
+}  // namespace
+
+LidarModel::LidarModel(const LidarSettings& sensor)
+    : sensor_(sensor), uniform_beam_(sensor.beam_profile == "uniform") {
   const double sigma = sensor.divergence_sigma_rad;
   const double half_fov = 0.5 * sensor.ifov_rad;
-  fov_fraction_ = -std::expm1(-half_fov * half_fov / (2.0 * sigma * sigma));
+  fov_fraction_ = uniform_beam_
+                      ? std::min(1.0, cone_solid_angle_sr(half_fov) /
+                                          cone_solid_angle_sr(uniform_beam_half_angle_rad()))
+                      : -std::expm1(-half_fov * half_fov / (2.0 * sigma * sigma));
   // Rays for multiple scattering come from the whole field of view (see shot_transport.cpp).
   max_angle_rad_ = half_fov;
   // The reference return sits at the centre of a bin two thirds into the window: canopy comes
@@ -30,8 +45,19 @@ LidarModel::LidarModel(const LidarSettings& sensor) : sensor_(sensor) {
 }
 
 double LidarModel::fov_solid_angle_sr() const {
-  const double s = std::sin(0.25 * sensor_.ifov_rad);  // 1 - cos(half) = 2 sin^2(half / 2)
-  return 4.0 * std::numbers::pi * s * s;
+  return cone_solid_angle_sr(0.5 * sensor_.ifov_rad);
+}
+
+double LidarModel::beam_density_sr(double angle_rad) const {
+  if (uniform_beam_) {
+    // 1 / (Omega_beam f_fov) where the beam lights, inside the view: the density of
+    // BeamSampler::direction's uniform draw.
+    const double lit_rad = std::min(uniform_beam_half_angle_rad(), max_angle_rad_);
+    return angle_rad <= lit_rad ? 1.0 / cone_solid_angle_sr(lit_rad) : 0.0;
+  }
+  const double two_sigma_sq = 2.0 * sensor_.divergence_sigma_rad * sensor_.divergence_sigma_rad;
+  return std::exp(-angle_rad * angle_rad / two_sigma_sq) /
+         (std::numbers::pi * two_sigma_sq * fov_fraction_);
 }
 
 std::vector<double> LidarModel::bin_time_ns() const {
@@ -120,7 +146,10 @@ BeamSampler::BeamSampler(const LidarModel& lidar, const Vec3& axis)
     : axis_(normalized(axis)),
       two_sigma_sq_(2.0 * lidar.beam_sigma_rad() * lidar.beam_sigma_rad()),
       fov_fraction_(lidar.fov_fraction()),
-      sin_quarter_fov_(std::sin(0.25 * lidar.sensor().ifov_rad)) {
+      sin_quarter_fov_(std::sin(0.25 * lidar.sensor().ifov_rad)),
+      uniform_beam_(lidar.uniform_beam()),
+      sin_half_lit_(std::sin(
+          0.5 * std::min(lidar.uniform_beam_half_angle_rad(), 0.5 * lidar.sensor().ifov_rad))) {
   // Any two unit vectors across the axis will do; this pair is stable for a nadir axis.
   const Vec3 helper = std::abs(axis_[2]) < 0.9 ? Vec3{0.0, 0.0, 1.0} : Vec3{0.0, 1.0, 0.0};
   across_ = normalized(cross(helper, axis_));
@@ -128,6 +157,9 @@ BeamSampler::BeamSampler(const LidarModel& lidar, const Vec3& axis)
 }
 
 Vec3 BeamSampler::direction(double u1, double u2) const {
+  // A uniform beam: uniform in solid angle over the part of its cone inside the view.
+  if (uniform_beam_)
+    return direction_at(2.0 * std::asin(std::sqrt(u1) * sin_half_lit_), sincos_turn(u2));
   // Radial density of a 2-D Gaussian truncated at the field of view, inverted.
   const double angle_rad = std::sqrt(-two_sigma_sq_ * std::log1p(-u1 * fov_fraction_));
   return direction_at(angle_rad, sincos_turn(u2));

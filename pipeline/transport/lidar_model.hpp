@@ -1,5 +1,5 @@
-// The lidar as the transport sees it (the seed's section 2.2): a Gaussian beam inside a top-hat
-// field of view, time bins about the reference return, and the Gaussian pulse.
+// The lidar as the transport sees it (the seed's section 2.2): a Gaussian (or uniform) beam inside
+// a top-hat field of view, time bins about the reference return, and the Gaussian pulse.
 #pragma once
 
 #include <vector>
@@ -19,9 +19,17 @@ class LidarModel {
   const LidarSettings& sensor() const { return sensor_; }
   std::size_t band_count() const { return sensor_.bands.size(); }
 
-  // Part of the beam's energy inside the field of view: 1 - exp(-ifov^2 / (8 sigma^2)).
+  // Part of the beam's energy inside the field of view: 1 - exp(-ifov^2 / (8 sigma^2)) for a
+  // Gaussian beam; for a uniform one the field of view's solid angle over the beam's, at most 1.
   double fov_fraction() const { return fov_fraction_; }
+  // The beam's angular RMS width per axis, whatever its profile.
   double beam_sigma_rad() const { return sensor_.divergence_sigma_rad; }
+  bool uniform_beam() const { return uniform_beam_; }
+  // A uniform beam's half-angle: 2 sigma (the RMS per axis of a uniform disc is its radius / 2).
+  double uniform_beam_half_angle_rad() const { return 2.0 * sensor_.divergence_sigma_rad; }
+  // The beam's irradiance at `angle_rad` from its axis as a density over the field of view's
+  // directions (per sr): what the beam's rays are drawn by.
+  double beam_density_sr(double angle_rad) const;
   // Largest angle from the axis at which a ray is sampled: the field of view's edge.
   double max_angle_rad() const { return max_angle_rad_; }
   // Solid angle of the field of view (sr).
@@ -49,6 +57,7 @@ class LidarModel {
 
  private:
   LidarSettings sensor_;
+  bool uniform_beam_;
   double fov_fraction_;
   double max_angle_rad_;
   double lead_ns_;                      // time from the centre of bin 0 to the reference return
@@ -76,6 +85,8 @@ class BeamSampler {
   double two_sigma_sq_;
   double fov_fraction_;
   double sin_quarter_fov_;
+  bool uniform_beam_;
+  double sin_half_lit_;  // a uniform beam: sin of half the half-angle it lights inside the view
 };
 
 }  // namespace glaswave

@@ -611,11 +611,13 @@ void PathTracer::project(const Vec3& direction) {
   project_foliage(optics_, direction[2], projection_);
 }
 
-// The beam's irradiance in a direction, as a density over the field of view (per sr):
-// exp(-theta^2 / 2 sigma^2) / (2 pi sigma^2 f_fov). The beam path's rays are drawn by it.
+// The beam's irradiance in a direction, as a density over the field of view (per sr): for a
+// Gaussian beam exp(-theta^2 / 2 sigma^2) / (2 pi sigma^2 f_fov). The beam path's rays are drawn
+// by it.
 double PathTracer::beam_density(const Vec3& direction) const {
   const double angle_from_axis =
       std::atan2(norm(cross(direction, geometry_.axis)), dot(direction, geometry_.axis));
+  if (lidar_.uniform_beam()) return lidar_.beam_density_sr(angle_from_axis);
   return std::exp(-std::pow(angle_from_axis, 2) / two_sigma_sq_) /
          (std::numbers::pi * two_sigma_sq_ * lidar_.fov_fraction());
 }

@@ -12,6 +12,9 @@ fabs, ftran, the closure fabs + falb + ftran (1 - soil) and each one's standard 
 1 deg and either side of the hotspot), brfpp.png and its CSV (every scene's principal plane),
 hotspot.png and its CSV (HET01's discs against their turbid twin HET03 with leaf_size_m the
 discs' radius and their diameter), the ROMC files of every run under runs/, and summary.json.
+RAMI-IV's lidar measurements (lidar_sgl_co, lidar_tot) come from `glaswave run` over the scenes'
+`<scene>_lidar.json` (the turbid layers and HET01-03: 10 shots at the centre, a uniform 50 m
+footprint, a delta pulse): lidar.csv, lidar.png and a table in rami.md.
 """
 import argparse
 import copy
@@ -40,6 +43,10 @@ SCENES = ["hom_tur_pla", "hom_tur_ere", "hom_tur_uni", "hom_dis_pla", "hom_dis_e
 # Photons a scene: the full run's fits ~20 minutes on two cores.
 PHOTONS = {"quick": 1500, "full": 40000}
 PATH_KEYS = [("canopy", "crowns_file"), ("canopy", "facets", "trees_file")]
+# RAMI-IV's lidar: where it applies (make_scenes.py says why not the discrete layers), and the
+# rays of each of the 10 shots.
+LIDAR_SCENES = ["hom_tur_pla", "hom_tur_ere", "hom_tur_uni", "het01", "het02", "het03"]
+LIDAR_RAYS = {"quick": 200, "full": 10000}
 
 
 def log(message):
@@ -77,6 +84,85 @@ def run_brf(glaswave, runs_dir, document, label, threads):
                            f"{result.stderr.strip()}")
     log(f"brf {label}: {time.monotonic() - start:.1f} s")
     return out
+
+
+def run_lidar(glaswave, runs_dir, document, label, threads):
+    """`glaswave run` with output.rami: RAMI-IV's lidar files under the run's rami/."""
+    text = json.dumps(document, sort_keys=True, indent=1)
+    stem = os.path.join(runs_dir, "run-" + hashlib.sha1(text.encode()).hexdigest()[:10])
+    out = stem + ".out"
+    if os.path.isdir(os.path.join(out, "rami")):
+        return out
+    write_atomic(stem + ".json", text)
+    shutil.rmtree(out, ignore_errors=True)
+    start = time.monotonic()
+    result = subprocess.run([glaswave, "run", stem + ".json", "--out", out, "--quiet",
+                             "--threads", str(threads)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"glaswave run {label} failed ({result.returncode}): "
+                           f"{result.stderr.strip()}")
+    log(f"run {label}: {time.monotonic() - start:.1f} s")
+    return out
+
+
+def read_lidar(path):
+    """RAMI-IV's lidar file: rows, columns, interval; then height, signal, its deviation."""
+    with open(path) as f:
+        lines = [line.split() for line in f.read().splitlines() if line.strip()]
+    return np.array([[float(v) for v in line] for line in lines[1:]])
+
+
+def lidar_study(glaswave, scenes_dir, runs_dir, out_dir, mode, threads, summary):
+    """The lidar measurements of each scene where they apply, NIR (RAMI's band for abstract
+    canopies; CON for HET02): lidar.csv, lidar.png, and rows for rami.md."""
+    rows, profiles, lines = [], {}, []
+    for name in LIDAR_SCENES:
+        with open(os.path.join(scenes_dir, f"{name}_lidar.json")) as f:
+            document = absolute_paths(json.load(f), scenes_dir)
+        document["simulation"]["rays_per_shot"] = LIDAR_RAYS[mode]
+        out = run_lidar(glaswave, runs_dir, document, name, threads)
+        band = "CON" if name == "het02" else "NIR"
+        experiment = document["output"]["rami"]["experiment"].replace("{band}", band)
+        parts = {}
+        for m in ("lidar_sgl_co", "lidar_tot"):
+            table = read_lidar(os.path.join(out, "rami", f"{m}_glaswave-{experiment}.mes"))
+            parts[m] = table
+            for z, value, sd in table:
+                rows.append([name, band, m, z, value, sd])
+        profiles[name] = parts
+        sums = {m: (float(t[:, 1].sum()), float(math.sqrt((t[:, 2] ** 2).sum())))
+                for m, t in parts.items()}
+        ground = {m: float(t[0, 1]) for m, t in parts.items()}
+        summary.setdefault("lidar", {})[name] = {"band": band, "sums": sums, "first_row": ground}
+        lines.append(f"| {name} | {band} | {sums['lidar_sgl_co'][0]:.4f} ± "
+                     f"{sums['lidar_sgl_co'][1]:.4f} | {sums['lidar_tot'][0]:.4f} ± "
+                     f"{sums['lidar_tot'][1]:.4f} | {ground['lidar_sgl_co']:.4f} | "
+                     f"{ground['lidar_tot']:.4f} |")
+    write_csv(os.path.join(out_dir, "lidar.csv"),
+              ["scene", "band", "measurement", "height_m", "signal", "signal_sd"], rows)
+    figure, axes = plt.subplots(1, 2, figsize=(11, 4.6))
+    for ax, names in zip(axes, [LIDAR_SCENES[:3], LIDAR_SCENES[3:]]):
+        for name in names:
+            for m, style in (("lidar_tot", "-"), ("lidar_sgl_co", ":")):
+                t = profiles[name][m]
+                # The first row holds the ground's return: drawn beside the canopy's, not in it.
+                ax.plot(t[1:, 1], t[1:, 0], style, label=f"{name} {m}")
+        ax.set_xlabel("return signal per row (apparent reflectance)")
+        ax.set_ylabel("height (m)")
+        ax.legend(fontsize=7)
+    axes[0].set_title("RAMI-IV lidar, 1 m turbid layers (0.05 m rows)")
+    axes[1].set_title("RAMI-IV lidar, HET01-03 (0.5 m rows)")
+    figure.tight_layout()
+    figure.savefig(os.path.join(out_dir, "lidar.png"), dpi=110)
+    plt.close(figure)
+    header = ["", f"RAMI-IV's lidar: 10 shots of {LIDAR_RAYS[mode]} rays at the centre, a "
+              "uniform 50 m footprint, a delta pulse; each row's return over E_t T A_T f_fov / "
+              "(pi R^2), summed over the rows (+- from the rows' standard errors over the "
+              "shots); the first row holds the ground's return.", "",
+              "| scene | band | lidar_sgl_co, sum | lidar_tot, sum | sgl_co, first row | "
+              "tot, first row |", "|---|---|---|---|---|---|"]
+    return header + lines
 
 
 def read_mes(path):
@@ -163,6 +249,8 @@ def main():
         lines.append(f"| {r[0]} | {r[1]} | {r[2]:.4f} ± {r[3]:.4f} | {r[4]:.4f} ± {r[5]:.4f} | "
                      f"{r[6]:.4f} ± {r[7]:.4f} | {r[8]:.5f} ± {r[9]:.5f} | "
                      f"{r[10]:.4f} ± {r[11]:.4f} | {r[12]:.4f} ± {r[13]:.4f} |")
+    lines += lidar_study(args.glaswave, scenes_dir, runs_dir, args.out, mode, args.threads,
+                         summary)
     write_atomic(os.path.join(args.out, "rami.md"), "\n".join(lines) + "\n")
     write_csv(os.path.join(args.out, "brfpp.csv"), ["scene", "band", "signed_vza_deg", "brf",
                                                      "brf_se"], planes)

@@ -154,3 +154,63 @@ def test_closure_planes_and_romc_files(scenes):
         brf1 = mes("brf1")
         assert brf1.shape == (1, 5) and brf1[0, 1] == -1.0 and brf1[0, 2] == -1.0
         assert brf1[0, 3] == pytest.approx(band["albedo"], abs=1e-6)
+
+
+def read_lidar_mes(path):
+    """ROMC's lidar file (RAMI-IV's lidar_tot page): a header line (rows, columns, the height
+    interval), then rows from the ground up of the bin's mean height (m), the return signal and
+    its standard deviation (-1 when not available)."""
+    with open(path) as f:
+        lines = [line.split() for line in f.read().splitlines() if line.strip()]
+    rows, columns, interval = int(lines[0][0]), int(lines[0][1]), float(lines[0][2])
+    table = np.array([[float(v) for v in line] for line in lines[1:]])
+    assert columns == 3 and table.shape == (rows, 3)
+    assert np.allclose(table[:, 0], (np.arange(rows) + 0.5) * interval, atol=1e-6)
+    return interval, table
+
+
+def test_turbid_layer_lidar_single_scattering_profile(scenes):
+    """RAMI-IV's lidar_sgl_co of the 1 m turbid layer (LAI 3, spherical: G = 1/2) against
+    PHYSICS.md section 3's hotspot column, the laser and the detector co-located: at depth z
+    below the top the canopy returns (u rho / 3) e^(-u z / 2) per unit depth (u = L / H), the
+    ground rho_s e^(-L / 2). A row's return is that integrated over the heights its window bins
+    span: window bins of d = c bin_ns / 2 centred on the rows' edges, each whole in the row below
+    its centre, so row j >= 1 spans [j D + d/2, (j+1) D + d/2] and the first [0, D + d/2] with
+    the ground."""
+    out = os.path.join(scenes, "hom_tur_uni-lidar")
+    subprocess.run([GLASWAVE, "run", os.path.join(scenes, "hom_tur_uni_lidar.json"), "--out", out,
+                    "--quiet", "--set", "simulation.rays_per_shot=4000"],
+                   check=True, stdout=subprocess.DEVNULL)
+    config = json.load(open(os.path.join(scenes, "hom_tur_uni_lidar.json")))
+    d = 0.5 * 299792458.0 * config["sensor"]["bin_ns"] * 1e-9
+    rho, rho_s = make_scenes.NIR["reflectance"], make_scenes.NIR["soil"]
+    lai, depth = make_scenes.HOM_LAI, make_scenes.HOM_DEPTH_M
+    u = lai / depth
+    interval, single = read_lidar_mes(os.path.join(
+        out, "rami", "lidar_sgl_co_glaswave-HOM03_TUR_UNI_NIR.mes"))
+    _, total = read_lidar_mes(os.path.join(out, "rami", "lidar_tot_glaswave-HOM03_TUR_UNI_NIR.mes"))
+    assert interval == pytest.approx(0.05) and len(single) == len(total) == 20
+
+    def canopy(low_m, high_m):  # heights above the ground
+        low_m, high_m = max(low_m, 0.0), min(high_m, depth)
+        if high_m <= low_m:
+            return 0.0
+        return 2.0 * rho / 3.0 * (math.exp(-u * (depth - high_m) / 2) -
+                                  math.exp(-u * (depth - low_m) / 2))
+
+    expected = np.array([canopy(0.0 if j == 0 else j * interval + d / 2, (j + 1) * interval + d / 2)
+                         for j in range(len(single))])
+    expected[0] += rho_s * math.exp(-lai / 2)
+    # By hand: the canopy's whole single scattering (2 rho / 3)(1 - e^-1.5) = 0.25673, the
+    # ground's 0.159 e^-1.5 = 0.03548.
+    assert expected.sum() == pytest.approx(0.25673 + 0.03548, abs=1e-4)
+    sd = single[:, 2]
+    assert np.all(sd > 0), "ten shots give each row a standard error"
+    # Row by row within 4.5 of the ten shots' standard errors (themselves 25 % uncertain), the
+    # whole within 4 of its own.
+    z = (single[:, 1] - expected) / sd
+    assert np.all(np.abs(z) < 4.5), z
+    assert abs(single[:, 1].sum() - expected.sum()) < 4.0 * math.sqrt((sd ** 2).sum())
+    # Multiple scattering only adds, and arrives no earlier than the single.
+    assert np.all(total[:, 1] >= single[:, 1] - 1e-12)
+    assert total[:, 1].sum() > single[:, 1].sum() * 1.05

@@ -502,7 +502,7 @@ TEST(Errors, UnknownKeySuggestsTheNearest) {
   EXPECT_EQ(error_of(doc(R"({"output": {"xyz": true}})")),
             "/output/xyz: unknown key \"xyz\"; known keys: atl03, atl08, footprints, "
             "footprints_format, gedi_l1b, gedi_l2a, geojson, glah01, glah14, glas_ellipsoid, "
-            "metrics, netcdf, per_order, plots");
+            "metrics, netcdf, per_order, plots, rami");
 }
 
 TEST(Errors, WrongTypes) {

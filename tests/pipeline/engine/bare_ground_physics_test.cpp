@@ -51,6 +51,48 @@ TEST(BareGround, ReceivedEnergyMatchesLambertianFormulaAtNadir) {
   }
 }
 
+// A uniform beam (RAMI-IV's lidar footprint) over level ground: the same closed form with
+// f_fov the part of the beam the view sees, the ratio of the cones' solid angles: 1 when the view
+// holds the whole beam, (h / a)^2 when it is narrower (half-angles h of the view, a = 2 sigma of
+// the beam). Every ray of the first path scores rho_s exactly, so only round-off is allowed.
+TEST(BareGround, AUniformBeamReturnsThePartOfItsConeTheViewSees) {
+  const double range_m = 600000.0;
+  for (const double sigma_rad : {0.00005, 0.0004}) {
+    nlohmann::json document = test_support::plane_shot("north2010", 0.0, 0.0, 2000);
+    document["sensor"]["beam_profile"] = "uniform";
+    document["sensor"]["divergence_sigma_rad"] = sigma_rad;
+    const Simulated shot = simulate(document);
+    const double a = 2.0 * sigma_rad, h = 0.0002;
+    const double f_fov = a <= h ? 1.0 : (h / a) * (h / a);
+    const double energy_mJ[] = {32.0, 72.0}, transmission[] = {0.8, 0.9};
+    for (int band = 0; band < 2; ++band) {
+      const double expected_J = energy_mJ[band] * 1e-3 * transmission[band] * 0.709 * 0.15 * f_fov /
+                                (pi * range_m * range_m);
+      EXPECT_NEAR(shot.record.rx_energy_J[band] / expected_J, 1.0, 1e-6)
+          << "sigma " << sigma_rad << " band " << band;
+    }
+  }
+}
+
+// Gardner's broadening depends on the beam only through its RMS per axis: a uniform disc of
+// radius 2 sigma R has RMS sigma R across the slope, so on a 10 deg plane at nadir the uniform
+// beam widens the pulse as the Gaussian of the same sigma does, sigma_p^2 = sigma_tx^2 +
+// (2 R sigma_theta tan(alpha) / c)^2 + bin^2 / 12 (20.04 ns in PHYSICS.md's table).
+TEST(BareGround, AUniformBeamOnASlopeBroadensThePulseByItsRms) {
+  const double sigma_theta = 27.5e-6, range_m = 600000.0, sigma_tx_ns = 5.0;
+  nlohmann::json document = test_support::plane_shot("north2010", 10.0, 0.0, 40000);
+  document["sensor"]["beam_profile"] = "uniform";
+  document["sensor"]["divergence_sigma_rad"] = sigma_theta;
+  document["sensor"]["bins"] = 1000;
+  const Simulated shot = simulate(document);
+  const double spread_ns = 2.0 * range_m * sigma_theta * std::tan(10.0 * pi / 180.0) / c_m_s * 1e9;
+  const double expected_ns =
+      std::sqrt(sigma_tx_ns * sigma_tx_ns + spread_ns * spread_ns + 1.0 / 12);
+  EXPECT_NEAR(expected_ns, 20.04, 0.01);
+  const Moments m = waveform_moments(shot.record.rx_waveform_W[1], shot.bin_time_ns);
+  EXPECT_NEAR(m.rms_ns / expected_ns, 1.0, 0.02);
+}
+
 // A level surface at nadir returns the transmitted pulse (RMS 5 ns, plus the bin's 1/12),
 // centred on 2R/c.
 TEST(BareGround, LevelSurfaceReturnsThePulseAtTwoRangeOverC) {

@@ -40,7 +40,7 @@ TEST(RunMemory, CountsTheTreesUnderTheFieldOfView) {
   EXPECT_NEAR(m.scene_half_size_m, half_m, 1e-6);
   const double density = -std::log(1.0 - 0.7) / (std::numbers::pi * 8.0 * 8.0);
   EXPECT_NEAR(m.trees, density * 4.0 * half_m * half_m, 1e-6 * m.trees);
-  EXPECT_NEAR(m.bytes, m.threads * (m.trees * 2560.0 + m.waveform_bytes), 1.0);
+  EXPECT_NEAR(m.bytes, m.program_bytes + m.threads * (m.trees * 2560.0 + m.waveform_bytes), 1.0);
   EXPECT_GT(m.available_bytes, 0.0);
   EXPECT_NO_THROW(check_run(c));
   // Bare ground has no trees; a layer neither.
@@ -111,7 +111,9 @@ TEST(RunMemory, CountsTheVoxelGridsWindowEachThreadHolds) {
   // kept between shots, here the whole grid (600 x 600 columns of 30 floats and an index).
   EXPECT_EQ(m.source_bytes,
             192.0 * 192 * 30 * 4 + 600.0 * 600 * (30 * 4 + sizeof(VoxelField::Column)));
-  EXPECT_NEAR(m.bytes, m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes), 1.0);
+  EXPECT_NEAR(m.bytes,
+              m.program_bytes + m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes),
+              1.0);
   EXPECT_NO_THROW(check_run(c));
 }
 
@@ -197,7 +199,7 @@ TEST(BrfMemory, CountsTheTreesOfTheTileAndTheImage) {
   const double density = -std::log(1.0 - 0.7) / (std::numbers::pi * 8.0 * 8.0);
   EXPECT_NEAR(m.trees, density * 110.0 * 110.0, 1e-9 * m.trees);
   EXPECT_NEAR(m.image_bytes, 2.0 * 50 * 50 * 8 * 2, 1e-9);  // glas: 2 bands
-  EXPECT_NEAR(m.bytes, m.trees * 2560.0 + m.image_bytes, 1e-6);
+  EXPECT_NEAR(m.bytes, m.program_bytes + m.trees * 2560.0 + m.image_bytes, 1e-6);
   EXPECT_NO_THROW(check_brf(c));
   // Over a DEM the scene reaches 100 m beyond the tile.
   const Config dem = parse_config(doc(R"({"terrain": {"dem": "x.tif"}, "brf": {}})"));
@@ -225,7 +227,7 @@ TEST(BrfMemory, ATileThatCannotBePhysicalOrFitIsRefusedAtItsKey) {
               StartsWith("/brf/scene_size_m: brf's scene would hold about "));
   EXPECT_THAT(refusal(R"({"canopy": {"crown_radius_m": 0.01}})"),
               StartsWith("/canopy/crown_radius_m: brf's scene would hold about "));
-  // 256 bands of 8192 x 8192 pixels: 256 GiB of image.
+  // 256 bands of 8192 x 8192 pixels: 256 GiB of image, and the program's 52 MiB.
   json bands = json::array();
   for (int i = 0; i < 256; ++i)
     bands.push_back({{"name", std::string("b").append(std::to_string(i))},
@@ -238,7 +240,7 @@ TEST(BrfMemory, ATileThatCannotBePhysicalOrFitIsRefusedAtItsKey) {
       {"brf",
        {{"scene_size_m", 8192}}}}.dump();
   EXPECT_THAT(refusal(many_bands),
-              StartsWith("/brf/image_resolution_m: brf's scene would hold about 256 GiB"));
+              StartsWith("/brf/image_resolution_m: brf's scene would hold about 256.1 GiB"));
 }
 
 }  // namespace
@@ -255,8 +257,8 @@ TEST(RunMemory, CountsTheIcesatGranulesPhotonsHeldToTheEnd) {
       "beams": ["gt1l", "gt2l"]}, "track": {"shots": 1000000}})"));
   const RunMemory m = estimate_run_memory(pass);
   EXPECT_DOUBLE_EQ(m.granule_bytes, 800.0 * 1e6 * 2);
-  EXPECT_DOUBLE_EQ(
-      m.bytes, m.source_bytes + m.granule_bytes + m.threads * (m.scene_bytes + m.waveform_bytes));
+  EXPECT_DOUBLE_EQ(m.bytes, m.program_bytes + m.source_bytes + m.granule_bytes +
+                                m.threads * (m.scene_bytes + m.waveform_bytes));
   const Config without = parse_config(doc(R"({"sensor": {"preset": "atlas"},
       "track": {"shots": 1000000}, "output": {"atl03": false, "atl08": false,
       "netcdf": true}})"));

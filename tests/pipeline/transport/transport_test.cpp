@@ -83,6 +83,45 @@ TEST(BeamSampler, AnglesFollowTheTruncatedGaussian) {
   EXPECT_LE(max_angle, 0.0002 * (1 + 1e-6));
 }
 
+// A uniform beam of half-angle a = 2 sigma lights its cone evenly (RAMI-IV's lidar footprint): the
+// part of the rays within an angle r of the axis is the area ratio (r / a)^2, where a Gaussian of
+// the same sigma has 1 - exp(-r^2 / 2 sigma^2) (0.632 at r = a / sqrt 2, for the uniform 1/2); none
+// beyond a. Inside a narrower field of view h, the rays fill the view evenly and f_fov = (h / a)^2.
+TEST(BeamSampler, AUniformBeamLightsItsConeEvenly) {
+  LidarSettings sensor = table2_sensor();
+  sensor.beam_profile = "uniform";
+  sensor.divergence_sigma_rad = 0.00005;  // a = 0.0001, inside the 0.0002 half field of view
+  const LidarModel lidar(sensor);
+  EXPECT_EQ(lidar.fov_fraction(), 1.0);
+  const BeamSampler beam(lidar, {0.0, 0.0, -1.0});
+  const double a = 0.0001;
+  const int n = 200000;
+  int inner = 0, quarter = 0;
+  double max_angle = 0;
+  for (int i = 0; i < n; ++i) {
+    RayRandom random(3, 0, i);
+    const double u1 = random.uniform(), u2 = random.uniform();
+    const Vec3 d = beam.direction(u1, u2);
+    const double angle = std::acos(std::min(1.0, -d[2]));
+    inner += angle < a / std::sqrt(2.0);
+    quarter += angle < 0.5 * a;
+    max_angle = std::max(max_angle, angle);
+  }
+  // Binomial errors: sqrt(p (1 - p) / n) = 0.0011 and 0.0010; 5 of them.
+  EXPECT_NEAR(double(inner) / n, 0.5, 0.0056);
+  EXPECT_NEAR(double(quarter) / n, 0.25, 0.005);
+  EXPECT_LE(max_angle, a * (1 + 1e-6));
+  // The density the transport weighs the second path by: 1 / (pi a^2) inside (small angles),
+  // none outside.
+  EXPECT_NEAR(lidar.beam_density_sr(0.5 * a) * std::numbers::pi * a * a, 1.0, 1e-6);
+  EXPECT_EQ(lidar.beam_density_sr(1.01 * a), 0.0);
+  // A view narrower than the beam: the part of the beam it sees is the ratio of the solid angles.
+  sensor.divergence_sigma_rad = 0.0002;  // a = 0.0004, twice the half field of view
+  const LidarModel clipped(sensor);
+  EXPECT_NEAR(clipped.fov_fraction(), 0.25, 1e-6);
+  EXPECT_NEAR(clipped.beam_density_sr(0.0001) * std::numbers::pi * 0.0002 * 0.0002, 1.0, 1e-6);
+}
+
 TEST(RayRandom, DependsOnlyOnSeedShotAndRay) {
   RayRandom a(1, 2, 3), b(1, 2, 3), c(1, 2, 4), d(1, 3, 3), e(2, 2, 3);
   const double first = a.uniform();
