@@ -29,6 +29,7 @@ enum class RandomPurpose : std::uint64_t {
   stand = 0x57a9d7ee5c0ffee1ULL,
   roughness = 0x2009e1a7715ce5adULL,
   sun = 0x5a7b1e55f0c0ffeeULL,           // `brf`: photons traced from the sun
+  sky = 0x5c71a7e5b0c0ffeeULL,           // the sky's light for the background, by (node, photon)
   beam_points = 0xb3a9501b01c0ffeeULL,   // the transport's scrambling of a shot's Sobol' points
   photons = 0x9407025c0a7e1a5eULL,       // photon counting: a shot's photon events by (beam, bin)
   table_design = 0x7ab1e5d0e5161c0dULL,  // `glaswave table`: the design's shift by (parameter)

@@ -370,6 +370,16 @@ int brf(const Arguments& arguments) {
                   view["azimuth_deg"].get<double>(), view["brf"].get<double>(),
                   view["brf_stderr"].get<double>());
     std::printf("\n");
+    if (!band.contains("toa_albedo")) continue;
+    std::printf("band %s at the top of the atmosphere: albedo %.4f",
+                band["name"].get<std::string>().c_str(), band["toa_albedo"].get<double>());
+    for (const auto& view : band["views"])
+      std::printf("; BRF(%g, %g) %.4f +- %.4f", view["zenith_deg"].get<double>(),
+                  view["azimuth_deg"].get<double>(), view["toa_brf"].get<double>(),
+                  view["toa_brf_stderr"].get<double>());
+    std::printf("; sunlight reaching the scene: %.4f direct, %.4f diffuse\n",
+                band["direct_transmittance"].get<double>(),
+                band["diffuse_transmittance"].get<double>());
   }
   const double wall_s = std::max(summary.wall_s, 1e-9);
   std::printf(

@@ -64,6 +64,23 @@ nlohmann::json brf_document(const Config& config, const BrfResult& result) {
       entry["closure_stderr"] = result.closure_stderr[band];
       entry["rami_experiment"] = rami_experiment(*config.brf.rami, config.sensor.bands[band].name);
     }
+    // The layers' light (only with them: the products without stay as they were).
+    if (result.sky) {
+      const BrfSky& sky = *result.sky;
+      entry["albedo_stderr"] = result.albedo_stderr[band];
+      entry["direct_transmittance"] = sky.direct[band];
+      entry["diffuse_transmittance"] = sky.diffuse[band];
+      entry["downward_flux"] = sky.downward[band];
+      entry["atmosphere_absorbed"] = sky.absorbed[band];
+      entry["toa_albedo"] = sky.albedo[band];
+      entry["toa_albedo_stderr"] = sky.albedo_stderr[band];
+      entry["toa_closure"] = sky.closure[band];
+      entry["toa_closure_stderr"] = sky.closure_stderr[band];
+      for (std::size_t v = 0; v < config.brf.views.size(); ++v) {
+        entry["views"][v]["toa_brf"] = sky.brf[band][v];
+        entry["views"][v]["toa_brf_stderr"] = sky.brf_stderr[band][v];
+      }
+    }
     bands.push_back(entry);
   }
   return {{"bands", bands}};
@@ -101,6 +118,8 @@ BrfSummary run_brf(const Config& config, const BrfRequest& request,
   // Every order (BrfOptions' default): simulation.max_order is the lidar's.
   options.seed = config.seed;
   options.image_pixels = pixels;
+  options.atmosphere = config.atmosphere;
+  options.ground_height_m = footprint.ground.h_m;
 
   const int cores = tbb::this_task_arena::max_concurrency();
   tbb::task_arena arena(request.threads > 0 ? std::min(request.threads, cores) : cores);

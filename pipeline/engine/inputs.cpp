@@ -69,6 +69,7 @@ ReceiverSettings receiver_settings(const Config& config) {
   settings.metrics = config.output.metrics;
   settings.seed = config.seed;
   if (config.detector.enabled) settings.detector = config.detector;
+  settings.atmosphere = config.atmosphere;  // the sun's background through the layers
   return settings;
 }
 

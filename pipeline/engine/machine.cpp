@@ -290,6 +290,13 @@ void check_brf(const Config& config) {
 
 std::optional<Error> brf_tile_error(const Config& config, const Terrain& terrain,
                                     const Footprint& footprint) {
+  // The layers are level: so must a periodic tile under them be.
+  if (config.terrain.plane && config.atmosphere && config.terrain.plane->slope_deg != 0.0)
+    return config_error(
+        "/terrain/plane/slope_deg",
+        "brf through the atmosphere's layers needs a level plane (its periodic tile "
+        "under level layers cannot slope), got " +
+            format_number(config.terrain.plane->slope_deg) + " degrees; a level plane, or a DEM");
   if (config.terrain.plane) return std::nullopt;  // a plane is everywhere, and its tile periodic
   const double tile_half_size_m = config.brf.tile_half_size_m();
   const auto off = tile_off_terrain(terrain, LocalFrame(footprint.ground), tile_half_size_m);

@@ -8,6 +8,7 @@
 
 #include "footprints/sun_position.hpp"
 #include "pipeline/transport/photon_counting.hpp"
+#include "pipeline/transport/sky_light.hpp"
 
 namespace glaswave {
 namespace {
@@ -65,6 +66,11 @@ ShotSources shot_sources(const ScoredReturns& scored, double wavelength_nm, doub
 PhotonCountingReceiver::PhotonCountingReceiver(const ReceiverSettings& settings)
     : settings_(settings), waveform_(settings), lidar_(settings.lidar) {
   if (settings_.photons.empty()) settings_.photons.emplace_back();
+  const bool sun = std::any_of(
+      settings_.photons.begin(), settings_.photons.end(),
+      [](const PhotonCountingSettings& p) { return p.background == BackgroundSource::sun; });
+  if (settings_.atmosphere && sun)
+    sky_ = sky_light(*settings_.atmosphere, settings_.lidar.bands.size(), 0, settings_.seed);
 }
 
 const PhotonCountingSettings& PhotonCountingReceiver::beam_settings(int beam) const {
@@ -86,6 +92,11 @@ double most_background_rate_Hz(const ReceiverSettings& settings, const PhotonCou
   b.telescope_area_m2 = settings.lidar.telescope_area_m2;
   b.efficiency = p.efficiency;
   b.wavelength_nm = band.wavelength_nm;
+  std::optional<SkyLight> sky;
+  if (settings.atmosphere) {
+    sky = sky_light(*settings.atmosphere, settings.lidar.bands.size(), 0, settings.seed);
+    b.sky = &*sky;
+  }
   return glaswave::background_rate_Hz(b);
 }
 
@@ -110,6 +121,7 @@ double PhotonCountingReceiver::background_rate_Hz(const PhotonCountingSettings& 
   b.telescope_area_m2 = settings_.lidar.telescope_area_m2;
   b.efficiency = p.efficiency;
   b.wavelength_nm = band.wavelength_nm;
+  if (sky_) b.sky = &*sky_;
   return glaswave::background_rate_Hz(b);
 }
 

@@ -7,13 +7,16 @@
 // energies alone when nothing reads the waveforms).
 #pragma once
 
+#include <optional>
+
 #include "pipeline/shot/receiver.hpp"
 #include "pipeline/shot/waveform_receiver.hpp"
 
 namespace glaswave {
 
 // The most background photons a second a shot of beam `p` can be given: its fixed rate, none,
-// or the sun's worst case, overhead over a white scene through the band's atmosphere. check_run
+// or the sun's worst case, overhead over a white scene through the band's atmosphere (its layers
+// when there are: their SkyLight, traced here). check_run
 // bounds a shot's background photons by it, before any shot.
 double most_background_rate_Hz(const ReceiverSettings& settings, const PhotonCountingSettings& p);
 
@@ -25,7 +28,8 @@ class PhotonCountingReceiver : public Receiver {
   // the top of the canopy (its bins up to the one by which a tenth of the canopy's energy has
   // arrived), the rest of the canopy and the ground, each split by scattering order in
   // proportion to the bin's per-order energy; the background's rate from the sun
-  // (SolarBackground) over a Lambertian scene of the shot's eq. (1) reflectance, or the
+  // (SolarBackground) over a Lambertian scene of the shot's eq. (1) reflectance (through the
+  // layers: their SkyLight, traced once when the receiver is made), or the
   // settings' fixed rate, or none; the events drawn by (seed, shot, beam, bin), each spread by
   // the pulse, the dead time applied. The record's waveform fields are the waveform receiver's.
   void receive(ShotReturns returns, ShotRecord& record) const override;
@@ -42,6 +46,7 @@ class PhotonCountingReceiver : public Receiver {
   ReceiverSettings settings_;
   WaveformReceiver waveform_;
   LidarModel lidar_;
+  std::optional<SkyLight> sky_;  // with the layers and a sun background
 };
 
 }  // namespace glaswave

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "core/registry.hpp"
+#include "footprints/atmosphere_settings.hpp"
 #include "pipeline/products/shot_record.hpp"
 #include "pipeline/transport/detector.hpp"
 #include "pipeline/transport/lidar_model.hpp"
@@ -92,6 +93,9 @@ struct ReceiverSettings {
   // a shot is received as the beam whose key is its footprint's beam, the first when none is.
   // Empty: ATLAS's strong beam.
   std::vector<PhotonCountingSettings> photons;
+  // The atmosphere's layers: photon counting's sun background comes through them (SkyLight, at
+  // the first band); none: through the bands' transmission, as before.
+  std::optional<AtmosphereSettings> atmosphere;
 };
 
 // What the run around a receiver must know of its kind before one is made, so that the engine asks

@@ -165,7 +165,7 @@ int AtmosphereModel::interval_at(double z, double dz) const {
 
 bool AtmosphereModel::cross(Vec3& position, Vec3& direction, double& path_m,
                             std::span<double> weight, const std::function<double()>& uniform,
-                            int* scatterings) const {
+                            int* scatterings, const ScatterSeen* seen) const {
   int scattered = 0;
   // Told however the crossing ends.
   struct Count {
@@ -219,6 +219,7 @@ bool AtmosphereModel::cross(Vec3& position, Vec3& direction, double& path_m,
     }
     const Slab& slab = slabs_[chosen];
     for (std::size_t b = 0; b < bands_; ++b) weight[b] *= slab.scattering[b] / slab.sampling;
+    if (seen) (*seen)(position, direction, slab.phase, weight);
     const double u1 = uniform(), u2 = uniform(), u3 = uniform();
     direction = turned(direction, sample_phase_cosine(slab.phase, u1, u3), u2);
     i = interval_at(position[2], direction[2]);

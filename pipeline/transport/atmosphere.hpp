@@ -40,14 +40,25 @@ class AtmosphereModel {
   double optical_depth(std::size_t band, double z_low, double z_high) const;
   // The whole column's, above the floor.
   double column_optical_depth(std::size_t band) const { return column_[band]; }
+  // The top of the highest layer (the floor when there is none): a ray that `cross` gives up on
+  // ends there when it left through the top, below it when it was lost.
+  double top_z_m() const { return intervals_.empty() ? floor_z_m_ : intervals_.back().z1; }
+
+  // Told of each scattering `cross` draws: where, the direction the ray arrived in, the phase
+  // function of the layer that scattered it, and each band's weight after the scattering (its
+  // albedo applied, before its new direction): `brf`'s local estimates toward the views.
+  using ScatterSeen = std::function<void(const Vec3& point, const Vec3& arriving,
+                                         const AtmospherePhase& phase, std::span<const double>)>;
 
   // Carries a ray from `position` (above the floor) along `direction` down to the floor: its
   // scatterings drawn (free paths by a band-independent scattering coefficient, each band's
   // weight carrying its own extinction and albedo), `path_m` lengthened by the way it went.
   // False when it is lost: it leaves the top going up, or scatters too often. `scatterings`, when
-  // given, receives how often it scattered.
+  // given, receives how often it scattered; `seen`, when given, is told of each scattering (it
+  // draws no number: the ray's path is the same with or without it).
   bool cross(Vec3& position, Vec3& direction, double& path_m, std::span<double> weight,
-             const std::function<double()>& uniform, int* scatterings = nullptr) const;
+             const std::function<double()>& uniform, int* scatterings = nullptr,
+             const ScatterSeen* seen = nullptr) const;
 
   // Single scattering on the way back, sampled for a lit point. A height drawn by the column's
   // scattering (all bands summed) on the detector ray `down` (from `sensor`, pointing down) gives

@@ -5,9 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <numbers>
+#include <span>
+#include <stdexcept>
 
 #include "core/random.hpp"
+#include "pipeline/transport/atmosphere.hpp"
 
 namespace glaswave {
 namespace {
@@ -17,6 +22,28 @@ namespace {
 constexpr int max_wraps = 1000;
 // Batches traced at once between progress reports, and summed in order.
 constexpr std::int64_t batches_per_group = 64;
+// A photon that has gone down through the layers this often (the sky's light bouncing between a
+// white scene and a thick cloud) is given up: its energy is lost, a negligible part.
+constexpr int most_passes = 10000;
+
+// Sums over photons of a per-photon value x, of its square and of x d, d being the photon's
+// energy entering the scene's top: a ratio estimate sum(x) / sum(d) and its standard error.
+struct RatioSums {
+  explicit RatioSums(std::size_t n) : sum(n, 0.0), sum_sq(n, 0.0), sum_down(n, 0.0) {}
+  void add(std::size_t i, double x, double down) {
+    sum[i] += x;
+    sum_sq[i] += x * x;
+    sum_down[i] += x * down;
+  }
+  void merge(const RatioSums& other) {
+    for (std::size_t i = 0; i < sum.size(); ++i) {
+      sum[i] += other.sum[i];
+      sum_sq[i] += other.sum_sq[i];
+      sum_down[i] += other.sum_down[i];
+    }
+  }
+  std::vector<double> sum, sum_sq, sum_down;
+};
 
 // The tally of one batch of photons: scores summed per band and view, with their squares for
 // the standard error; the nadir image as a list of (pixel, per-band score) entries, which stays
@@ -34,12 +61,30 @@ struct BatchTally {
         closure(bands, 0.0),
         closure_sq(bands, 0.0),
         part_sum(brf_parts * bands * views, 0.0),
-        part_sum_sq(brf_parts * bands * views, 0.0) {}
+        part_sum_sq(brf_parts * bands * views, 0.0),
+        down(bands),
+        escaped_ratio(bands),
+        absorbed_ratio(bands),
+        transmitted_ratio(bands),
+        closure_ratio(bands),
+        view_ratio(bands * views),
+        part_ratio(brf_parts * bands * views),
+        direct(bands),
+        diffuse(bands),
+        toa_escaped(bands),
+        toa_view(bands * views),
+        layers_absorbed(bands),
+        toa_closure(bands) {}
   std::vector<double> escaped, sum, sum_sq;
   // RAMI's fluxes and parts (brf_transport.hpp), with their squares.
   std::vector<double> escaped_sq, absorbed, absorbed_sq, transmitted, transmitted_sq;
   std::vector<double> closure, closure_sq;
   std::vector<double> part_sum, part_sum_sq;  // [(part * bands + band) * views + view]
+  // With the layers: each photon's energy entering the scene's top (`down`), the scene's
+  // quantities as ratios to it, and the sky's per photon.
+  RatioSums down, escaped_ratio, absorbed_ratio, transmitted_ratio, closure_ratio, view_ratio,
+      part_ratio;
+  RatioSums direct, diffuse, toa_escaped, toa_view, layers_absorbed, toa_closure;
   std::vector<std::int64_t> pixels;
   std::vector<double> pixel_scores;  // [entry * bands + band]
   std::int64_t ray_queries = 0;
@@ -63,7 +108,7 @@ struct Event {
 class SunTracer {
  public:
   SunTracer(const Scene& scene, const SceneOptics& optics, const BrfTile& tile,
-            const BrfOptions& options)
+            const BrfOptions& options, const AtmosphereModel* layers)
       : scene_(scene),
         optics_(optics),
         tile_(tile),
@@ -78,7 +123,27 @@ class SunTracer {
         absorbed_(bands_),
         transmitted_(bands_),
         escaped_(bands_),
-        projection_(optics.foliage.size()) {}
+        projection_(optics.foliage.size()),
+        layers_(layers) {
+    if (!layers_) return;
+    toa_scores_.assign(bands_ * views_, 0.0);
+    down_.assign(bands_, 0.0);
+    direct_.assign(bands_, 0.0);
+    diffuse_.assign(bands_, 0.0);
+    toa_escaped_.assign(bands_, 0.0);
+    layers_absorbed_.assign(bands_, 0.0);
+    // A scene's light reaches the top of the layers toward a view unscattered by exp(-tau / mu).
+    view_above_.assign(bands_ * views_, 0.0);
+    for (std::size_t v = 0; v < views_; ++v)
+      for (std::size_t band = 0; band < bands_; ++band)
+        if (options_.views[v][2] > 0.0)
+          view_above_[band * views_ + v] =
+              std::exp(-layers_->column_optical_depth(band) / options_.views[v][2]);
+    seen_ = [this](const Vec3& point, const Vec3& arriving, const AtmospherePhase& phase,
+                   std::span<const double> weight) {
+      score_layers(point, arriving, phase, weight);
+    };
+  }
 
   void trace_photon(std::int64_t batch, std::int64_t photon, BatchTally& tally);
 
@@ -97,6 +162,12 @@ class SunTracer {
   void score(const Event& event, const Vec3& arriving, int part, BatchTally& tally);
   void tally_fluxes(const Event& event, const std::vector<double>& before, bool scattered);
   void project(const Vec3& direction) { project_foliage(optics_, direction[2], projection_); }
+  bool through_scene(Photon& path, RandomStream& random, BatchTally& tally, std::int64_t& order,
+                     Vec3& exit_point);
+  void through_layers(Photon& path, RandomStream& random, BatchTally& tally);
+  void score_layers(const Vec3& point, const Vec3& arriving, const AtmospherePhase& phase,
+                    std::span<const double> weight);
+  void tally_through_layers(BatchTally& tally);
 
   const Scene& scene_;
   const SceneOptics& optics_;
@@ -110,6 +181,11 @@ class SunTracer {
   std::vector<double> before_;                            // the throughput before an event
   std::vector<double> projection_;
   std::vector<VolumeSpan> spans_;
+  // The layers, when there are: this photon's scores at their top and its energies (per band).
+  const AtmosphereModel* layers_;
+  AtmosphereModel::ScatterSeen seen_;
+  std::vector<double> toa_scores_, view_above_;
+  std::vector<double> down_, direct_, diffuse_, toa_escaped_, layers_absorbed_;
 };
 
 // Distance along d to the tile's side; infinite when the tile is not periodic.
@@ -185,6 +261,9 @@ Event SunTracer::next_event(Photon& photon, RandomStream& random, BatchTally& ta
     if (!tile_.periodic || side_m >= far_m || (rise > 0.0 && height_m > top_m_) ||
         (rise < 0.0 && height_m < -top_m_)) {
       event.escaped_up = rise > 0.0;
+      // Where it leaves through the top, for the layers above (level then: rise is d[2]).
+      if (layers_ && event.escaped_up)
+        event.point = origin + ((top_m_ - height_above_plane(origin)) / rise) * d;
       return event;
     }
     wrap(origin, d, side_m);
@@ -250,6 +329,7 @@ void SunTracer::score(const Event& event, const Vec3& arriving, int part, BatchT
           throughput_[band] * response(band, view) * transmission / rise_rate(view);
       scores_[band * views_ + v] += value;
       part_scores_[(part * bands_ + band) * views_ + v] += value;
+      if (layers_) toa_scores_[band * views_ + v] += value * view_above_[band * views_ + v];
     }
   }
   // The image: nadir, at the pixel under the event.
@@ -278,35 +358,23 @@ void SunTracer::tally_fluxes(const Event& event, const std::vector<double>& befo
   }
 }
 
-void SunTracer::trace_photon(std::int64_t batch, std::int64_t photon, BatchTally& tally) {
-  RandomStream random(options_.seed, batch, photon, RandomPurpose::sun);
-  std::fill(throughput_.begin(), throughput_.end(), 1.0);
-  std::fill(scores_.begin(), scores_.end(), 0.0);
-  std::fill(part_scores_.begin(), part_scores_.end(), 0.0);
-  std::fill(absorbed_.begin(), absorbed_.end(), 0.0);
-  std::fill(transmitted_.begin(), transmitted_.end(), 0.0);
-  std::fill(escaped_.begin(), escaped_.end(), 0.0);
-  // Uniform over the tile, entering at the top of the scene.
-  const double h = tile_.half_size_m;
-  const double x = (2.0 * random.uniform() - 1.0) * h, y = (2.0 * random.uniform() - 1.0) * h;
-  Photon path;
-  path.direction = options_.sun_direction;
-  path.position = {x, y, top_m_ + tile_.ground_slope_x * x + tile_.ground_slope_y * y};
+// Follows the photon through the scene from where `path` is until it is absorbed, ended by
+// Russian roulette or cut at max_order (false), or leaves through the top (true: `exit_point`
+// there, with the layers). `order` counts the scene's scatterings over the photon's life.
+bool SunTracer::through_scene(Photon& path, RandomStream& random, BatchTally& tally,
+                              std::int64_t& order, Vec3& exit_point) {
   // Scored up to max_order (every order by default); the light scattered there is followed once
   // more to see whether it leaves, so that the albedo counts the same orders as the BRF.
   const std::int64_t last_order = std::int64_t{options_.max_order} + 1;
-  for (std::int64_t order = 1; order <= last_order; ++order) {
+  while (++order <= last_order) {
     const Event event = next_event(path, random, tally);
     if (event.element == RayElement::none) {
-      if (event.escaped_up)
-        for (std::size_t band = 0; band < bands_; ++band) {
-          tally.escaped[band] += throughput_[band];
-          tally.escaped_sq[band] += throughput_[band] * throughput_[band];
-          escaped_[band] = throughput_[band];
-        }
-      break;
+      if (!event.escaped_up) return false;
+      for (std::size_t band = 0; band < bands_; ++band) escaped_[band] += throughput_[band];
+      exit_point = event.point;
+      return true;
     }
-    if (order > options_.max_order) break;
+    if (order > options_.max_order) return false;
     const int part = order > 1                             ? brf_many_times
                      : event.element == RayElement::ground ? brf_soil_once
                                                            : brf_canopy_once;
@@ -315,16 +383,105 @@ void SunTracer::trace_photon(std::int64_t batch, std::int64_t photon, BatchTally
     const bool scattered = sample_scattering(event.element, event.material, optics_, event.normal,
                                              random, path.direction, throughput_);
     tally_fluxes(event, before_, scattered);
-    if (!scattered) break;
+    if (!scattered) return false;
     path.position = event.point;
     path.min_distance_m = event.element == RayElement::leaf ? 0.0 : surface_offset_m;
     // Russian roulette on faint photons keeps the estimate unbiased and the work bounded.
     const double strongest = *std::max_element(throughput_.begin(), throughput_.end());
-    if (!(strongest > 0.0)) break;
+    if (!(strongest > 0.0)) return false;
     if (strongest < 0.05) {
-      if (random.uniform() >= 0.5) break;
+      if (random.uniform() >= 0.5) return false;
       for (double& weight : throughput_) weight *= 2.0;
     }
+  }
+  return false;
+}
+
+// A scattering in the layers, scored toward each view at their top: the phase function toward it
+// (per sr) times the transmission above the point, over the view's cosine, times pi (a white
+// Lambertian plane's radiance being E mu / pi).
+void SunTracer::score_layers(const Vec3& point, const Vec3& arriving, const AtmospherePhase& phase,
+                             std::span<const double> weight) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  for (std::size_t v = 0; v < views_; ++v) {
+    const Vec3& view = options_.views[v];
+    if (!(view[2] > 0.0)) continue;
+    const double response = std::numbers::pi * phase_function(phase, dot(arriving, view)) / view[2];
+    for (std::size_t band = 0; band < bands_; ++band)
+      toa_scores_[band * views_ + v] +=
+          weight[band] * response *
+          std::exp(-layers_->optical_depth(band, point[2], inf) / view[2]);
+  }
+}
+
+// The photon from the top of the layers: down through them to the scene's top (where, the layers
+// being uniform across, it comes in at its place brought back into the tile), through the scene,
+// up into the layers, and down again or out through their top.
+void SunTracer::through_layers(Photon& path, RandomStream& random, BatchTally& tally) {
+  const std::function<double()> uniform = [&random] { return random.uniform(); };
+  const double h = tile_.half_size_m;
+  auto into_tile = [h](double x) { return x - 2.0 * h * std::floor((x + h) / (2.0 * h)); };
+  std::int64_t order = 0;
+  for (int pass = 0; pass < most_passes; ++pass) {
+    double path_m = 0.0;
+    int scatterings = 0;
+    before_ = throughput_;
+    const bool down = layers_->cross(path.position, path.direction, path_m, throughput_, uniform,
+                                     &scatterings, &seen_);
+    for (std::size_t band = 0; band < bands_; ++band)
+      layers_absorbed_[band] += before_[band] - throughput_[band];
+    if (!down) break;
+    for (std::size_t band = 0; band < bands_; ++band) {
+      down_[band] += throughput_[band];
+      if (pass == 0) (scatterings == 0 ? direct_ : diffuse_)[band] += throughput_[band];
+    }
+    path.position = {into_tile(path.position[0]), into_tile(path.position[1]), top_m_};
+    path.min_distance_m = 0.0;
+    Vec3 exit_point{};
+    if (!through_scene(path, random, tally, order, exit_point)) return;
+    path.position = {exit_point[0], exit_point[1], layers_->floor_z_m()};
+    before_ = throughput_;
+    const bool back = layers_->cross(path.position, path.direction, path_m, throughput_, uniform,
+                                     &scatterings, &seen_);
+    for (std::size_t band = 0; band < bands_; ++band)
+      layers_absorbed_[band] += before_[band] - throughput_[band];
+    // Without a layer above the floor the crossing changes nothing and the light has left.
+    if (!back || !(path.direction[2] < 0.0)) break;
+  }
+  // Out through the top of the layers, or lost in them (scattered too often, or level).
+  if (path.position[2] >= layers_->top_z_m() && path.direction[2] > 0.0)
+    for (std::size_t band = 0; band < bands_; ++band) toa_escaped_[band] += throughput_[band];
+}
+
+void SunTracer::trace_photon(std::int64_t batch, std::int64_t photon, BatchTally& tally) {
+  RandomStream random(options_.seed, batch, photon, RandomPurpose::sun);
+  std::fill(throughput_.begin(), throughput_.end(), 1.0);
+  std::fill(scores_.begin(), scores_.end(), 0.0);
+  std::fill(part_scores_.begin(), part_scores_.end(), 0.0);
+  std::fill(absorbed_.begin(), absorbed_.end(), 0.0);
+  std::fill(transmitted_.begin(), transmitted_.end(), 0.0);
+  std::fill(escaped_.begin(), escaped_.end(), 0.0);
+  // Uniform over the tile, entering at the top of the scene (or of the layers).
+  const double h = tile_.half_size_m;
+  const double x = (2.0 * random.uniform() - 1.0) * h, y = (2.0 * random.uniform() - 1.0) * h;
+  Photon path;
+  path.direction = options_.sun_direction;
+  if (layers_) {
+    for (std::vector<double>* v :
+         {&toa_scores_, &down_, &direct_, &diffuse_, &toa_escaped_, &layers_absorbed_})
+      std::fill(v->begin(), v->end(), 0.0);
+    path.position = {x, y, layers_->top_z_m()};
+    through_layers(path, random, tally);
+    tally_through_layers(tally);
+    return;
+  }
+  path.position = {x, y, top_m_ + tile_.ground_slope_x * x + tile_.ground_slope_y * y};
+  std::int64_t order = 0;
+  Vec3 exit_point{};
+  through_scene(path, random, tally, order, exit_point);
+  for (std::size_t band = 0; band < bands_; ++band) {
+    tally.escaped[band] += escaped_[band];
+    tally.escaped_sq[band] += escaped_[band] * escaped_[band];
   }
   for (std::size_t i = 0; i < scores_.size(); ++i) {
     tally.sum[i] += scores_[i];
@@ -347,11 +504,105 @@ void SunTracer::trace_photon(std::int64_t batch, std::int64_t photon, BatchTally
   }
 }
 
+// A photon through the layers: its scene's quantities beside the energy it brought into the
+// scene's top (their ratios are taken over all photons), and the sky's per photon.
+void SunTracer::tally_through_layers(BatchTally& tally) {
+  for (std::size_t band = 0; band < bands_; ++band) {
+    const double d = down_[band];
+    tally.down.add(band, d, d);
+    tally.escaped_ratio.add(band, escaped_[band], d);
+    tally.absorbed_ratio.add(band, absorbed_[band], d);
+    tally.transmitted_ratio.add(band, transmitted_[band], d);
+    const double soil_absorbed = transmitted_[band] * (1.0 - optics_.soil_reflectance[band]);
+    tally.closure_ratio.add(band, escaped_[band] + absorbed_[band] + soil_absorbed, d);
+    tally.direct.add(band, direct_[band], d);
+    tally.diffuse.add(band, diffuse_[band], d);
+    tally.toa_escaped.add(band, toa_escaped_[band], d);
+    tally.layers_absorbed.add(band, layers_absorbed_[band], d);
+    tally.toa_closure.add(
+        band, toa_escaped_[band] + layers_absorbed_[band] + absorbed_[band] + soil_absorbed, d);
+    for (std::size_t v = 0; v < views_; ++v) {
+      const std::size_t i = band * views_ + v;
+      tally.view_ratio.add(i, scores_[i], d);
+      tally.toa_view.add(i, toa_scores_[i], d);
+      for (int part = 0; part < brf_parts; ++part) {
+        const std::size_t j = (part * bands_ + band) * views_ + v;
+        tally.part_ratio.add(j, part_scores_[j], d);
+      }
+    }
+  }
+}
+
 // The mean of n scores from their sum and sum of squares, and its standard error.
 std::pair<double, double> mean_and_stderr(double sum, double sum_sq, double n) {
   const double mean = sum / n;
   const double variance = n > 1.0 ? std::max(0.0, sum_sq / n - mean * mean) * n / (n - 1.0) : 0.0;
   return {mean, std::sqrt(variance / n)};
+}
+
+// A ratio sum(x) / sum(d) over n photons, and its standard error by the delta method:
+// sqrt(sum (x - R d)^2) / sum(d).
+std::pair<double, double> ratio_and_stderr(const RatioSums& x, std::size_t i, const RatioSums& d,
+                                           std::size_t band) {
+  const double total = d.sum[band];
+  if (!(total > 0.0)) return {0.0, 0.0};
+  const double r = x.sum[i] / total;
+  const double spread = x.sum_sq[i] - 2.0 * r * x.sum_down[i] + r * r * d.sum_sq[band];
+  return {r, std::sqrt(std::max(0.0, spread)) / total};
+}
+
+// The result of photons traced through the layers (BrfResult's and BrfSky's definitions).
+BrfResult sky_result(const BatchTally& total, std::vector<std::vector<double>> image,
+                     std::int64_t photon_count) {
+  const std::size_t bands = total.down.sum.size(), views = total.sum.size() / bands;
+  const double photons = static_cast<double>(photon_count);
+  BrfResult result;
+  result.ray_queries = total.ray_queries;
+  BrfSky& sky = result.sky.emplace();
+  auto ratio = [&](const RatioSums& x, std::size_t i, std::size_t band, std::vector<double>& mean,
+                   std::vector<double>& stderr_) {
+    const auto [m, e] = ratio_and_stderr(x, i, total.down, band);
+    mean.push_back(m);
+    stderr_.push_back(e);
+  };
+  auto per_photon = [&](const RatioSums& x, std::size_t i, std::vector<double>& mean,
+                        std::vector<double>& stderr_) {
+    const auto [m, e] = mean_and_stderr(x.sum[i], x.sum_sq[i], photons);
+    mean.push_back(m);
+    stderr_.push_back(e);
+  };
+  for (std::size_t band = 0; band < bands; ++band) {
+    ratio(total.escaped_ratio, band, band, result.albedo, result.albedo_stderr);
+    ratio(total.absorbed_ratio, band, band, result.absorbed, result.absorbed_stderr);
+    ratio(total.transmitted_ratio, band, band, result.transmitted, result.transmitted_stderr);
+    ratio(total.closure_ratio, band, band, result.closure, result.closure_stderr);
+    result.brf.emplace_back();
+    result.brf_stderr.emplace_back();
+    sky.brf.emplace_back();
+    sky.brf_stderr.emplace_back();
+    for (std::size_t v = 0; v < views; ++v) {
+      ratio(total.view_ratio, band * views + v, band, result.brf.back(), result.brf_stderr.back());
+      per_photon(total.toa_view, band * views + v, sky.brf.back(), sky.brf_stderr.back());
+    }
+    for (int part = 0; part < brf_parts; ++part) {
+      result.part_brf[part].emplace_back();
+      result.part_stderr[part].emplace_back();
+      for (std::size_t v = 0; v < views; ++v)
+        ratio(total.part_ratio, (part * bands + band) * views + v, band,
+              result.part_brf[part].back(), result.part_stderr[part].back());
+    }
+    per_photon(total.direct, band, sky.direct, sky.direct_stderr);
+    per_photon(total.diffuse, band, sky.diffuse, sky.diffuse_stderr);
+    per_photon(total.down, band, sky.downward, sky.downward_stderr);
+    per_photon(total.toa_escaped, band, sky.albedo, sky.albedo_stderr);
+    per_photon(total.layers_absorbed, band, sky.absorbed, sky.absorbed_stderr);
+    per_photon(total.toa_closure, band, sky.closure, sky.closure_stderr);
+    // A pixel gets its share of the energy entering the top: its BRF is its scores over that.
+    const double per_pixel = total.down.sum[band] / static_cast<double>(image[band].size());
+    for (double& value : image[band]) value = per_pixel > 0.0 ? value / per_pixel : 0.0;
+  }
+  result.image = std::move(image);
+  return result;
 }
 
 }  // namespace
@@ -363,12 +614,22 @@ BrfResult simulate_brf(const Scene& scene, const SceneOptics& optics, const BrfT
       static_cast<std::int64_t>(options.image_pixels) * options.image_pixels;
   BatchTally total(bands, views);
   std::vector<std::vector<double>> image(bands, std::vector<double>(pixels, 0.0));
+  // The layers are cut at the scene's top, as SunTracer's top_m_ (level: the tile must be).
+  std::optional<AtmosphereModel> layers;
+  if (options.atmosphere) {
+    // A level plane's own fit on the curved Earth is within 1e-6 of level.
+    constexpr double most_gradient = 1e-4;
+    if (std::abs(tile.ground_slope_x) > most_gradient ||
+        std::abs(tile.ground_slope_y) > most_gradient)
+      throw std::invalid_argument("brf through the layers needs a level tile");
+    layers.emplace(*options.atmosphere, bands, 0.0, options.ground_height_m, scene.top_m() + 1.0);
+  }
   const std::int64_t batches = (options.photons + brf_batch_photons - 1) / brf_batch_photons;
   for (std::int64_t first = 0; first < batches; first += batches_per_group) {
     const std::int64_t last = std::min(batches, first + batches_per_group);
     std::vector<BatchTally> tallies(last - first, BatchTally(bands, views));
     tbb::parallel_for(first, last, [&](std::int64_t batch) {
-      SunTracer tracer(scene, optics, tile, options);
+      SunTracer tracer(scene, optics, tile, options, layers ? &*layers : nullptr);
       const std::int64_t end =
           std::min(brf_batch_photons, options.photons - batch * brf_batch_photons);
       for (std::int64_t photon = 0; photon < end; ++photon)
@@ -397,9 +658,25 @@ BrfResult simulate_brf(const Scene& scene, const SceneOptics& optics, const BrfT
         for (std::size_t band = 0; band < bands; ++band)
           image[band][tally.pixels[e]] += tally.pixel_scores[e * bands + band];
       total.ray_queries += tally.ray_queries;
+      if (!layers) continue;
+      for (auto [into, from] : {std::pair{&total.down, &tally.down},
+                                {&total.escaped_ratio, &tally.escaped_ratio},
+                                {&total.absorbed_ratio, &tally.absorbed_ratio},
+                                {&total.transmitted_ratio, &tally.transmitted_ratio},
+                                {&total.closure_ratio, &tally.closure_ratio},
+                                {&total.view_ratio, &tally.view_ratio},
+                                {&total.part_ratio, &tally.part_ratio},
+                                {&total.direct, &tally.direct},
+                                {&total.diffuse, &tally.diffuse},
+                                {&total.toa_escaped, &tally.toa_escaped},
+                                {&total.toa_view, &tally.toa_view},
+                                {&total.layers_absorbed, &tally.layers_absorbed},
+                                {&total.toa_closure, &tally.toa_closure}})
+        into->merge(*from);
     }
     if (progress) progress(std::min(options.photons, last * brf_batch_photons), options.photons);
   }
+  if (layers) return sky_result(total, std::move(image), options.photons);
   // Photons cross the tile's top uniformly, each carrying E_sun (s.N) A / photons, where s is
   // toward the sun: against a white Lambertian plane lit by E_sun cos(theta_s), the scores are
   // scaled by (s.N) / cos(theta_s) (1 over level ground).

@@ -10,8 +10,10 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <vector>
 
+#include "footprints/atmosphere_settings.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/scattering.hpp"
 
@@ -40,6 +42,12 @@ struct BrfOptions {
   int max_order = brf_every_order;  // the scatterings scored; a smaller number cuts the light
   std::uint64_t seed = 1;
   int image_pixels = 100;  // nadir image: pixels along each side of the tile
+  // The layers above the scene's top that the sunlight crosses on its way down and the scene's
+  // light on its way up (issue 40), placed as the lidar's are: the frame's origin is on the
+  // ground, `ground_height_m` above the ellipsoid. None: the sun lights the scene's top directly,
+  // as before (and the same bits). A periodic tile must then be level (the layers are).
+  std::optional<AtmosphereSettings> atmosphere;
+  double ground_height_m = 0.0;
 };
 
 // Per band: the albedo (energy leaving the top after up to max_order scatterings, every one by
@@ -54,7 +62,30 @@ struct BrfOptions {
 // transmission to the ground (every arrival there, direct and diffuse, before the soil reflects
 // it), each with its standard error. Energy closes: albedo + absorption + transmission times the
 // soil's absorptance = 1, within the Monte Carlo error (Russian roulette keeps it in expectation).
+//
+// With the layers (BrfOptions::atmosphere), every one of those is of the scene's top under the
+// light that reaches it there, direct and diffuse, all of it over all of it: the albedo is the
+// energy leaving the top over the energy entering it, the BRF the radiance over that of a white
+// Lambertian plane under the same light (the hemispherical-directional reflectance factor), the
+// fluxes per energy entering, the image the same; each photon's share entering weights its
+// scores (ratio estimates, their standard errors by the delta method). Beside them, per unit of
+// the sunlight at the top of the layers (BrfSky): what reaches the scene's top the first time,
+// unscattered (exp(-tau / mu_sun)) and scattered by the layers, and all that reaches it (the
+// light the layers send back down included); the reflectance at the top of the layers (its
+// albedo, and per view the radiance over that of a white plane under the sun without them,
+// pi L / (E mu_sun)); the layers' absorption, and the closure (that albedo plus every
+// absorption: the layers', the canopy's, the soil's), 1 within the Monte Carlo error.
 enum BrfPart { brf_canopy_once = 0, brf_soil_once = 1, brf_many_times = 2, brf_parts = 3 };
+
+struct BrfSky {
+  std::vector<double> direct, direct_stderr;         // [band]: at the scene's top, unscattered
+  std::vector<double> diffuse, diffuse_stderr;       // [band]: at the scene's top, scattered
+  std::vector<double> downward, downward_stderr;     // [band]: every arrival at the scene's top
+  std::vector<double> albedo, albedo_stderr;         // [band]: at the top of the layers
+  std::vector<std::vector<double>> brf, brf_stderr;  // [band][view]: at the top of the layers
+  std::vector<double> absorbed, absorbed_stderr;     // [band]: by the layers
+  std::vector<double> closure, closure_stderr;       // [band]
+};
 
 struct BrfResult {
   std::vector<double> albedo, albedo_stderr;
@@ -65,6 +96,7 @@ struct BrfResult {
   std::vector<std::vector<double>> brf, brf_stderr;                              // [band][view]
   std::vector<std::vector<double>> part_brf[brf_parts], part_stderr[brf_parts];  // [band][view]
   std::vector<std::vector<double>> image;  // [band][row * image_pixels + column]
+  std::optional<BrfSky> sky;               // with the layers
   std::int64_t ray_queries = 0;
 };
 

@@ -114,11 +114,14 @@ std::vector<double> expected_photons(std::span<const double> energy_J, double wa
 double background_rate_Hz(const SolarBackground& b) {
   const double cos_sun = std::cos(b.sun_zenith_deg * std::numbers::pi / 180.0);
   if (!(cos_sun > 0.0)) return 0.0;
-  const double radiance = b.reflectance / std::numbers::pi * b.irradiance_W_m2_nm * cos_sun *
-                          std::pow(b.transmission_one_way, 1.0 / cos_sun);
   const double solid_angle_sr = 2.0 * std::numbers::pi * (1.0 - std::cos(0.5 * b.ifov_rad));
-  const double power_W = radiance * b.transmission_one_way * b.telescope_area_m2 * solid_angle_sr *
-                         b.filter_bandwidth_nm;
+  // The radiance reaching the receiver.
+  const double radiance = b.sky ? b.sky->reflectance(cos_sun, b.reflectance) / std::numbers::pi *
+                                      b.irradiance_W_m2_nm * cos_sun
+                                : b.reflectance / std::numbers::pi * b.irradiance_W_m2_nm *
+                                      cos_sun * std::pow(b.transmission_one_way, 1.0 / cos_sun) *
+                                      b.transmission_one_way;
+  const double power_W = radiance * b.telescope_area_m2 * solid_angle_sr * b.filter_bandwidth_nm;
   return power_W * b.efficiency / photon_energy_J(b.wavelength_nm);
 }
 

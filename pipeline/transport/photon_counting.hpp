@@ -11,6 +11,8 @@
 #include <span>
 #include <vector>
 
+#include "pipeline/transport/sky_light.hpp"
+
 namespace glaswave {
 
 // Energy of one photon, h c / lambda (CODATA 2018 exact constants), J.
@@ -40,13 +42,18 @@ struct SolarBackground {
   double telescope_area_m2 = 0.0;
   double efficiency = 1.0;  // as for expected_photons
   double wavelength_nm = 532.0;
+  // The atmosphere's layers (issue 40), when there are: the light reaching the receiver is then
+  // R(mu0, rho) E mu0 / pi, the layers' own light and their diffuse light included, in place of
+  // the transmission's.
+  const SkyLight* sky = nullptr;
 };
 
 // Detected background photons per second:
 //   L = (rho / pi) F cos(theta_s) T^(1/cos theta_s)           surface radiance, W m^-2 sr^-1 nm^-1
 //   rate = L T A_T Omega dlambda efficiency / (h c / lambda),  Omega = 2 pi (1 - cos(ifov / 2))
-// (the radiance does not change with range, so neither does the rate). 0 with the sun at or below
-// the horizon.
+// (the radiance does not change with range, so neither does the rate); with `sky`,
+//   L = R(mu0, rho) F mu0 / pi,  rate = L A_T Omega dlambda efficiency / (h c / lambda).
+// 0 with the sun at or below the horizon.
 double background_rate_Hz(const SolarBackground& background);
 
 // Where the background light comes from: the sun at each shot's time and place over the scene's

@@ -202,8 +202,9 @@ def brf(config, threads=0, overrides=None):
     """The scene's reflectance under the sun, as `glaswave brf` computes it (FLIGHT's mode).
 
     Returns the dict that brf.json holds: {"bands": [{"name", "albedo", "views": [{"zenith_deg",
-    "azimuth_deg", "brf", "brf_stderr"}]}]}; scene.tif is not made. `config`, `threads` and
-    `overrides` as for run(); results do not depend on `threads`.
+    "azimuth_deg", "brf", "brf_stderr"}]}]}, with the sky's keys beside them when the
+    configuration has an atmosphere (docs/guide/atmosphere.md); scene.tif is not made. `config`,
+    `threads` and `overrides` as for run(); results do not depend on `threads`.
     """
     path, document, folder = _source(config)
     return json.loads(_glaswave.brf(path, document, folder, _assignments(overrides),

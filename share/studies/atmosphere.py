@@ -13,7 +13,10 @@ and, over the forest, of the canopy height error (canopy_height_est - canopy_hei
 beside the same without the cloud; the shots' atmosphere_delay_m and
 atmosphere_scattered_fraction (the truth); the valid shots. Runs are cached under DIR/runs by a
 hash of the configuration (share/studies/studies.py's Runner); atmosphere.csv and
-atmosphere.png, summary.json.
+atmosphere.png, summary.json. And the sun through the same clouds at 1 km: `glaswave brf` over
+the forest (sun 30 degrees from the zenith in the south) through `clear` and each cloud, the
+direct and diffuse light reaching the canopy, its nadir and hotspot reflectance factors under
+that light and the nadir reflectance at the top of the layers: atmosphere_brf.csv.
 """
 import argparse
 import copy
@@ -36,8 +39,13 @@ TAUS = [0.0, 0.1, 0.2, 0.5, 1.0, 2.0]
 HEIGHTS_KM = [1.0, 3.0, 10.0]
 THICKNESS_M = 500.0
 SIZES = {"quick": {"shots": 4, "rays_per_shot": 1500, "taus": [0.0, 0.5, 2.0],
-                   "heights_km": [1.0, 10.0]},
-         "full": {"shots": 40, "rays_per_shot": 5000, "taus": TAUS, "heights_km": HEIGHTS_KM}}
+                   "heights_km": [1.0, 10.0], "photons": 5000},
+         "full": {"shots": 40, "rays_per_shot": 5000, "taus": TAUS, "heights_km": HEIGHTS_KM,
+                  "photons": 100000}}
+SUN = {"sun_zenith_deg": 30.0, "sun_azimuth_deg": 180.0, "scene_size_m": 60.0,
+       "image_resolution_m": 6.0,
+       "views": [{"zenith_deg": 0.0, "azimuth_deg": 0.0},
+                 {"zenith_deg": 30.0, "azimuth_deg": 180.0}]}
 SCENES = {"forest": {"sensor": {"preset": "glas"}},
           "bare": {"sensor": {"preset": "glas"}, "canopy": None}}
 
@@ -70,13 +78,34 @@ def shot_values(ds):
     }
 
 
+def study_sun(runner, size, out, layers):
+    """brf over the forest through `clear` (its `layers`) and a cloud at 1 km of each tau."""
+    rows = []
+    for tau in size["taus"]:
+        cloud = [cloud_layer(tau, 1.0)] if tau > 0.0 else []
+        sets = dict(SCENES["forest"], atmosphere={"layers": copy.deepcopy(layers) + cloud})
+        folder = runner.brf("base.json", sets, size, SUN, f"forest brf tau={tau:g} H=1 km")
+        with open(os.path.join(folder, "brf.json")) as f:
+            band = next(b for b in json.load(f)["bands"] if b["name"] == BAND)
+        rows.append([tau, band["direct_transmittance"], band["diffuse_transmittance"],
+                     band["views"][0]["brf"], band["views"][1]["brf"],
+                     band["views"][0]["toa_brf"], band["toa_albedo"]])
+    header = ["cloud_tau", "direct_transmittance", "diffuse_transmittance", "hdrf_nadir",
+              "hdrf_hotspot", "toa_brf_nadir", "toa_albedo"]
+    seed.write_csv(os.path.join(out, "atmosphere_brf.csv"), header, rows)
+    return [dict(zip(header, [seed.format_value(x) for x in r])) for r in rows]
+
+
 def study(runner, size, out):
     rows = []
+    sun = None
     for scene, sets in SCENES.items():
         clear_sets = dict(sets, atmosphere="clear")
         clear = runner.run("base.json", clear_sets, size, f"{scene} clear")
         base = shot_values(clear)
         layers = clear_layers(clear)
+        if scene == "forest":
+            sun = study_sun(runner, size, out, layers)
         for height_km in size["heights_km"]:
             for tau in size["taus"]:
                 if tau == 0.0:
@@ -100,7 +129,7 @@ def study(runner, size, out):
     seed.write_csv(os.path.join(out, "atmosphere.csv"), header, rows)
     plot(rows, size, os.path.join(out, "atmosphere.png"))
     seed.write_atomic(os.path.join(out, "atmosphere.md"), markdown(rows, size))
-    return [dict(zip(header, [seed.format_value(x) for x in r])) for r in rows]
+    return [dict(zip(header, [seed.format_value(x) for x in r])) for r in rows], sun
 
 
 def plot(rows, size, path):
@@ -161,8 +190,9 @@ def main():
     runner = seed.Runner(args.glaswave, args.out, args.threads)
     start = time.monotonic()
     size = SIZES[mode]
+    cases, sun = study(runner, size, args.out)
     summary = {"mode": mode, "band": BAND, "shots": size["shots"],
-               "rays_per_shot": size["rays_per_shot"], "cases": study(runner, size, args.out)}
+               "rays_per_shot": size["rays_per_shot"], "cases": cases, "sun": sun}
     seed.write_atomic(os.path.join(args.out, "summary.json"),
                       json.dumps(summary, indent=1) + "\n")
     seed.log(f"atmosphere {mode}: {runner.count} glaswave runs in "
