@@ -74,7 +74,8 @@ TEST(FacetMesh, AFaceOfNoCornerIsRefusedBeforeAssimpTriangulates) {
 }
 
 // Assimp takes any file beginning with the bytes "ply" for a PLY; one whose first line was more
-// ("plyply", mesh_fuzzer) escaped glaswave's header checks and Assimp read its header for ever.
+// ("plyply", mesh_fuzzer) escaped glaswave's header checks and Assimp read its header for ever; so
+// did a header whose end_header followed a carriage return.
 TEST(FacetMesh, APlyWhoseFirstLineIsMoreThanPlyIsRefused) {
   test_support::ScratchDir dir;
   const auto started = std::chrono::steady_clock::now();
@@ -84,6 +85,13 @@ TEST(FacetMesh, APlyWhoseFirstLineIsMoreThanPlyIsRefused) {
             std::string::npos)
       << message;
   EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(5));
+  // A keyword after a carriage return or a space: Assimp read past the file's end for ever.
+  for (const char* before : {"\r", " "}) {
+    std::string text = ply("1", "3 0 1 2\n");
+    text.insert(text.find("end_header"), before);
+    EXPECT_NE(refusal(write(dir.path() / "cr.ply", text)).find("begins with a space or holds a "),
+              std::string::npos);
+  }
   // The word in capitals, or with a carriage return, is PLY's first line still.
   std::string upper = ply("1", "3 0 1 2\n");
   upper.replace(0, 4, "PLY\r\n");
