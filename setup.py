@@ -123,6 +123,10 @@ class BuildWithCMake(build_py):
         os.makedirs(os.path.join(package, "bin"), exist_ok=True)
         shutil.copy2(os.path.join(CMAKE_BUILD, "pipeline", "glaswave"),
                      os.path.join(package, "bin", "glaswave"))
+        # The granule reader's own program (footprints/granule.hpp): the module and the program
+        # look for it in glaswave/bin/.
+        shutil.copy2(os.path.join(CMAKE_BUILD, "footprints", "glaswave-read-granule"),
+                     os.path.join(package, "bin", "glaswave-read-granule"))
         share = os.path.join(package, "share", "glaswave")
         for folder in SHARE:
             shutil.rmtree(os.path.join(share, folder), ignore_errors=True)

@@ -129,13 +129,30 @@ std::uint64_t ply_property_bytes(const std::string& type, bool ascii) {
 void check_ply_counts(const std::string& place, const std::string& model) {
   std::ifstream in(place, std::ios::binary);
   std::string line;
-  if (!std::getline(in, line) || (line != "ply" && line != "ply\r")) return;
+  // Assimp reads as PLY any file whose first three bytes are "ply" in either case ("plyply", a
+  // header it then read for ever, found by mesh_fuzzer): such a file is checked here too, and its
+  // first line must be that word alone.
+  if (!std::getline(in, line) || line.size() < 3) return;
+  std::transform(line.begin(), line.end(), line.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (line.compare(0, 3, "ply") != 0) return;
+  while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
+  if (line != "ply")
+    throw input_error(place, "the mesh of model \"" + model +
+                                 "\": its PLY header's first line is not the word ply alone");
   bool ascii = false;
   std::vector<std::pair<std::string, std::uint64_t>> elements;  // name, count
   std::vector<std::uint64_t> element_bytes;
   constexpr std::size_t max_header_lines = 100000;
   for (std::size_t n = 0; n < max_header_lines && std::getline(in, line); ++n) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    // Assimp's reader does not see a keyword after a space or carriage return ("\rend_header":
+    // it read past the file's end for ever, found by mesh_fuzzer), where the words below do.
+    if (!line.empty() && (std::isspace(static_cast<unsigned char>(line.front())) ||
+                          line.find('\r') != std::string::npos))
+      throw input_error(place, "the mesh of model \"" + model +
+                                   "\": a line of its PLY header begins with a space or holds a "
+                                   "carriage return before its end");
     std::istringstream words(line);
     std::string keyword;
     words >> keyword;
@@ -187,9 +204,9 @@ void check_ply_counts(const std::string& place, const std::string& model) {
   throw input_error(place, "the mesh of model \"" + model + "\": its PLY header has no end_header");
 }
 
-// glTF's JSON (a .gltf, or a .glb's first chunk) nested deeper than this is refused before
-// Assimp's recursive parser overflows its stack on it (200 000 levels of arrays: a crash). glTF
-// itself nests a few levels; extras may nest more.
+// glTF's JSON (a .gltf, or a .glb's first chunk, whose declared length is checked first) nested
+// deeper than this is refused before Assimp's recursive parser overflows its stack on it
+// (200 000 levels of arrays: a crash). glTF itself nests a few levels; extras may nest more.
 constexpr int max_gltf_depth = 256;
 
 void check_gltf_depth(const std::string& place, const std::string& model) {
@@ -200,9 +217,17 @@ void check_gltf_depth(const std::string& place, const std::string& model) {
   if (in.gcount() == 12 && std::string_view(magic, 4) == "glTF") {
     unsigned char chunk[8] = {};
     in.read(reinterpret_cast<char*>(chunk), 8);
-    if (in.gcount() != 8 || std::string_view(reinterpret_cast<char*>(chunk) + 4, 4) != "JSON")
-      return;
+    if (in.gcount() != 8) return;
     length = chunk[0] | chunk[1] << 8 | chunk[2] << 16 | std::uint64_t{chunk[3]} << 24;
+    // Assimp reserves the JSON's declared length (glTF 2's first chunk, glTF 1's scene: the same
+    // four bytes) before reading it: 1.7 GB for a file of 105 bytes (mesh_fuzzer).
+    std::error_code error;
+    const std::uint64_t size = std::filesystem::file_size(place, error);
+    if (!error && length > (size > 20 ? size - 20 : 0))
+      throw input_error(place, "the mesh of model \"" + model + "\" declares a JSON chunk of " +
+                                   std::to_string(length) + " bytes, more than its " +
+                                   std::to_string(size) + " bytes hold (cut short or corrupt)");
+    if (std::string_view(reinterpret_cast<char*>(chunk) + 4, 4) != "JSON") return;
   } else {
     in.clear();
     in.seekg(0);
@@ -245,6 +270,27 @@ void check_gltf_depth(const std::string& place, const std::string& model) {
   }
 }
 
+// Assimp 5.2's triangulation asserts (abort(), in Debian's build) that a mesh marked as holding
+// polygons has a face of more than three corners; a face of no corner marks it so without one
+// (a PLY face list of count 0, found by mesh_fuzzer). Validation lets such faces through, so they
+// are refused here, before the step runs.
+void check_polygons(const aiScene& scene, const std::string& place, const std::string& model) {
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& part = *scene.mMeshes[m];
+    bool polygon = false;
+    for (unsigned f = 0; f < part.mNumFaces; ++f) {
+      if (part.mFaces[f].mNumIndices == 0)
+        throw input_error(place, "the mesh of model \"" + model + "\": face " + std::to_string(f) +
+                                     " of its mesh " + std::to_string(m) + " names no vertex");
+      polygon = polygon || part.mFaces[f].mNumIndices > 3;
+    }
+    if ((part.mPrimitiveTypes & aiPrimitiveType_POLYGON) && !polygon)
+      throw input_error(place, "the mesh of model \"" + model + "\": its mesh " +
+                                   std::to_string(m) +
+                                   " is marked as holding polygons and holds none (corrupt)");
+  }
+}
+
 }  // namespace
 
 FacetMesh read_facet_mesh(const std::filesystem::path& file, const std::string& model) {
@@ -256,21 +302,26 @@ FacetMesh read_facet_mesh(const std::filesystem::path& file, const std::string& 
   auto owned = std::make_unique<CheckedIOSystem>();
   const CheckedIOSystem* files = owned.get();
   importer.SetIOHandler(owned.release());  // the importer deletes it
-  // Validated first (faces naming vertices the mesh lacks, counts that disagree), then node
-  // transforms applied, polygons cut into triangles, shared vertices merged.
-  const aiScene* scene =
-      importer.ReadFile(place, aiProcess_ValidateDataStructure | aiProcess_Triangulate |
-                                   aiProcess_PreTransformVertices |
-                                   aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
-  if (!files->refused().empty())
-    throw input_error(place, "the mesh of model \"" + model + "\" names a file it cannot use (" +
-                                 files->refused() + ")");
-  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode) {
-    std::string why = importer.GetErrorString();
-    std::replace(why.begin(), why.end(), '\n', ' ');
-    throw input_error(place, "cannot read the mesh of model \"" + model +
-                                 "\" (Assimp: " + (why.empty() ? "no scene" : why) + ")");
-  }
+  // Read and validated first (faces naming vertices the mesh lacks, counts that disagree), then,
+  // once glaswave has checked what Assimp's steps assume, node transforms applied, polygons cut
+  // into triangles, shared vertices merged.
+  const aiScene* scene = importer.ReadFile(place, aiProcess_ValidateDataStructure);
+  auto check_scene = [&] {
+    if (!files->refused().empty())
+      throw input_error(place, "the mesh of model \"" + model + "\" names a file it cannot use (" +
+                                   files->refused() + ")");
+    if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode) {
+      std::string why = importer.GetErrorString();
+      std::replace(why.begin(), why.end(), '\n', ' ');
+      throw input_error(place, "cannot read the mesh of model \"" + model +
+                                   "\" (Assimp: " + (why.empty() ? "no scene" : why) + ")");
+    }
+  };
+  check_scene();
+  check_polygons(*scene, place, model);
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_PreTransformVertices |
+                                       aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+  check_scene();
   FacetMesh mesh;
   std::map<std::string, std::uint16_t> material_numbers;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {

@@ -49,8 +49,21 @@ struct GranuleShot {
 // beam not in the file or named twice, a dataset too large, an integer of the wrong kind or out
 // of range, or a granule without a shot. `warnings`, when given, receives one line when
 // footprints with a fill position were skipped.
+//
+// HDF5 1.10 (Debian 12's) crashes on some corrupt files, in ways no check of the bytes before it
+// covers, and a library must not fork: the granule is read by the small program
+// glaswave-read-granule, started with posix_spawn (which runs no fork handlers, so a thread
+// holding PROJ's or another library's lock cannot hang it). A crash there refuses the file. The
+// program is looked for, first found: beside the binary holding this code, in bin/ beside it
+// (the pip package's glaswave/bin/ for its module), in ../libexec/glaswave/ from it (an installed
+// prefix), where the build made it, and in the install prefix's libexec/glaswave/.
 std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
                                       const std::vector<std::string>& beams,
                                       std::vector<std::string>* warnings = nullptr);
+
+// glaswave-read-granule's whole work: `argv` is the program, the granule, then the beams. Writes
+// the shots, or the error, and the warnings to standard output for read_granule; 0 when all of it
+// was written.
+int granule_reader_main(int argc, char** argv);
 
 }  // namespace glaswave

@@ -6,8 +6,10 @@
 #include <sys/stat.h>
 
 #include <chrono>
+#include <cstdint>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "canopy/facet_trees.hpp"
 #include "core/error.hpp"
@@ -55,6 +57,45 @@ TEST(FacetMesh, FacesNamingVerticesTheMeshLacksAreRefused) {
     const std::string message = refusal(file);
     EXPECT_NE(message.find("bad.ply"), std::string::npos) << face << message;
   }
+}
+
+// Assimp 5.2 aborts in its triangulation on a face of no corner (mesh_fuzzer's binary PLY, ASCII
+// here): before the fix this test ended the test program.
+TEST(FacetMesh, AFaceOfNoCornerIsRefusedBeforeAssimpTriangulates) {
+  test_support::ScratchDir dir;
+  const std::pair<const char*, const char*> cases[] = {{"1", "0\n"}, {"2", "3 0 1 2\n0\n"}};
+  for (const auto& [count, faces] : cases) {
+    const auto file = write(dir.path() / "empty-face.ply", ply(count, faces));
+    const std::string message = refusal(file);
+    EXPECT_NE(message.find("empty-face.ply: the mesh of model \"oak\": face "), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("names no vertex"), std::string::npos) << message;
+  }
+}
+
+// Assimp takes any file beginning with the bytes "ply" for a PLY; one whose first line was more
+// ("plyply", mesh_fuzzer) escaped glaswave's header checks and Assimp read its header for ever; so
+// did a header whose end_header followed a carriage return.
+TEST(FacetMesh, APlyWhoseFirstLineIsMoreThanPlyIsRefused) {
+  test_support::ScratchDir dir;
+  const auto started = std::chrono::steady_clock::now();
+  const std::string message = refusal(write(dir.path() / "plyply.ply", "ply" + ply("1", "0\n")));
+  EXPECT_NE(message.find("plyply.ply: the mesh of model \"oak\": its PLY header's first line is "
+                         "not the word ply alone"),
+            std::string::npos)
+      << message;
+  EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(5));
+  // A keyword after a carriage return or a space: Assimp read past the file's end for ever.
+  for (const char* before : {"\r", " "}) {
+    std::string text = ply("1", "3 0 1 2\n");
+    text.insert(text.find("end_header"), before);
+    EXPECT_NE(refusal(write(dir.path() / "cr.ply", text)).find("begins with a space or holds a "),
+              std::string::npos);
+  }
+  // The word in capitals, or with a carriage return, is PLY's first line still.
+  std::string upper = ply("1", "3 0 1 2\n");
+  upper.replace(0, 4, "PLY\r\n");
+  EXPECT_EQ(read_facet_mesh(write(dir.path() / "upper.ply", upper), "oak").triangles.size(), 3u);
 }
 
 TEST(FacetMesh, AHeaderDeclaringMoreThanItsFileHoldsIsRefusedAtOnce) {
@@ -114,6 +155,30 @@ TEST(FacetMesh, FilesTheModelNamesFollowTheRegularFileRule) {
 // A glTF of 200 000 nested arrays overflowed the stack of Assimp's recursive JSON parser; one of
 // 256 levels, a string holding brackets and escaped quotes, is read on to the parser's own
 // verdict.
+// A GLB whose JSON chunk declares more bytes than the file holds: Assimp reserved them first
+// (1.7 GB for a file of 105 bytes, mesh_fuzzer). glTF 1's binary header has its scene's length in
+// the same four bytes.
+TEST(FacetMesh, AGlbDeclaringAChunkBeyondItsFileIsRefusedAtOnce) {
+  test_support::ScratchDir dir;
+  const std::string json = R"({"asset": {"version": "2.0"}})";
+  auto glb = [&](std::uint32_t version, std::uint32_t declared) {
+    std::string bytes = "glTF";
+    for (std::uint32_t word : {version, std::uint32_t(20 + json.size()), declared})
+      for (int b = 0; b < 4; ++b) bytes += static_cast<char>(word >> (8 * b) & 0xff);
+    return bytes + (version == 2 ? "JSON" : std::string(4, '\0')) + json;
+  };
+  for (std::uint32_t version : {1u, 2u}) {
+    const std::string message = refusal(write(dir.path() / "big.glb", glb(version, 0x6a000198u)));
+    EXPECT_NE(message.find("big.glb: the mesh of model \"oak\" declares a JSON chunk of "
+                           "1778385304 bytes, more than its 49 bytes hold"),
+              std::string::npos)
+        << version << ": " << message;
+  }
+  // The length the file holds is Assimp's to read (no triangle here: refused, but not for size).
+  const std::string message = refusal(write(dir.path() / "fits.glb", glb(2, json.size())));
+  EXPECT_EQ(message.find("declares a JSON chunk"), std::string::npos) << message;
+}
+
 TEST(FacetMesh, GltfNestedDeeperThanItsLimitIsRefusedBeforeItIsParsed) {
   test_support::ScratchDir dir;
   const std::string deep = std::string(200000, '[') + std::string(200000, ']');

@@ -3,7 +3,9 @@
 #include "footprints/granule.hpp"
 
 #include <gtest/gtest.h>
+#include <pthread.h>
 
+#include <atomic>
 #include <chrono>
 #include <fstream>
 #include <limits>
@@ -355,6 +357,23 @@ TEST(GranuleTrack, ARootGroupOfUndefinedAddressesIsRefusedBeforeHdf5ReadsIt) {
                          "address beyond the file's end"),
             std::string::npos)
       << refused;
+}
+
+// A library must not fork (issue 42): a fork waits in every library's fork handler, and one whose
+// lock another thread holds (PROJ's) hangs it. The granule is read by a program of its own started
+// with posix_spawn, which runs no fork handler: a handler counting forks sees none. Before, the
+// reader forked and the count was 1.
+std::atomic<int> forks{0};
+
+TEST(GranuleTrack, TheGranuleIsReadWithoutAFork) {
+  static const bool registered = pthread_atfork([] { forks.fetch_add(1); }, nullptr, nullptr) == 0;
+  ASSERT_TRUE(registered);
+  test_support::ScratchDir dir;
+  const auto file = dir.path() / "GEDI02_A_small.h5";
+  testing::write_gedi_l2a(file);
+  const int before = forks.load();
+  EXPECT_EQ(read_granule(file, {}).size(), 5u);
+  EXPECT_EQ(forks.load() - before, 0);
 }
 
 }  // namespace

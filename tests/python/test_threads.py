@@ -1,7 +1,9 @@
 """The library from several Python threads at once: two threads calling glaswave.run together
 (each run writing shots.nc through libnetcdf and HDF5 while the other reads its own back) end
-without a crash and give the products of one call; and the shot range accepts numpy integers."""
+without a crash and give the products of one call; a granule track runs beside other threads
+without a fork; and the shot range accepts numpy integers."""
 
+import ctypes
 import threading
 
 import numpy as np
@@ -88,3 +90,54 @@ def test_the_users_own_netcdf_reads_share_the_engines_lock(tmp_path):
         assert (read["shot_number"].values == reference["shot_number"].values).all()
     thread.join()
     assert failures == []
+
+
+def test_a_granule_track_beside_other_threads_runs_without_a_fork(tmp_path):
+    # Issue 42: the granule reader forked, and the child hung in PROJ's fork handler while
+    # another thread held PROJ's lock. A fork handler registered through libc counts every fork
+    # of this process (a library's fork() runs it; posix_spawn runs none): none may come while
+    # the granule track runs beside two pass runs, round after round. The child also kept a copy
+    # of the other runs' shots.nc with HDF5's lock on it, so that reading it back failed
+    # ("NetCDF: HDF error", 4 tries of 6 under load, and two granule tracks in every try).
+    import h5py
+    granule = tmp_path / "GEDI02_A.h5"
+    with h5py.File(granule, "w") as f:
+        f["BEAM0101/shot_number"] = np.array([10101000001, 10101000002], "u8")
+        f["BEAM0101/lat_lowestmode"] = np.array([1.0, 1.0005])
+        f["BEAM0101/lon_lowestmode"] = np.array([2.0, 2.0001])
+        f["BEAM0101/delta_time"] = np.array([4.0e7, 4.0e7 + 0.0083])
+    track = {"seed": 1, "sensor": {"preset": "gedi"},
+             "simulation": {"rays_per_shot": 20, "max_order": 1},
+             "terrain": {"plane": {"origin_lat_deg": 1.0, "origin_lon_deg": 2.0,
+                                   "elevation_m": 50.0}},
+             "track": {"type": "granule", "file": str(granule), "altitude_m": 420000.0}}
+    passes = small_config(shots=1, rays=20)
+    forks = []
+    counting = threading.Event()
+    handler = ctypes.CFUNCTYPE(None)(lambda: forks.append(1) if counting.is_set() else None)
+    libc = ctypes.CDLL(None)
+    # pthread_atfork itself is a static wrapper of glibc's around this exported function.
+    assert libc.__register_atfork(handler, None, None, None) == 0
+    failures = []
+    counting.set()
+
+    def loop(config):
+        try:
+            for _ in range(10):
+                glaswave.run(config, threads=1)
+        except Exception as error:  # noqa: BLE001 - reported by the main thread
+            failures.append(f"{config['track']['type']} track: {error!r}")
+
+    threads = [threading.Thread(target=loop, args=(c,)) for c in (track, passes, passes)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=300)
+    counting.clear()
+    assert not any(thread.is_alive() for thread in threads), "a run hung"
+    assert failures == []
+    assert forks == []
+    handler_kept.append(handler)  # a registered handler cannot be removed: it must outlive us
+
+
+handler_kept = []

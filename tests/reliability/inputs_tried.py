@@ -959,6 +959,12 @@ def round_four_inputs(t):
               says="bad.ply")
         t.run(f"42/1. a PLY face naming {name} (run)", ["run", facets(model), "--quiet", "--out",
                                                         out], out=out, expect=3)
+    # Round six: Assimp 5.2's triangulation aborted on a face of no corner (mesh_fuzzer).
+    model = t.write("empty-face.ply", ply(2, "3 0 1 2\n0\n"))
+    t.run("42/1. a PLY face naming no vertex (check)", ["check", facets(model)], expect=3,
+          says="names no vertex")
+    t.run("42/1. a PLY face naming no vertex (run)", ["run", facets(model), "--quiet", "--out", out],
+          out=out, expect=3, says="names no vertex")
     model = t.write("big.ply", ply(10**9, "3 0 1 2\n"))
     t.run(f"42/1. a {os.path.getsize(model)}-byte PLY declaring 10^9 faces", [
         "check", facets(model)], expect=3, says="declares 1000000000 face elements")
