@@ -23,21 +23,19 @@
 namespace glaswave {
 
 // The sensor: the lidar the transport and the receivers use (the seed's Table 2, with the
-// `north2010` preset's defaults), and what the configuration says beside it.
-struct SensorSettings : LidarSettings {
+// `north2010` preset's defaults), the photon-counting detector, and what the configuration says
+// beside them.
+struct SensorSettings : LidarSettings, PhotonDetectorSettings {
   std::string preset;           // "north2010", "glas", "gedi", "atlas" or empty
   double pulse_rate_hz = 40.0;  // the laser's: a track's shot rate when it gives none
   // What makes the record: "waveform" (the received waveform and its processing) or
   // "photon_counting" (ICESat-2's photon events; docs/icesat2.md), with the photon-counting
-  // receiver's own settings (ATLAS's by default) and its beams.
+  // receiver's detector (PhotonDetectorSettings, ATLAS's by default) and its beams.
   std::string receiver = "waveform";
   std::vector<std::string> beams = {"gt2l"};
   // The spacecraft's yaw, "backward" or "forward" (footprints/atlas_beams.hpp): which beam of
   // each pair is strong and each ground track's ATLAS spot.
   std::string sc_orient = "backward";
-  double photon_efficiency = 0.45 * 0.15;
-  double filter_bandwidth_nm = 0.038;
-  double dead_time_ns = 3.2;
 };
 
 struct SimulationSettings {

@@ -44,9 +44,7 @@ std::vector<PhotonCountingSettings> photon_settings(const Config& config) {
   for (const AtlasBeam& beam :
        select_atlas_beams(config.sensor.beams, atlas_orientation(config.sensor.sc_orient))) {
     PhotonCountingSettings p;
-    p.efficiency = config.sensor.photon_efficiency;
-    p.filter_bandwidth_nm = config.sensor.filter_bandwidth_nm;
-    p.dead_time_ns = config.sensor.dead_time_ns;
+    static_cast<PhotonDetectorSettings&>(p) = config.sensor;  // the sensor's detector, whole
     p.channels = beam.strong ? 16 : 4;
     p.energy_ratio = beam.energy_ratio;
     p.beam = static_cast<std::uint32_t>(beam.spot_number);
