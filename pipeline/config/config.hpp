@@ -55,12 +55,11 @@ struct OutputSettings {
   bool per_order = false;
   bool metrics = true;                        // the waveform metrics and Gaussian decomposition
   std::string footprints_format = "GeoJSON";  // "GeoJSON" or "GPKG"
-  bool glah01 = false, glah14 = false;        // DIR/glah01.h5, DIR/glah14.h5
   std::string glas_ellipsoid = "wgs84";       // "wgs84" or "topex": the GLAS granules' heights
   // The ICESat-2 granules (atl03.h5, atl08.h5); absent: on with the photon-counting receiver.
   std::optional<bool> atl03, atl08;
   // The switches product writers declare in their own files (core/part_switch.hpp): the GEDI
-  // granules' gedi_l1b and gedi_l2a, and a new writer's.
+  // granules' gedi_l1b and gedi_l2a, the GLAS granules' glah01 and glah14, and a new writer's.
   PartSwitches switches;
 };
 

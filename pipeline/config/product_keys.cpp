@@ -45,10 +45,6 @@ Key output_keys() {
        o.choice("footprints_format", &S::footprints_format, {"GeoJSON", "GPKG"},
                 "the footprints' format: `footprints.geojson`, or `footprints.gpkg` "
                 "(GeoPackage)"),
-       o.boolean("glah01", &S::glah01,
-                 "write `glah01.h5`, a GLAS GLAH01-style granule (waveforms)"),
-       o.boolean("glah14", &S::glah14,
-                 "write `glah14.h5`, a GLAS GLAH14-style granule (elevations, Gaussians)"),
        o.choice("glas_ellipsoid", &S::glas_ellipsoid, {"wgs84", "topex"},
                 "the GLAS granules' heights: on WGS84, or on GLAS's TOPEX/Poseidon "
                 "ellipsoid (`Geophysical/d_deltaEllip` is WGS84 less T/P height)"),
