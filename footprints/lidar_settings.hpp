@@ -40,6 +40,15 @@ inline int pulse_margin_bins(const LidarSettings& lidar) {
   return static_cast<int>(std::ceil(6.0 * lidar.pulse_sigma_ns / lidar.bin_ns));
 }
 
+// A photon-counting receiver's detector (ATLAS's strong beam by default: docs/icesat2.md): the
+// sensor's keys (`photon_efficiency`, `filter_bandwidth_nm`, `dead_time_ns`) and the
+// photon-counting receiver's settings are both this struct, so that each default is written once.
+struct PhotonDetectorSettings {
+  double photon_efficiency = 0.45 * 0.15;  // optical throughput times photon detection efficiency
+  double filter_bandwidth_nm = 0.038;      // the receiver filter's equivalent (rectangular) width
+  double dead_time_ns = 3.2;               // each detector channel's, non-paralysable
+};
+
 // The detector and digitiser between the received light and the recorded waveform
 // (`"detector"`). Off by default: the waveform is then the noise-free received power. Every level
 // is in W of received light at the detector's input except saturation_W, the digitiser's full

@@ -23,21 +23,19 @@
 namespace glaswave {
 
 // The sensor: the lidar the transport and the receivers use (the seed's Table 2, with the
-// `north2010` preset's defaults), and what the configuration says beside it.
-struct SensorSettings : LidarSettings {
+// `north2010` preset's defaults), the photon-counting detector, and what the configuration says
+// beside them.
+struct SensorSettings : LidarSettings, PhotonDetectorSettings {
   std::string preset;           // "north2010", "glas", "gedi", "atlas" or empty
   double pulse_rate_hz = 40.0;  // the laser's: a track's shot rate when it gives none
   // What makes the record: "waveform" (the received waveform and its processing) or
   // "photon_counting" (ICESat-2's photon events; docs/icesat2.md), with the photon-counting
-  // receiver's own settings (ATLAS's by default) and its beams.
+  // receiver's detector (PhotonDetectorSettings, ATLAS's by default) and its beams.
   std::string receiver = "waveform";
   std::vector<std::string> beams = {"gt2l"};
   // The spacecraft's yaw, "backward" or "forward" (footprints/atlas_beams.hpp): which beam of
   // each pair is strong and each ground track's ATLAS spot.
   std::string sc_orient = "backward";
-  double photon_efficiency = 0.45 * 0.15;
-  double filter_bandwidth_nm = 0.038;
-  double dead_time_ns = 3.2;
 };
 
 struct SimulationSettings {
@@ -67,12 +65,11 @@ struct OutputSettings {
   bool per_order = false;
   bool metrics = true;                        // the waveform metrics and Gaussian decomposition
   std::string footprints_format = "GeoJSON";  // "GeoJSON" or "GPKG"
-  bool glah01 = false, glah14 = false;        // DIR/glah01.h5, DIR/glah14.h5
   std::string glas_ellipsoid = "wgs84";       // "wgs84" or "topex": the GLAS granules' heights
   // The ICESat-2 granules (atl03.h5, atl08.h5); absent: on with the photon-counting receiver.
   std::optional<bool> atl03, atl08;
   // The switches product writers declare in their own files (core/part_switch.hpp): the GEDI
-  // granules' gedi_l1b and gedi_l2a, and a new writer's.
+  // granules' gedi_l1b and gedi_l2a, the GLAS granules' glah01 and glah14, and a new writer's.
   PartSwitches switches;
   std::optional<RamiLidarSettings> rami;  // RAMI-IV's lidar measurements; absent: none
 };

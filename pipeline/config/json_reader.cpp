@@ -213,7 +213,7 @@ JsonReader::JsonReader(const json& object, std::string path, json& resolved, con
 
 void JsonReader::throw_undeclared(const std::string& key) const {
   throw std::logic_error("the configuration parser reads " + place(key) +
-                         " as it is not declared in pipeline/config/keys.cpp");
+                         " as it is not declared among its keys (pipeline/config/*_keys.cpp)");
 }
 
 const Key& JsonReader::declared(const std::string& key, KeyType type) const {
@@ -494,7 +494,7 @@ void read_declared(JsonReader& reader, const KeyHooks& hooks,
   for (const auto& [name, hook] : hooks)
     if (!declaration.child(name))
       throw std::logic_error("the configuration parser reads " + reader.place(name) +
-                             " as it is not declared in pipeline/config/keys.cpp");
+                             " as it is not declared among its keys (pipeline/config/*_keys.cpp)");
   for (const Key& key : declaration.children) {
     if (key.read)
       for (const SettingsTarget& target : targets)

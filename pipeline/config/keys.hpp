@@ -101,6 +101,9 @@ struct Key {
 // Builders of declarations: each gives the name, the default, the range and unit, and what the
 // key means. A default given as the settings' own member initialiser keeps it in one place.
 namespace declare {
+// A key of `type` with nothing but its name, unit and description (a choice_or_object's, whose
+// section sets the rest).
+Key make(std::string name, KeyType type, std::string unit, std::string description);
 Key number(std::string name, std::optional<double> fallback, Range range, std::string unit,
            std::string description);
 Key integer(std::string name, std::optional<std::int64_t> fallback, std::int64_t min,

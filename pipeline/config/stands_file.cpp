@@ -17,9 +17,9 @@
 #include "core/error.hpp"
 #include "core/excerpt.hpp"
 #include "core/gdal_layer.hpp"
-#include "pipeline/config/canopy_section.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/keys.hpp"
+#include "pipeline/config/section_readers.hpp"
 #include "terrain/gdal_source.hpp"
 
 namespace glaswave {

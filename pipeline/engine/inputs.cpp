@@ -44,9 +44,7 @@ std::vector<PhotonCountingSettings> photon_settings(const Config& config) {
   for (const AtlasBeam& beam :
        select_atlas_beams(config.sensor.beams, atlas_orientation(config.sensor.sc_orient))) {
     PhotonCountingSettings p;
-    p.efficiency = config.sensor.photon_efficiency;
-    p.filter_bandwidth_nm = config.sensor.filter_bandwidth_nm;
-    p.dead_time_ns = config.sensor.dead_time_ns;
+    static_cast<PhotonDetectorSettings&>(p) = config.sensor;  // the sensor's detector, whole
     p.channels = beam.strong ? 16 : 4;
     p.energy_ratio = beam.energy_ratio;
     p.beam = static_cast<std::uint32_t>(beam.spot_number);
@@ -108,7 +106,7 @@ bool products_read_shot_fields(const OutputSettings& output) {
   // A writer that declares its own switch is taken to read them (the GEDI granules do).
   bool switched = false;
   for (const auto& [name, on] : output.switches) switched = switched || on;
-  return output.netcdf || output.footprints || output.glah01 || output.glah14 || switched;
+  return output.netcdf || output.footprints || switched;
 }
 
 std::unique_ptr<ShotSimulator> make_run_shot_simulator(const Config& config,
@@ -154,12 +152,13 @@ namespace {
 // GLAH01's and GLAH14's i_rec_ndx is a 4-byte integer (the GLAH dictionary's): a shot number
 // past 40 x (2^31 - 1) + 39 has no record index the granule can hold.
 void check_glas_record_index(const Config& config, const Track& track) {
-  const OutputSettings& o = config.output;
-  if (!o.glah01 && !o.glah14) return;
+  const bool glah01 = switched_on(config.output.switches, "glah01");
+  const bool glah14 = switched_on(config.output.switches, "glah14");
+  if (!glah01 && !glah14) return;
   constexpr std::int64_t most = std::int64_t{std::numeric_limits<std::int32_t>::max()} * 40 + 39;
   const std::int64_t largest = track.largest_source_shot_number();
   if (largest <= most) return;
-  throw config_error(o.glah14 ? "/output/glah14" : "/output/glah01",
+  throw config_error(glah14 ? "/output/glah14" : "/output/glah01",
                      "the track's shot numbers reach " + std::to_string(largest) +
                          " (a GEDI granule's), and a GLAS granule numbers a shot by its 1 s "
                          "record, i_rec_ndx, a 4-byte integer up to 2147483647 (shot numbers to " +

@@ -418,12 +418,10 @@ std::unique_ptr<RunOutput> open_output(const RunSetup& setup, const RunRequest& 
   settings.footprints_format = config.output.footprints_format == "GPKG"
                                    ? FootprintsFormat::gpkg
                                    : FootprintsFormat::geojson;
-  settings.glah01 = config.output.glah01;
-  settings.glah14 = config.output.glah14;
   settings.glas_topex = config.output.glas_ellipsoid == "topex";
   settings.switches = config.output.switches;  // the writers' own keys
   // GLAH14's cloud flag: the layers found at GLAS's 1064 nm channel, as ATL08's at 532 nm.
-  if (config.atmosphere && settings.glah14)
+  if (config.atmosphere && switched_on(settings.switches, "glah14"))
     settings.glas_cloud_layers =
         reported_cloud_layers(*config.atmosphere, nearest_band(info, 1064.0));
   output->writers = make_writers(request.out_dir, settings, info, icesat2_product_settings(config));

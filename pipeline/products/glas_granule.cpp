@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 
+#include "core/part_switch.hpp"
 #include "core/registry.hpp"
 
 namespace glaswave {
@@ -528,15 +529,23 @@ void GlasGranuleWriter::write_file(Hdf5Writer& f) {
 
 namespace {
 
+// output.glah01 and output.glah14 (core/part_switch.hpp); the heights' ellipsoid,
+// output.glas_ellipsoid, is more than a switch: the configuration declares it.
+const Registration<PartSwitch> glah01_key(
+    "glah01", 40, {"output", false, "write `glah01.h5`, a GLAS GLAH01-style granule (waveforms)"});
+const Registration<PartSwitch> glah14_key(
+    "glah14", 41,
+    {"output", false, "write `glah14.h5`, a GLAS GLAH14-style granule (elevations, Gaussians)"});
+
 const Registration<ProductWriter> glah01_writer(
     "glah01.h5", 40, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
-      if (!c.settings.glah01) return nullptr;
+      if (!switched_on(c.settings.switches, "glah01")) return nullptr;
       return std::make_unique<GlasGranuleWriter>(c.out_dir / "glah01.h5", GlasLevel::glah01,
                                                  c.settings.glas_topex, c.info);
     });
 const Registration<ProductWriter> glah14_writer(
     "glah14.h5", 41, [](const WriterContext& c) -> std::unique_ptr<ProductWriter> {
-      if (!c.settings.glah14) return nullptr;
+      if (!switched_on(c.settings.switches, "glah14")) return nullptr;
       return std::make_unique<GlasGranuleWriter>(c.out_dir / "glah14.h5", GlasLevel::glah14,
                                                  c.settings.glas_topex, c.info,
                                                  c.settings.glas_cloud_layers);

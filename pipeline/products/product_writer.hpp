@@ -75,12 +75,12 @@ struct ProductSettings {
   bool netcdf = true;      // DIR/shots.nc
   bool footprints = true;  // DIR/footprints.geojson or DIR/footprints.gpkg
   FootprintsFormat footprints_format = FootprintsFormat::geojson;
-  // The HDF5 granules in the real products' layouts (PRODUCT.md section 10, docs/granules.md).
-  bool glah01 = false;      // DIR/glah01.h5
-  bool glah14 = false;      // DIR/glah14.h5
-  bool glas_topex = false;  // GLAS heights on the TOPEX/Poseidon ellipsoid, not WGS84
+  // The GLAS granules' heights on the TOPEX/Poseidon ellipsoid, not WGS84 (PRODUCT.md section 10,
+  // docs/granules.md).
+  bool glas_topex = false;
   // The switches writers declare in their own files (core/part_switch.hpp), as the configuration's
-  // `output` set them: DIR/gedi_l1b.h5, DIR/gedi_l2a.h5 and a new writer's.
+  // `output` set them: DIR/gedi_l1b.h5, DIR/gedi_l2a.h5, DIR/glah01.h5, DIR/glah14.h5 and a new
+  // writer's.
   PartSwitches switches{};
   // GLAH14's elv_cloud_flg: with an `atmosphere` section, the layers its layer finder reports
   // at the band nearest 1064 nm (maybe none); without, absent.

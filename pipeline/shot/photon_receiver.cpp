@@ -90,7 +90,7 @@ double most_background_rate_Hz(const ReceiverSettings& settings, const PhotonCou
   b.filter_bandwidth_nm = p.filter_bandwidth_nm;
   b.ifov_rad = settings.lidar.ifov_rad;
   b.telescope_area_m2 = settings.lidar.telescope_area_m2;
-  b.efficiency = p.efficiency;
+  b.efficiency = p.photon_efficiency;
   b.wavelength_nm = band.wavelength_nm;
   std::optional<SkyLight> sky;
   if (settings.atmosphere) {
@@ -119,7 +119,7 @@ double PhotonCountingReceiver::background_rate_Hz(const PhotonCountingSettings& 
   b.filter_bandwidth_nm = p.filter_bandwidth_nm;
   b.ifov_rad = settings_.lidar.ifov_rad;
   b.telescope_area_m2 = settings_.lidar.telescope_area_m2;
-  b.efficiency = p.efficiency;
+  b.efficiency = p.photon_efficiency;
   b.wavelength_nm = band.wavelength_nm;
   if (sky_) b.sky = &*sky_;
   return glaswave::background_rate_Hz(b);
@@ -131,7 +131,7 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
   scale_pulse_energy(returns.waveforms, p.energy_ratio);
   const ScoredReturns& scored = returns.waveforms.scored;
   const LidarSettings& lidar = settings_.lidar;
-  const ShotSources shot = shot_sources(scored, lidar.bands[0].wavelength_nm, p.efficiency);
+  const ShotSources shot = shot_sources(scored, lidar.bands[0].wavelength_nm, p.photon_efficiency);
   double received_J = 0.0;
   for (const double e : scored.total_J[0]) received_J += e;
   PhotonDraw draw{settings_.seed,

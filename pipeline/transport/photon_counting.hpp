@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "footprints/lidar_settings.hpp"
 #include "pipeline/transport/sky_light.hpp"
 
 namespace glaswave {
@@ -60,11 +61,9 @@ double background_rate_Hz(const SolarBackground& background);
 // reflectance, nowhere, or a fixed rate.
 enum class BackgroundSource : std::uint8_t { sun, none, rate };
 
-// A photon-counting receiver's own settings (ATLAS's strong beam by default: docs/icesat2.md).
-struct PhotonCountingSettings {
-  double efficiency = 0.45 * 0.15;  // optical throughput times photon detection efficiency
-  double filter_bandwidth_nm = 0.038;
-  double dead_time_ns = 3.2;
+// A photon-counting receiver's own settings: its detector (the sensor's: ATLAS's strong beam by
+// default, docs/icesat2.md) and its beam's.
+struct PhotonCountingSettings : PhotonDetectorSettings {
   int channels = 16;          // 16 a strong beam, 4 a weak one
   double energy_ratio = 1.0;  // the beam's pulse energy over the band's (45/175 weak)
   std::uint32_t beam = 0;     // the beam's key in the draws
