@@ -481,6 +481,8 @@ void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
   double t[6];
   if (GDALGetGeoTransform(dataset, t) != CE_None)
     throw input_error(place, "the voxel grid has no geotransform");
+  if (!std::all_of(t, t + 6, [](double v) { return std::isfinite(v); }))
+    throw input_error(place, "the voxel grid's geotransform (origin, cell size) is not finite");
   if (t[2] != 0.0 || t[4] != 0.0 || !(t[1] > 0.0) || t[5] == 0.0)
     throw input_error(place, "the voxel grid is rotated or has no cell size");
   OGRSpatialReferenceH srs = GDALGetSpatialRef(dataset);

@@ -73,7 +73,7 @@ Key terrain_keys() {
       "choice made is in the run summary and in the products' `config`");
   datum.open_choices = true;
   datum.what_else = "a vertical CRS as AUTHORITY:CODE";
-  datum.pattern = ":";
+  datum.pattern = std::string(":");  // not = ":": GCC 12 warns falsely (-Wrestrict)
   Key terrain =
       object(
           "terrain", "the ground: exactly one of `dem`, `plane` and `point_cloud`",
