@@ -54,8 +54,8 @@ nlohmann::json brf_document(const Config& config, const BrfResult& result) {
                             {"albedo", result.albedo[band]},
                             {"views", views}};
     // RAMI's fluxes, when its measurements are asked for (the products without stay as they were).
+    if (config.brf.rami || result.sky) entry["albedo_stderr"] = result.albedo_stderr[band];
     if (config.brf.rami) {
-      entry["albedo_stderr"] = result.albedo_stderr[band];
       entry["fabs"] = result.absorbed[band];
       entry["fabs_stderr"] = result.absorbed_stderr[band];
       entry["ftran"] = result.transmitted[band];
@@ -67,7 +67,6 @@ nlohmann::json brf_document(const Config& config, const BrfResult& result) {
     // The layers' light (only with them: the products without stay as they were).
     if (result.sky) {
       const BrfSky& sky = *result.sky;
-      entry["albedo_stderr"] = result.albedo_stderr[band];
       entry["direct_transmittance"] = sky.direct[band];
       entry["diffuse_transmittance"] = sky.diffuse[band];
       entry["downward_flux"] = sky.downward[band];

@@ -13,9 +13,12 @@
 #include "pipeline/transport/brf_transport.hpp"
 #include "terrain/ground_mesh.hpp"
 #include "terrain/terrain.hpp"
+#include "tests/pipeline/transport/transport_test_support.hpp"
 
 namespace glaswave {
 namespace {
+
+using test_support::uniform_layer;
 
 constexpr double pi = std::numbers::pi;
 constexpr double deg = pi / 180.0;
@@ -27,18 +30,6 @@ Vec3 toward(double zenith_deg, double azimuth_deg) {
 
 AtmospherePhase hg(double g) { return {AtmospherePhase::Kind::henyey_greenstein, g, 0.0, 1.0}; }
 AtmospherePhase rayleigh() { return {}; }
-
-// A layer of the same optical depth in every band, and per band albedo.
-AtmosphereLayer layer(double base_m, double top_m, double tau, std::vector<double> albedo,
-                      AtmospherePhase phase) {
-  AtmosphereLayer l;
-  l.base_m = base_m;
-  l.top_m = top_m;
-  l.optical_depth.assign(albedo.size(), tau);
-  l.single_scattering_albedo = std::move(albedo);
-  l.phase = phase;
-  return l;
-}
 
 // Level ground (and optional crowns) over a periodic tile of 60 m, under `layers`; the ground
 // and leaves the same in every band.
@@ -89,8 +80,9 @@ std::vector<Crown> four_crowns() {
 
 // Molecules, a boundary-layer aerosol and a stratus, all with single-scattering albedo `omega`.
 std::vector<AtmosphereLayer> cloudy(double omega) {
-  return {layer(0.0, 8000.0, 0.1, {omega}, rayleigh()), layer(0.0, 2000.0, 0.2, {omega}, hg(0.7)),
-          layer(500.0, 1500.0, 2.0, {omega}, hg(0.85))};
+  return {uniform_layer(0.0, 8000.0, 0.1, {omega}, rayleigh()),
+          uniform_layer(0.0, 2000.0, 0.2, {omega}, hg(0.7)),
+          uniform_layer(500.0, 1500.0, 2.0, {omega}, hg(0.85))};
 }
 
 // The test: a conservative atmosphere (albedo 1, the stratus of tau 2 within it) over a
@@ -136,9 +128,9 @@ TEST(BrfAtmosphere, AbsorbingLayersAndSceneCloseTheEnergy) {
 TEST(BrfAtmosphere, DirectLightIsBeerLambert) {
   const SkyScene black(1, 0.0, 0.0, 0.0);
   const double mu = std::cos(50.0 * deg);
-  const BrfResult r = black.run(
-      {layer(-500.0, 8000.0, 0.1, {1.0}, rayleigh()), layer(1000.0, 3000.0, 0.3, {0.95}, hg(0.75))},
-      toward(50.0, 200.0), {toward(0, 0)}, 20000);
+  const BrfResult r = black.run({uniform_layer(-500.0, 8000.0, 0.1, {1.0}, rayleigh()),
+                                 uniform_layer(1000.0, 3000.0, 0.3, {0.95}, hg(0.75))},
+                                toward(50.0, 200.0), {toward(0, 0)}, 20000);
   const double floor_m = black.scene->top_m() + 1.0;
   const double expected = std::exp(-(0.1 * (8000.0 - floor_m) / 8500.0 + 0.3) / mu);
   RecordProperty("direct", std::to_string(r.sky->direct[0]));
@@ -185,7 +177,7 @@ TEST(BrfAtmosphere, ThinLayerSingleScatteringMatchesQuadrature) {
   const Vec3 sun = toward(40.0, 0.0);
   const std::vector<Vec3> views = {toward(0.0, 0.0), toward(40.0, 0.0), toward(30.0, 180.0)};
   const BrfResult r =
-      black.run({layer(2000.0, 3000.0, tau, {1.0, omega}, hg(g))}, sun, views, 100000);
+      black.run({uniform_layer(2000.0, 3000.0, tau, {1.0, omega}, hg(g))}, sun, views, 100000);
   const double expected = omega * diffuse_single(tau, g, mu0);
   // Less than all the light the layer scatters, more than the half of it a forward peak sends on.
   EXPECT_LT(expected / omega, -std::expm1(-tau / mu0));
@@ -214,8 +206,8 @@ TEST(BrfAtmosphere, LambertianGroundUnderAnAbsorbingLayer) {
   const double tau = 0.5, rho = 0.3, mu0 = std::cos(30.0 * deg);
   const SkyScene ground(1, rho, 0.0, 0.0);
   const std::vector<Vec3> views = {toward(0.0, 0.0), toward(50.0, 120.0)};
-  const BrfResult r =
-      ground.run({layer(100.0, 4100.0, tau, {0.0}, rayleigh())}, toward(30.0, 10.0), views, 20000);
+  const BrfResult r = ground.run({uniform_layer(100.0, 4100.0, tau, {0.0}, rayleigh())},
+                                 toward(30.0, 10.0), views, 20000);
   double e3 = 0.0;  // E3(tau) = int_0^1 mu e^(-tau / mu) dmu
   const int n = 100000;
   for (int i = 0; i < n; ++i) {

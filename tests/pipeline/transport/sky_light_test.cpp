@@ -11,22 +11,14 @@
 #include <numbers>
 
 #include "pipeline/transport/photon_counting.hpp"
+#include "tests/pipeline/transport/transport_test_support.hpp"
 
 namespace glaswave {
 namespace {
 
-constexpr double pi = std::numbers::pi;
+using test_support::uniform_layer;
 
-AtmosphereLayer layer(double base_m, double top_m, double tau, std::vector<double> albedo,
-                      AtmospherePhase phase) {
-  AtmosphereLayer l;
-  l.base_m = base_m;
-  l.top_m = top_m;
-  l.optical_depth.assign(albedo.size(), tau);
-  l.single_scattering_albedo = std::move(albedo);
-  l.phase = phase;
-  return l;
-}
+constexpr double pi = std::numbers::pi;
 
 double hg_phase(double g, double c) {
   const double d = 1.0 + g * g - 2.0 * g * c;
@@ -39,7 +31,7 @@ double hg_phase(double g, double c) {
 TEST(SkyLight, AbsorbingLayerGivesTheTransmissionFormula) {
   const double tau = 0.4;
   const SkyLight sky =
-      sky_light(AtmosphereSettings{"", {layer(0.0, 3000.0, tau, {0.0}, {})}}, 1, 0, 7, 200);
+      sky_light(AtmosphereSettings{"", {uniform_layer(0.0, 3000.0, tau, {0.0}, {})}}, 1, 0, 7, 200);
   ASSERT_EQ(sky.mu_sun.size(), 20u);
   for (std::size_t k = 0; k < sky.mu_sun.size(); ++k) {
     EXPECT_NEAR(sky.down_transmission[k], std::exp(-tau / sky.mu_sun[k]), 1e-12);
@@ -72,8 +64,9 @@ TEST(SkyLight, AbsorbingLayerGivesTheTransmissionFormula) {
 TEST(SkyLight, ThinLayerPathLightIsItsSingleScattering) {
   const double tau = 0.2, g = 0.7, omega = 0.001;
   const AtmospherePhase phase{AtmospherePhase::Kind::henyey_greenstein, g, 0.0, 1.0};
-  const SkyLight sky = sky_light(
-      AtmosphereSettings{"", {layer(1000.0, 2000.0, tau, {1.0, omega}, phase)}}, 2, 1, 7, 100000);
+  const SkyLight sky =
+      sky_light(AtmosphereSettings{"", {uniform_layer(1000.0, 2000.0, tau, {1.0, omega}, phase)}},
+                2, 1, 7, 100000);
   for (std::size_t k : {4u, 9u}) {  // sun cosines 0.25 and 0.5
     const double mu0 = sky.mu_sun[k];
     // The light arrives going down at mu0 and leaves straight up: cos(Theta) = -mu0.
@@ -91,8 +84,8 @@ TEST(SkyLight, ThinLayerPathLightIsItsSingleScattering) {
 // (trapezoids, T_down(0) = 0), to 0.01.
 TEST(SkyLight, ConservativeLayerAlbedoFromBelowIsWhatItDoesNotLetThrough) {
   const AtmospherePhase phase{AtmospherePhase::Kind::henyey_greenstein, 0.8, 0.0, 1.0};
-  const SkyLight sky =
-      sky_light(AtmosphereSettings{"", {layer(1000.0, 2000.0, 1.0, {1.0}, phase)}}, 1, 0, 7, 20000);
+  const SkyLight sky = sky_light(
+      AtmosphereSettings{"", {uniform_layer(1000.0, 2000.0, 1.0, {1.0}, phase)}}, 1, 0, 7, 20000);
   double through = 0.0, mu = 0.0, f = 0.0;
   for (std::size_t k = 0; k < sky.mu_sun.size(); ++k) {
     const double next = sky.down_transmission[k] * sky.mu_sun[k];

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "canopy/leaf_angles.hpp"
+#include "footprints/atmosphere_settings.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/transport/lidar_model.hpp"
 #include "pipeline/transport/shot_transport.hpp"
@@ -13,6 +14,18 @@
 #include "terrain/terrain.hpp"
 
 namespace glaswave::test_support {
+
+// A layer of the same optical depth in every band, with each band's single-scattering albedo.
+inline AtmosphereLayer uniform_layer(double base_m, double top_m, double tau,
+                                     std::vector<double> albedo, AtmospherePhase phase) {
+  AtmosphereLayer l;
+  l.base_m = base_m;
+  l.top_m = top_m;
+  l.optical_depth.assign(albedo.size(), tau);
+  l.single_scattering_albedo = std::move(albedo);
+  l.phase = phase;
+  return l;
+}
 
 // Table 2 of the seed: a 5 ns pulse, 0.11 mrad beam, 0.4 mrad field of view, a 0.95 m telescope
 // (0.709 m^2), 1 ns bins, 544 of them; 32 mJ at 532 nm and 72 mJ at 1064 nm with round-trip
