@@ -121,8 +121,14 @@ class Fields {
                    std::string description) const {
     Key k = declare::string_array(std::move(name), std::move(description));
     if (!(initial_.*member).empty()) k.default_value = initial_.*member;
+    // Absent: the member's default, which the key reference shows (given empty: empty, for the
+    // section's checks to refuse where a list must name something).
     return bind(std::move(k), member,
-                [](JsonReader& r, const std::string& key) { return r.string_array(key); });
+                [initial = initial_.*member](JsonReader& r, const std::string& key) {
+                  const bool given = r.has(key);
+                  std::vector<std::string> names = r.string_array(key);
+                  return given ? names : initial;
+                });
   }
   // An object read into a struct of its own, with the keys `children` declare for it.
   template <typename M>

@@ -57,18 +57,9 @@ Key output_keys() {
            "rami", &S::rami,
            "RAMI-IV's lidar measurements in ROMC's format, the return binned by height from the "
            "ground up, written to `DIR/rami/` (docs/guide/rami.md); absent: none",
-           {r.bind(declare::string_array("measurements",
-                                         "ROMC's measurement identifiers: `lidar_sgl_co` (light "
-                                         "scattered once: needs `per_order`) and `lidar_tot` "
-                                         "(all of it)")
-                       .with_default(RamiLidarSettings{}.measurements),
-                   &RamiLidarSettings::measurements,
-                   // Absent: both (an empty list given is refused by the checks).
-                   [](JsonReader& reader, const std::string& key) {
-                     const bool given = reader.has(key);
-                     std::vector<std::string> names = reader.string_array(key);
-                     return given ? names : RamiLidarSettings{}.measurements;
-                   }),
+           {r.string_array("measurements", &RamiLidarSettings::measurements,
+                           "ROMC's measurement identifiers: `lidar_sgl_co` (light scattered "
+                           "once: needs `per_order`) and `lidar_tot` (all of it)"),
             r.string("experiment", &RamiLidarSettings::experiment,
                      "ROMC's experiment identifier; `{band}` is replaced by the band's name, as "
                      "it must be with more than one band")

@@ -129,7 +129,6 @@ void check_beams(JsonReader& r, SensorSettings& s) {
     r.fail("beams",
            "names no beam: name one or more of gt1l gt1r gt2l gt2r gt3l gt3r, or leave it out "
            "for gt2l");
-  if (s.beams.empty()) s.beams = SensorSettings{}.beams;
   r.resolved()["beams"] = s.beams;
   if (s.receiver != "photon_counting") return;
   static const std::vector<std::string> known = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};

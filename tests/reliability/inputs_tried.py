@@ -4,9 +4,11 @@
     /usr/bin/python3 tests/reliability/inputs_tried.py [--glaswave build/pipeline/glaswave]
         [--out inputs_tried.md] [--only SUBSTRING]
 
-Each case runs under `timeout 20` in a scratch directory and is recorded with its exit status,
-the first line of stderr and a verdict. A case is a bug when it crashes (a signal: exit >= 128),
-hangs (killed by the timeout: 124), echoes a file's content (every hostile file holds the
+Each case runs in a scratch directory with 20 s of CPU (`prlimit --cpu=20`) and 120 s of wall
+time (`timeout -s KILL 120`, for what blocks without spending CPU), and is recorded with its exit
+status, the first line of stderr and a verdict. The limit is CPU time so that a loaded machine
+does not make a fast case look hung. A case is a bug when it crashes (a signal: exit >= 128),
+hangs (spends its CPU, or blocks until the wall limit), echoes a file's content (every hostile file holds the
 marker below), leaves a product under its final name after a failure, or fails with more (or
 less) than one `glaswave: error:` line. Cases marked `ok` are meant to succeed. A full disk is a
 small tmpfs when this runs as root (else `ulimit -f`). ctest runs it on the built command (the
@@ -31,7 +33,8 @@ from osgeo import osr
 MARKER = "SECRET-MARKER-7f3a"
 PRODUCTS = {"shots.nc", "footprints.geojson", "footprints.gpkg", "brf.json", "scene.tif",
             "sensitivity.csv", "sensitivity.md", "waveforms.png", "track_map.png"}
-TIMEOUT_S = 20
+CPU_LIMIT_S = 20
+WALL_LIMIT_S = 120
 MAX_LINE = 1000  # a one-line message quotes input as a bounded excerpt (issue 28)
 
 
@@ -92,7 +95,8 @@ class Trial:
         self.count += 1
         if out is not None:
             shutil.rmtree(out, ignore_errors=True)
-        command = ["timeout", "-s", "KILL", str(TIMEOUT_S), *(command or [self.glaswave, *args])]
+        command = ["timeout", "-s", "KILL", str(WALL_LIMIT_S), "prlimit", f"--cpu={CPU_LIMIT_S}",
+                   *(command or [self.glaswave, *args])]
         started = time.monotonic()
         cpu_before = _children_cpu_s()
         if shell_prefix:
@@ -107,8 +111,10 @@ class Trial:
         lines = [l for l in stderr.splitlines() if l.strip()]
         first = lines[0] if lines else ""
         problems = []
-        if status == 137 and wall_s >= TIMEOUT_S - 0.5:
-            problems.append(f"HANG (killed after {TIMEOUT_S} s)")
+        if status == 137 and wall_s >= WALL_LIMIT_S - 0.5:
+            problems.append(f"HANG (blocked: killed after {WALL_LIMIT_S} s of wall time)")
+        elif status == 128 + signal.SIGXCPU:
+            problems.append(f"HANG (spent its {CPU_LIMIT_S} s of CPU)")
         elif status >= 128:
             problems.append(f"CRASH (signal {status - 128})")
         if MARKER in stderr or MARKER in done.stdout.decode("utf-8", "replace"):
@@ -141,7 +147,8 @@ class Trial:
         bugs = [r for r in self.rows if is_bug(r[4])]
         text = [
             "# Inputs tried on glaswave (issue 13)", "",
-            f"{len(self.rows)} inputs, each run as `timeout -s KILL {TIMEOUT_S} glaswave ...` by "
+            f"{len(self.rows)} inputs, each run as `timeout -s KILL {WALL_LIMIT_S} prlimit "
+            f"--cpu={CPU_LIMIT_S} glaswave ...` by "
             "`tests/reliability/inputs_tried.py`; exit status, the first line of stderr, and the "
             "verdict (a crash, a hang, an echoed file, a product left after a failure or more "
             "than one error line would be named). "
@@ -255,7 +262,7 @@ def issue_items(t):
     process = subprocess.Popen([t.glaswave, "run", long, "--quiet", "--threads", "1", "--out",
                                 out], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     journal = pathlib.Path(out) / "glaswave.journal"
-    deadline = time.monotonic() + TIMEOUT_S
+    deadline = time.monotonic() + WALL_LIMIT_S
     while time.monotonic() < deadline and process.poll() is None and not (
             journal.exists() and journal.stat().st_size > 0):
         time.sleep(0.05)
@@ -732,7 +739,7 @@ sys.exit(f"glaswave: error: {{failures[0]}}" if failures else 0)
                                     "--out", out], stdout=subprocess.DEVNULL,
                                    stderr=subprocess.DEVNULL)
         journal = pathlib.Path(out) / "glaswave.journal"
-        deadline = time.monotonic() + TIMEOUT_S
+        deadline = time.monotonic() + WALL_LIMIT_S
         while time.monotonic() < deadline and process.poll() is None and len(
                 journal_frames(journal)) < 3:
             time.sleep(0.05)
@@ -875,7 +882,7 @@ except ValueError as error:
     first = subprocess.Popen([t.glaswave, "run", long, "--quiet", "--threads", "1", "--out", out],
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     lock = pathlib.Path(out) / ".glaswave.lock"
-    deadline = time.monotonic() + TIMEOUT_S
+    deadline = time.monotonic() + WALL_LIMIT_S
     while time.monotonic() < deadline and not (lock.exists() and lock.read_text().strip()):
         time.sleep(0.01)
     t.run("28/7. a second run on the --out of a running one", [

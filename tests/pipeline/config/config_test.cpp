@@ -308,6 +308,21 @@ TEST(OutputKeys, IcesatGranulesAskedOfTheWaveformReceiverAreWarnedAbout) {
           .warnings.empty());
 }
 
+// A list left out is the default the key reference shows (docs/guide/rami.md's five and two
+// measurements); brf.rami without `measurements` read as empty and was refused as naming none
+// (given empty, `check` still refuses it as naming none).
+TEST(Defaults, ListsLeftOutAreTheirDefaults) {
+  const Config c = parse_config(doc(R"({"brf": {"rami": {"experiment": "HET01"}},
+                                         "output": {"per_order": true,
+                                                    "rami": {"experiment": "HOM03"}}})"));
+  ASSERT_TRUE(c.brf.rami.has_value());
+  EXPECT_EQ(c.brf.rami->measurements,
+            (std::vector<std::string>{"brfpp", "brfop", "fabs", "ftran", "falb"}));
+  ASSERT_TRUE(c.output.rami.has_value());
+  EXPECT_EQ(c.output.rami->measurements, (std::vector<std::string>{"lidar_sgl_co", "lidar_tot"}));
+  EXPECT_EQ(c.sensor.beams, std::vector<std::string>{"gt2l"});
+}
+
 TEST(Defaults, EverythingElse) {
   const Config c = parse_config(doc("{}"));
   EXPECT_EQ(c.seed, 1u);
