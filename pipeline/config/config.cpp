@@ -52,13 +52,15 @@ Config parse_config(const json& document) {
   c.canopy = read_canopy(root, c.sensor.bands);
   c.track = read_track(root, c.sensor);
   c.output = read_output(root, c.warnings);
-  // The ICESat-2 granules are the photon-counting receiver's: asked of the waveform's, nothing.
-  if (c.sensor.receiver != "photon_counting")
+  // The ICESat-2 granules are those of a receiver that flies ATLAS's beams: asked of another,
+  // nothing.
+  if (!receiver_traits_of(c.sensor).atlas_beams)
     for (const auto& [key, asked] : {std::pair{"atl03", c.output.atl03}, {"atl08", c.output.atl08}})
       if (asked.value_or(false))
-        c.warnings.push_back("/output/" + std::string(key) + ": the " + c.sensor.receiver +
-                             " receiver writes no ICESat-2 granule; it is written with "
-                             "sensor.receiver \"photon_counting\"");
+        c.warnings.push_back(
+            "/output/" + std::string(key) + ": the " + c.sensor.receiver +
+            " receiver writes no ICESat-2 granule; it is written with sensor.receiver " +
+            receivers_that([](const ReceiverTraits& t) { return t.atlas_beams; }));
   c.detector = read_detector(root);
   c.brf = read_brf(root);
   c.table = read_table(root);

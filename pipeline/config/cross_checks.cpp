@@ -4,7 +4,9 @@
 
 #include <string>
 
+#include "canopy/vegetation_traits.hpp"
 #include "core/error.hpp"
+#include "core/part_kind.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/keys.hpp"
 
@@ -91,7 +93,10 @@ void check_band_wavelengths(const std::vector<LidarBand>& bands) {
 }
 
 void check_point_cloud_ground(const Config& config) {
-  if (!config.terrain.point_cloud || (config.canopy && config.canopy->kind == "point_cloud"))
+  if (!config.terrain.point_cloud ||
+      (config.canopy && declared_traits<VegetationTraits>(config.canopy->kind)
+                            .value_or(VegetationTraits{})
+                            .ground_points))
     return;
   throw config_error("/terrain/point_cloud",
                      "is the ground of canopy.point_cloud's cloud, and the canopy has no point "

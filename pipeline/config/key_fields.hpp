@@ -180,7 +180,10 @@ class Fields {
   }
 
  private:
-  const S initial_{};
+  // Value-initialised through S's own constructor: aggregate initialisation (`initial_{}`) put
+  // every member's construction and unwinding inline here, where GCC 12 saw SensorSettings'
+  // beam_profile as maybe uninitialised on the unwinding path (a false -Wmaybe-uninitialized).
+  const S initial_ = S();
 };
 
 namespace section_keys {

@@ -60,8 +60,12 @@ void check_rami_lidar(const Config& config) {
   if (config.sensor.bands.size() > 1 && rami.experiment.find("{band}") == std::string::npos)
     throw config_error("/output/rami/experiment",
                        "needs '{band}' with more than one band: an experiment is one band's");
-  if (config.sensor.receiver != "waveform")
-    throw config_error("/output/rami", "RAMI's lidar measurements need the waveform receiver");
+  if (!receiver_traits_of(config.sensor).waveform) {
+    const auto waveform = [](const ReceiverTraits& t) { return t.waveform; };
+    throw config_error("/output/rami", "RAMI's lidar measurements need the " +
+                                           alternatives(declared_kinds<ReceiverTraits>(waveform)) +
+                                           " receiver");
+  }
   if (config.atmosphere)
     throw config_error("/output/rami",
                        "RAMI's lidar measurements are of the canopy alone: not beside "
@@ -160,8 +164,8 @@ TableSettings read_table(JsonReader& root) {
 
 void check_outputs(const Config& config) {
   const OutputSettings& o = config.output;
-  // A photon-counting run's ICESat-2 granules are products of their own.
-  const bool granules = config.sensor.receiver == "photon_counting" &&
+  // The ICESat-2 granules of a receiver that flies ATLAS's beams are products of their own.
+  const bool granules = receiver_traits_of(config.sensor).atlas_beams &&
                         (o.atl03.value_or(true) || o.atl08.value_or(true));
   if (!o.netcdf && !o.footprints && !granules && !o.rami)
     throw config_error("/output",

@@ -1,5 +1,7 @@
 // The keys of what a shot sees and how it is traced: `simulation`, `terrain`, `canopy`, `track`.
 #include "canopy/canopy_settings.hpp"
+#include "canopy/vegetation_traits.hpp"
+#include "core/part_kind.hpp"
 #include "footprints/track_settings.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/config/key_fields.hpp"
@@ -269,6 +271,11 @@ Key canopy_keys() {
                                  "`transmittance` ≤ 1")
                             .with_default_text("none: opaque")}))
                 .with_required()})});
+  // A kind whose keys the configuration does not declare is chosen by its empty object.
+  for (const auto& kind : Registry<PartKind<VegetationTraits>>::instance().entries())
+    if (kind.make.traits.keys == VegetationTraits::Keys::none)
+      canopy.children.push_back(
+          object(kind.name, kind.make.description + " (no other canopy key beside it)", {}));
   canopy.default_text = "null";
   return canopy;
 }

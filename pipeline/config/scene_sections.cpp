@@ -4,9 +4,11 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "canopy/vegetation_traits.hpp"
 #include "core/error.hpp"
 #include "core/glas_time.hpp"
 #include "core/names.hpp"
+#include "core/part_kind.hpp"
 #include "pipeline/config/json_reader.hpp"
 #include "pipeline/config/keys.hpp"
 #include "pipeline/config/section_readers.hpp"
@@ -241,24 +243,6 @@ KeyHooks leaf_hooks(JsonReader& r, CanopySettings& c, const std::vector<LidarBan
       {"bark_reflectance", [&] { c.bark_reflectance = spectral(r, "bark_reflectance", bands); }}};
 }
 
-// canopy.voxels or canopy.point_cloud: measured vegetation, alone in the canopy.
-CanopySettings read_measured_canopy(JsonReader& canopy, const std::vector<LidarBand>& bands) {
-  const bool voxels = canopy.has("voxels");
-  const char* name = voxels ? "voxels" : "point_cloud";
-  for (const std::string& key : canopy.given())
-    if (key != name)
-      canopy.fail(key, std::string("cannot be given beside canopy.") + name +
-                           " (the canopy holds one vegetation source)");
-  CanopySettings c;
-  c.kind = name;
-  JsonReader r = canopy.object(name);
-  KeyHooks hooks = leaf_hooks(r, c, bands);
-  hooks.emplace_back("bark_fraction", [&] { c.green_fraction = 1.0 - c.bark_fraction; });
-  read_fields(r, hooks, c);
-  r.finish();
-  return c;
-}
-
 // canopy.facets.materials: each material's optics per band, a leaf where a transmittance is given.
 void read_facet_materials(JsonReader& r, CanopySettings& c, const std::vector<LidarBand>& bands) {
   for (auto& [name, entry] : r.object_map("materials")) {
@@ -279,20 +263,26 @@ void read_facet_materials(JsonReader& r, CanopySettings& c, const std::vector<Li
   }
 }
 
-// canopy.facets: facet trees, alone in the canopy.
-CanopySettings read_facet_canopy(JsonReader& canopy, const std::vector<LidarBand>& bands) {
+// canopy.<kind>: the object of a kind that declared itself (VegetationTraits), alone in the
+// canopy, read with the keys its declaration names.
+CanopySettings read_kind_canopy(JsonReader& canopy, const std::string& kind,
+                                VegetationTraits::Keys keys, const std::vector<LidarBand>& bands) {
   for (const std::string& key : canopy.given())
-    if (key != "facets")
-      canopy.fail(key,
-                  "cannot be given beside canopy.facets (the canopy holds one vegetation "
-                  "source)");
+    if (key != kind)
+      canopy.fail(key, "cannot be given beside canopy." + kind +
+                           " (the canopy holds one vegetation source)");
   CanopySettings c;
-  c.kind = "facets";
-  JsonReader r = canopy.object("facets");
-  read_fields(r,
-              {{"models", [&] { c.facet_models = r.path_map("models"); }},
-               {"materials", [&] { read_facet_materials(r, c, bands); }}},
-              c);
+  c.kind = kind;
+  JsonReader r = canopy.object(kind);
+  KeyHooks hooks;
+  if (keys == VegetationTraits::Keys::measured) {
+    hooks = leaf_hooks(r, c, bands);
+    hooks.emplace_back("bark_fraction", [&] { c.green_fraction = 1.0 - c.bark_fraction; });
+  } else if (keys == VegetationTraits::Keys::facets) {
+    hooks = {{"models", [&] { c.facet_models = r.path_map("models"); }},
+             {"materials", [&] { read_facet_materials(r, c, bands); }}};
+  }
+  read_fields(r, hooks, c);
   r.finish();
   return c;
 }
@@ -305,8 +295,10 @@ std::optional<CanopySettings> read_canopy(JsonReader& root, const std::vector<Li
     return std::nullopt;
   }
   JsonReader r = root.object("canopy");
-  if (r.has("voxels") || r.has("point_cloud")) return read_measured_canopy(r, bands);
-  if (r.has("facets")) return read_facet_canopy(r, bands);
+  // The kind whose object is given; else the crowns' (the vegetation sources declare their kinds).
+  for (const auto& kind : Registry<PartKind<VegetationTraits>>::instance().entries())
+    if (kind.make.traits.keys != VegetationTraits::Keys::crowns && r.has(kind.name))
+      return read_kind_canopy(r, kind.name, kind.make.traits.keys, bands);
   CanopySettings c;
   KeyHooks hooks = leaf_hooks(r, c, bands);
   hooks.insert(hooks.end(), {{"green_fraction", [&] { read_fractions(r, c); }},

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "canopy/canopy_settings.hpp"
+#include "core/part_kind.hpp"
+#include "footprints/receiver_traits.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/config/json_reader.hpp"
 
@@ -41,6 +43,18 @@ TrackSettings read_track(JsonReader& root, const SensorSettings& sensor);
 OutputSettings read_output(JsonReader& root, std::vector<std::string>& warnings);
 BrfSettings read_brf(JsonReader& root);
 TableSettings read_table(JsonReader& root);
+
+// What the sensor's receiver declared it is (core/part_kind.hpp), which the rules across keys ask
+// instead of its name; none of its traits for a name no receiver declared (its key refuses it).
+inline ReceiverTraits receiver_traits_of(const SensorSettings& sensor) {
+  return declared_traits<ReceiverTraits>(sensor.receiver).value_or(ReceiverTraits{});
+}
+
+// The names of the receivers whose traits satisfy `keep`, as a message lists them.
+template <typename Keep>
+std::string receivers_that(Keep keep) {
+  return quoted_alternatives(declared_kinds<ReceiverTraits>(keep));
+}
 
 // Refuses a shot whose waveforms would take more than run_limits::shot_waveform_bytes, at the
 // key that makes them large.

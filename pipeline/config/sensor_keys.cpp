@@ -1,5 +1,7 @@
 // The keys of the lidar and the air it looks through: `sensor`, `detector`, `atmosphere`.
+#include "core/part_kind.hpp"
 #include "footprints/atmosphere_settings.hpp"
+#include "footprints/receiver_traits.hpp"
 #include "pipeline/config/atmosphere_presets.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/config/key_fields.hpp"
@@ -16,6 +18,22 @@ std::vector<std::string> preset_names() {
   std::vector<std::string> names;
   for (const auto& [name, text] : sensor_presets()) names.push_back(name);
   return names;
+}
+
+// sensor.receiver's: each receiver's own words (core/part_kind.hpp: the receivers declare their
+// kinds), then the presets that choose one.
+std::string receiver_description() {
+  const auto receivers = Registry<PartKind<ReceiverTraits>>::instance().entries();
+  std::vector<std::string> kinds;
+  for (const auto& receiver : receivers)
+    kinds.push_back("`" + receiver.name + "` (" + receiver.make.description + ")");
+  std::string text = "what the record is made of: " + alternatives(kinds);
+  for (const auto& [name, preset] : sensor_presets()) {
+    const json receiver = json::parse(preset).value("receiver", json());
+    if (receiver.is_string())
+      text += "; the `" + name + "` preset's is `" + receiver.get<std::string>() + "`";
+  }
+  return text;
 }
 
 }  // namespace
@@ -83,11 +101,7 @@ Key sensor_keys() {
                             "`atmosphere`, refused beside it (its layers give it)")})
            .with_items(1, run_limits::bands)
            .with_default_text("the preset's"),
-       s.choice("receiver", &S::receiver, {"waveform", "photon_counting"},
-                "what the record is made of: `waveform` (the received waveform and its "
-                "processing) or `photon_counting` (ICESat-2's photon events, written to "
-                "`atl03.h5` and `atl08.h5`; docs/icesat2.md); the `atlas` preset's is "
-                "`photon_counting`"),
+       s.choice("receiver", &S::receiver, declared_kinds<ReceiverTraits>(), receiver_description()),
        s.string_array("beams", &S::beams,
                       "photon counting: which of ATLAS's beams `gt1l gt1r gt2l gt2r gt3l gt3r` to "
                       "simulate (strong: the `l` beams backward, the `r` ones forward; weak: the "

@@ -122,7 +122,7 @@ void read_bands(JsonReader& r, SensorSettings& s, bool atmosphere, bool bands_gi
   }
 }
 
-// The beams of the photon-counting receiver: ATLAS's, one a run for now.
+// The beams of a receiver that flies ATLAS's (ReceiverTraits::atlas_beams).
 void check_beams(JsonReader& r, SensorSettings& s) {
   // Given empty, it asks for no beam: gt2l in its place would run without a word.
   if (s.beams.empty() && r.has("beams"))
@@ -130,7 +130,7 @@ void check_beams(JsonReader& r, SensorSettings& s) {
            "names no beam: name one or more of gt1l gt1r gt2l gt2r gt3l gt3r, or leave it out "
            "for gt2l");
   r.resolved()["beams"] = s.beams;
-  if (s.receiver != "photon_counting") return;
+  if (!receiver_traits_of(s).atlas_beams) return;
   static const std::vector<std::string> known = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};
   for (const std::string& beam : s.beams)
     if (std::find(known.begin(), known.end(), beam) == known.end())

@@ -14,7 +14,9 @@
 #include <mutex>
 
 #include "core/error.hpp"
+#include "core/part_kind.hpp"
 #include "core/random.hpp"
+#include "footprints/receiver_traits.hpp"
 #include "pipeline/config/config.hpp"
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/retrieval/netcdf_file.hpp"
@@ -174,10 +176,12 @@ double implied_rhov_rhog(double energy_canopy, double energy_ground, double cove
 
 ForwardTable build_table(const TableRequest& request, const TableProgress& progress) {
   const Config base = load_config_document(request.document, request.folder, {});
-  if (base.sensor.receiver != "waveform")
+  // A receiver that declared it records waveforms (core/part_kind.hpp).
+  const auto waveform = [](const ReceiverTraits& t) { return t.waveform; };
+  if (!declared_traits<ReceiverTraits>(base.sensor.receiver).value_or(ReceiverTraits{}).waveform)
     throw config_error("/sensor/receiver",
-                       "a forward table holds waveforms: the receiver must "
-                       "be \"waveform\"");
+                       "a forward table holds waveforms: the receiver must be " +
+                           quoted_alternatives(declared_kinds<ReceiverTraits>(waveform)));
   ForwardTable table;
   for (const auto& [key, range] : base.table.vary)
     table.parameters.push_back({key, range[0], range[1], {}});

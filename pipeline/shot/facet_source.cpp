@@ -128,8 +128,8 @@ double FacetSource::source_bytes(const VegetationSettings& settings) {
 }
 
 namespace {
-const Registration<VegetationSource> facets(
-    "facets", 0,
+const VegetationRegistration facets(
+    "facets", 3, {"facet trees", {.keys = VegetationTraits::Keys::facets}},
     {[](const VegetationSettings& s) { return std::make_unique<FacetSource>(s); },
      &FacetSource::region_bytes, &FacetSource::source_bytes, "/canopy/facets/models"});
 }  // namespace

@@ -158,8 +158,8 @@ double ForestSource::region_bytes(const VegetationSettings& settings, double sid
 }
 
 namespace {
-const Registration<VegetationSource> forest(
-    "forest", 0,
+const VegetationRegistration forest(
+    "forest", 0, {"crowns, stands and a layer", {.keys = VegetationTraits::Keys::crowns}},
     {[](const VegetationSettings& s) { return std::make_unique<ForestSource>(s); },
      &ForestSource::region_bytes, nullptr, "/canopy/crown_radius_m", forest_tree_bytes});
 }  // namespace

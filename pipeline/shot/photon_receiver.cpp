@@ -167,10 +167,11 @@ void PhotonCountingReceiver::receive(ShotReturns returns, ShotRecord& record) co
 }
 
 namespace {
-const Registration<Receiver> photon_counting(
-    "photon_counting", 0,
-    {[](const ReceiverSettings& s) { return std::make_unique<PhotonCountingReceiver>(s); },
-     {.every_order = true, .shares_scenes = true, .atlas_beams = true}});
+const ReceiverRegistration photon_counting(
+    "photon_counting", 1,
+    {"ICESat-2's photon events, written to `atl03.h5` and `atl08.h5`; docs/icesat2.md",
+     {.every_order = true, .shares_scenes = true, .atlas_beams = true}},
+    [](const ReceiverSettings& s) { return std::make_unique<PhotonCountingReceiver>(s); });
 }  // namespace
 
 }  // namespace glaswave

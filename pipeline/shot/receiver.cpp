@@ -1,5 +1,5 @@
-// Looking a receiver up by its kind among those registered (each from its own .cpp), and the
-// scaling of a pulse's returns.
+// Looking a receiver and its kind's traits up among those registered (each from its own .cpp),
+// and the scaling of a pulse's returns.
 #include "pipeline/shot/receiver.hpp"
 
 #include "core/error.hpp"
@@ -7,13 +7,19 @@
 namespace glaswave {
 namespace {
 
+[[noreturn]] void unknown(const std::string& name, const std::vector<std::string>& known) {
+  std::string list;
+  for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+  throw setting_error(ErrorKind::config, "kind",
+                      "no receiver \"" + name + "\" (there are: " + list + ")");
+}
+
 ReceiverKind kind_of(const std::string& name) {
   const Registry<Receiver>& receivers = Registry<Receiver>::instance();
   if (std::optional<ReceiverKind> kind = receivers.find(name)) return *std::move(kind);
-  std::string known;
-  for (const auto& entry : receivers.entries()) known += (known.empty() ? "" : ", ") + entry.name;
-  throw setting_error(ErrorKind::config, "kind",
-                      "no receiver \"" + name + "\" (there are: " + known + ")");
+  std::vector<std::string> known;
+  for (const auto& entry : receivers.entries()) known.push_back(entry.name);
+  unknown(name, known);
 }
 
 }  // namespace
@@ -41,6 +47,10 @@ std::unique_ptr<Receiver> make_receiver(const ReceiverSettings& settings) {
   return kind_of(settings.kind).make(settings);
 }
 
-ReceiverTraits receiver_traits(const std::string& kind) { return kind_of(kind).traits; }
+ReceiverTraits receiver_traits(const std::string& kind) {
+  if (const std::optional<ReceiverTraits> traits = declared_traits<ReceiverTraits>(kind))
+    return *traits;
+  unknown(kind, declared_kinds<ReceiverTraits>());
+}
 
 }  // namespace glaswave

@@ -7,8 +7,8 @@
 // and writes them to the record's variable-length fields (ShotRecord::photon_*, stored in
 // shots.nc as CF contiguous ragged arrays along the `photon` dimension).
 //
-// A new receiver is one class and one registration in its own .cpp (Registration<Receiver>,
-// core/registry.hpp, keyed by ReceiverSettings::kind): the engine and the transport do not change.
+// A new receiver is one class and one registration in its own .cpp (ReceiverRegistration below,
+// keyed by ReceiverSettings::kind): the configuration, the engine and the transport do not change.
 #pragma once
 
 #include <cstdint>
@@ -16,10 +16,13 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "core/part_kind.hpp"
 #include "core/registry.hpp"
 #include "footprints/atmosphere_settings.hpp"
+#include "footprints/receiver_traits.hpp"
 #include "pipeline/products/shot_record.hpp"
 #include "pipeline/transport/detector.hpp"
 #include "pipeline/transport/lidar_model.hpp"
@@ -98,32 +101,34 @@ struct ReceiverSettings {
   std::optional<AtmosphereSettings> atmosphere;
 };
 
-// What the run around a receiver must know of its kind before one is made, so that the engine asks
-// the kind instead of naming it.
-struct ReceiverTraits {
-  bool every_order =
-      false;  // it takes the returns of every scattering order (photons carry theirs)
-  bool shares_scenes = false;  // its footprints overlap (10 kHz): shots share their stretch's scene
-  // It flies ATLAS's beams (sensor.beams, sc_orient): a pass's beams fly their own ground tracks,
-  // each received with its own ReceiverSettings::photons, and the ICESat-2 granules are its own.
-  bool atlas_beams = false;
-};
-
 using ReceiverFactory = std::function<std::unique_ptr<Receiver>(const ReceiverSettings&)>;
 
-// One kind of receiver. Each registers itself from its own .cpp, by its ReceiverSettings::kind:
-//   const Registration<Receiver> waveform("waveform", 0, {[](const ReceiverSettings& s) {...}});
-// (waveform_receiver.cpp, photon_receiver.cpp; the shot library is linked whole).
+// One kind of receiver: how to make one. What the configuration and the engine must know of the
+// kind before one is made (its ReceiverTraits, footprints/lidar_settings.hpp) it declares beside
+// it.
 struct ReceiverKind {
   ReceiverFactory make;
-  ReceiverTraits traits;
+};
+
+// One kind's registration, from its own .cpp: its declaration (Registry<PartKind<ReceiverTraits>>,
+// core/part_kind.hpp: the configuration's allowed names, the table of keys' description, the
+// traits that the configuration's rules and the engine ask) and its factory (Registry<Receiver>),
+// under one name (waveform_receiver.cpp, photon_receiver.cpp; the shot library is linked whole):
+//   const ReceiverRegistration waveform("waveform", 0, {"the received waveform ...",
+//                                       {.waveform = true}}, [](const ReceiverSettings& s) {...});
+struct ReceiverRegistration {
+  ReceiverRegistration(const std::string& name, int order,
+                       PartKind<ReceiverTraits>::Declaration declaration, ReceiverFactory make)
+      : declared(name, order, std::move(declaration)), made(name, order, {std::move(make)}) {}
+  Registration<PartKind<ReceiverTraits>> declared;
+  Registration<Receiver> made;
 };
 
 // The receiver of `settings.kind`. Throws a setting error at `kind` for an unknown name.
 std::unique_ptr<Receiver> make_receiver(const ReceiverSettings& settings);
 
-// What the receiver kind `kind` says of itself. Throws a setting error at `kind` for an unknown
-// name.
+// What the receiver kind `kind` declared of itself. Throws a setting error at `kind` for a name
+// that declared nothing.
 ReceiverTraits receiver_traits(const std::string& kind);
 
 }  // namespace glaswave

@@ -3,11 +3,10 @@
 // volumes: crowns, a layer; surfaces: triangles with one material each), the optical materials
 // that geometry's material numbers index, the truth under the beam and a memory estimate.
 //
-// A new source is one class and one registration in its own .cpp (Registration<VegetationSource>,
-// core/registry.hpp, keyed by the configuration's canopy kind): the engine and the transport do
-// not change. The built-in sources
-// (crowns and layers, facet trees, voxel grids, point clouds) add what they need to `Vegetation`
-// and the scene; the transport's VolumeSpan and SurfaceHit stay as they are.
+// A new source is one class and one registration in its own .cpp (VegetationRegistration below,
+// keyed by the configuration's canopy kind): the engine and the transport do not change. The
+// built-in sources (crowns and layers, facet trees, voxel grids, point clouds) add what they need
+// to `Vegetation` and the scene; the transport's VolumeSpan and SurfaceHit stay as they are.
 #pragma once
 
 #include <cstdint>
@@ -15,9 +14,12 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "canopy/canopy_settings.hpp"
+#include "canopy/vegetation_traits.hpp"
+#include "core/part_kind.hpp"
 #include "core/registry.hpp"
 #include "pipeline/scene/scene.hpp"
 #include "pipeline/scene/vegetation.hpp"
@@ -108,15 +110,29 @@ struct VegetationSettings {
 // large, where a run too large for the machine is refused. A source whose region is counted in
 // plants (a forest's trees) gives the bytes of one, so that a message may say how many.
 //
-// Each kind registers itself from its own .cpp, by its CanopySettings::kind:
-//   const Registration<VegetationSource> forest("forest", 0, VegetationKind{...});
-// (forest_source.cpp, voxel_source.cpp, facet_source.cpp; the shot library is linked whole).
+// Each kind registers itself from its own .cpp, by its CanopySettings::kind, with a
+// VegetationRegistration (below; a source the configuration need not name, a test's, may register
+// its VegetationKind alone).
 struct VegetationKind {
   std::function<std::unique_ptr<VegetationSource>(const VegetationSettings&)> make;
   std::function<double(const VegetationSettings&, double side_m)> region_bytes;
   std::function<double(const VegetationSettings&)> source_bytes;
   std::string memory_key = "/canopy";
   double plant_bytes = 0.0;  // of one plant, where the region is counted in plants; else 0
+};
+
+// One kind's registration, from its own .cpp: its declaration (Registry<PartKind<
+// VegetationTraits>>, core/part_kind.hpp: the canopy's kinds the configuration reads, by the
+// keys it declares) and how to make it (Registry<VegetationSource>), under one name
+// (forest_source.cpp, voxel_source.cpp, facet_source.cpp; the shot library is linked whole):
+//   const VegetationRegistration forest("forest", 0, {"crowns, stands and a layer",
+//                                       {.keys = VegetationTraits::Keys::crowns}}, {...});
+struct VegetationRegistration {
+  VegetationRegistration(const std::string& name, int order,
+                         PartKind<VegetationTraits>::Declaration declaration, VegetationKind kind)
+      : declared(name, order, std::move(declaration)), made(name, order, std::move(kind)) {}
+  Registration<PartKind<VegetationTraits>> declared;
+  Registration<VegetationSource> made;
 };
 
 // The source of `settings.canopy.kind`. Throws a setting error at `kind` for an unknown name.

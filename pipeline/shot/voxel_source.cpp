@@ -13,11 +13,18 @@
 #include "core/gdal_layer.hpp"
 
 namespace glaswave {
+namespace {
+
+// Of the two kinds, the one given a cloud's file (canopy.point_cloud.file, which configuration
+// requires of it) voxelises it; the other reads a voxels file.
+bool from_cloud(const CanopySettings& canopy) { return !canopy.point_cloud_file.empty(); }
+
+}  // namespace
 
 VoxelSource::VoxelSource(const VegetationSettings& settings)
     : canopy_(settings.canopy), leaf_angles_(canopy_.lad, canopy_.lad_mean_deg) {
   std::string place;
-  if (canopy_.kind == "point_cloud") {
+  if (from_cloud(canopy_)) {
     place = canopy_.point_cloud_file;
     const LasFile cloud(canopy_.point_cloud_file);
     GapFractionSettings inversion;
@@ -111,7 +118,7 @@ GridShape grid_shape(const VegetationSettings& settings) {
   GridShape g;
   const CanopySettings& canopy = settings.canopy;
   try {
-    if (canopy.kind == "point_cloud") {
+    if (from_cloud(canopy)) {
       const LasHeader h = LasFile(canopy.point_cloud_file).header();
       const double size_m = canopy.voxel_size_m;
       g.cell_x_m = g.cell_y_m = size_m;
@@ -159,7 +166,7 @@ double VoxelSource::region_bytes(const VegetationSettings& settings, double side
 double VoxelSource::source_bytes(const VegetationSettings& settings) {
   const GridShape g = grid_shape(settings);
   const double tiles = g.cached_tile_bytes();
-  if (settings.canopy.kind != "point_cloud") return g.cache_bytes + tiles;
+  if (!from_cloud(settings.canopy)) return g.cache_bytes + tiles;
   // Reading: the ground points (three doubles each, at most every point) and a window of a
   // million points. Inverting: each voxel's weight (a double) and density (a float) at once.
   const double reading = g.points * 3.0 * sizeof(double) + (1 << 20) * sizeof(LasPoint);
@@ -169,15 +176,21 @@ double VoxelSource::source_bytes(const VegetationSettings& settings) {
 }
 
 namespace {
-// A voxel file and a point cloud voxelised when the run starts: one source, two kinds.
-const Registration<VegetationSource> voxels(
-    "voxels", 0,
-    {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
-     &VoxelSource::region_bytes, &VoxelSource::source_bytes, "/canopy/voxels/file"});
-const Registration<VegetationSource> point_cloud(
-    "point_cloud", 0,
-    {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
-     &VoxelSource::region_bytes, &VoxelSource::source_bytes, "/canopy/point_cloud/voxel_size_m"});
+// A voxel file and a point cloud voxelised when the run starts: one source, two kinds, each read
+// from an object of measured vegetation's keys; the cloud's ground points may be the terrain.
+VegetationKind voxel_kind(std::string memory_key) {
+  return {[](const VegetationSettings& s) { return std::make_unique<VoxelSource>(s); },
+          &VoxelSource::region_bytes, &VoxelSource::source_bytes, std::move(memory_key)};
+}
+const VegetationRegistration voxels("voxels", 1,
+                                    {"a voxel grid of plant area density",
+                                     {.keys = VegetationTraits::Keys::measured}},
+                                    voxel_kind("/canopy/voxels/file"));
+const VegetationRegistration point_cloud("point_cloud", 2,
+                                         {"an airborne lidar point cloud",
+                                          {.keys = VegetationTraits::Keys::measured,
+                                           .ground_points = true}},
+                                         voxel_kind("/canopy/point_cloud/voxel_size_m"));
 }  // namespace
 
 }  // namespace glaswave

@@ -96,9 +96,9 @@ std::vector<double> WaveformReceiver::surface_reflectance(const ShotRecord& reco
 }
 
 namespace {
-const Registration<Receiver> waveform(
-    "waveform", 0,
-    {[](const ReceiverSettings& s) { return std::make_unique<WaveformReceiver>(s); }, {}});
+const ReceiverRegistration waveform(
+    "waveform", 0, {"the received waveform and its processing", {.waveform = true}},
+    [](const ReceiverSettings& s) { return std::make_unique<WaveformReceiver>(s); });
 }  // namespace
 
 }  // namespace glaswave

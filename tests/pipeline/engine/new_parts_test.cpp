@@ -1,15 +1,21 @@
 // A new part is its own files (issue 36): a vegetation source, a receiver and a product writer,
 // each a test double declared and registered in this file alone (nothing else in the tree names
-// them), with the writer's key `output.parts_double` declared beside it. A configuration that
-// turns the writer on is read as the command reads it, and one shot runs from the engine's typed
-// settings through the double source's canopy and the double receiver to the double writer.
+// them), with the writer's key `output.parts_double` declared beside it. The configuration takes
+// the doubles' kinds from their registrations (`sensor.receiver`, `canopy.slab_double`) and asks
+// its rules of what they declared, not of their names; a configuration that names them is read as
+// the command reads it, and one shot runs from the engine's typed settings through the double
+// source's canopy and the double receiver to the double writer.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "canopy/leaf_angles.hpp"
@@ -89,14 +95,31 @@ struct KeepingWriter final : ProductWriter {
   void abort() noexcept override {}
 };
 
-// The three parts' registrations, and the writer's key beside it.
-const Registration<VegetationSource> slab(
-    "slab_double", 0,
-    {[](const VegetationSettings&) { return std::make_unique<SlabSource>(); },
-     [](const VegetationSettings&, double side_m) { return 64.0 * side_m; }, nullptr, "/canopy"});
-const Registration<Receiver> centroids(
-    "centroid_double", 0,
-    {[](const ReceiverSettings& s) { return std::make_unique<CentroidPhotons>(s); }, {}});
+// The parts' registrations, and the writer's key beside it. Two vegetation kinds and two
+// receivers, each declaring a trait the other lacks: a kind whose file's ground points may be the
+// terrain, a receiver that flies ATLAS's beams.
+VegetationKind slab_kind() {
+  return {[](const VegetationSettings&) { return std::make_unique<SlabSource>(); },
+          [](const VegetationSettings&, double side_m) { return 64.0 * side_m; }, nullptr,
+          "/canopy"};
+}
+const VegetationRegistration slab("slab_double", 0, {"a turbid slab (a test double)", {}},
+                                  slab_kind());
+const VegetationRegistration grounded_slab("ground_double", 0,
+                                           {"a turbid slab over its own ground (a test double)",
+                                            {.ground_points = true}},
+                                           slab_kind());
+ReceiverFactory centroid_photons() {
+  return [](const ReceiverSettings& s) { return std::make_unique<CentroidPhotons>(s); };
+}
+const ReceiverRegistration centroids("centroid_double", 90,
+                                     {"two photons a shot (a test double)", {}},
+                                     centroid_photons());
+const ReceiverRegistration beam_centroids("beams_double", 91,
+                                          {"two photons a shot of each of ATLAS's beams (a test "
+                                           "double)",
+                                           {.atlas_beams = true}},
+                                          centroid_photons());
 const Registration<PartSwitch> keeping_key("parts_double", 0,
                                            {"output", false,
                                             "keep the records in memory (a test double)"});
@@ -107,17 +130,27 @@ const Registration<ProductWriter> keeping(
     });
 
 // One shot of the glas preset at nadir over a level plane of soil 0.2, as a user would write it,
-// with the double writer alone asked for.
-json one_shot(const json& output) {
+// with the double writer alone asked for; the receiver and the canopy as given.
+json one_shot(const json& output, const std::string& receiver = "waveform",
+              const json& canopy = nullptr) {
   return {
-      {"sensor", {{"preset", "glas"}}},
+      {"sensor", {{"preset", "glas"}, {"receiver", receiver}}},
       {"simulation", {{"rays_per_shot", 2000}, {"max_order", 4}}},
       {"terrain",
        {{"plane", {{"origin_lat_deg", 46.0}, {"origin_lon_deg", 8.0}}}, {"soil_reflectance", 0.2}}},
-      {"canopy", nullptr},
+      {"canopy", canopy},
       {"track",
        {{"type", "points"}, {"points", json::array({{{"lat_deg", 46.0}, {"lon_deg", 8.0}}})}}},
       {"output", output}};
+}
+
+std::string error_of(const std::function<void()>& read) {
+  try {
+    read();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
 }
 
 TEST(NewParts, TheWritersKeyIsTheConfigurationsOwn) {
@@ -136,20 +169,85 @@ TEST(NewParts, TheWritersKeyIsTheConfigurationsOwn) {
   EXPECT_THROW(parse_config(one_shot({{"parts_doubel", true}})), Error);
 }
 
+// The receivers and the canopy's kinds the configuration takes are those registered: the doubles
+// are named, and a misspelt name is refused with every registered name listed.
+TEST(NewParts, TheConfigurationNamesTheKindsThatRegistered) {
+  using testing::HasSubstr;
+  EXPECT_THAT(
+      configuration_keys().child("sensor")->child("receiver")->choices,
+      testing::ElementsAre("waveform", "photon_counting", "centroid_double", "beams_double"));
+  EXPECT_EQ(parse_config(one_shot({}, "centroid_double")).sensor.receiver, "centroid_double");
+  const std::string misspelt = error_of([] { parse_config(one_shot({}, "centroid_doubel")); });
+  EXPECT_THAT(misspelt, HasSubstr("/sensor/receiver: must be one of waveform, photon_counting, "
+                                  "centroid_double, beams_double, got \"centroid_doubel\""));
+
+  // A kind whose keys the configuration does not declare is chosen by its empty object, alone.
+  const std::optional<CanopySettings> canopy =
+      parse_config(one_shot({}, "waveform", {{"slab_double", json::object()}})).canopy;
+  ASSERT_TRUE(canopy.has_value());
+  EXPECT_EQ(canopy->kind, "slab_double");
+  EXPECT_EQ(
+      error_of([] {
+        parse_config(one_shot({}, "waveform", {{"slab_double", json::object()}, {"pai", 1.0}}));
+      }),
+      "/canopy/pai: cannot be given beside canopy.slab_double (the canopy holds one vegetation "
+      "source)");
+  EXPECT_THAT(error_of([] {
+                parse_config(one_shot({}, "waveform", {{"slab_double", {{"pai", 1.0}}}}));
+              }),
+              testing::StartsWith("/canopy/slab_double/pai: "));
+}
+
+// The rules across keys ask what a kind declared: RAMI's measurements and the forward table need
+// a receiver that declared a waveform; ATLAS's beams and the ICESat-2 granules are a receiver's
+// that declared it flies them; the terrain may be the ground points of a kind that declared them.
+TEST(NewParts, TheRulesAskWhatAKindDeclared) {
+  const json rami = {{"per_order", true}, {"rami", {{"experiment", "x_{band}"}}}};
+  EXPECT_EQ(error_of([&] { check_outputs(parse_config(one_shot(rami, "centroid_double"))); }),
+            "/output/rami: RAMI's lidar measurements need the waveform receiver");
+
+  const Config asked = parse_config(one_shot({{"atl03", true}}, "centroid_double"));
+  ASSERT_EQ(asked.warnings.size(), 1u);
+  EXPECT_EQ(asked.warnings[0],
+            "/output/atl03: the centroid_double receiver writes no ICESat-2 granule; it is "
+            "written with sensor.receiver \"photon_counting\" or \"beams_double\"");
+  EXPECT_TRUE(parse_config(one_shot({{"atl03", true}}, "beams_double")).warnings.empty());
+
+  // Its granules are something to write; the other double's run would write nothing.
+  const json nothing = {{"netcdf", false}, {"footprints", false}};
+  EXPECT_NO_THROW(check_outputs(parse_config(one_shot(nothing, "beams_double"))));
+  EXPECT_THAT(error_of([&] { check_outputs(parse_config(one_shot(nothing, "centroid_double"))); }),
+              testing::StartsWith("/output: nothing to write"));
+
+  // ATLAS's beams are checked for the receiver that flies them alone.
+  json beams = one_shot({}, "beams_double");
+  beams["sensor"]["beams"] = {"gt9x"};
+  EXPECT_THAT(error_of([&] { parse_config(beams); }),
+              testing::StartsWith("/sensor/beams: no beam \"gt9x\""));
+  beams["sensor"]["receiver"] = "centroid_double";
+  EXPECT_NO_THROW(parse_config(beams));
+
+  json ground = one_shot({}, "waveform", {{"ground_double", json::object()}});
+  ground["terrain"] = {{"point_cloud", true}};
+  EXPECT_EQ(parse_config(ground).canopy->kind, "ground_double");
+  ground["canopy"] = {{"slab_double", json::object()}};
+  EXPECT_THAT(error_of([&] { parse_config(ground); }),
+              testing::StartsWith("/terrain/point_cloud: is the ground of canopy.point_cloud's "
+                                  "cloud, and the canopy has no point cloud"));
+}
+
 // The slab holds PAI 5 (0.5 m2/m3 over 10 m, a closed form) from 5 to 15 m above the ground:
 // the canopy's photon lies within it; the ground's no higher than the plane (to a 1 ns bin,
 // 0.15 m: light scattered more than once only arrives later) and under the canopy's. Both on
 // the beam's axis, at the footprint's latitude and longitude.
 TEST(NewParts, AShotRunsThroughTheThreeDoubles) {
   const Config config =
-      parse_config(one_shot({{"netcdf", false}, {"footprints", false}, {"parts_double", true}}));
+      parse_config(one_shot({{"netcdf", false}, {"footprints", false}, {"parts_double", true}},
+                            "centroid_double", {{"slab_double", json::object()}}));
   const std::unique_ptr<Terrain> terrain = open_terrain(config);
-  VegetationSettings vegetation;
-  vegetation.canopy.kind = "slab_double";
-  ReceiverSettings receiver = receiver_settings(config);
-  receiver.kind = "centroid_double";
-  const ShotSimulator simulator(shot_settings(config), *terrain, make_vegetation_source(vegetation),
-                                make_receiver(receiver));
+  const ShotSimulator simulator(shot_settings(config), *terrain,
+                                make_vegetation_source(vegetation_settings(config)),
+                                make_receiver(receiver_settings(config)));
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
 
   const test_support::ScratchDir dir("glaswave_new_parts");

@@ -49,9 +49,10 @@ class HalfPeakPhotons : public Receiver {
   LidarModel lidar_;
 };
 
-const Registration<Receiver> half_peak_photons(
-    "half_peak_photons", 0,
-    {[](const ReceiverSettings& s) { return std::make_unique<HalfPeakPhotons>(s); }, {}});
+const Registration<Receiver> half_peak_photons("half_peak_photons", 0,
+                                               {[](const ReceiverSettings& s) {
+                                                 return std::make_unique<HalfPeakPhotons>(s);
+                                               }});
 
 // Over bare ground at nadir the pulse (sigma 5 ns) is above half its peak within 1.18 sigma of
 // the ground's return: 11 or 12 one-ns bins, within c / 2 * 5.9 ns = 0.88 m of the ground.
