@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """How wrong is each retrieval method? `glaswave retrieve` on held-out forests (issue 37, item 5).
 
-Usage: retrieval.py --glaswave BINARY [--quick] [--out DIR] [--threads N]
+Usage: retrieval.py --glaswave BINARY [--quick | --size full|reduced|quick] [--out DIR]
+                    [--threads N]
 
 For GEDI and GLAS in turn: a forward table of crowned forests (`glaswave table`, ellipsoid crowns
 over the ranges in TABLE_VARY, slopes 0-30 deg), then stands the table did not see (their own
@@ -50,16 +51,19 @@ COLOURS = {"gedi_l2a": "tab:orange", "gedi_l2a_a1": "tab:purple", "gedi_l2b": "t
            "wi": "tab:green", "rt": "tab:red"}
 SLOPE_CLASSES_DEG = [(0.0, 10.0), (10.0, 20.0), (20.0, 30.0)]
 
-# The table's forests: ellipsoid crowns, every range a Halton coordinate, the crown base one of
-# three layers (so canopy tops from 6 to 36 m).
+# The table's forests: every range a Halton coordinate, covering the held-out stands' own ranges
+# (PAI 0.3-6, radii 1.5-7 m: a posterior is a weighted mean of entries, so it cannot reach a
+# truth beyond them); the crown base one of four layers that tile the stands' 2-18 m (so canopy
+# tops from 6 to 34 m), and both crown shapes the stands have.
 TABLE_VARY = {
-    "canopy.pai": [0.3, 5.0],
+    "canopy.pai": [0.3, 6.0],
     "canopy.cover": [0.15, 0.95],
-    "canopy.crown_radius_m": [2.0, 6.0],
+    "canopy.crown_radius_m": [1.5, 7.0],
     "canopy.crown_half_height_m": [2.0, 8.0],
     "terrain.plane.slope_deg": [0.0, 30.0],
 }
-TABLE_VALUES = {"canopy.crown_base_m": ["[2.0, 4.0]", "[6.0, 10.0]", "[12.0, 18.0]"]}
+TABLE_VALUES = {"canopy.crown_base_m": ["[2.0, 5.0]", "[5.0, 8.5]", "[8.5, 12.5]", "[12.5, 18.0]"],
+                "canopy.crown_shape": ["ellipsoid", "cone"]}
 
 # The detector of the held-out shots: a background and Gaussian noise of about 1 % of these
 # forests' peaks (4e-8 to 1e-7 W for GEDI, 1e-7 to 3e-7 W for GLAS at 1000 rays; a real GEDI
@@ -86,6 +90,11 @@ SIZES = {
     "full": {"table_entries": {"gedi": 1500, "glas": 1000}, "table_rays": 1000,
              "stands": {"gedi": 40, "glas": 30}, "shots": {"gedi": 50, "glas": 30},
              "rays": 1000},
+    # GEDI alone: the full study's table and stands (the same seeds, so the same forests), half
+    # the shots each; about 2-3 minutes of CPU, for comparing a change before and after.
+    "reduced": {"table_entries": {"gedi": 1500, "glas": 1000}, "table_rays": 1000,
+                "stands": {"gedi": 40, "glas": 0}, "shots": {"gedi": 25, "glas": 30},
+                "rays": 1000},
     "quick": {"table_entries": {"gedi": 96, "glas": 64}, "table_rays": 1000,
               "stands": {"gedi": 3, "glas": 2}, "shots": {"gedi": 8, "glas": 6}, "rays": 1000},
 }
@@ -162,9 +171,12 @@ def table_document(sensor, size):
                     "soil_reflectance": 0.3},
         "canopy": {"crown_shape": "ellipsoid", "crown_base_m": [6.0, 10.0],
                    "crown_half_height_m": 5.0, "crown_radius_m": 4.0, "pai": 2.0, "cover": 0.5},
+        # The entry's shots on one footprint, other rays: its waveform is that footprint's and
+        # its truth the same footprint's, as a measured shot's is (two footprints 222 m apart
+        # gave a mean of two forests' waveforms and truths, which no shot sees).
         "track": {"type": "points", "altitude_m": 420000.0 if sensor == "gedi" else 600000.0,
                   "points": [{"lat_deg": 0.0, "lon_deg": 0.0},
-                             {"lat_deg": 0.002, "lon_deg": 0.0}]},
+                             {"lat_deg": 0.0, "lon_deg": 0.0}]},
         "output": {"footprints": False},
         "table": {"vary": TABLE_VARY, "values": TABLE_VALUES,
                   "entries": size["table_entries"][sensor]},
@@ -307,12 +319,16 @@ def read_retrieval(path, shots_files, stands, sensor):
         for name, variable in nc.variables.items():
             if variable.dimensions == ("shot",):
                 columns[name] = np.ma.filled(variable[:].astype(float), np.nan)
-    slope, stand_index = [], []
+    slope, stand_index, energy_ground, energy_canopy = [], [], [], []
     for i, shots_nc in enumerate(shots_files):
         with netCDF4.Dataset(shots_nc) as nc:
             slope.append(np.ma.filled(nc["slope_deg"][:].astype(float), np.nan))
+            energy_ground.append(np.ma.filled(nc["rx_energy_ground"][:, 0].astype(float), np.nan))
+            energy_canopy.append(np.ma.filled(nc["rx_energy_canopy"][:, 0].astype(float), np.nan))
         stand_index.append(np.full(slope[-1].size, i))
     columns["slope_deg"] = np.concatenate(slope)
+    columns["energy_ground_J"] = np.concatenate(energy_ground)
+    columns["energy_canopy_J"] = np.concatenate(energy_canopy)
     columns["stand"] = np.concatenate(stand_index)
     n = len(columns["shot_number"])
     if columns["slope_deg"].size != n:
@@ -324,11 +340,108 @@ def read_retrieval(path, shots_files, stands, sensor):
 
 
 def in_table_ranges(stand):
-    """Whether the stand's varied keys lie inside the table's ranges and its crowns are the
-    table's shape (its crown base is never one of the table's three)."""
-    if stand["canopy.crown_shape"] != "ellipsoid":
+    """Whether the stand's varied keys lie inside the table's ranges, its crowns are one of the
+    table's shapes and its crown bases within the table's layers' span (its bases are never
+    exactly one of the table's layers)."""
+    if stand["canopy.crown_shape"] not in TABLE_VALUES.get("canopy.crown_shape", ["ellipsoid"]):
+        return False
+    layers = [json.loads(v) for v in TABLE_VALUES["canopy.crown_base_m"]]
+    base = stand["canopy.crown_base_m"]
+    if not min(a for a, _ in layers) <= base[0] <= base[1] <= max(b for _, b in layers):
         return False
     return all(low <= stand[key] <= high for key, (low, high) in TABLE_VARY.items())
+
+
+def truth_in_table(shots, truth_ranges):
+    """Whether each shot's true canopy height, cover and PAI lie within the ranges
+    (variable: (low, high)) of the table's entries' truths."""
+    inside = np.ones(len(shots["shot_number"]), bool)
+    for variable, (low, high) in truth_ranges.items():
+        truth = shots[f"{variable}_true"]
+        inside &= (truth >= low) & (truth <= high)
+    return inside
+
+
+def table_truth_ranges(table_nc):
+    """The table's entries' truths, (min, max) per variable."""
+    names = {"canopy_height": "canopy_height_true", "cover": "cover_true", "pai": "pai_true"}
+    with netCDF4.Dataset(table_nc) as nc:
+        return {v: (float(np.nanmin(nc[n][:])), float(np.nanmax(nc[n][:])))
+                for v, n in names.items()}
+
+
+# ---------------------------------------------------------------------------------------------
+# What a waveform can tell of PAI: its ground return against the noise.
+
+
+def fit_ground_energy(pai, cover, energy_ground):
+    """Fits the ground return of clumped crowns, Eg = Eg0 ((1 - C) + C exp(-k PAI / C)) (the
+    gaps between crowns, and a crown's own gap at its plant area PAI / C), to the shots' true
+    PAI, cover and ground energy: k on a grid of 0.001 over (0, 2], Eg0 by least squares at
+    each k. Returns (Eg0, k, residual sd)."""
+    pai, cover, eg = (np.asarray(x, float) for x in (pai, cover, energy_ground))
+    keep = np.isfinite(pai) & np.isfinite(cover) & np.isfinite(eg) & (cover > 0.02)
+    pai, cover, eg = pai[keep], cover[keep], eg[keep]
+    best = (math.inf, math.nan, math.nan)
+    for k in np.arange(0.001, 2.0005, 0.001):
+        shape = (1.0 - cover) + cover * np.exp(-k * pai / cover)
+        eg0 = float(np.dot(shape, eg) / np.dot(shape, shape))
+        sse = float(np.sum((eg - eg0 * shape) ** 2))
+        if sse < best[0]:
+            best = (sse, eg0, float(k))
+    sse, eg0, k = best
+    return eg0, k, math.sqrt(sse / max(1, pai.size))
+
+
+def saturation_pai(eg0, k, cover, noise_J, changes=1.0):
+    """The PAI above which one unit of PAI changes the ground return by less than `changes`
+    noise sds at this cover: |dEg/dPAI| = Eg0 k exp(-k PAI / C) = changes noise_J."""
+    ratio = eg0 * k / (changes * noise_J)
+    return cover / k * math.log(ratio) if ratio > 1.0 else 0.0
+
+
+def saturation_rows(shots, sensor, bin_ns, pulse_sigma_ns, rays):
+    """The fit and, per cover, the PAI where the ground return's change per unit PAI falls to
+    one noise sd and where it falls to 1 / 0.6 sd (a posterior sd of 0.6 from the ground return
+    alone): for the detector's noise summed over the ground return's bins (+-2 pulse sigma), and
+    for a shot's Monte Carlo noise at `rays` rays (one ray's energy, the median shot's total over
+    the rays, times the square root of the ground return's rays)."""
+    eg0, k, residual = fit_ground_energy(shots["pai_true"], shots["cover_true"],
+                                         shots["energy_ground_J"])
+    bins = 4.0 * pulse_sigma_ns / bin_ns
+    detector_J = SENSORS[sensor]["detector"]["noise_rms_W"] * bin_ns * 1e-9 * math.sqrt(bins)
+    total = float(np.nanmedian(shots["energy_ground_J"] + shots["energy_canopy_J"]))
+    rows = []
+    for cover in (0.5, 0.7, 0.9):
+        # The Monte Carlo sd at the saturating PAI itself: the ground's rays there, about
+        # (1 - C) of the bare ground's (the crowns opaque).
+        monte_carlo_J = math.sqrt(eg0 * (1.0 - cover) * total / rays)
+        rows.append({"cover": cover,
+                     "detector_1sd": saturation_pai(eg0, k, cover, detector_J),
+                     "detector_rmse06": saturation_pai(eg0, k, cover, detector_J, 1.0 / 0.6),
+                     "monte_carlo_1sd": saturation_pai(eg0, k, cover, monte_carlo_J),
+                     "monte_carlo_rmse06": saturation_pai(eg0, k, cover, monte_carlo_J,
+                                                          1.0 / 0.6)})
+    return {"eg0_J": eg0, "k": k, "residual_J": residual, "detector_J": detector_J,
+            "rays": rays, "rows": rows}
+
+
+def markdown_saturation(saturation):
+    lines = []
+    for sensor, s in saturation.items():
+        lines.append(f"{sensor.upper()}: Eg = Eg0 ((1 - C) + C exp(-k PAI / C)) fitted, Eg0 "
+                     f"{s['eg0_J']:.3g} J, k {s['k']:.3f}, residual sd {s['residual_J']:.3g} J; "
+                     f"noise of the ground energy: detector {s['detector_J']:.3g} J, Monte Carlo "
+                     f"at {s['rays']} rays as below.\n")
+        lines.append("| cover | PAI where dEg/dPAI = 1 detector sd | = 1/0.6 detector sd | "
+                     "= 1 Monte Carlo sd | = 1/0.6 Monte Carlo sd |")
+        lines.append("|---|---|---|---|---|")
+        for r in s["rows"]:
+            lines.append(f"| {r['cover']:.1f} | {r['detector_1sd']:.1f} | "
+                         f"{r['detector_rmse06']:.1f} | {r['monte_carlo_1sd']:.1f} | "
+                         f"{r['monte_carlo_rmse06']:.1f} |")
+        lines.append("")
+    return "\n".join(lines) + "\n"
 
 
 def concatenate(parts):
@@ -344,10 +457,19 @@ def metric_rows(shots, sensors):
                        lambda s, lo=low, hi=high: (s["slope_deg"] >= lo) & (s["slope_deg"] < hi)))
     strata.append(("slope 0-20", lambda s: s["slope_deg"] < 20.0))
     strata.append(("true PAI below 5", lambda s: s["pai_true"] < 5.0))
+    strata.append(("true PAI 5-8", lambda s: (s["pai_true"] >= 5.0) & (s["pai_true"] < 8.0)))
+    strata.append(("true PAI 8 and above", lambda s: s["pai_true"] >= 8.0))
     strata.append(("cone crowns", lambda s: s["crown_shape"] == "cone"))
+    strata.append(("ellipsoid crowns", lambda s: s["crown_shape"] == "ellipsoid"))
     strata.append(("inside the table's ranges", lambda s: s["in_table_ranges"]))
+    # The shot's own truths (height, cover, PAI) within those of the table's entries: what the
+    # posterior, a weighted mean of the entries' truths, can reach at all.
+    strata.append(("truth inside the table's truths", lambda s: s["truth_in_table"]))
+    strata.append(("truth beyond the table's truths", lambda s: ~s["truth_in_table"]))
     strata.append(("rt flagged", lambda s: s["rt_flag"] != 0))
     strata.append(("rt not flagged", lambda s: s["rt_flag"] == 0))
+    strata.append(("slope 0-20, rt not flagged",
+                   lambda s: (s["slope_deg"] < 20.0) & (s["rt_flag"] == 0)))
     for sensor in sensors:
         one = {k: v[shots["sensor"] == sensor] for k, v in shots.items()}
         if len(one["shot_number"]) == 0:
@@ -376,8 +498,8 @@ def write_metrics_csv(path, rows):
 
 
 def write_shots_csv(path, shots):
-    names = ["sensor", "stand", "shot_number", "crown_shape", "in_table_ranges", "slope_deg",
-             "rt_flag"]
+    names = ["sensor", "stand", "shot_number", "crown_shape", "in_table_ranges", "truth_in_table",
+             "slope_deg", "rt_flag"]
     names += [f"{v}_true" for v in VARIABLES]
     names += [f"{v}_{m}" for m in METHODS for v in VARIABLES if f"{v}_{m}" in shots]
     names += [f"{v}_rt_{p}" for v in VARIABLES for p in ("p05", "p95")]
@@ -535,15 +657,18 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--glaswave", required=True, help="the glaswave binary")
     parser.add_argument("--quick", action="store_true", help="small runs, for a check")
+    parser.add_argument("--size", choices=sorted(SIZES), default=None,
+                        help="the study's size (--quick is --size quick)")
     parser.add_argument("--out", default="out/studies/retrieval")
     parser.add_argument("--threads", type=int, default=0)
     args = parser.parse_args()
-    size = SIZES["quick" if args.quick else "full"]
+    size_name = args.size or ("quick" if args.quick else "full")
+    size = SIZES[size_name]
     os.makedirs(args.out, exist_ok=True)
     runs = Runs(args.glaswave, args.out, args.threads)
     started = time.monotonic()
-    sensors = list(SENSORS)
-    parts, speeds, tables = [], {}, {}
+    sensors = [s for s in SENSORS if size["stands"][s] > 0]
+    parts, speeds, tables, saturation = [], {}, {}, {}
     for sensor in sensors:
         table = runs.table(table_document(sensor, size), f"{sensor} table")
         with netCDF4.Dataset(table) as nc:
@@ -554,7 +679,14 @@ def main():
         shots_files = [runs.run(stand_document(sensor, stand, size), f"{sensor} stand {i}")
                        for i, stand in enumerate(stands)]
         product, summary = runs.retrieve(shots_files, table, f"{sensor}: {len(stands)} stands")
-        parts.append(read_retrieval(product, shots_files, stands, sensor))
+        part = read_retrieval(product, shots_files, stands, sensor)
+        tables[sensor]["truth_ranges"] = table_truth_ranges(table)
+        part["truth_in_table"] = truth_in_table(part, tables[sensor]["truth_ranges"])
+        with netCDF4.Dataset(table) as nc:
+            saturation[sensor] = saturation_rows(part, sensor, float(nc.getncattr("bin_ns")),
+                                                 float(nc.getncattr("pulse_sigma_ns")),
+                                                 size["rays"])
+        parts.append(part)
         speeds[sensor] = {"shots": summary["shots"], "methods_wall_s": summary["wall_s"],
                           "shots_per_s": summary["shots_per_s"],
                           "command_wall_s": summary["command_wall_s"],
@@ -566,20 +698,23 @@ def main():
     write_metrics_csv(os.path.join(args.out, "retrieval_metrics.csv"), rows)
     write_shots_csv(os.path.join(args.out, "retrieval_shots.csv"), shots)
     text = ("# Retrieval study: every method against the truth\n\n"
-            f"{'quick' if args.quick else 'full'} size: {json.dumps(size)}\n\n"
+            f"{size_name} size: {json.dumps(size)}\n\n"
             "## All shots\n\n" + markdown(rows) +
             "\n## By stratum (bias / RMSE, rt's 90 % coverage in brackets)\n\n" +
-            markdown_strata(rows))
+            markdown_strata(rows) +
+            "\n## The ground return's change per unit PAI against the noise\n\n" +
+            markdown_saturation(saturation))
     write_atomic(os.path.join(args.out, "retrieval_metrics.md"), text)
     plot_scatter(shots, sensors, os.path.join(args.out, "retrieval_scatter.png"))
     plot_slope(shots, sensors, os.path.join(args.out, "retrieval_slope.png"))
     summary = {
-        "size": "quick" if args.quick else "full",
+        "size": size_name,
         "tables": tables,
         "speed": speeds,
         "glaswave_seconds": runs.seconds,
         "wall_s": time.monotonic() - started,
         "metrics": [r for r in rows if r["stratum"] == "all"],
+        "saturation": saturation,
     }
     write_atomic(os.path.join(args.out, "summary.json"),
                  json.dumps(summary, indent=1, default=float) + "\n")

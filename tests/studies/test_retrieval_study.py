@@ -65,6 +65,45 @@ def test_metrics_give_coverage_for_rt_only_and_honour_a_mask():
 def test_a_stand_beyond_the_table_is_not_inside_its_ranges():
     stand = {key: 0.5 * (low + high) for key, (low, high) in retrieval.TABLE_VARY.items()}
     stand["canopy.crown_shape"] = "ellipsoid"
+    stand["canopy.crown_base_m"] = [6.0, 7.5]  # inside the layers' 2-18 m
     assert retrieval.in_table_ranges(stand)
-    assert not retrieval.in_table_ranges({**stand, "canopy.crown_shape": "cone"})
-    assert not retrieval.in_table_ranges({**stand, "canopy.pai": 5.5})
+    assert retrieval.in_table_ranges({**stand, "canopy.crown_shape": "cone"})
+    assert not retrieval.in_table_ranges({**stand, "canopy.crown_shape": "cylinder"})
+    assert not retrieval.in_table_ranges({**stand, "canopy.pai": 6.5})  # the table's to 6
+    assert not retrieval.in_table_ranges({**stand, "canopy.crown_radius_m": 1.0})
+    assert not retrieval.in_table_ranges({**stand, "canopy.crown_base_m": [1.0, 3.0]})
+
+
+def test_a_truth_beyond_the_tables_truths_is_not_inside_them():
+    # Ranges by hand: PAI 0.5-5, cover 0.1-0.9, height 5-30 m. Shot 0 inside every one; shot 1's
+    # PAI 7 beyond; shot 2's cover 0.95 beyond; shot 3 on the bounds (inside); shot 4 NaN.
+    ranges = {"pai": (0.5, 5.0), "cover": (0.1, 0.9), "canopy_height": (5.0, 30.0)}
+    shots = {
+        "shot_number": np.arange(5),
+        "pai_true": np.array([2.0, 7.0, 2.0, 0.5, NAN]),
+        "cover_true": np.array([0.5, 0.5, 0.95, 0.9, 0.5]),
+        "canopy_height_true": np.array([20.0, 20.0, 20.0, 30.0, 20.0]),
+    }
+    inside = retrieval.truth_in_table(shots, ranges)
+    assert inside.tolist() == [True, False, False, True, False]
+
+
+def test_the_ground_energy_fit_recovers_a_known_forest():
+    # Ground energies made from the closed form with Eg0 = 2e-15 J and k = 0.35 (a multiple of
+    # the fit's grid step), no noise: the fit returns them.
+    rng = np.random.default_rng(1)
+    pai = rng.uniform(0.1, 10.0, 300)
+    cover = rng.uniform(0.2, 0.95, 300)
+    eg = 2e-15 * ((1.0 - cover) + cover * np.exp(-0.35 * pai / cover))
+    eg0, k, residual = retrieval.fit_ground_energy(pai, cover, eg)
+    assert k == pytest.approx(0.35, abs=1e-9)
+    assert eg0 == pytest.approx(2e-15, rel=1e-9)
+    assert residual == pytest.approx(0.0, abs=1e-24)
+
+
+def test_saturation_pai_by_hand():
+    # Eg0 k = 0.5, noise 0.01: exp(-0.5 P / 0.5) = 0.02 at P = ln 50 = 3.912; twice the noise
+    # (changes 2): ln 25 = 3.219; below the noise already at PAI 0: 0.
+    assert retrieval.saturation_pai(1.0, 0.5, 0.5, 0.01) == pytest.approx(math.log(50.0))
+    assert retrieval.saturation_pai(1.0, 0.5, 0.5, 0.01, 2.0) == pytest.approx(math.log(25.0))
+    assert retrieval.saturation_pai(1.0, 0.5, 0.9, 1.0) == 0.0
