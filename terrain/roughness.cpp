@@ -246,11 +246,12 @@ struct LatticeRegion {
   }
 };
 
-// Maps between the lattice's grid and the frame, fitted on 5 x 5 points of the region at the
+// Maps between the lattice's grid and the frame, fitted on 5 x 5 points of the square of
+// half-width `half_size_m` about `centre_m` (the region) at the
 // ground's mean height: the frame's axes are not the local verticals, so a point's height moves
 // its latitude and longitude, but by well under a millimetre within tens of metres of it.
-LatticeRegion fit_region_maps(const GroundMesh& base, const LocalFrame& frame, double half_size_m,
-                              double h) {
+LatticeRegion fit_region_maps(const GroundMesh& base, const LocalFrame& frame,
+                              const std::array<double, 2>& centre_m, double half_size_m, double h) {
   const Geodetic& origin = frame.origin();
   const Zone zone = zone_of(origin.lat_deg, origin.lon_deg);
   const double z_ref_m = 0.5 * (base.min_height_m + base.max_height_m);
@@ -258,7 +259,7 @@ LatticeRegion fit_region_maps(const GroundMesh& base, const LocalFrame& frame, d
   std::vector<std::array<double, 2>> local_points, grid_points;
   for (int b = -2; b <= 2; ++b) {
     for (int a = -2; a <= 2; ++a) {
-      const double x = 0.5 * a * half_size_m, y = 0.5 * b * half_size_m;
+      const double x = centre_m[0] + 0.5 * a * half_size_m, y = centre_m[1] + 0.5 * b * half_size_m;
       const Geodetic g = frame.to_geodetic({x, y, z_ref_m});
       const GridPoint p = grid_point(zone, g.lat_deg, g.lon_deg);
       local_points.push_back({x, y});
@@ -269,25 +270,60 @@ LatticeRegion fit_region_maps(const GroundMesh& base, const LocalFrame& frame, d
           QuadraticMap(local_points, grid_points, half_size_m), h};
 }
 
-// The lattice nodes covering the square of half-width `half_size_m` about the origin.
-void cover_square(LatticeRegion& region, double half_size_m) {
-  const double h = region.h;
+// The lattice nodes [i0, i1] x [j0, j1] of one square of the frame.
+struct NodeBox {
+  std::int64_t i0 = 0, i1 = 0, j0 = 0, j1 = 0;
+  bool holds(std::int64_t i, std::int64_t j) const {
+    return i >= i0 && i <= i1 && j >= j0 && j <= j1;
+  }
+  // Nodes from (i, j) to the box's nearest edge.
+  std::int64_t depth(std::int64_t i, std::int64_t j) const {
+    return std::min({i - i0, i1 - i, j - j0, j1 - j});
+  }
+};
+
+// The lattice nodes covering the square of the frame.
+NodeBox cover_square(const LatticeRegion& region, const RoughSquare& square) {
+  const double h = region.h, half_size_m = square.half_size_m;
+  const double x0 = square.x_m - half_size_m, x1 = square.x_m + half_size_m;
+  const double y0 = square.y_m - half_size_m, y1 = square.y_m + half_size_m;
   double gx0 = std::numeric_limits<double>::infinity(), gy0 = gx0, gx1 = -gx0, gy1 = -gx0;
-  for (const auto& [x, y] : {std::array<double, 2>{-half_size_m, -half_size_m},
-                             {half_size_m, -half_size_m},
-                             {half_size_m, half_size_m},
-                             {-half_size_m, half_size_m}}) {
+  for (const auto& [x, y] : {std::array<double, 2>{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}) {
     const auto g = region.to_grid(x, y);
     gx0 = std::min(gx0, g[0] + region.centre.x_m);
     gx1 = std::max(gx1, g[0] + region.centre.x_m);
     gy0 = std::min(gy0, g[1] + region.centre.y_m);
     gy1 = std::max(gy1, g[1] + region.centre.y_m);
   }
-  region.i0 = static_cast<std::int64_t>(std::floor(gx0 / h));
-  region.i1 = static_cast<std::int64_t>(std::ceil(gx1 / h));
-  region.j0 = static_cast<std::int64_t>(std::floor(gy0 / h));
-  region.j1 = static_cast<std::int64_t>(std::ceil(gy1 / h));
+  return {static_cast<std::int64_t>(std::floor(gx0 / h)),
+          static_cast<std::int64_t>(std::ceil(gx1 / h)),
+          static_cast<std::int64_t>(std::floor(gy0 / h)),
+          static_cast<std::int64_t>(std::ceil(gy1 / h))};
 }
+
+// The union of boxes over the region's nodes: each node's depth in the box holding it deepest
+// (-1 outside them all), and whether each cell lies in one box.
+struct BoxUnion {
+  BoxUnion(const LatticeRegion& region, std::vector<NodeBox> node_boxes)
+      : boxes(std::move(node_boxes)),
+        ni(region.ni()),
+        depths(static_cast<std::size_t>(ni) * region.nj(), -1),
+        cells(depths.size(), 0) {
+    for (const NodeBox& box : boxes)
+      for (std::int64_t j = box.j0; j <= box.j1; ++j)
+        for (std::int64_t i = box.i0; i <= box.i1; ++i) {
+          const std::size_t n = static_cast<std::size_t>(j - region.j0) * ni + (i - region.i0);
+          depths[n] = std::max(depths[n], box.depth(i, j));
+          if (i < box.i1 && j < box.j1) cells[n] = 1;
+        }
+  }
+  std::int64_t depth(int i, int j) const { return depths[static_cast<std::size_t>(j) * ni + i]; }
+
+  std::vector<NodeBox> boxes;
+  int ni;
+  std::vector<std::int64_t> depths;
+  std::vector<char> cells;
+};
 
 std::uint32_t add_vertex(GroundMesh& mesh, double x, double y, double z) {
   mesh.vertices_m.insert(mesh.vertices_m.end(),
@@ -318,7 +354,8 @@ void add_convex_polygon(const std::vector<ClipVertex>& polygon, GroundMesh& mesh
 // finer where the base has finer detail (a DEM of fine cells) so that its own relief stays.
 // The field varies over a correlation length, three lattice steps: between nodes it is
 // interpolated bilinearly. At most 1024 nodes a side: finer detail is then smoothed.
-void mesh_region(const GroundMesh& base, const LatticeRegion& region,
+// Over several boxes, only the nodes and cells inside one of them.
+void mesh_region(const GroundMesh& base, const LatticeRegion& region, const BoxUnion& boxes,
                  const std::vector<double>& relief_m, double base_spacing_m, GroundMesh& mesh) {
   const int ni = region.ni(), nj = region.nj();
   int r = 1;
@@ -336,29 +373,59 @@ void mesh_region(const GroundMesh& base, const LatticeRegion& region,
   };
   const HeightIndex ground(base);
   std::vector<std::uint32_t> node_vertex(static_cast<std::size_t>(fi) * fj, no_vertex);
+  // Whether fine node (a, b) lies in the union (its lattice neighbours do), and whether the
+  // fine cell from it lies in one box.
+  auto node_in = [&](int a, int b) {
+    return boxes.depth(a / r, b / r) >= 0 && boxes.depth((a + r - 1) / r, (b + r - 1) / r) >= 0;
+  };
+  auto cell_in = [&](int a, int b) {
+    return boxes.cells[static_cast<std::size_t>(b / r) * ni + a / r] != 0;
+  };
   for (int b = 0; b < fj; ++b)
     for (int a = 0; a < fi; ++a) {
+      if (!node_in(a, b)) continue;
       const auto [x, y] = region.local(region.i0 + static_cast<double>(a) / r,
                                        region.j0 + static_cast<double>(b) / r);
       if (const auto z = ground.height_m(x, y))
         node_vertex[static_cast<std::size_t>(b) * fi + a] =
             add_vertex(mesh, x, y, *z + relief_at(a, b));
     }
-  triangulate_grid(fi, fj, node_vertex, mesh.triangles);
+  if (boxes.boxes.size() == 1) {
+    triangulate_grid(fi, fj, node_vertex, mesh.triangles);
+    return;
+  }
+  // triangulate_grid's triangles, of the cells inside a box alone: two boxes a cell apart leave
+  // the cell between them to the base.
+  for (int b = 0; b + 1 < fj; ++b)
+    for (int a = 0; a + 1 < fi; ++a) {
+      if (!cell_in(a, b)) continue;
+      const std::size_t n = static_cast<std::size_t>(b) * fi + a;
+      const std::uint32_t p = node_vertex[n], q = node_vertex[n + 1], s = node_vertex[n + fi],
+                          t = node_vertex[n + fi + 1];
+      if (p != no_vertex && q != no_vertex && t != no_vertex)
+        mesh.triangles.insert(mesh.triangles.end(), {p, q, t});
+      if (p != no_vertex && t != no_vertex && s != no_vertex)
+        mesh.triangles.insert(mesh.triangles.end(), {p, t, s});
+    }
 }
 
-// The base outside the lattice's region: its outline in the frame is a convex quadrilateral
-// (counter-clockwise, as east and north are in both). A triangle that crosses it is cut along
-// it; the outside is split into four convex parts (outside edge k, inside the edges before).
-void add_base_outside(const GroundMesh& base, const LatticeRegion& region, GroundMesh& mesh) {
-  const std::array<std::array<double, 2>, 4> quad = {
-      region.local(region.i0, region.j0), region.local(region.i1, region.j0),
-      region.local(region.i1, region.j1), region.local(region.i0, region.j1)};
-  auto side = [&](int edge, const ClipVertex& v) {
+// The base outside the boxes: each box's outline in the frame is a convex quadrilateral
+// (counter-clockwise, as east and north are in both). A triangle that crosses one is cut along
+// it; the outside is split into four convex parts (outside edge k, inside the edges before), and
+// each part goes on to the next box.
+void add_base_outside(const GroundMesh& base, const LatticeRegion& region,
+                      const std::vector<NodeBox>& boxes, GroundMesh& mesh) {
+  using Quad = std::array<std::array<double, 2>, 4>;
+  std::vector<Quad> quads;
+  for (const NodeBox& box : boxes)
+    quads.push_back({region.local(box.i0, box.j0), region.local(box.i1, box.j0),
+                     region.local(box.i1, box.j1), region.local(box.i0, box.j1)});
+  auto side = [](const Quad& quad, int edge, const ClipVertex& v) {
     const auto& p = quad[edge];
     const auto& q = quad[(edge + 1) % 4];
     return (q[0] - p[0]) * (v.y - p[1]) - (q[1] - p[1]) * (v.x - p[0]);  // > 0 inside
   };
+  std::vector<std::vector<ClipVertex>> parts, next;
   for (std::size_t t = 0; t < base.triangles.size(); t += 3) {
     std::vector<ClipVertex> triangle;
     for (int k = 0; k < 3; ++k) {
@@ -366,26 +433,40 @@ void add_base_outside(const GroundMesh& base, const LatticeRegion& region, Groun
       triangle.push_back(
           {base.vertices_m[3 * v], base.vertices_m[3 * v + 1], base.vertices_m[3 * v + 2]});
     }
-    bool disjoint = false, inside = true;
-    for (int edge = 0; edge < 4; ++edge) {
-      int outside = 0;
-      for (const ClipVertex& p : triangle) outside += side(edge, p) < 0.0 ? 1 : 0;
-      disjoint = disjoint || outside == 3;
-      inside = inside && outside == 0;
+    bool whole = true;  // the triangle untouched so far: kept as the base has it
+    parts.assign(1, triangle);
+    for (const Quad& quad : quads) {
+      next.clear();
+      for (const std::vector<ClipVertex>& polygon : parts) {
+        bool disjoint = false, inside = true;
+        for (int edge = 0; edge < 4; ++edge) {
+          int outside = 0;
+          for (const ClipVertex& p : polygon) outside += side(quad, edge, p) < 0.0 ? 1 : 0;
+          disjoint = disjoint || outside == static_cast<int>(polygon.size());
+          inside = inside && outside == 0;
+        }
+        if (disjoint) {
+          next.push_back(polygon);
+          continue;
+        }
+        whole = false;
+        if (inside) continue;
+        for (int edge = 0; edge < 4; ++edge) {
+          std::vector<ClipVertex> part =
+              clip(polygon, [&](const ClipVertex& p) { return -side(quad, edge, p); });
+          for (int before = 0; before < edge && part.size() >= 3; ++before)
+            part = clip(part, [&](const ClipVertex& p) { return side(quad, before, p); });
+          if (part.size() >= 3) next.push_back(std::move(part));
+        }
+      }
+      parts.swap(next);
     }
-    if (disjoint) {
+    if (whole) {
       mesh.triangles.insert(mesh.triangles.end(), base.triangles.begin() + t,
                             base.triangles.begin() + t + 3);
       continue;
     }
-    if (inside) continue;
-    for (int edge = 0; edge < 4; ++edge) {
-      std::vector<ClipVertex> part =
-          clip(triangle, [&](const ClipVertex& p) { return -side(edge, p); });
-      for (int before = 0; before < edge && part.size() >= 3; ++before)
-        part = clip(part, [&](const ClipVertex& p) { return side(before, p); });
-      add_convex_polygon(part, mesh);
-    }
+    for (const std::vector<ClipVertex>& part : parts) add_convex_polygon(part, mesh);
   }
 }
 
@@ -458,38 +539,91 @@ Error RoughnessField::too_fine(double half_size_m, std::int64_t nodes_a_side) co
 
 GroundMesh RoughnessField::roughen(const GroundMesh& base, const LocalFrame& frame,
                                    double half_size_m, double base_spacing_m) const {
-  if (!enabled() || base.triangles.empty() || half_size_m <= 0.0) return base;
-  // The finest lattice whose nodes over the region stay within the limit.
+  if (half_size_m <= 0.0) return base;
+  return roughen(base, frame, std::vector<RoughSquare>{{0.0, 0.0, half_size_m}}, base_spacing_m);
+}
+
+GroundMesh RoughnessField::roughen(const GroundMesh& base, const LocalFrame& frame,
+                                   const std::vector<RoughSquare>& squares,
+                                   double base_spacing_m) const {
+  if (!enabled() || base.triangles.empty() || squares.empty()) return base;
+  // The maps are fitted over the squares' bounding square.
+  double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+  double widest_m = 0.0;
+  for (const RoughSquare& square : squares) {
+    if (!(square.half_size_m > 0.0)) return base;
+    x0 = std::min(x0, square.x_m - square.half_size_m);
+    x1 = std::max(x1, square.x_m + square.half_size_m);
+    y0 = std::min(y0, square.y_m - square.half_size_m);
+    y1 = std::max(y1, square.y_m + square.half_size_m);
+    widest_m = std::max(widest_m, square.half_size_m);
+  }
+  const std::array<double, 2> centre_m =
+      squares.size() == 1 ? std::array<double, 2>{squares[0].x_m, squares[0].y_m}
+                          : std::array<double, 2>{0.5 * (x0 + x1), 0.5 * (y0 + y1)};
+  const double fit_half_m =
+      squares.size() == 1 ? squares[0].half_size_m : 0.5 * std::max(x1 - x0, y1 - y0);
+  // The finest lattice whose nodes over each square stay within the limit.
   std::optional<LatticeRegion> fitted;
+  std::vector<NodeBox> node_boxes;
   int level = 0;
   for (;; ++level) {
-    fitted.emplace(fit_region_maps(base, frame, half_size_m, lattices_[level].spacing_m));
-    cover_square(*fitted, half_size_m);
-    const std::int64_t nodes_a_side =
-        std::max(fitted->i1 - fitted->i0, fitted->j1 - fitted->j0) + 1;
+    fitted.emplace(fit_region_maps(base, frame, centre_m, fit_half_m, lattices_[level].spacing_m));
+    node_boxes.clear();
+    std::int64_t nodes_a_side = 0;
+    for (const RoughSquare& square : squares) {
+      node_boxes.push_back(cover_square(*fitted, square));
+      nodes_a_side = std::max(nodes_a_side, std::max(node_boxes.back().i1 - node_boxes.back().i0,
+                                                     node_boxes.back().j1 - node_boxes.back().j0) +
+                                                1);
+    }
     if (nodes_a_side <= max_nodes_a_side) break;
-    if (level + 1 == static_cast<int>(lattices_.size())) throw too_fine(half_size_m, nodes_a_side);
+    if (level + 1 == static_cast<int>(lattices_.size())) throw too_fine(widest_m, nodes_a_side);
   }
-  const LatticeRegion& region = *fitted;
+  LatticeRegion& region = *fitted;
+  region.i0 = region.j0 = std::numeric_limits<std::int64_t>::max();
+  region.i1 = region.j1 = std::numeric_limits<std::int64_t>::min();
+  for (const NodeBox& box : node_boxes) {
+    region.i0 = std::min(region.i0, box.i0), region.i1 = std::max(region.i1, box.i1);
+    region.j0 = std::min(region.j0, box.j0), region.j1 = std::max(region.j1, box.j1);
+  }
   const Lattice& lattice = lattices_[level];
   const int ni = region.ni(), nj = region.nj();
 
-  // The relief of every node, tapering to nothing over the region's outer 2 correlation lengths.
-  std::vector<double> relief_m =
-      smoothed_noise(seed_, region.zone, level, lattice.kernel, region.i0, region.j0, ni, nj);
+  // The relief of every node of a box, tapering to nothing over the outer 2 correlation
+  // lengths of the boxes' union (a node's depth in the box holding it deepest). A node's noise
+  // is the same whichever box it is smoothed in.
+  std::vector<double> relief_m;
+  if (node_boxes.size() == 1) {
+    relief_m =
+        smoothed_noise(seed_, region.zone, level, lattice.kernel, region.i0, region.j0, ni, nj);
+  } else {
+    relief_m.assign(static_cast<std::size_t>(ni) * nj, 0.0);
+    for (const NodeBox& box : node_boxes) {
+      const int bi = static_cast<int>(box.i1 - box.i0 + 1),
+                bj = static_cast<int>(box.j1 - box.j0 + 1);
+      const std::vector<double> noise =
+          smoothed_noise(seed_, region.zone, level, lattice.kernel, box.i0, box.j0, bi, bj);
+      for (int j = 0; j < bj; ++j)
+        for (int i = 0; i < bi; ++i)
+          relief_m[static_cast<std::size_t>(box.j0 - region.j0 + j) * ni +
+                   (box.i0 - region.i0 + i)] = noise[static_cast<std::size_t>(j) * bi + i];
+    }
+  }
+  const BoxUnion boxes(region, std::move(node_boxes));
   const int ramp_nodes =
       std::max(1, static_cast<int>(std::lround(2.0 * correlation_m_ / region.h)));
   for (int j = 0; j < nj; ++j)
     for (int i = 0; i < ni; ++i) {
-      const int edge = std::min({i, ni - 1 - i, j, nj - 1 - j});
+      const std::int64_t edge = std::max<std::int64_t>(0, boxes.depth(i, j));
       const double taper = std::min(1.0, static_cast<double>(edge) / ramp_nodes);
       relief_m[static_cast<std::size_t>(j) * ni + i] *= lattice.scale * taper;
     }
 
   GroundMesh mesh;
   mesh.vertices_m = base.vertices_m;
-  mesh_region(base, region, relief_m, base_spacing_m, mesh);
-  add_base_outside(base, region, mesh);
+  mesh_region(base, region, boxes, relief_m, base_spacing_m, mesh);
+  add_base_outside(base, region, boxes.boxes, mesh);
   mesh.min_height_m = std::numeric_limits<double>::infinity();
   mesh.max_height_m = -std::numeric_limits<double>::infinity();
   for (std::uint32_t v : mesh.triangles) {

@@ -30,6 +30,11 @@
 
 namespace glaswave {
 
+// A square of a frame, about (x_m, y_m), where the relief is meshed.
+struct RoughSquare {
+  double x_m = 0.0, y_m = 0.0, half_size_m = 0.0;
+};
+
 class RoughnessField {
  public:
   RoughnessField(const RoughnessSettings& settings, std::uint64_t seed);
@@ -52,6 +57,14 @@ class RoughnessField {
   // region is meshed that finely (up to 1024 nodes a side), so that the base's relief is kept.
   // Throws (naming roughness/correlation_m) where no lattice fits.
   GroundMesh roughen(const GroundMesh& base, const LocalFrame& frame, double half_size_m,
+                     double base_spacing_m = std::numeric_limits<double>::infinity()) const;
+
+  // The same within any of `squares` (the beams of the footprints sharing one scene): their
+  // union is meshed on one lattice (each square within the node limit), the relief tapering over
+  // the union's outer 2 correlation lengths; a point's relief is the same whichever squares hold
+  // it, away from that taper. One square about the origin is the call above, bit for bit.
+  GroundMesh roughen(const GroundMesh& base, const LocalFrame& frame,
+                     const std::vector<RoughSquare>& squares,
                      double base_spacing_m = std::numeric_limits<double>::infinity()) const;
 
   // 1024 nodes a side: about 2 million triangles, some 200 MB of mesh and ray-tracing index.

@@ -65,11 +65,18 @@ Vegetation crowns_vegetation(const Forest& forest, const VegetationRegion& regio
                                             region.half_size_m * std::sqrt(2.0) + widest_m)) {
     const CanopySettings& canopy = forest.canopy(tree.kind);
     if (canopy.pai <= 0.0) continue;
+    // A strip leaves out most of its square: the trees far outside it (placed at the frame's
+    // height, a few centimetres from where their ground puts them) skip the terrain's lookup.
+    if (region.strip) {
+      const Vec3 near = region.frame.to_local({tree.lat_deg, tree.lon_deg, centre.h_m});
+      if (!region.strip->holds(near[0], near[1], tree.crown_radius_m + 5.0)) continue;
+    }
     const double ground_m = region.terrain.height_m(tree.lat_deg, tree.lon_deg);
     if (!std::isfinite(ground_m)) continue;
     const Vec3 foot = region.frame.to_local({tree.lat_deg, tree.lon_deg, ground_m});
     const double reach_m = region.half_size_m + tree.crown_radius_m;
     if (std::abs(foot[0]) > reach_m || std::abs(foot[1]) > reach_m) continue;
+    if (region.strip && !region.strip->holds(foot[0], foot[1], tree.crown_radius_m)) continue;
     Crown crown;
     crown.shape = canopy.crown_shape;
     crown.base_m = foot + Vec3{0.0, 0.0, tree.crown_base_m};

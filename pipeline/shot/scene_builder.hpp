@@ -34,6 +34,11 @@ class SceneBuilder {
   // footprint's mean ground). Thread-safe.
   BuiltScene build(const LocalFrame& frame, const SurfaceOrientation& ground, double half_size_m,
                    double rough_half_size_m) const;
+  // A strip's scene (footprints along a track sharing one): the ground within `strip` (cut from
+  // the square of half-width `half_size_m`, which holds it), its roughness meshed within
+  // `rough` (one square a footprint's beam), the vegetation grown within the strip.
+  BuiltScene build(const LocalFrame& frame, const SurfaceOrientation& ground, double half_size_m,
+                   const RegionStrip& strip, const std::vector<RoughSquare>& rough) const;
 
   const Terrain& terrain() const { return terrain_; }
   const RoughnessField& roughness() const { return *roughness_; }

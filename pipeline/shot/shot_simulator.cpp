@@ -71,11 +71,34 @@ void ShotSimulator::check_vegetation(const Footprint& footprint) const {
 
 void ShotSimulator::share_scenes_along(const Track& track) {
   stretches_.reset();
-  if (settings_.stretch_shots <= 0 || scenes_.roughness().enabled() ||
-      (vegetation_ && !vegetation_->fixed_on_the_ground()))
+  if (vegetation_ && !vegetation_->fixed_on_the_ground()) return;
+  const double margin_m = vegetation_ ? vegetation_margin_m : 0.0;
+  const RoughnessField& roughness = scenes_.roughness();
+  if (settings_.stretch_shots > 0) {
+    if (!roughness.enabled())
+      stretches_ = std::make_unique<StretchScenes>(scenes_, lidar_, track, margin_m,
+                                                   settings_.stretch_shots);
     return;
-  stretches_ = std::make_unique<StretchScenes>(
-      scenes_, lidar_, track, vegetation_ ? vegetation_margin_m : 0.0, settings_.stretch_shots);
+  }
+  // A strip meshes its beams' roughness on one lattice, on the terrain's own mesh: a terrain of
+  // finer detail than the lattice's, which a shot's own scene meshes more finely under the beam,
+  // keeps a scene a shot.
+  if (settings_.strip_shots <= 0 ||
+      (roughness.enabled() && scenes_.terrain().detail_m() < roughness.spacing_m()))
+    return;
+  // Footprints too far apart for a strip (GLAS's 172 m) build their own scenes from the start,
+  // in the run's small batches: its first two footprints tell.
+  if (track.sequence_length() >= 2) {
+    const Footprint a = track.locate_shot(0), b = track.locate_shot(1);
+    if (a.on_terrain && b.on_terrain) {
+      const Vec3 step = LocalFrame(a.ground).to_local(b.ground);
+      const double half_strip_m =
+          std::hypot(step[0], step[1]) * static_cast<double>(settings_.strip_shots / 2);
+      if (half_strip_m > max_stretch_reach_m) return;
+    }
+  }
+  stretches_ = std::make_unique<StretchScenes>(scenes_, lidar_, track, margin_m,
+                                               settings_.strip_shots, StretchShape::strip);
 }
 
 namespace {

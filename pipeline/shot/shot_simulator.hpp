@@ -32,6 +32,9 @@ struct ShotSettings {
   // Consecutive shots of a beam that share one scene once the simulator follows a track
   // (stretch_scenes.hpp; the photon-counting receiver's 10 kHz); 0: each shot builds its own.
   std::int64_t stretch_shots = 0;
+  // Consecutive shots of a beam that share one strip's scene once the simulator follows a track
+  // (stretch_scenes.hpp's strips: a waveform pass's); 0: none. stretch_shots comes first.
+  std::int64_t strip_shots = 0;
   // Whether anything reads the record's fields that the ICESat-2 granules do not (the beam's
   // outline; the ground's slope and aspect, fitted under each beam): false (a photon-counting
   // run writing its granules alone) leaves the outline empty and, where a shot shares its
@@ -70,9 +73,16 @@ class ShotSimulator {
 
   // The footprints to come are the track's: consecutive shots of a beam share a stretch's scene
   // when settings.stretch_shots asks for it and the scene allows (no roughness, which is meshed
-  // only where the beam is; vegetation fixed on the ground). The track outlives the simulator.
+  // only where the beam is; vegetation fixed on the ground), or a strip's when
+  // settings.strip_shots does (vegetation fixed on the ground; roughness meshed under each beam,
+  // where the terrain's detail is no finer than the roughness's lattice). The track outlives the
+  // simulator.
   void share_scenes_along(const Track& track);
-  bool shares_scenes() const { return stretches_ != nullptr; }
+  // Whether shots share a stretch's scene (photon counting's: shots of tenths of a millisecond,
+  // which the engine hands its threads in large batches), or a strip's (a waveform pass's:
+  // shots of milliseconds, in the usual small batches).
+  bool shares_scenes() const { return stretches_ && stretches_->shape() == StretchShape::square; }
+  bool shares_strips() const { return stretches_ && stretches_->shape() == StretchShape::strip; }
 
   const LidarModel& lidar() const { return lidar_; }
   const SceneBuilder& scenes() const { return scenes_; }

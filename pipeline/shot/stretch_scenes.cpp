@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <stdexcept>
 
 #include "pipeline/shot/footprint_geometry.hpp"
@@ -54,8 +55,14 @@ struct StretchScenes::Entry {
 };
 
 StretchScenes::StretchScenes(const SceneBuilder& scenes, const LidarModel& lidar,
-                             const Track& track, double margin_m, std::int64_t shots)
-    : scenes_(scenes), lidar_(lidar), track_(track), margin_m_(margin_m), shots_(shots) {
+                             const Track& track, double margin_m, std::int64_t shots,
+                             StretchShape shape)
+    : scenes_(scenes),
+      lidar_(lidar),
+      track_(track),
+      margin_m_(margin_m),
+      shots_(shots),
+      shape_(shape) {
   if (shots_ < 1) throw std::invalid_argument("a stretch holds at least one shot");
 }
 
@@ -132,6 +139,10 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
     reach_m = std::max(reach_m, std::hypot(centre[0], centre[1]));
   }
   if (reach_m > max_stretch_reach_m) return nullptr;
+  if (shape_ == StretchShape::strip) {
+    build_strip(*stretch_scene, held);
+    return stretch_scene;
+  }
   // The patch a shot's rays land on changes only with the ground's slope under it: every 32nd
   // shot's and the last's (their 8 directions traced to the terrain), 22 m apart.
   double patch_m = 0.0;
@@ -146,12 +157,70 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
   const FootprintFrame where = footprint_frame(terrain, lidar_, middle);
   stretch_scene->built =
       scenes_.build(frame, where.orientation, reach_m + patch_m + margin_m_, 0.0);
-  stretch_scene->sun = stretch_sun(held.front(), held.back());
-  const VegetationSource* vegetation = scenes_.vegetation();
-  if (!vegetation || vegetation->measured_on_volumes())
-    stretch_scene->truth = std::make_unique<TruthGrid>(
-        *stretch_scene->built.scene, 0.15 * middle.range_m * lidar_.beam_sigma_rad());
+  finish(*stretch_scene, held);
   return stretch_scene;
+}
+
+// The strip's rectangle, in the frame of its middle footprint: along the line from its first
+// footprint to its last, as long and wide as every footprint's own scene (its traced patch and
+// the margin about its centre), the roughness under each beam as a shot's own scene has it.
+void StretchScenes::build_strip(StretchScene& scene, const std::vector<Footprint>& held) const {
+  const Terrain& terrain = scenes_.terrain();
+  const LocalFrame& frame = scene.frame;
+  std::vector<Vec3> centres;
+  for (const Footprint& footprint : held) centres.push_back(frame.to_local(footprint.ground));
+  RegionStrip strip;
+  const Vec3 run = centres.back() - centres.front();
+  if (std::hypot(run[0], run[1]) > 1e-3) {
+    const double length_m = std::hypot(run[0], run[1]);
+    strip.axis_x = run[0] / length_m;
+    strip.axis_y = run[1] / length_m;
+  }
+  double reach_m = 0.0;  // of a footprint's scene about its centre
+  std::vector<RoughSquare> rough;
+  const bool roughness = scenes_.roughness().enabled();
+  const double rough_angle_rad = std::min(lidar_.max_angle_rad(), 4.5 * lidar_.beam_sigma_rad());
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    const LocalFrame own(held[k].ground);
+    reach_m = std::max(
+        reach_m, traced_patch_half_size_m(terrain, lidar_, held[k], own, lidar_.max_angle_rad()) +
+                     margin_m_);
+    // Roughness is meshed only where the beam is, as in the shot's own scene.
+    if (roughness)
+      rough.push_back({centres[k][0], centres[k][1],
+                       traced_patch_half_size_m(terrain, lidar_, held[k], own, rough_angle_rad)});
+  }
+  strip.along0_m = strip.across0_m = std::numeric_limits<double>::infinity();
+  strip.along1_m = strip.across1_m = -std::numeric_limits<double>::infinity();
+  for (const Vec3& c : centres) {
+    const double along = c[0] * strip.axis_x + c[1] * strip.axis_y;
+    const double across = c[1] * strip.axis_x - c[0] * strip.axis_y;
+    strip.along0_m = std::min(strip.along0_m, along - reach_m);
+    strip.along1_m = std::max(strip.along1_m, along + reach_m);
+    strip.across0_m = std::min(strip.across0_m, across - reach_m);
+    strip.across1_m = std::max(strip.across1_m, across + reach_m);
+  }
+  // The square about the middle footprint that holds the rectangle.
+  double half_size_m = 0.0;
+  for (const double along : {strip.along0_m, strip.along1_m})
+    for (const double across : {strip.across0_m, strip.across1_m})
+      half_size_m = std::max({half_size_m, std::abs(along * strip.axis_x - across * strip.axis_y),
+                              std::abs(along * strip.axis_y + across * strip.axis_x)});
+  const Footprint& middle = held[held.size() / 2];
+  const FootprintFrame where = footprint_frame(terrain, lidar_, middle);
+  scene.built = scenes_.build(frame, where.orientation, half_size_m, strip, rough);
+  finish(scene, held);
+}
+
+// The sun over the stretch, and the truth's grid where the vegetation's truth is measured on
+// its volumes.
+void StretchScenes::finish(StretchScene& scene, const std::vector<Footprint>& held) const {
+  scene.sun = stretch_sun(held.front(), held.back());
+  const VegetationSource* vegetation = scenes_.vegetation();
+  const Footprint& middle = held[held.size() / 2];
+  if (!vegetation || vegetation->measured_on_volumes())
+    scene.truth = std::make_unique<TruthGrid>(*scene.built.scene,
+                                              0.15 * middle.range_m * lidar_.beam_sigma_rad());
 }
 
 }  // namespace glaswave

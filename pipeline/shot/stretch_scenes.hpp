@@ -25,6 +25,13 @@ namespace glaswave {
 // Shots of a stretch: 256 at 0.7 m are 179 m of track, whose scene (with vegetation's 100 m
 // margin) is about 2.6 times a shot's in area, built once for 256 shots.
 inline constexpr std::int64_t stretch_shots = 256;
+// Shots of a waveform pass's strip (GEDI's footprints 60 m apart, about 25 m across, each
+// scene some 360 m across with vegetation): a strip of 8 shots, 420 m of track, is one
+// rectangle along it as wide as a shot's scene, 0.27 times the area of 8 shots' own scenes.
+// 4, 8 and 16 shots cost the same within 2 % on the GEDI demo (docs/performance.md: what stays
+// is per shot, the roughness under each beam and the rays); 8 keep within 500 m. GLAS's footprints,
+// 172 m apart, reach farther than max_stretch_reach_m from a strip's middle and build their own.
+inline constexpr std::int64_t strip_shots = 8;
 // A stretch whose footprints lie farther than this from its middle one (consecutive shots far
 // apart: points, a granule's beams one after another) shares no scene: its shots build their own.
 inline constexpr double max_stretch_reach_m = 500.0;
@@ -61,12 +68,18 @@ struct StretchScene {
   }
 };
 
+// A stretch's scene: a square about its middle footprint (ICESat-2's 0.7 m spacing), or a strip,
+// a rectangle along the track holding each footprint's scene, the roughness meshed under each
+// beam (waveform passes).
+enum class StretchShape { square, strip };
+
 class StretchScenes {
  public:
   // The builder, lidar and track outlive this. `margin_m`: how far beyond a shot's traced patch
   // its scene reaches (vegetation's diffuse light). `shots`: shots a stretch.
   StretchScenes(const SceneBuilder& scenes, const LidarModel& lidar, const Track& track,
-                double margin_m, std::int64_t shots = stretch_shots);
+                double margin_m, std::int64_t shots = stretch_shots,
+                StretchShape shape = StretchShape::square);
 
   // The scene of the footprint's stretch, built at its first use (or ahead, by its predecessor's
   // middle shot) and kept while the run is near it; null when the stretch shares none (its
@@ -75,17 +88,21 @@ class StretchScenes {
   std::shared_ptr<const StretchScene> find(const Footprint& footprint) const;
 
   std::int64_t shots() const { return shots_; }
+  StretchShape shape() const { return shape_; }
 
  private:
   struct Entry;
   std::shared_ptr<const StretchScene> find(int beam_index, std::int64_t stretch) const;
   std::shared_ptr<const StretchScene> build(int beam_index, std::int64_t stretch) const;
+  void build_strip(StretchScene& scene, const std::vector<Footprint>& held) const;
+  void finish(StretchScene& scene, const std::vector<Footprint>& held) const;
 
   const SceneBuilder& scenes_;
   const LidarModel& lidar_;
   const Track& track_;
   double margin_m_;
   std::int64_t shots_;
+  StretchShape shape_;
   // The stretches met last, the most recent last: a run walks the track in order, so three a
   // beam (the one a batch ends in, the one it starts, the next one built ahead) are all it meets
   // again.

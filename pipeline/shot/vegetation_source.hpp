@@ -30,6 +30,20 @@
 
 namespace glaswave {
 
+// A rectangle of a frame turned along a track (a strip of footprints sharing one scene): the
+// points whose coordinates along `axis` (unit, horizontal) lie in [along0_m, along1_m] and across
+// it (axis turned 90 degrees counter-clockwise) in [across0_m, across1_m].
+struct RegionStrip {
+  double axis_x = 0.0, axis_y = 1.0;
+  double along0_m = 0.0, along1_m = 0.0, across0_m = 0.0, across1_m = 0.0;
+  // Whether (x, y) lies within `margin_m` of the rectangle, in each direction.
+  bool holds(double x_m, double y_m, double margin_m = 0.0) const {
+    const double along = x_m * axis_x + y_m * axis_y, across = y_m * axis_x - x_m * axis_y;
+    return along >= along0_m - margin_m && along <= along1_m + margin_m &&
+           across >= across0_m - margin_m && across <= across1_m + margin_m;
+  }
+};
+
 // A square region of the terrain around a footprint, in the footprint's local frame.
 struct VegetationRegion {
   const Terrain& terrain;
@@ -37,6 +51,9 @@ struct VegetationRegion {
   double half_size_m = 0.0;   // the region is [-half_size_m, half_size_m]^2 east and north
   SurfaceOrientation ground;  // the footprint's mean ground (a layer follows it)
   std::size_t bands = 0;      // the materials' values are per band
+  // Where given, only the square's part within this strip is needed: a source may leave out
+  // what lies wholly outside it (crowns do), or grow the square.
+  const RegionStrip* strip = nullptr;
 };
 
 // The vegetation of one region: what the scene holds, and the materials it is made of.

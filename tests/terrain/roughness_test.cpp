@@ -162,6 +162,60 @@ TEST(Roughness, MeshCarriesTheFieldWithoutGapsAndAgreesBetweenFootprints) {
   EXPECT_LT(worst_outside_m, 2e-3);
 }
 
+// Several footprints' squares meshed at once (a strip's scene): two overlapping, one apart and
+// one a lattice node from it. One surface over every point; the field's relief (the per-point
+// convolution, height_m) deep inside any square, the same whichever squares hold a point; the
+// plane beyond them all; and one square about the origin is the one-square call, bit for bit.
+TEST(Roughness, SeveralSquaresCarryTheFieldWithoutGaps) {
+  const RoughnessField field({0.4, 2.0}, 17);
+  const PlaneTerrain plane({45.0, 7.0, 600.0, 15.0, 250.0});
+  const LocalFrame frame({45.0, 7.0, 600.0});
+  const GroundMesh base = build_ground_mesh(plane, frame, 60.0, 1.0e9);
+  const std::vector<RoughSquare> squares = {
+      {0.0, 0.0, 20.0}, {25.0, 18.0, 20.0}, {-40.0, 30.0, 10.0}, {-40.0, 8.0, 11.0}};
+  const GroundMesh mesh = field.roughen(base, frame, squares, 1.0e9);
+  // Depth of (x, y) inside the deepest square holding it (negative outside them all).
+  auto depth = [&](double x, double y) {
+    double deepest = -1e9;
+    for (const RoughSquare& s : squares)
+      deepest =
+          std::max(deepest, s.half_size_m - std::max(std::abs(x - s.x_m), std::abs(y - s.y_m)));
+    return deepest;
+  };
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-58.0, 58.0);
+  double worst_field_m = 0.0, worst_outside_m = 0.0;
+  int inside = 0, outside = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const double x = u(rng), y = u(rng);
+    const Cover c = cover(mesh, x, y, -1e-7);
+    ASSERT_GE(c.count, 1) << "a gap at " << x << ", " << y;
+    EXPECT_LE(cover(mesh, x, y, 1e-6).count, 1) << "double cover at " << x << ", " << y;
+    const Geodetic on_mesh = frame.to_geodetic({x, y, c.z});
+    const double relief_m = on_mesh.h_m - plane.height_m(on_mesh.lat_deg, on_mesh.lon_deg);
+    // The taper is 2 correlation lengths (4 m) from a square's nodes, which reach a node
+    // (0.67 m) beyond it and more where the grid turns from the frame (1.4 degrees here): 3 m
+    // out, as for one square above.
+    if (depth(x, y) > 5.0) {
+      worst_field_m = std::max(
+          worst_field_m, std::abs(relief_m - field.height_m(on_mesh.lat_deg, on_mesh.lon_deg)));
+      ++inside;
+    } else if (depth(x, y) < -3.0) {
+      worst_outside_m = std::max(worst_outside_m, std::abs(relief_m));
+      ++outside;
+    }
+  }
+  EXPECT_GT(inside, 300);
+  EXPECT_GT(outside, 1500);
+  EXPECT_LT(worst_field_m, 2e-3);
+  EXPECT_LT(worst_outside_m, 2e-3);
+
+  const GroundMesh one = field.roughen(base, frame, 30.0, 1.0e9);
+  const GroundMesh same = field.roughen(base, frame, {{0.0, 0.0, 30.0}}, 1.0e9);
+  EXPECT_EQ(same.vertices_m, one.vertices_m);
+  EXPECT_EQ(same.triangles, one.triangles);
+}
+
 // Ground with relief finer than the roughness lattice (ridges 3 m apart, 5 m high, in cells of
 // 0.25 m) under a nearly flat roughness of 6 m correlation (lattice 2 m): the roughened mesh keeps
 // the ground's own relief. Every triangle's centroid lies within 0.3 m of the ground under it (a

@@ -1,0 +1,161 @@
+// Waveform passes' shots sharing a strip's scene (issue 39): GEDI's footprints 60 m apart over the
+// seed's Table 1 forest on a rough plane, traced through each strip's one scene, give what each
+// shot's own scene gives (the second method, the per-shot path other tracks keep): the same
+// returns within the Monte Carlo's noise, the same truth within the grids' spacing, the same sun
+// and ground fit; and a strip's scene depends on the strip alone, whichever shot builds it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <vector>
+
+#include "pipeline/engine/inputs.hpp"
+#include "pipeline/shot/footprint_geometry.hpp"
+#include "pipeline/shot/stretch_scenes.hpp"
+
+namespace glaswave {
+namespace {
+
+// One GEDI beam 60 m a shot at 30 degrees east of north (a strip turned in its frame) over the
+// Table 1 forest on a 10 degree plane with roughness of 0.2 m RMS, 3 m correlation.
+Config gedi_pass(int shots, int rays) {
+  const nlohmann::json pass = {
+      {"seed", 11},
+      {"sensor", {{"preset", "gedi"}}},
+      {"simulation", {{"rays_per_shot", rays}, {"max_order", 3}}},
+      {"terrain",
+       {{"plane",
+         {{"origin_lat_deg", 10.0},
+          {"origin_lon_deg", 0.0},
+          {"elevation_m", 100.0},
+          {"slope_deg", 10.0},
+          {"aspect_deg", 200.0}}},
+        {"roughness", {{"rms_m", 0.2}, {"correlation_m", 3.0}}},
+        {"soil_reflectance", 0.25}}},
+      {"canopy", nlohmann::json::object()},
+      {"track",
+       {{"type", "pass"},
+        {"start_lat_deg", 10.0},
+        {"start_lon_deg", 0.0},
+        {"heading_deg", 30.0},
+        {"shots", shots},
+        {"spacing_m", 60.0},
+        {"altitude_m", 420000.0},
+        {"start_time", "2019-03-20T14:00:00Z"}}},
+      {"output", {{"netcdf", true}, {"footprints", false}}},
+  };
+  return parse_config(pass);
+}
+
+double mean_of(const std::vector<double>& d, double* standard_error) {
+  double mean = 0.0, squares = 0.0;
+  for (const double x : d) {
+    mean += x;
+    squares += x * x;
+  }
+  const auto n = static_cast<double>(d.size());
+  mean /= n;
+  *standard_error = std::sqrt((squares / n - mean * mean) / n);
+  return mean;
+}
+
+// 24 shots, three strips, each simulated in its own scene and in its strip's.
+TEST(StripScene, TracesWhatEachShotsOwnSceneDoes) {
+  const Config config = gedi_pass(24, 400);
+  const auto terrain = make_terrain(config.terrain);
+  const std::unique_ptr<Track> track = plan_track(config, *terrain);
+  const auto own = make_shot_simulator(config, *terrain);
+  auto shared = make_shot_simulator(config, *terrain);
+  ASSERT_EQ(shot_settings(config).strip_shots, strip_shots);
+  shared->share_scenes_along(*track);
+  ASSERT_TRUE(shared->shares_strips());
+  ASSERT_FALSE(shared->shares_scenes());  // the engine's small batches: shots of milliseconds
+  std::vector<double> energy, cover, pai, height;  // shared - own, a shot
+  double energy_own = 0.0;
+  for (const Footprint& footprint : track->footprints(0, 24)) {
+    const ShotRecord a = own->simulate(footprint);
+    const ShotRecord b = shared->simulate(footprint);
+    ASSERT_EQ(a.quality_flag, b.quality_flag);
+    // The same rays (keyed by seed, shot and ray) through the same crowns and relief under the
+    // beam: the returns differ only where a ray grazes an edge the two frames place a float's
+    // width apart, or wanders beyond 100 m into crowns one scene holds and the other not.
+    energy.push_back(b.rx_energy_J.at(0) - a.rx_energy_J.at(0));
+    energy_own += a.rx_energy_J.at(0);
+    EXPECT_NEAR(b.rx_energy_J.at(0) / a.rx_energy_J.at(0), 1.0, 0.02) << footprint.shot_number;
+    // The truth's lines on the strip's grid against the shot's own: grids a fraction of a node
+    // (0.9 m) apart.
+    cover.push_back(b.cover_true - a.cover_true);
+    pai.push_back(b.pai_true - a.pai_true);
+    height.push_back(b.canopy_height_true_m - a.canopy_height_true_m);
+    EXPECT_NEAR(b.cover_true, a.cover_true, 0.03) << footprint.shot_number;
+    EXPECT_NEAR(b.pai_true, a.pai_true, 0.05) << footprint.shot_number;
+    // The sun interpolated along the strip against ERFA at the shot.
+    EXPECT_NEAR(b.solar_elevation_deg, a.solar_elevation_deg, 1e-5);
+    EXPECT_NEAR(b.solar_azimuth_deg, a.solar_azimuth_deg, 1e-5);
+    // The footprint's own ground fit and bins, whatever frame the scene is in.
+    EXPECT_EQ(b.slope_deg, a.slope_deg);
+    EXPECT_NEAR(b.elev_bin0_m, a.elev_bin0_m, 1e-6);
+    EXPECT_NEAR(b.elev_lastbin_m, a.elev_lastbin_m, 1e-6);
+  }
+  // The differences are noise about zero: their means within 3 standard errors.
+  for (const auto* d : {&energy, &cover, &pai, &height}) {
+    double standard_error = 0.0;
+    const double mean = mean_of(*d, &standard_error);
+    EXPECT_LE(std::abs(mean), 3.0 * standard_error + 1e-12 * energy_own);
+  }
+}
+
+// A strip's scene is built once for its 8 shots and found by each; the next strip has its own,
+// whichever shot of it comes first; the records do not depend on which shot built their scene
+// (threads, --shots parts and --resume start anywhere). GLAS's 172 m spacing shares none.
+TEST(StripScene, OneSceneAStripThatDependsOnTheStripAlone) {
+  const Config config = gedi_pass(24, 50);
+  const auto terrain = make_terrain(config.terrain);
+  const std::unique_ptr<Track> track = plan_track(config, *terrain);
+  const auto simulator = make_shot_simulator(config, *terrain);
+  const StretchScenes strips(simulator->scenes(), simulator->lidar(), *track, vegetation_margin_m,
+                             strip_shots, StretchShape::strip);
+  const auto first = strips.find(track->footprint(0));
+  ASSERT_NE(first, nullptr);
+  EXPECT_EQ(strips.find(track->footprint(7)), first);
+  const auto second = strips.find(track->footprint(8));
+  ASSERT_NE(second, nullptr);
+  EXPECT_NE(second, first);
+  // Its frame is its middle footprint's (shot 12), 8 shots (480 m) up the track from the first's.
+  const Vec3 offset = first->frame.to_local(second->frame.origin());
+  EXPECT_NEAR(std::hypot(offset[0], offset[1]), 480.0, 0.5);
+  EXPECT_NEAR(std::atan2(offset[0], offset[1]) * 180.0 / std::numbers::pi, 30.0, 0.1);
+
+  // The track's shots in order, backwards, and from the middle of a strip on a fresh simulator.
+  auto forwards = make_shot_simulator(config, *terrain);
+  auto backwards = make_shot_simulator(config, *terrain);
+  auto middle = make_shot_simulator(config, *terrain);
+  for (auto* s : {&forwards, &backwards, &middle}) (*s)->share_scenes_along(*track);
+  std::vector<ShotRecord> a, b(24), c;
+  for (std::int64_t shot = 0; shot < 24; ++shot)
+    a.push_back(forwards->simulate(track->footprint(shot)));
+  for (std::int64_t shot = 23; shot >= 0; --shot)
+    b[static_cast<std::size_t>(shot)] = backwards->simulate(track->footprint(shot));
+  for (std::int64_t shot = 13; shot < 24; ++shot)
+    c.push_back(middle->simulate(track->footprint(shot)));
+  for (std::size_t k = 0; k < 24; ++k) {
+    EXPECT_EQ(b[k].rx_waveform_W, a[k].rx_waveform_W) << k;
+    EXPECT_EQ(b[k].cover_true, a[k].cover_true) << k;
+    EXPECT_EQ(b[k].solar_azimuth_deg, a[k].solar_azimuth_deg) << k;
+    if (k >= 13) {
+      EXPECT_EQ(c[k - 13].rx_waveform_W, a[k].rx_waveform_W) << k;
+      EXPECT_EQ(c[k - 13].pai_true, a[k].pai_true) << k;
+    }
+  }
+
+  Config glas = config;
+  glas.track.spacing_m = 172.0;
+  const std::unique_ptr<Track> apart = plan_track(glas, *terrain);
+  const StretchScenes none(simulator->scenes(), simulator->lidar(), *apart, vegetation_margin_m,
+                           strip_shots, StretchShape::strip);
+  EXPECT_EQ(none.find(apart->footprint(0)), nullptr);
+}
+
+}  // namespace
+}  // namespace glaswave
