@@ -20,6 +20,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "canopy/netcdf_classic_header.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/gdal_layer.hpp"
@@ -613,6 +614,7 @@ void VoxelGridFile::open(const std::filesystem::path& file, bool spawn) {
   const bool classic = magic[0] == 'C' && magic[1] == 'D' && magic[2] == 'F';
   const bool hdf5 = magic[1] == 'H' && magic[2] == 'D' && magic[3] == 'F';
   if (classic) {
+    check_classic_netcdf_header(file, impl_->place);
     impl_->open_netcdf(file);
   } else if (hdf5) {
     if (spawn)

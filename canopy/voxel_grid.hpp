@@ -17,7 +17,8 @@
 // read 16 MB past a heap buffer inside nc_inq_varndims): it is opened and read, window by window,
 // by the small program glaswave-read-voxels (core/spawned_reader.hpp), started when the grid is
 // opened and ended when it is closed, found as the granule reader is (footprints/granule.hpp). A
-// crash there refuses the file. A classic NetCDF grid (CDF-1, 2, 5) is read here.
+// crash there refuses the file. A classic NetCDF grid (CDF-1, 2, 5) is read here, its header's
+// sizes checked against the file's first (canopy/netcdf_classic_header.hpp).
 #pragma once
 
 #include <cstddef>
