@@ -747,7 +747,8 @@ VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
 }
 
 int voxel_reader_main(int argc, char** argv) {
-  if (argc != 2) return 2;
+  const int channel = take_reply_channel();
+  if (argc != 2 || channel < 0) return 2;
   std::unique_ptr<VoxelGridFile> grid;
   MessageOut opened;
   const auto refuse = [&](MessageOut& out, const std::exception& e) {
@@ -770,8 +771,7 @@ int voxel_reader_main(int argc, char** argv) {
   } catch (const std::exception& e) {
     refuse(opened, e);
   }
-  if (!write_hello(STDOUT_FILENO, kReaderHello) || !write_message(STDOUT_FILENO, opened.text()))
-    return 2;
+  if (!write_hello(channel, kReaderHello) || !write_message(channel, opened.text())) return 2;
   if (!grid) return 0;
   for (std::string request; read_message(STDIN_FILENO, request);) {
     MessageOut reply;
@@ -786,7 +786,7 @@ int voxel_reader_main(int argc, char** argv) {
       reply = MessageOut();
       refuse(reply, e);
     }
-    if (!write_message(STDOUT_FILENO, reply.text())) return 2;
+    if (!write_message(channel, reply.text())) return 2;
   }
   return 0;
 }

@@ -94,6 +94,7 @@ SpawnedReader::SpawnedReader(const std::filesystem::path& program,
       posix_spawn_file_actions_adddup2(actions.get(), ends[1], STDIN_FILENO) != 0 ||
       posix_spawn_file_actions_adddup2(actions.get(), ends[1], STDOUT_FILENO) != 0 ||
       posix_spawn_file_actions_addclosefrom_np(actions.get(), STDERR_FILENO + 1) != 0) {
+    ::close(ends[0]);
     ::close(ends[1]);
     throw run_error(file_, cannot + "cannot start its reader");
   }
@@ -112,6 +113,7 @@ SpawnedReader::SpawnedReader(const std::filesystem::path& program,
   }
   ::close(ends[1]);
   if (error != 0) {
+    ::close(ends[0]);
     child_ = -1;
     throw run_error(
         file_, cannot + "cannot start " + program.string() + " (" + std::strerror(error) + ")");
@@ -119,8 +121,17 @@ SpawnedReader::SpawnedReader(const std::filesystem::path& program,
 }
 
 SpawnedReader::~SpawnedReader() {
-  if (socket_ >= 0) ::close(socket_);  // the program reads the end of its input and ends
+  hang_up();  // the program reads the end of its input and ends
   wait();
+}
+
+void SpawnedReader::hang_up() {
+  if (socket_ < 0) return;
+  // shutdown, not only close: a copy of this end in a process forked meanwhile (Python's
+  // multiprocessing) would keep the program waiting for more, and wait() with it.
+  ::shutdown(socket_, SHUT_RDWR);
+  ::close(socket_);
+  socket_ = -1;
 }
 
 void SpawnedReader::wait() {
@@ -142,8 +153,7 @@ void SpawnedReader::wait() {
 
 void SpawnedReader::ended(const std::string& why) {
   if (failure_.empty()) {
-    if (socket_ >= 0) ::close(socket_);
-    socket_ = -1;
+    hang_up();
     wait();
   }
   if (failure_.empty())
@@ -192,10 +202,15 @@ std::string SpawnedReader::receive() {
 }
 
 void SpawnedReader::finish() {
-  if (socket_ >= 0) ::close(socket_);
-  socket_ = -1;
+  hang_up();
   wait();
   if (!failure_.empty()) throw input_error(file_, failure_);
+}
+
+int take_reply_channel() {
+  const int channel = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, STDERR_FILENO + 1);
+  if (channel >= 0) ::dup2(STDERR_FILENO, STDOUT_FILENO);
+  return channel;
 }
 
 bool read_message(int fd, std::string& message) {
@@ -207,9 +222,8 @@ bool read_message(int fd, std::string& message) {
 
 bool write_message(int fd, std::string_view message) {
   const std::uint64_t size = message.size();
-  std::string bytes(reinterpret_cast<const char*>(&size), sizeof size);
-  bytes += message;
-  return write_hello(fd, bytes);
+  return write_hello(fd, std::string_view(reinterpret_cast<const char*>(&size), sizeof size)) &&
+         write_hello(fd, message);
 }
 
 bool write_hello(int fd, std::string_view bytes) {

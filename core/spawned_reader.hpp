@@ -51,6 +51,7 @@ class SpawnedReader {
 
  private:
   [[noreturn]] void ended(const std::string& why);
+  void hang_up();
   void wait();
 
   std::filesystem::path program_;
@@ -65,6 +66,10 @@ class SpawnedReader {
 // be written); one message on `fd` (false at the end of its input, or a cut one); `message` written
 // whole to `fd` (false when it could not be).
 bool write_hello(int fd, std::string_view hello);
+// In a reader program, first: the descriptor its hello and replies go to (its standard output as
+// started; -1 when it cannot be had), standard output then pointed at standard error, so that a
+// library printing to standard output cannot break a reply.
+int take_reply_channel();
 bool read_message(int fd, std::string& message);
 bool write_message(int fd, std::string_view message);
 

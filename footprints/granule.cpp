@@ -315,10 +315,11 @@ std::vector<GranuleShot> decode(const std::string& reply, std::vector<std::strin
 }  // namespace
 
 int granule_reader_main(int argc, char** argv) {
-  if (argc < 2) return 2;
+  const int channel = take_reply_channel();
+  if (argc < 2 || channel < 0) return 2;
   const std::vector<std::string> beams(argv + 2, argv + argc);
   const std::string reply = read_encoded(argv[1], beams);
-  return write_hello(STDOUT_FILENO, kHello) && write_message(STDOUT_FILENO, reply) ? 0 : 2;
+  return write_hello(channel, kHello) && write_message(channel, reply) ? 0 : 2;
 }
 
 std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
