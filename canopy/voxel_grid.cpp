@@ -7,21 +7,26 @@
 #include <netcdf.h>
 #include <ogr_spatialref.h>
 #include <ogr_srs_api.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 
+#include "canopy/netcdf_classic_header.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/gdal_layer.hpp"
 #include "core/length_units.hpp"
 #include "core/netcdf_lock.hpp"
+#include "core/spawned_reader.hpp"
 #include "terrain/gdal_source.hpp"
 
 namespace glaswave {
@@ -239,6 +244,11 @@ double height_metadata(const char* text, int band, const char* key, const std::s
   return number;
 }
 
+// glaswave-read-voxels's first bytes; the number changes with its messages' layout.
+constexpr std::string_view kReaderHello = "glaswave-read-voxels 1\n";
+const std::string kReaderRefused =
+    "HDF5 failed reading the voxel grid (a corrupt file): it is refused";
+
 }  // namespace
 
 struct VoxelGridFile::Impl {
@@ -261,11 +271,13 @@ struct VoxelGridFile::Impl {
   // each; empty when no layer is packed.
   std::vector<double> scale, offset;
   GDALDatasetH dataset = nullptr;
-  bool memory = false;             // shape holds the whole grid, pad included
-  std::size_t cache_bytes = 0;     // NetCDF's chunk cache for `pad`
-  std::vector<int> band_of_layer;  // GDAL band (1-based) of each layer, bottom up
+  bool memory = false;                    // shape holds the whole grid, pad included
+  std::size_t cache_bytes = 0;            // NetCDF's chunk cache for `pad`
+  std::vector<int> band_of_layer;         // GDAL band (1-based) of each layer, bottom up
+  std::unique_ptr<SpawnedReader> reader;  // a NetCDF-4 grid's glaswave-read-voxels
   mutable std::mutex mutex;
 
+  void open_spawned(const std::filesystem::path& file);
   void open_netcdf(const std::filesystem::path& file);
   void open_gdal(const std::filesystem::path& file);
   void convert_xy_to_crs_units(const std::array<double, 2>& xy_metres);
@@ -546,19 +558,72 @@ void VoxelGridFile::Impl::open_gdal(const std::filesystem::path& file) {
   check_layers(shape.z_edges_m, place);
 }
 
+// NetCDF-4 grids are read by the reader program (canopy/voxel_grid.hpp says why): it sends the
+// grid's shape, or the error, here.
+void VoxelGridFile::Impl::open_spawned(const std::filesystem::path& file) {
+  netcdf = true;
+  const std::filesystem::path program = find_reader_program(
+      "glaswave-read-voxels", {GLASWAVE_VOXEL_READER_BUILT, GLASWAVE_VOXEL_READER_INSTALLED});
+  if (program.empty())
+    throw run_error(place,
+                    "cannot read the voxel grid: the program glaswave-read-voxels, which reads "
+                    "NetCDF-4 grids, is missing from this installation (install it as `cmake "
+                    "--install` does, in PREFIX/libexec/glaswave/)");
+  reader = std::make_unique<SpawnedReader>(program, std::vector<std::string>{file.string()}, place,
+                                           "the voxel grid", std::string(kReaderHello));
+  const std::string reply = reader->receive();
+  try {
+    MessageIn in(reply);
+    if (in.get<char>() != 'S') throw in.get_error();
+    shape.crs_wkt = in.get_string();
+    shape.nx = in.get<int>();
+    shape.ny = in.get<int>();
+    shape.nz = in.get<int>();
+    shape.x0 = in.get<double>();
+    shape.y0 = in.get<double>();
+    shape.dx = in.get<double>();
+    shape.dy = in.get<double>();
+    const auto edges = in.get<std::uint64_t>();
+    if (shape.nz < 1 || edges != static_cast<std::uint64_t>(shape.nz) + 1)
+      throw std::length_error("layers");
+    shape.z_edges_m.resize(edges);
+    in.get_bytes(shape.z_edges_m.data(), edges * sizeof(double));
+    cache_bytes = in.get<std::uint64_t>();
+  } catch (const std::length_error&) {
+    throw input_error(place, kReaderRefused);
+  }
+}
+
 VoxelGridFile::VoxelGridFile(const std::filesystem::path& file) : impl_(std::make_unique<Impl>()) {
+  open(file, true);
+}
+
+VoxelGridFile::VoxelGridFile(const std::filesystem::path& file, InProcess)
+    : impl_(std::make_unique<Impl>()) {
+  open(file, false);
+}
+
+void VoxelGridFile::open(const std::filesystem::path& file, bool spawn) {
   impl_->place = file.string();
   // A FIFO or a device (or a VRT naming one) is refused before it is opened.
   require_gdal_source(file.native(), "the voxel grid");
   std::ifstream in(file, std::ios::binary);
   char magic[4] = {};
   in.read(magic, 4);
-  const bool netcdf = (magic[0] == 'C' && magic[1] == 'D' && magic[2] == 'F') ||
-                      (magic[1] == 'H' && magic[2] == 'D' && magic[3] == 'F');
-  if (netcdf)
+  in.close();
+  const bool classic = magic[0] == 'C' && magic[1] == 'D' && magic[2] == 'F';
+  const bool hdf5 = magic[1] == 'H' && magic[2] == 'D' && magic[3] == 'F';
+  if (classic) {
+    check_classic_netcdf_header(file, impl_->place);
     impl_->open_netcdf(file);
-  else
+  } else if (hdf5) {
+    if (spawn)
+      impl_->open_spawned(file);
+    else
+      impl_->open_netcdf(file);
+  } else {
     impl_->open_gdal(file);
+  }
 }
 
 VoxelGridFile::VoxelGridFile(VoxelBlock grid) : impl_(std::make_unique<Impl>()) {
@@ -617,6 +682,26 @@ VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
   block.x0 = s.x0 + i0 * s.dx;
   block.y0 = s.y0 + j0 * s.dy;
   block.pad.resize(voxels);
+  if (impl_->reader) {
+    // Read, unpacked and checked by the reader program.
+    MessageOut request;
+    for (int n : {i0, ni, j0, nj}) request.put(std::int32_t{n});
+    std::string reply;
+    {
+      std::lock_guard lock(impl_->mutex);
+      impl_->reader->send(request.text());
+      reply = impl_->reader->receive();
+    }
+    try {
+      MessageIn in(reply);
+      if (in.get<char>() != 'S') throw in.get_error();
+      if (in.left() != voxels * sizeof(float)) throw std::length_error("densities");
+      in.get_bytes(block.pad.data(), voxels * sizeof(float));
+    } catch (const std::length_error&) {
+      throw input_error(impl_->place, kReaderRefused);
+    }
+    return block;
+  }
   if (impl_->memory) {
     for (int k = 0; k < s.nz; ++k)
       for (int j = 0; j < nj; ++j)
@@ -661,92 +746,49 @@ VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
   return block;
 }
 
-namespace {
-
-void check_nc(int status, const std::string& place) {
-  if (status != NC_NOERR) throw run_error(place, std::string("NetCDF: ") + nc_strerror(status));
-}
-
-}  // namespace
-
-void write_voxel_netcdf(const std::filesystem::path& file, const VoxelBlock& block,
-                        const std::vector<float>& ground_m, const std::string& history) {
-  AtomicFile product(file);
-  const std::string place = file.string();
-  std::lock_guard lock(netcdf_library_mutex());
-  int nc = -1;
-  check_nc(nc_create(product.part_path().c_str(), NC_NETCDF4 | NC_CLOBBER, &nc), place);
+int voxel_reader_main(int argc, char** argv) {
+  const int channel = take_reply_channel();
+  if (argc != 2 || channel < 0) return 2;
+  std::unique_ptr<VoxelGridFile> grid;
+  MessageOut opened;
+  const auto refuse = [&](MessageOut& out, const std::exception& e) {
+    out.put('E');
+    if (const auto* error = dynamic_cast<const Error*>(&e))
+      out.put_error(*error);
+    else
+      out.put_error(input_error(argv[1], std::string("cannot read the voxel grid: ") + e.what()));
+  };
   try {
-    int dz, dy, dx, dnv;
-    check_nc(nc_def_dim(nc, "z", block.nz, &dz), place);
-    check_nc(nc_def_dim(nc, "y", block.ny, &dy), place);
-    check_nc(nc_def_dim(nc, "x", block.nx, &dx), place);
-    check_nc(nc_def_dim(nc, "nv", 2, &dnv), place);
-    auto text = [&](int var, const char* name, const std::string& value) {
-      check_nc(nc_put_att_text(nc, var, name, value.size(), value.c_str()), place);
-    };
-    int vx, vy, vz, vzb, vcrs, vpad, vground = -1;
-    check_nc(nc_def_var(nc, "x", NC_DOUBLE, 1, &dx, &vx), place);
-    text(vx, "standard_name", "projection_x_coordinate");
-    text(vx, "long_name", "x of the column centres in the grid's CRS");
-    text(vx, "units", "m");
-    check_nc(nc_def_var(nc, "y", NC_DOUBLE, 1, &dy, &vy), place);
-    text(vy, "standard_name", "projection_y_coordinate");
-    text(vy, "long_name", "y of the column centres in the grid's CRS");
-    text(vy, "units", "m");
-    check_nc(nc_def_var(nc, "z", NC_DOUBLE, 1, &dz, &vz), place);
-    text(vz, "long_name", "height above the ground of the layer centres");
-    text(vz, "units", "m");
-    text(vz, "positive", "up");
-    text(vz, "axis", "Z");
-    text(vz, "bounds", "z_bounds");
-    const int zb_dims[2] = {dz, dnv};
-    check_nc(nc_def_var(nc, "z_bounds", NC_DOUBLE, 2, zb_dims, &vzb), place);
-    check_nc(nc_def_var(nc, "crs", NC_INT, 0, nullptr, &vcrs), place);
-    text(vcrs, "crs_wkt", block.crs_wkt);
-    text(vcrs, "spatial_ref", block.crs_wkt);
-    const int pad_dims[3] = {dz, dy, dx};
-    check_nc(nc_def_var(nc, "pad", NC_FLOAT, 3, pad_dims, &vpad), place);
-    const std::size_t chunk[3] = {std::size_t(block.nz), std::size_t(std::min(block.ny, 64)),
-                                  std::size_t(std::min(block.nx, 64))};
-    check_nc(nc_def_var_chunking(nc, vpad, NC_CHUNKED, chunk), place);
-    check_nc(nc_def_var_deflate(nc, vpad, 1, 1, 4), place);
-    text(vpad, "long_name", "plant area density (one-sided)");
-    text(vpad, "units", "m2 m-3");
-    text(vpad, "grid_mapping", "crs");
-    if (!ground_m.empty()) {
-      const int g_dims[2] = {dy, dx};
-      check_nc(nc_def_var(nc, "ground_elevation", NC_FLOAT, 2, g_dims, &vground), place);
-      text(vground, "long_name", "ground elevation under each column, in the CRS's heights");
-      text(vground, "units", "m");
-      text(vground, "grid_mapping", "crs");
-    }
-    text(NC_GLOBAL, "Conventions", "CF-1.10");
-    text(NC_GLOBAL, "title", "plant area density voxel grid (glaswave voxels format)");
-    if (!history.empty()) text(NC_GLOBAL, "history", history);
-    check_nc(nc_enddef(nc), place);
-    std::vector<double> c(block.nx);
-    for (int i = 0; i < block.nx; ++i) c[i] = block.x0 + (i + 0.5) * block.dx;
-    check_nc(nc_put_var_double(nc, vx, c.data()), place);
-    c.resize(block.ny);
-    for (int j = 0; j < block.ny; ++j) c[j] = block.y0 + (j + 0.5) * block.dy;
-    check_nc(nc_put_var_double(nc, vy, c.data()), place);
-    std::vector<double> zc(block.nz), zb(2 * block.nz);
-    for (int k = 0; k < block.nz; ++k) {
-      zc[k] = (block.z_edges_m[k] + block.z_edges_m[k + 1]) / 2;
-      zb[2 * k] = block.z_edges_m[k];
-      zb[2 * k + 1] = block.z_edges_m[k + 1];
-    }
-    check_nc(nc_put_var_double(nc, vz, zc.data()), place);
-    check_nc(nc_put_var_double(nc, vzb, zb.data()), place);
-    check_nc(nc_put_var_float(nc, vpad, block.pad.data()), place);
-    if (vground >= 0) check_nc(nc_put_var_float(nc, vground, ground_m.data()), place);
-    check_nc(nc_close(nc), place);
-  } catch (...) {
-    nc_close(nc);
-    throw;
+    grid.reset(new VoxelGridFile(argv[1], VoxelGridFile::InProcess{}));
+    const VoxelBlock& s = grid->shape();
+    opened.put('S');
+    opened.put_string(s.crs_wkt);
+    for (int n : {s.nx, s.ny, s.nz}) opened.put(n);
+    for (double v : {s.x0, s.y0, s.dx, s.dy}) opened.put(v);
+    opened.put(std::uint64_t{s.z_edges_m.size()});
+    opened.put_bytes(s.z_edges_m.data(), s.z_edges_m.size() * sizeof(double));
+    opened.put(std::uint64_t{grid->read_cache_bytes()});
+  } catch (const std::exception& e) {
+    refuse(opened, e);
   }
-  product.commit();
+  if (!write_hello(channel, kReaderHello) || !write_message(channel, opened.text())) return 2;
+  if (!grid) return 0;
+  for (std::string request; read_message(STDIN_FILENO, request);) {
+    MessageOut reply;
+    try {
+      MessageIn in(request);
+      const auto i0 = in.get<std::int32_t>(), ni = in.get<std::int32_t>();
+      const auto j0 = in.get<std::int32_t>(), nj = in.get<std::int32_t>();
+      const VoxelBlock block = grid->columns(i0, ni, j0, nj);
+      reply.put('S');
+      reply.put_bytes(block.pad.data(), block.pad.size() * sizeof(float));
+    } catch (const std::exception& e) {
+      reply = MessageOut();
+      refuse(reply, e);
+    }
+    if (!write_message(channel, reply.text())) return 2;
+  }
+  return 0;
 }
 
 }  // namespace glaswave

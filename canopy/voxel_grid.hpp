@@ -12,6 +12,13 @@
 //
 // A grid is opened once and read by windows of columns (a shot needs a few hundred metres of a
 // grid that may cover many km^2), as the DEM is.
+//
+// A NetCDF-4 grid is an HDF5 file, and Debian 12's HDF5 1.10.8 crashes on some corrupt ones (a
+// read 16 MB past a heap buffer inside nc_inq_varndims): it is opened and read, window by window,
+// by the small program glaswave-read-voxels (core/spawned_reader.hpp), started when the grid is
+// opened and ended when it is closed, found as the granule reader is (footprints/granule.hpp). A
+// crash there refuses the file. A classic NetCDF grid (CDF-1, 2, 5) is read here, its header's
+// sizes checked against the file's first (canopy/netcdf_classic_header.hpp).
 #pragma once
 
 #include <cstddef>
@@ -81,9 +88,20 @@ class VoxelGridFile {
   VoxelBlock columns(int i0, int ni, int j0, int nj) const;
 
  private:
+  struct InProcess {};
+  // The grid read in this process, NetCDF-4 too: glaswave-read-voxels's.
+  VoxelGridFile(const std::filesystem::path& file, InProcess);
+  void open(const std::filesystem::path& file, bool spawn);
+  friend int voxel_reader_main(int argc, char** argv);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// glaswave-read-voxels's whole work: `argv` is the program and the grid. Opens the grid and writes
+// its shape, or the error, to standard output; then answers each window asked on standard input
+// with its checked densities, or the error, until its input ends. 0 when all was written.
+int voxel_reader_main(int argc, char** argv);
 
 // Writes a block as the `voxels` NetCDF format (CF-1.10), to `file`.part then renamed.
 // `ground_m`, when not empty (nx * ny, rows as in the block), is written as `ground_elevation`.

@@ -1,10 +1,6 @@
 // Reading GEDI L2A and GLAH14 granules through the one HDF5 layer (core/hdf5_file.hpp).
 #include "footprints/granule.hpp"
 
-#include <dlfcn.h>
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -26,8 +22,7 @@
 #include "core/hdf5_file.hpp"
 #include "core/input_file.hpp"
 #include "core/netcdf_lock.hpp"
-
-extern char** environ;
+#include "core/spawned_reader.hpp"
 
 namespace glaswave {
 namespace {
@@ -270,97 +265,45 @@ std::vector<GranuleShot> read_in_process(const std::filesystem::path& file,
   return shots;
 }
 
-// What the reader program sends read_granule: a tag, then the shots or the error, then warnings.
-void put_bytes(std::string& out, const void* data, std::size_t size) {
-  out.append(static_cast<const char*>(data), size);
-}
-void put_string(std::string& out, const std::string& text) {
-  const std::uint64_t size = text.size();
-  put_bytes(out, &size, sizeof size);
-  out += text;
-}
-
-class Reader {
- public:
-  explicit Reader(const std::string& data) : data_(data) {}
-  void get(void* out, std::size_t size) {
-    if (data_.size() - at_ < size) throw std::length_error("granule reader's reply cut");
-    std::memcpy(out, data_.data() + at_, size);
-    at_ += size;
-  }
-  void skip(std::size_t size) { at_ += std::min(size, data_.size() - at_); }
-  std::string get_string() {
-    std::uint64_t size = 0;
-    get(&size, sizeof size);
-    if (data_.size() - at_ < size) throw std::length_error("granule reader's reply cut");
-    std::string text = data_.substr(at_, size);
-    at_ += size;
-    return text;
-  }
-
- private:
-  const std::string& data_;
-  std::size_t at_ = 0;
-};
-
-// In the reader program: reads the granule and encodes the outcome.
-// The reply's first bytes: a reader program of another glaswave (an older install found first)
-// is named, not misread. The number changes with the reply's layout or GranuleShot's.
-constexpr std::string_view kReplyMagic = "glaswave-read-granule 1\n";
+// The reader program's reply: 'S', the shots, or 'E', the error; then the warnings.
+// The hello's number changes with the reply's layout or GranuleShot's.
+constexpr std::string_view kHello = "glaswave-read-granule 2\n";
 
 std::string read_encoded(const std::filesystem::path& file, const std::vector<std::string>& beams) {
-  std::string out(kReplyMagic);
+  MessageOut out;
   std::vector<std::string> warnings;
   try {
     const std::vector<GranuleShot> shots = read_in_process(file, beams, &warnings);
-    out += 'S';
-    const std::uint64_t count = shots.size();
-    put_bytes(out, &count, sizeof count);
-    put_bytes(out, shots.data(), shots.size() * sizeof(GranuleShot));
+    out.put('S');
+    out.put(std::uint64_t{shots.size()});
+    out.put_bytes(shots.data(), shots.size() * sizeof(GranuleShot));
   } catch (const Error& e) {
-    out += 'E';
-    const auto kind = static_cast<std::int32_t>(e.kind());
-    put_bytes(out, &kind, sizeof kind);
-    put_string(out, e.place());
-    put_string(out, e.message());
+    out.put('E');
+    out.put_error(e);
   } catch (const std::exception& e) {
-    out += 'E';
-    const auto kind = static_cast<std::int32_t>(ErrorKind::input);
-    put_bytes(out, &kind, sizeof kind);
-    put_string(out, file.string());
-    put_string(out, std::string("cannot read the granule: ") + e.what());
+    out.put('E');
+    out.put_error(input_error(file.string(), std::string("cannot read the granule: ") + e.what()));
   }
-  const std::uint64_t lines = warnings.size();
-  put_bytes(out, &lines, sizeof lines);
-  for (const std::string& line : warnings) put_string(out, line);
-  return out;
+  out.put(std::uint64_t{warnings.size()});
+  for (const std::string& line : warnings) out.put_string(line);
+  return out.text();
 }
 
 std::vector<GranuleShot> decode(const std::string& reply, std::vector<std::string>* warnings) {
   static_assert(std::is_trivially_copyable_v<GranuleShot>);
-  if (reply.compare(0, kReplyMagic.size(), kReplyMagic) != 0)
-    throw std::length_error("not glaswave-read-granule's reply");
-  Reader in(reply);
-  in.skip(kReplyMagic.size());
-  char tag = 0;
-  in.get(&tag, 1);
+  MessageIn in(reply);
   std::vector<GranuleShot> shots;
   std::optional<Error> error;
-  if (tag == 'S') {
-    std::uint64_t count = 0;
-    in.get(&count, sizeof count);
-    if (count > static_cast<std::uint64_t>(kMostGranuleShots) * 64)
-      throw std::length_error("granule reader's reply too long");
+  if (in.get<char>() == 'S') {
+    const auto count = in.get<std::uint64_t>();
+    if (count > in.left() / sizeof(GranuleShot))
+      throw std::length_error("granule reader's reply cut");
     shots.resize(count);
-    in.get(shots.data(), count * sizeof(GranuleShot));
+    in.get_bytes(shots.data(), count * sizeof(GranuleShot));
   } else {
-    std::int32_t kind = 0;
-    in.get(&kind, sizeof kind);
-    std::string place = in.get_string();
-    error.emplace(static_cast<ErrorKind>(kind), std::move(place), in.get_string());
+    error.emplace(in.get_error());
   }
-  std::uint64_t lines = 0;
-  in.get(&lines, sizeof lines);
+  const auto lines = in.get<std::uint64_t>();
   for (std::uint64_t i = 0; i < lines; ++i) {
     std::string line = in.get_string();
     if (warnings) warnings->push_back(std::move(line));
@@ -369,75 +312,14 @@ std::vector<GranuleShot> decode(const std::string& reply, std::vector<std::strin
   return shots;
 }
 
-// Where glaswave-read-granule is, or empty: the first of footprints/granule.hpp's places that
-// holds it.
-std::filesystem::path granule_reader_program() {
-  namespace fs = std::filesystem;
-  constexpr const char* name = "glaswave-read-granule";
-  std::vector<fs::path> places;
-  Dl_info self{};
-  if (::dladdr(reinterpret_cast<void*>(&granule_reader_program), &self) != 0 && self.dli_fname) {
-    std::error_code error;
-    const fs::path binary = fs::canonical(self.dli_fname, error);
-    if (!error) {
-      const fs::path folder = binary.parent_path();
-      places = {folder / name, folder / "bin" / name,
-                folder / ".." / "libexec" / "glaswave" / name};
-    }
-  }
-  places.emplace_back(GLASWAVE_GRANULE_READER_BUILT);
-  places.emplace_back(GLASWAVE_GRANULE_READER_INSTALLED);
-  for (const fs::path& place : places) {
-    std::error_code error;
-    if (fs::is_regular_file(place, error) && ::access(place.c_str(), X_OK) == 0) return place;
-  }
-  return {};
-}
-
-// A pipe whose two ends close on exec: another thread's child never holds the writing end open.
-struct Pipe {
-  int ends[2] = {-1, -1};
-  Pipe() {
-    if (::pipe2(ends, O_CLOEXEC) != 0) ends[0] = ends[1] = -1;
-  }
-  ~Pipe() {
-    close(0);
-    close(1);
-  }
-  void close(int end) {
-    if (ends[end] >= 0) ::close(ends[end]);
-    ends[end] = -1;
-  }
-};
-
-class SpawnActions {
- public:
-  SpawnActions() { ok_ = posix_spawn_file_actions_init(&actions_) == 0; }
-  ~SpawnActions() {
-    if (ok_) posix_spawn_file_actions_destroy(&actions_);
-  }
-  bool ok() const { return ok_; }
-  posix_spawn_file_actions_t* get() { return &actions_; }
-
- private:
-  posix_spawn_file_actions_t actions_;
-  bool ok_ = false;
-};
-
 }  // namespace
 
 int granule_reader_main(int argc, char** argv) {
-  if (argc < 2) return 2;
+  const int channel = take_reply_channel();
+  if (argc < 2 || channel < 0) return 2;
   const std::vector<std::string> beams(argv + 2, argv + argc);
   const std::string reply = read_encoded(argv[1], beams);
-  std::size_t sent = 0;
-  while (sent < reply.size()) {
-    const ssize_t n = ::write(STDOUT_FILENO, reply.data() + sent, reply.size() - sent);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return 2;
-    sent += static_cast<std::size_t>(n);
-  }
-  return 0;
+  return write_hello(channel, kHello) && write_message(channel, reply) ? 0 : 2;
 }
 
 std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
@@ -445,69 +327,22 @@ std::vector<GranuleShot> read_granule(const std::filesystem::path& file,
                                       std::vector<std::string>* warnings) {
   const std::string path = file.string();
   require_input_file(path, "the granule");
-  const std::filesystem::path program = granule_reader_program();
+  const std::filesystem::path program = find_reader_program(
+      "glaswave-read-granule", {GLASWAVE_GRANULE_READER_BUILT, GLASWAVE_GRANULE_READER_INSTALLED});
   if (program.empty())
     throw run_error(path,
                     "cannot read the granule: the program glaswave-read-granule, which reads "
                     "granules, is missing from this installation (install it as `cmake --install` "
                     "does, in PREFIX/libexec/glaswave/)");
-  const std::string refused = "HDF5 failed reading the granule (a corrupt file): it is refused";
-  Pipe pipe;
-  SpawnActions actions;
-  if (pipe.ends[0] < 0 || !actions.ok())
-    throw run_error(path, "cannot read the granule: no pipe to its reader");
-  // The reader's standard output is the pipe, its input nothing; its errors stay the caller's.
-  // Nothing else of the caller's goes with it: a file another thread has open through HDF5 holds
-  // HDF5's flock, and a reader holding a copy kept the lock after that thread closed the file, so
-  // that opening it again failed ("NetCDF: HDF error" on the shots.nc of another thread's run).
-  if (posix_spawn_file_actions_addopen(actions.get(), STDIN_FILENO, "/dev/null", O_RDONLY, 0) !=
-          0 ||
-      posix_spawn_file_actions_adddup2(actions.get(), pipe.ends[1], STDOUT_FILENO) != 0 ||
-      posix_spawn_file_actions_addclosefrom_np(actions.get(), STDERR_FILENO + 1) != 0)
-    throw run_error(path, "cannot read the granule: cannot start its reader");
-  std::vector<std::string> arguments{program.string(), path};
+  std::vector<std::string> arguments{path};
   arguments.insert(arguments.end(), beams.begin(), beams.end());
-  std::vector<char*> argv;
-  for (std::string& argument : arguments) argv.push_back(argument.data());
-  argv.push_back(nullptr);
-  pid_t child = -1;
-  // Started under the HDF5 lock: until it has run, the reader holds a copy of every descriptor,
-  // and a file another thread's HDF5 closed meanwhile would stay locked (see above); posix_spawn
-  // returns once the copies are closed and the program runs.
-  int error = 0;
-  {
-    const std::lock_guard lock(netcdf_library_mutex());
-    error = posix_spawn(&child, argv[0], actions.get(), nullptr, argv.data(), environ);
-  }
-  if (error != 0)
-    throw run_error(path, "cannot read the granule: cannot start " + program.string() + " (" +
-                              std::strerror(error) + ")");
-  pipe.close(1);
-  std::string reply;
-  char buffer[1 << 16];
-  for (ssize_t n; (n = ::read(pipe.ends[0], buffer, sizeof buffer)) != 0;) {
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) break;
-    reply.append(buffer, static_cast<std::size_t>(n));
-  }
-  pipe.close(0);
-  int status = 0;
-  pid_t waited = -1;
-  while ((waited = ::waitpid(child, &status, 0)) < 0 && errno == EINTR) {
-  }
-  // A caller ignoring SIGCHLD has its children reaped unasked (ECHILD): the reply alone decides.
-  if (waited == child && WIFSIGNALED(status))
-    throw input_error(path, refused + " (its reader, " + program.string() + ", ended by signal " +
-                                std::to_string(WTERMSIG(status)) + ")");
-  if (waited == child && (!WIFEXITED(status) || WEXITSTATUS(status) != 0))
-    throw input_error(path, refused);
-  if (reply.compare(0, kReplyMagic.size(), kReplyMagic) != 0)
-    throw run_error(path, "cannot read the granule: " + program.string() +
-                              " is not the granule reader of this glaswave (another version?)");
+  SpawnedReader reader(program, arguments, path, "the granule", std::string(kHello));
+  const std::string reply = reader.receive();
+  reader.finish();
   try {
     return decode(reply, warnings);
   } catch (const std::length_error&) {
-    throw input_error(path, refused);
+    throw input_error(path, "HDF5 failed reading the granule (a corrupt file): it is refused");
   }
 }
 

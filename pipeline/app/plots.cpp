@@ -11,11 +11,13 @@
 #include <cerrno>
 #include <cstdlib>
 #include <fstream>
+#include <mutex>
 #include <string>
 #include <system_error>
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/netcdf_lock.hpp"
 
 extern char** environ;
 
@@ -99,7 +101,10 @@ std::string read_all(const Fd& fd) {
   }
 }
 
-// The child's stdin and stdout on /dev/null, its stderr into `stderr_fd`.
+// The child's stdin and stdout on /dev/null, its stderr into `stderr_fd`, and nothing else of
+// the caller's: a file another thread has open through HDF5 holds HDF5's flock, and a child
+// holding a copy for the minutes matplotlib draws kept it locked after that thread closed it
+// (as the granule reader did: core/spawned_reader.hpp).
 void redirect(SpawnActions& actions, const Fd& stderr_fd) {
   int error =
       posix_spawn_file_actions_addopen(actions.get(), STDIN_FILENO, "/dev/null", O_RDONLY, 0);
@@ -108,6 +113,8 @@ void redirect(SpawnActions& actions, const Fd& stderr_fd) {
         posix_spawn_file_actions_addopen(actions.get(), STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
   if (error == 0)
     error = posix_spawn_file_actions_adddup2(actions.get(), stderr_fd.get(), STDERR_FILENO);
+  if (error == 0)
+    error = posix_spawn_file_actions_addclosefrom_np(actions.get(), STDERR_FILENO + 1);
   if (error != 0)
     throw run_error("plots", "cannot prepare the child process: " + describe_errno(error));
 }
@@ -140,9 +147,15 @@ void write_plots(const fs::path& out_dir, const std::string& script_name) {
   SpawnActions actions;
   redirect(actions, write_end);
   pid_t pid = -1;
-  const int error = debian_python
-                        ? posix_spawn(&pid, argv[0], actions.get(), nullptr, argv.data(), environ)
-                        : posix_spawnp(&pid, argv[0], actions.get(), nullptr, argv.data(), environ);
+  int error = 0;
+  {
+    // Under the HDF5 lock: until the script runs, the child holds a copy of every descriptor
+    // (see redirect); posix_spawn returns once they are closed.
+    const std::lock_guard lock(netcdf_library_mutex());
+    error = debian_python
+                ? posix_spawn(&pid, argv[0], actions.get(), nullptr, argv.data(), environ)
+                : posix_spawnp(&pid, argv[0], actions.get(), nullptr, argv.data(), environ);
+  }
   if (error != 0) throw run_error("plots", "cannot start " + python + ": " + describe_errno(error));
   write_end.reset();  // so that reading ends when the child exits
 

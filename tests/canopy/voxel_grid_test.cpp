@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <string>
 #include <tuple>
 
@@ -169,12 +170,13 @@ struct HandGrid {
   std::function<void(int nc, int pad)> extra;
   std::function<void(int nc, int pad)> put_pad;  // replaces writing the sample's values
   std::vector<double> z_bounds = {0, 1, 1, 3, 3, 6, 6, 10, 10, 15};
+  int format = NC_NETCDF4;  // or a classic one: 0 (CDF-1), NC_64BIT_OFFSET, NC_64BIT_DATA
 };
 
 std::filesystem::path write_hand_grid(const std::filesystem::path& file, const HandGrid& g) {
   const VoxelBlock b = sample_block();
   int nc = -1;
-  EXPECT_EQ(nc_create(file.c_str(), NC_NETCDF4 | NC_CLOBBER, &nc), NC_NOERR);
+  EXPECT_EQ(nc_create(file.c_str(), g.format | NC_CLOBBER, &nc), NC_NOERR);
   int dz, dy, dx, dnv, dzb = -1;
   nc_def_dim(nc, "z", 3, &dz);
   nc_def_dim(nc, "y", 4, &dy);
@@ -406,6 +408,84 @@ TEST(VoxelGrid, GeotiffHeightsAreNumbersOfMetresAndItsScaleApplied) {
   EXPECT_EQ(grid.shape().z_edges_m, (std::vector<double>{0.0, 10.5}));
   const VoxelBlock all = grid.window(-1e9, 1e9, -1e9, 1e9);
   EXPECT_EQ(all.pad, (std::vector<float>{0.25f, 0.5f, 0.75f, 1.0f}));
+}
+
+// The fuzz target's regressions (tests/fuzz/corpus/voxel/regression-*: the first byte picks the
+// format, the rest is the file), each once a crash or an allocation beyond the limit, are refused
+// as input errors naming the file: a corrupt NetCDF-4 grid on which HDF5 1.10.8 read 16 MB past a
+// heap buffer (it crashed the process: now its reader program), a 23-byte classic NetCDF asking
+// nc_open for 9 GB, a GeoTIFF whose pixel size is not finite.
+TEST(VoxelGrid, TheFuzzRegressionsAreRefusedAsInputErrorsNamingTheFile) {
+  test_support::ScratchDir dir;
+  const std::filesystem::path corpus =
+      std::filesystem::path(GLASWAVE_SOURCE_DIR) / "tests/fuzz/corpus/voxel";
+  int refused = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(corpus)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("regression-", 0) != 0) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_FALSE(bytes.empty()) << name;
+    const auto file = dir.path() / (name + (bytes[0] % 2 ? ".tif" : ".nc"));
+    std::ofstream(file, std::ios::binary) << bytes.substr(1);
+    const std::string error = refusal(file);
+    EXPECT_EQ(error.rfind(file.string() + ": ", 0), 0u) << name << ": " << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << name;
+    ++refused;
+  }
+  EXPECT_GE(refused, 3);
+}
+
+// A classic NetCDF header's declared sizes are checked against the file before nc_open (which
+// allocates them). The regression's bytes worked by hand: "CDF" 1, no records, NC_DIMENSION
+// (0x0A), then a count of 0x4344460A = 1128547850 dimensions in a file of 23 bytes.
+TEST(VoxelGrid, AClassicHeaderDeclaringMoreThanItsFileHoldsIsRefused) {
+  test_support::ScratchDir dir;
+  const auto write = [&](const std::string& name, const std::string& bytes) {
+    std::ofstream(dir.path() / name, std::ios::binary) << bytes;
+    return dir.path() / name;
+  };
+  const std::string nine_gb(
+      "CDF\x01\0\0\0\0\0\0\0\x0a"
+      "CDF\x0a\x0bP_C\x0a\x0a\0",
+      23);
+  EXPECT_NE(refusal(write("nine_gb.nc", nine_gb)).find("declares 1128547850 dimensions"),
+            std::string::npos);
+  // Two dimensions declared: "x" of 4, then a name of no character, and the file ends.
+  const std::string cut(
+      "CDF\x01"
+      "\0\0\0\0\0\0\0\x0a\0\0\0\x02\0\0\0\x01"
+      "x\0\0\0\0\0\0\x04\0\0\0\0",
+      32);
+  EXPECT_NE(refusal(write("cut.nc", cut)).find("cut short"), std::string::npos);
+  // An attribute of 2^30 doubles in a file of 40 bytes.
+  const std::string values(
+      "CDF\x01"
+      "\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x0c\0\0\0\x01\0\0\0\x01"
+      "a\0\0\0\0\0\0\x06\x40\0\0\0",
+      40);
+  EXPECT_NE(refusal(write("values.nc", values)).find("declares 1073741824 attribute values"),
+            std::string::npos);
+}
+
+// The walk of the header reads what libnetcdf writes: the hand grid (dimensions, a CRS attribute
+// of some 600 bytes, variables with attributes) in each classic version is read as it is in
+// NetCDF-4.
+TEST(VoxelGrid, ClassicGridsOfEachVersionAreRead) {
+  test_support::ScratchDir dir;
+  for (const int format : {0, NC_64BIT_OFFSET, NC_64BIT_DATA}) {
+    HandGrid g;
+    g.format = format;
+    g.z_bounds_rows = 3;
+    const auto file = write_hand_grid(dir.path() / ("v" + std::to_string(format) + ".nc"), g);
+    const VoxelGridFile grid(file);
+    EXPECT_FALSE(grid.shape().crs_wkt.empty());
+    const VoxelBlock block = grid.window(-1e9, 1e9, -1e9, 1e9);
+    const VoxelBlock b = sample_block();
+    ASSERT_EQ(block.pad.size(), b.pad.size()) << format;
+    EXPECT_EQ(block.pad, b.pad) << format;
+    EXPECT_EQ(block.z_edges_m, (std::vector<double>{0, 1, 3, 6})) << format;
+  }
 }
 
 }  // namespace

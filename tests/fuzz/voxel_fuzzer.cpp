@@ -1,7 +1,10 @@
 // Fuzzes the voxel grid reader (canopy/voxel_grid: VoxelGridFile over a NetCDF file or a GDAL
 // raster, its shape, coordinates, layer heights, fill, packing and CRS checked when opened, and
 // its values when read). The input's first byte picks the format (.nc or .tif); the rest is the
-// file, opened, then read whole by windows of the size a shot reads. An input Error is a
+// file, opened, then read whole by windows of the size a shot reads. A NetCDF-4 grid is read by
+// the program glaswave-read-voxels (canopy/voxel_grid.hpp), as the library reads it: what
+// crashes that program (HDF5 1.10 on some corrupt files) is a refusal by design, its sanitizer's
+// report, if any, in the log, and libFuzzer's coverage does not reach into it. An input Error is a
 // refusal; anything else (a crash, a read out of bounds, a hang, an allocation beyond the limit,
 // a file left open) is a finding. library_leaks.supp suppresses leaks with a frame inside
 // libnetcdf or HDF5, which would hide a file glaswave forgot to close: the check below finds that

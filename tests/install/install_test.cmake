@@ -18,7 +18,8 @@ set(prefix ${WORK_DIR}/prefix)
 file(REMOVE_RECURSE ${WORK_DIR})
 run_step("install" ${CMAKE_COMMAND} --install ${BINARY_DIR} --prefix ${prefix})
 
-foreach(path bin/glaswave libexec/glaswave/glaswave-read-granule include/glaswave/glaswave.hpp include/glaswave/core/error.hpp
+foreach(path bin/glaswave libexec/glaswave/glaswave-read-granule
+        libexec/glaswave/glaswave-read-voxels include/glaswave/glaswave.hpp include/glaswave/core/error.hpp
         include/glaswave/pipeline/engine/run.hpp ${LIBDIR}/libglaswave_engine.a
         ${LIBDIR}/cmake/glaswave/glaswaveConfig.cmake
         ${LIBDIR}/cmake/glaswave/glaswaveConfigVersion.cmake

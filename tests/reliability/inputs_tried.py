@@ -1056,6 +1056,16 @@ def round_four_inputs(t):
     t.run("42/3. pad written in its first layer only (NetCDF's fill in the others)", [
         "run", voxels(grid("unwritten.nc", write_pad=False)), "--quiet", "--out", out],
         out=out, expect=3, says="missing")
+    # voxel_fuzzer's findings (tests/fuzz/corpus/voxel: the first byte picks the format, the
+    # rest is the file): HDF5 crashed on the NetCDF-4 one, nc_open asked for 9 GB on the other.
+    corpus = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "fuzz", "corpus",
+                          "voxel")
+    for name, says in (("regression-netcdf4-hdf5-global-heap", "HDF5 failed reading"),
+                       ("regression-netcdf3-declares-9-gb", "declares 1128547850 dimensions")):
+        path = str(t.path(name + ".nc"))
+        with open(os.path.join(corpus, name), "rb") as found, open(path, "wb") as grid_file:
+            grid_file.write(found.read()[1:])
+        t.run(f"42/fuzz. the voxel grid {name}", ["check", voxels(path)], expect=3, says=says)
     for top in ("ten", "10 ft", "1e400"):
         path = str(t.path("top.tif"))
         dataset = gdal.GetDriverByName("GTiff").Create(path, 40, 40, 1, gdal.GDT_Float32)

@@ -73,6 +73,24 @@ class HostileInput : public ::testing::Test {
   ScratchDir dir_{"glaswave_hostile"};
 };
 
+// Issue 42: voxel grids fuzzing found, which crashed the process (HDF5 1.10.8 reading 16 MB past a
+// heap buffer on a corrupt NetCDF-4 grid) or asked nc_open for 9 GB (a 23-byte classic NetCDF
+// declaring 1.1e9 dimensions): check and run refuse each with one line naming the file, exit 3.
+TEST_F(HostileInput, CorruptVoxelGridsAreRefusedNamingTheFile) {
+  for (const std::string name :
+       {"regression-netcdf4-hdf5-global-heap", "regression-netcdf3-declares-9-gb"}) {
+    // The fuzz input's first byte picks the format; the rest is the file.
+    std::ifstream in(fs::path(GLASWAVE_SOURCE_DIR) / "tests/fuzz/corpus/voxel" / name,
+                     std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_GT(bytes.size(), 1u) << name;
+    const std::string grid = write(name + ".nc", bytes.substr(1));
+    json config = base();
+    config["canopy"] = {{"voxels", {{"file", grid}}}};
+    expect_refused(write("config.json", config.dump(2)), "", 3, grid + ": ");
+  }
+}
+
 // Item 3: run sizes that cannot be physical or would not fit in memory, refused by check and
 // run before anything is allocated, the limit in the message.
 TEST_F(HostileInput, RunSizesBeyondTheLimitsAreRefusedByCheckAndRun) {

@@ -6,7 +6,9 @@
 // installs it).
 #include "pipeline/app/plots.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <GeographicLib/UTMUPS.hpp>
 #include <array>
@@ -222,6 +224,39 @@ TEST_F(PlotsTest, FolderWithoutShotsThrowsWithTheScriptsMessage) {
     EXPECT_NE(std::string(error.what()).find("shots.nc"), std::string::npos) << error.what();
   }
   EXPECT_FALSE(fs::exists(dir_ / "plots"));
+}
+
+// The script's process holds none of the caller's descriptors but its standard input, output and
+// error (issue 42): a descriptor the caller left open across exec (no O_CLOEXEC), numbered 100 or
+// more, is not open in a script that lists its own (/proc/self/fd) into the folder. Before, it was.
+TEST(PlotsChild, HoldsNoneOfTheCallersDescriptors) {
+  test_support::ScratchDir share, out;
+  fs::create_directories(share.path() / "plots");
+  std::ofstream(share.path() / "plots" / "list_fds.py")
+      << "import os, sys\n"
+         "fds = sorted(int(fd) for fd in os.listdir('/proc/self/fd'))\n"
+         "open(os.path.join(sys.argv[1], 'fds.txt'), 'w').write(' '.join(map(str, fds)))\n";
+  const int opened = ::open("/dev/null", O_RDONLY);
+  ASSERT_GE(opened, 0);
+  const int inherited = ::fcntl(opened, F_DUPFD, 100);  // F_DUPFD leaves FD_CLOEXEC off
+  ::close(opened);
+  ASSERT_GE(inherited, 100);
+  const char* before = std::getenv("GLASWAVE_SHARE");
+  const std::string kept = before ? before : "";
+  ::setenv("GLASWAVE_SHARE", share.path().c_str(), 1);
+  EXPECT_NO_THROW(write_plots(out.path(), "list_fds.py"));
+  if (before)
+    ::setenv("GLASWAVE_SHARE", kept.c_str(), 1);
+  else
+    ::unsetenv("GLASWAVE_SHARE");
+  ::close(inherited);
+  std::ifstream listed(out.path() / "fds.txt");
+  std::vector<int> fds;
+  for (int fd; listed >> fd;) fds.push_back(fd);
+  ASSERT_FALSE(fds.empty());
+  // 0, 1, 2 and the listing's own descriptor of /proc/self/fd.
+  EXPECT_LE(fds.size(), 4u);
+  for (int fd : fds) EXPECT_NE(fd, inherited);
 }
 
 }  // namespace

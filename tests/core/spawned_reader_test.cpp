@@ -1,0 +1,116 @@
+// The reader programs' machinery (core/spawned_reader.hpp) with programs of the system standing in
+// for a reader: /bin/sh scripts that crash, exit, say another hello, or echo the caller's
+// messages back as a reader would. Each outcome is checked against what the script was told to do.
+#include "core/spawned_reader.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace glaswave {
+namespace {
+
+const std::string kHello = "test-reader 1\n";
+
+SpawnedReader shell(const std::string& script) {
+  return SpawnedReader("/bin/sh", {"-c", script}, "FILE.h5", "the test file", kHello);
+}
+
+// The error `action` throws: its kind and its whole text.
+template <typename Action>
+std::pair<ErrorKind, std::string> error_of(Action action) {
+  try {
+    action();
+  } catch (const Error& e) {
+    return {e.kind(), e.what()};
+  }
+  return {ErrorKind::config, "no error"};
+}
+
+TEST(SpawnedReader, AReaderEndedByASignalRefusesTheFileNamingItAndTheSignal) {
+  SpawnedReader reader = shell("kill -SEGV $$");
+  const auto [kind, text] = error_of([&] { reader.receive(); });
+  EXPECT_EQ(kind, ErrorKind::input);
+  EXPECT_EQ(text.rfind("FILE.h5: HDF5 failed reading the test file (a corrupt file)", 0), 0u)
+      << text;
+  EXPECT_NE(text.find("ended by signal 11"), std::string::npos) << text;
+  // And from then on, without waiting again.
+  EXPECT_EQ(error_of([&] { reader.send("more"); }).second, text);
+}
+
+TEST(SpawnedReader, AReaderThatFailsAfterItsReplyRefusesTheFileWhenFinished) {
+  // The hello, then a message of 2 bytes "ok" (its length as 8 little-endian bytes), then exit 1.
+  SpawnedReader reader = shell("printf 'test-reader 1\\n\\002\\0\\0\\0\\0\\0\\0\\0ok'; exit 1");
+  EXPECT_EQ(reader.receive(), "ok");
+  const auto [kind, text] = error_of([&] { reader.finish(); });
+  EXPECT_EQ(kind, ErrorKind::input);
+  EXPECT_EQ(text, "FILE.h5: HDF5 failed reading the test file (a corrupt file): it is refused");
+}
+
+TEST(SpawnedReader, AnotherHelloIsAnotherVersionsReaderNotACorruptFile) {
+  SpawnedReader reader = shell("printf 'test-reader 0\\n'");
+  const auto [kind, text] = error_of([&] { reader.receive(); });
+  EXPECT_EQ(kind, ErrorKind::run);
+  EXPECT_NE(text.find("/bin/sh is not the reader of this glaswave (another version?)"),
+            std::string::npos)
+      << text;
+}
+
+// A reader answering each message: cat echoes the caller's framed messages back whole.
+TEST(SpawnedReader, MessagesGoBothWaysAndTheirPartsReadBack) {
+  SpawnedReader reader = shell("printf 'test-reader 1\\n'; exec cat");
+  MessageOut out;
+  out.put(std::int32_t{-7});
+  out.put(2.5);
+  out.put_string("place");
+  out.put_error(input_error("grid.nc", "pad is negative"));
+  for (int round = 0; round < 3; ++round) {
+    reader.send(out.text());
+    const std::string back = reader.receive();
+    MessageIn in(back);
+    EXPECT_EQ(in.get<std::int32_t>(), -7);
+    EXPECT_EQ(in.get<double>(), 2.5);
+    EXPECT_EQ(in.get_string(), "place");
+    const Error error = in.get_error();
+    EXPECT_EQ(error.kind(), ErrorKind::input);
+    EXPECT_STREQ(error.what(), "grid.nc: pad is negative");
+    EXPECT_EQ(in.left(), 0u);
+    EXPECT_THROW(in.get<char>(), std::length_error);
+  }
+  reader.finish();  // cat ends at the end of its input, status 0
+}
+
+// A copy of the caller's end in a process forked meanwhile (Python's multiprocessing) does not
+// keep the reader waiting for input: the reader ends when its owner is done, not when the fork
+// exits 3 s later.
+TEST(SpawnedReader, AForkedCopyOfTheSocketDoesNotKeepTheReaderAlive) {
+  auto reader = std::make_unique<SpawnedReader>(
+      "/bin/sh", std::vector<std::string>{"-c", "printf 'test-reader 1\\n'; exec cat"}, "FILE.h5",
+      "the test file", kHello);
+  const pid_t fork = ::fork();
+  ASSERT_GE(fork, 0);
+  if (fork == 0) {
+    ::sleep(3);
+    ::_exit(0);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  reader.reset();  // hangs up and waits for cat
+  const double waited_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  int status = 0;
+  ::waitpid(fork, &status, 0);
+  EXPECT_LT(waited_s, 2.0);
+}
+
+}  // namespace
+}  // namespace glaswave
