@@ -165,10 +165,11 @@ void write_ancillary_rest(Granule& g, const std::vector<BeamTrack>& beams) {
   for (const auto& [which, t] : {std::pair<std::string, double>{"start", first_s},
                                  std::pair<std::string, double>{"end", last_s}}) {
     const std::string shot = which == "start" ? "first" : "last";
+    const std::string& end = which;  // clang 14 refuses a lambda naming a structured binding
     const double gps_s = atlas_sdp_gps_epoch_s + t;
     const double week = std::floor(gps_s / week_s);
     const auto fill = [&](const std::string& name, const std::string& long_name) {
-      g.dataset(h, which + "_" + name, std::vector<std::int32_t>{fill_of<std::int32_t>()},
+      g.dataset(h, end + "_" + name, std::vector<std::int32_t>{fill_of<std::int32_t>()},
                 {"1", long_name, "auxiliaryInformation", "Not simulated: the fill value"}, 0, true);
     };
     fill("cycle", (which == "start" ? "Starting" : "Ending") + std::string(" Cycle"));

@@ -290,6 +290,11 @@ TEST_F(Check, FieldTableIsPrinted) {
 // 20 bytes a byte of their file), measured here by the kernel for each run's process alone
 // (wait4's ru_maxrss): within 2x either way over bare ground, turbid crowns and disc leaves.
 TEST_F(Check, MemoryEstimateIsWithinTwiceTheMeasuredPeak) {
+#if defined(__SANITIZE_ADDRESS__)
+  // The peak would hold AddressSanitizer's shadow and quarantine (173 MiB on bare ground against
+  // the run's own 55), not what check estimates.
+  GTEST_SKIP() << "not measurable under AddressSanitizer";
+#endif
   // A sphere of 20 000 discs of 0.1 m (RAMI's .def), floating in four places.
   {
     std::ofstream def(dir_ / "sphere.def");
