@@ -124,6 +124,68 @@ std::uint64_t ply_property_bytes(const std::string& type, bool ascii) {
   return 1;
 }
 
+// An OFF header's counts (vertices, faces) are checked before Assimp reserves memory for them, as
+// PLY's are: a header declaring 6.7e99 vertices in 300 bytes (found by mesh_fuzzer; Assimp wraps
+// the count to 2.9e9 and asks for 34 GB) is refused. A vertex takes at least 6 bytes ("0 0 0\n"),
+// a face at least 4 ("1 0\n").
+void check_off_counts(const std::string& place, const std::string& model) {
+  std::ifstream in(place, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line)) return;
+  // An OFF file: its keyword (OFF, COFF, NOFF, CNOFF, STOFF, 4OFF, nOFF) in its first word, or the
+  // extension .off, with which Assimp reads the counts without a keyword (mesh_fuzzer). The
+  // numbers start after the keyword ("OFF02" declares 2 vertices to Assimp).
+  std::string upper = line.substr(0, line.find_first_of(" \t\r"));
+  std::transform(upper.begin(), upper.end(), upper.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  const std::size_t keyword = upper.find("OFF");
+  std::string extension = std::filesystem::path(place).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if ((keyword == std::string::npos || keyword > 2) && extension != ".off") return;
+  // The header's numbers (vertices, faces, edges; nOFF's dimension first) are its first three
+  // runs of digits after the keyword, comments (# to the line's end) left out, whatever else lies
+  // between them: Assimp reads "3#1 2\n\n6000..." as 3 and 6000... (mesh_fuzzer). Where it reads
+  // them differs by variant, so each alone must fit in the file, and the first two as vertices and
+  // faces together.
+  std::string text = keyword == std::string::npos || keyword > 2 ? line : line.substr(keyword + 3);
+  std::vector<std::string> counts;
+  std::string run;
+  for (std::size_t n = 0; counts.size() < 3 && n < 4096;) {
+    n += text.size() + 1;
+    text = text.substr(0, text.find('#'));  // a comment, to the line's end
+    for (const char c : text) {
+      if (std::isdigit(static_cast<unsigned char>(c))) {
+        run += c;
+      } else if (!run.empty()) {
+        counts.push_back(run);
+        run.clear();
+        if (counts.size() == 3) break;
+      }
+    }
+    if (counts.size() == 3 || !std::getline(in, text)) break;
+    if (!run.empty()) counts.push_back(run);  // a run ends with its line
+    run.clear();
+  }
+  if (!run.empty() && counts.size() < 3) counts.push_back(run);
+  std::error_code error;
+  const std::uint64_t size = std::filesystem::file_size(place, error);
+  if (error || counts.empty()) return;
+  const auto declared = [&](const std::string& what) {
+    return input_error(place, "the mesh of model \"" + model + "\" declares " + what +
+                                  " in its OFF header, more than its " + std::to_string(size) +
+                                  " bytes hold (cut short or corrupt)");
+  };
+  for (const std::string& count : counts)
+    if (count.size() > 20 || std::stold(count) > static_cast<long double>(size))
+      throw declared(count.size() > 20
+                         ? count.substr(0, 20) + "... (" + std::to_string(count.size()) + " digits)"
+                         : count);
+  if (counts.size() >= 2 &&
+      std::stold(counts[0]) * 6.0L + std::stold(counts[1]) * 4.0L > static_cast<long double>(size))
+    throw declared(counts[0] + " vertices and " + counts[1] + " faces");
+}
+
 // A PLY header's elements are counted before Assimp reserves memory for them: a header that
 // declares more elements than the bytes after it can hold (10^9 faces in 200 bytes) is refused.
 void check_ply_counts(const std::string& place, const std::string& model) {
@@ -297,6 +359,7 @@ FacetMesh read_facet_mesh(const std::filesystem::path& file, const std::string& 
   const std::string place = file.string();
   require_input_file(place, "the mesh of model \"" + model + "\"");
   check_ply_counts(place, model);
+  check_off_counts(place, model);
   check_gltf_depth(place, model);
   Assimp::Importer importer;
   auto owned = std::make_unique<CheckedIOSystem>();

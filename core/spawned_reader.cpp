@@ -10,9 +10,11 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <mutex>
 #include <stdexcept>
 #include <system_error>
+#include <thread>
 
 #include "core/netcdf_lock.hpp"
 
@@ -208,6 +210,16 @@ void SpawnedReader::finish() {
 }
 
 int take_reply_channel() {
+  // A reader outlives no caller: one that HDF5 sent spinning on a corrupt file (voxel_fuzzer
+  // found one) would run on after its caller ended (a killed run, a fuzzer's timeout), holding
+  // its caller's pipes. Reparented, it ends; the watchdog calls nothing of HDF5's.
+  const pid_t caller = ::getppid();
+  std::thread([caller] {
+    for (;;) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      if (::getppid() != caller) ::_exit(2);
+    }
+  }).detach();
   const int channel = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, STDERR_FILENO + 1);
   if (channel >= 0) ::dup2(STDERR_FILENO, STDOUT_FILENO);
   return channel;

@@ -118,6 +118,45 @@ TEST(FacetMesh, AHeaderDeclaringMoreThanItsFileHoldsIsRefusedAtOnce) {
             std::string::npos);
 }
 
+// An OFF header's counts, as PLY's (mesh_fuzzer: 6.7e99 vertices in 300 bytes, for which Assimp
+// asked 34 GB): 3 vertices and a face need at least 3 x 6 + 4 bytes ("0 0 0\n", "1 0\n").
+TEST(FacetMesh, AnOffHeaderDeclaringMoreThanItsFileHoldsIsRefused) {
+  test_support::ScratchDir dir;
+  const std::string plate = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  EXPECT_EQ(read_facet_mesh(write(dir.path() / "plate.off", plate), "oak").triangles.size(), 3u);
+  const std::string message =
+      refusal(write(dir.path() / "big.off", "OFF\n" + std::string(100, '6') + " 1 0\n0 0 0\n"));
+  EXPECT_NE(message.find("big.off"), std::string::npos) << message;
+  EXPECT_NE(message.find("declares 66666666666666666666... (100 digits) in its OFF header, more "
+                         "than its 115 bytes hold"),
+            std::string::npos)
+      << message;
+  // mesh_fuzzer's second: the count a line further on, after one on the keyword's line.
+  EXPECT_NE(refusal(write(dir.path() / "later.off", "OFF 2\n\n" + std::string(100, '6') + " 1\n"))
+                .find("(100 digits)"),
+            std::string::npos);
+  // Its counts without the keyword, which Assimp reads in a .off file, and a keyword run on into
+  // the first count ("OFF02").
+  EXPECT_NE(refusal(write(dir.path() / "bare.off", std::string(100, '6') + " 1 0\n0 0 0\n"))
+                .find("(100 digits)"),
+            std::string::npos);
+  EXPECT_NE(refusal(write(dir.path() / "run_on.off", "OFF02\n\n" + std::string(100, '6') + "\n"))
+                .find("(100 digits)"),
+            std::string::npos);
+  EXPECT_NE(refusal(write(dir.path() / "hash.off", "OFF 3#\n\n" + std::string(30, '6') + " 2\n"))
+                .find("(30 digits) in its OFF header"),
+            std::string::npos);
+  // A comment line's numbers are not the header's.
+  EXPECT_EQ(read_facet_mesh(
+                write(dir.path() / "comment.off", "OFF\n# 2026 12 02\n" + plate.substr(4)), "oak")
+                .triangles.size(),
+            3u);
+  // 5 vertices and a face need 34 bytes: 28 are refused.
+  EXPECT_NE(refusal(write(dir.path() / "short.off", "OFF 5 1 0\n0 0 0\n1 0 0\n0 1 0\n"))
+                .find("declares 5 vertices and 1 faces"),
+            std::string::npos);
+}
+
 TEST(FacetMesh, FilesTheModelNamesFollowTheRegularFileRule) {
   test_support::ScratchDir dir;
   const auto fifo = dir.path() / "fifo";
