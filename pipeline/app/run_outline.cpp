@@ -221,7 +221,8 @@ std::string run_outline(const Config& config, const CheckSummary& summary,
   const json canopy = resolved.value("canopy", json());
   const double rays = simulation.value("rays_per_shot", 10000.0);
   const int max_order = simulation.value("max_order", 8);
-  const RunMemory memory = estimate_run_memory(config);
+  const RunMemory memory =
+      estimate_run_memory(config, summary.shared_scenes ? &*summary.shared_scenes : nullptr);
   const double shots = static_cast<double>(summary.shots - summary.shots_off_terrain);
 
   std::string out;
@@ -249,9 +250,17 @@ std::string run_outline(const Config& config, const CheckSummary& summary,
                                    : bytes(memory.scene_bytes) + " of " + memory.vegetation;
   const std::string once =
       memory.source_bytes > 0.0 ? ", and the source's " + bytes(memory.source_bytes) + " once" : "";
+  // Strips' scenes, shared by their shots, are held a few at once beside each thread's waveforms.
+  const std::string scenes =
+      memory.strips ? number(memory.scenes, 12) + " x a strip's scene of " +
+                          number(static_cast<double>(memory.strips->shots), 12) + " shots (" +
+                          scene + ", " + number(std::round(memory.strips->length_m), 12) + " by " +
+                          number(std::round(memory.strips->width_m), 12) + " m, its ground's " +
+                          bytes(memory.ground_bytes) + "), " + number(memory.threads, 12) +
+                          " x a shot's waveforms"
+                    : number(memory.threads, 12) + " x a scene of " + scene + " and its waveforms";
   line("memory:", "about " + bytes(memory.bytes) + " (the program's " +
-                      bytes(memory.program_bytes) + ", " + number(memory.threads, 12) +
-                      " x a scene of " + scene + " and its waveforms" + once + "), of " +
+                      bytes(memory.program_bytes) + ", " + scenes + once + "), of " +
                       bytes(memory.available_bytes) + " available");
   line("products:", products_line(resolved.value("output", json::object()), config_file));
   return out;

@@ -10,12 +10,14 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <numbers>
 #include <sstream>
 #include <string>
 #include <system_error>
 #include <thread>
+#include <vector>
 
 #include "core/error.hpp"
 #include "footprints/ephemeris.hpp"
@@ -28,6 +30,8 @@
 #include "pipeline/shot/footprint_geometry.hpp"
 #include "pipeline/shot/photon_receiver.hpp"
 #include "pipeline/shot/receiver.hpp"
+#include "pipeline/shot/shot_simulator.hpp"
+#include "pipeline/shot/stretch_scenes.hpp"
 #include "pipeline/shot/vegetation_source.hpp"
 #include "terrain/terrain.hpp"
 
@@ -148,12 +152,92 @@ double icesat2_granule_bytes(const Config& c) {
   return icesat2_bytes_per_shot * shots * beams;
 }
 
-RunMemory estimate_run_memory(const Config& c) {
+namespace {
+
+// The area of the union of squares, on the grid their edges make.
+double union_area_m2(const std::vector<RoughSquare>& squares) {
+  std::vector<double> xs, ys;
+  for (const RoughSquare& s : squares) {
+    xs.insert(xs.end(), {s.x_m - s.half_size_m, s.x_m + s.half_size_m});
+    ys.insert(ys.end(), {s.y_m - s.half_size_m, s.y_m + s.half_size_m});
+  }
+  std::sort(xs.begin(), xs.end());
+  std::sort(ys.begin(), ys.end());
+  double area_m2 = 0.0;
+  for (std::size_t i = 0; i + 1 < xs.size(); ++i)
+    for (std::size_t j = 0; j + 1 < ys.size(); ++j) {
+      const double x = 0.5 * (xs[i] + xs[i + 1]), y = 0.5 * (ys[j] + ys[j + 1]);
+      if (std::any_of(squares.begin(), squares.end(), [&](const RoughSquare& s) {
+            return std::abs(x - s.x_m) < s.half_size_m && std::abs(y - s.y_m) < s.half_size_m;
+          }))
+        area_m2 += (xs[i + 1] - xs[i]) * (ys[j + 1] - ys[j]);
+    }
+  return area_m2;
+}
+
+// The triangles of a strip's ground: the terrain's mesh over the square holding the rectangle
+// (cells of its detail, 2 to 4096 a side), the part within the rectangle kept, and the
+// roughness's lattice under the beams (the finest whose nodes over each square stay within the
+// limit, two triangles a cell).
+double strip_ground_triangles(const StripPlan& plan, const Terrain& terrain,
+                              const RoughnessField& roughness) {
+  const double side_m = 2.0 * plan.half_size_m;
+  const double cells =
+      std::clamp(std::ceil(side_m / terrain.detail_m()), 2.0, static_cast<double>(4096));
+  const RegionStrip& r = plan.strip;
+  const double kept = (r.along1_m - r.along0_m) * (r.across1_m - r.across0_m) / (side_m * side_m);
+  double triangles = 2.0 * cells * cells * std::min(1.0, kept);
+  if (!roughness.enabled() || plan.rough.empty()) return triangles;
+  double widest_m = 0.0;
+  for (const RoughSquare& square : plan.rough) widest_m = std::max(widest_m, square.half_size_m);
+  double spacing_m = 0.0;
+  for (const int nodes : RoughnessField::nodes_per_correlation) {
+    spacing_m = roughness.correlation_m() / nodes;
+    if (2.0 * widest_m / spacing_m + 1.0 <= RoughnessField::max_nodes_a_side) break;
+  }
+  return triangles + 2.0 * union_area_m2(plan.rough) / (spacing_m * spacing_m);
+}
+
+}  // namespace
+
+std::optional<SharedScenes> shared_scenes(const ShotSimulator& simulator, const Track& track) {
+  const StretchScenes* strips = simulator.stretches();
+  if (!strips || strips->shape() != StretchShape::strip) return std::nullopt;
+  SharedScenes shared;
+  shared.shots = std::min(strips->shots(), track.sequence_length());
+  const std::int64_t per_beam = (track.sequence_length() + strips->shots() - 1) / strips->shots();
+  shared.held = static_cast<double>(std::min<std::int64_t>(
+      static_cast<std::int64_t>(strips->kept()), per_beam * track.beams_per_shot()));
+  // The largest of each beam's first, middle and last strips (a slope widens the patches).
+  const VegetationSource* vegetation = simulator.vegetation();
+  double largest_m2 = -1.0;
+  for (int beam = 0; beam < static_cast<int>(track.beams_per_shot()); ++beam)
+    for (const std::int64_t stretch : {std::int64_t{0}, per_beam / 2, per_beam - 1}) {
+      const std::optional<StripPlan> plan = strips->plan_strip(beam, stretch);
+      if (!plan) continue;
+      const RegionStrip& r = plan->strip;
+      const double area_m2 = (r.along1_m - r.along0_m) * (r.across1_m - r.across0_m);
+      if (area_m2 <= largest_m2) continue;
+      largest_m2 = area_m2;
+      shared.length_m = r.along1_m - r.along0_m;
+      shared.width_m = r.across1_m - r.across0_m;
+      shared.vegetation_side_m = vegetation && !vegetation->grows_within_strips()
+                                     ? 2.0 * plan->half_size_m
+                                     : std::sqrt(area_m2);
+      shared.ground_triangles = strip_ground_triangles(*plan, simulator.scenes().terrain(),
+                                                       simulator.scenes().roughness());
+    }
+  if (largest_m2 < 0.0) return std::nullopt;
+  return shared;
+}
+
+RunMemory estimate_run_memory(const Config& c, const SharedScenes* shared) {
   RunMemory m;
   const double range_m =
       highest_spacecraft_m(c) / std::cos(c.track.off_nadir_deg * std::numbers::pi / 180.0);
   m.scene_half_size_m = shot_patch_half_size_m(c, range_m);
-  const VegetationMemory vegetation = vegetation_memory(c, 2.0 * m.scene_half_size_m);
+  const VegetationMemory vegetation =
+      vegetation_memory(c, shared ? shared->vegetation_side_m : 2.0 * m.scene_half_size_m);
   m.trees = vegetation.trees;
   m.tree_bytes = vegetation.tree_bytes;
   m.scene_bytes = vegetation.region_bytes;
@@ -161,17 +245,24 @@ RunMemory estimate_run_memory(const Config& c) {
   m.vegetation = vegetation.kind;
   m.waveform_bytes = shot_size(c).bytes * shot_waveform_copies;
   m.threads = usable_cores();
+  m.scenes = m.threads;
+  if (shared) {
+    m.strips = *shared;
+    m.scenes = shared->held;
+    m.ground_bytes = shared->ground_triangles * ground_triangle_bytes;
+  }
   m.granule_bytes = icesat2_granule_bytes(c);
   m.program_bytes = program_resident_bytes;
-  m.bytes = m.program_bytes + m.source_bytes + m.granule_bytes +
-            m.threads * (m.scene_bytes + m.waveform_bytes);
+  const double scenes_bytes = m.scenes * (m.scene_bytes + m.ground_bytes);
+  m.bytes = m.program_bytes + m.source_bytes + m.granule_bytes + scenes_bytes +
+            m.threads * m.waveform_bytes;
   m.available_bytes = available_memory_bytes();
   // The key to change: the vegetation's when what its source holds weighs most, or when its
   // region does on a scene of a usual size; the waveforms when they weigh most; else what makes
   // the scene wide.
-  if (m.granule_bytes > m.source_bytes + m.threads * (m.scene_bytes + m.waveform_bytes))
+  if (m.granule_bytes > m.source_bytes + scenes_bytes + m.threads * m.waveform_bytes)
     m.place = "/track/shots";
-  else if (m.source_bytes > m.threads * (m.scene_bytes + m.waveform_bytes))
+  else if (m.source_bytes > scenes_bytes + m.threads * m.waveform_bytes)
     m.place = vegetation.key;
   else if (m.waveform_bytes > m.scene_bytes)
     m.place = "/sensor/bins";
@@ -212,26 +303,39 @@ void check_background(const Config& c) {
   }
 }
 
-void check_run(const Config& config) {
-  check_background(config);
-  const RunMemory memory = estimate_run_memory(config);
-  if (memory.bytes > memory.available_bytes) {
-    std::ostringstream why;
-    why << "a run would hold about " << gibibytes(memory.bytes) << " (" << memory.threads
-        << " threads x a shot's scene of "
+void check_run_memory(const RunMemory& memory) {
+  if (memory.bytes <= memory.available_bytes) return;
+  std::ostringstream why;
+  why << "a run would hold about " << gibibytes(memory.bytes) << " (";
+  if (memory.strips) {
+    const SharedScenes& strips = *memory.strips;
+    why << format_number(memory.scenes) << " strips' scenes of " << strips.shots << " shots, each "
+        << scene_words(memory.vegetation, memory.trees, memory.tree_bytes, memory.scene_bytes,
+                       strips.vegetation_side_m)
+        << " (a rectangle " << format_number(std::round(strips.length_m)) << " by "
+        << format_number(std::round(strips.width_m)) << " m) and its ground's "
+        << mebibytes(memory.ground_bytes) << "; " << memory.threads
+        << " threads x a shot's waveforms' " << mebibytes(memory.waveform_bytes);
+  } else {
+    why << memory.threads << " threads x a shot's scene of "
         << scene_words(memory.vegetation, memory.trees, memory.tree_bytes, memory.scene_bytes,
                        2.0 * memory.scene_half_size_m)
         << ", and its waveforms' " << mebibytes(memory.waveform_bytes);
-    if (memory.source_bytes > 0.0)
-      why << "; the " << memory.vegetation << " source's " << mebibytes(memory.source_bytes)
-          << " once";
-    if (memory.granule_bytes > 0.0)
-      why << "; the ICESat-2 granules' photons, " << mebibytes(memory.granule_bytes)
-          << " held to the end";
-    why << "), more than the " << gibibytes(memory.available_bytes)
-        << " of memory this process may have";
-    throw config_error(memory.place, why.str());
   }
+  if (memory.source_bytes > 0.0)
+    why << "; the " << memory.vegetation << " source's " << mebibytes(memory.source_bytes)
+        << " once";
+  if (memory.granule_bytes > 0.0)
+    why << "; the ICESat-2 granules' photons, " << mebibytes(memory.granule_bytes)
+        << " held to the end";
+  why << "), more than the " << gibibytes(memory.available_bytes)
+      << " of memory this process may have";
+  throw config_error(memory.place, why.str());
+}
+
+void check_run(const Config& config) {
+  check_background(config);
+  check_run_memory(estimate_run_memory(config));
   check_outputs(config);
   if (config.output.footprints) {
     std::vector<std::string> band_names;

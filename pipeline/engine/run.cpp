@@ -196,6 +196,9 @@ std::unique_ptr<RunSetup> set_up(const Config& config, const RunRequest& request
   setup->track = plan_track(config, *setup->terrain);
   const Track& track = *setup->track;
   setup->simulator->share_scenes_along(track);
+  // The strips' scenes the shots will share, counted as check counts them.
+  if (const auto shared = shared_scenes(*setup->simulator, track))
+    check_run_memory(estimate_run_memory(config, &*shared));
   const std::int64_t length = track.sequence_length();
   const auto selected =
       track.records_of_shots(request.first_shot.value_or(0), request.last_shot.value_or(length));
@@ -324,6 +327,10 @@ CheckSummary check_inputs(const Config& config) {
   const bool read_vegetation = vegetation && vegetation->checks_regions();
   const std::unique_ptr<Track> track = plan_track(config, *terrain);
   CheckSummary summary;
+  // The strips' scenes the shots will share, as run plans them (and refuses them).
+  simulator->share_scenes_along(*track);
+  summary.shared_scenes = shared_scenes(*simulator, *track);
+  if (summary.shared_scenes) check_run_memory(estimate_run_memory(config, &*summary.shared_scenes));
   summary.shots = track->size();
   summary.sequence_length = track->sequence_length();
   summary.warnings = config.warnings;

@@ -14,6 +14,7 @@
 #include "core/directory_lock.hpp"
 #include "footprints/track.hpp"
 #include "pipeline/config/config.hpp"
+#include "pipeline/engine/machine.hpp"
 #include "pipeline/shot/shot_simulator.hpp"
 
 namespace glaswave {
@@ -79,6 +80,7 @@ struct CheckSummary {
   std::int64_t shots_located = 0;      // records located: every one, or an even sample of a long
                                        // track (max_located_shots)
   std::vector<std::string> warnings;   // what the user should know, one line each
+  std::optional<SharedScenes> shared_scenes;  // the strips its shots share, as run plans them
 };
 
 // Opens every input of the configuration (DEM, crowns and stands, ephemeris) and plans the

@@ -30,6 +30,8 @@ class ForestSource : public VegetationSource {
     return forest_.canopy(0).crown_shape != CrownShape::layer;
   }
 
+  bool grows_within_strips() const override { return true; }
+
   // The crowns file's crowns.
   std::vector<Placed> placed() const override {
     std::vector<Placed> crowns;

@@ -83,6 +83,8 @@ class ShotSimulator {
   // shots of milliseconds, in the usual small batches).
   bool shares_scenes() const { return stretches_ && stretches_->shape() == StretchShape::square; }
   bool shares_strips() const { return stretches_ && stretches_->shape() == StretchShape::strip; }
+  // The stretches or strips the shots share, once share_scenes_along chose them; else null.
+  const StretchScenes* stretches() const { return stretches_.get(); }
 
   const LidarModel& lidar() const { return lidar_; }
   const SceneBuilder& scenes() const { return scenes_; }

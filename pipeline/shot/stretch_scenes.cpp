@@ -66,6 +66,10 @@ StretchScenes::StretchScenes(const SceneBuilder& scenes, const LidarModel& lidar
   if (shots_ < 1) throw std::invalid_argument("a stretch holds at least one shot");
 }
 
+std::size_t StretchScenes::kept() const {
+  return static_cast<std::size_t>(3 * track_.beams_per_shot() + 2);
+}
+
 std::shared_ptr<const StretchScene> StretchScenes::find(const Footprint& footprint) const {
   const int beam_index = track_.beam_index(footprint.beam);
   const std::int64_t stretch = footprint.shot_number / shots_;
@@ -98,8 +102,7 @@ std::shared_ptr<const StretchScene> StretchScenes::find(int beam_index,
       entry = std::make_shared<Entry>();
       entry->beam_index = beam_index;
       entry->stretch = stretch;
-      const auto kept = static_cast<std::size_t>(3 * track_.beams_per_shot() + 2);
-      if (recent_.size() >= kept) recent_.erase(recent_.begin());
+      if (recent_.size() >= kept()) recent_.erase(recent_.begin());
     }
     recent_.push_back(entry);
   }
@@ -116,28 +119,57 @@ std::shared_ptr<const StretchScene> StretchScenes::find(int beam_index,
   return entry->scene;
 }
 
-std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
-                                                         std::int64_t stretch) const {
-  const Terrain& terrain = scenes_.terrain();
-  const std::int64_t first = stretch * shots_;
-  const std::int64_t last = std::min(first + shots_, track_.sequence_length());
-  std::vector<Footprint> held;  // the footprints whose beams fall on the terrain's data
-  std::vector<bool> on_data;
-  for (std::int64_t shot = first; shot < last; ++shot) {
-    Footprint footprint = track_.locate_shot(shot, beam_index);
-    on_data.push_back(beam_on_terrain_data(terrain, lidar_, footprint));
-    if (on_data.back()) held.push_back(std::move(footprint));
-  }
-  if (held.empty()) return nullptr;
-  const Footprint& middle = held[held.size() / 2];
-  auto stretch_scene = std::make_shared<StretchScene>(
-      StretchScene{LocalFrame(middle.ground), {}, {}, {}, first, std::move(on_data)});
-  const LocalFrame& frame = stretch_scene->frame;
-  double reach_m = 0.0;  // of the footprint centres from the middle one
+namespace {
+
+// How far the footprints' centres lie from the frame's origin (the middle one's).
+double reach_from_middle_m(const LocalFrame& frame, const std::vector<Footprint>& held) {
+  double reach_m = 0.0;
   for (const Footprint& footprint : held) {
     const Vec3 centre = frame.to_local(footprint.ground);
     reach_m = std::max(reach_m, std::hypot(centre[0], centre[1]));
   }
+  return reach_m;
+}
+
+}  // namespace
+
+// The stretch's footprints whose beams fall on the terrain's data; `on_data` says which of its
+// shots those are, from the first.
+std::vector<Footprint> StretchScenes::held_footprints(int beam_index, std::int64_t stretch,
+                                                      std::vector<bool>& on_data) const {
+  const std::int64_t first = stretch * shots_;
+  const std::int64_t last = std::min(first + shots_, track_.sequence_length());
+  std::vector<Footprint> held;
+  on_data.clear();
+  for (std::int64_t shot = first; shot < last; ++shot) {
+    Footprint footprint = track_.locate_shot(shot, beam_index);
+    on_data.push_back(beam_on_terrain_data(scenes_.terrain(), lidar_, footprint));
+    if (on_data.back()) held.push_back(std::move(footprint));
+  }
+  return held;
+}
+
+std::optional<StripPlan> StretchScenes::plan_strip(int beam_index, std::int64_t stretch) const {
+  if (shape_ != StretchShape::strip) return std::nullopt;
+  std::vector<bool> on_data;
+  const std::vector<Footprint> held = held_footprints(beam_index, stretch, on_data);
+  if (held.empty()) return std::nullopt;
+  const LocalFrame frame(held[held.size() / 2].ground);
+  if (reach_from_middle_m(frame, held) > max_stretch_reach_m) return std::nullopt;
+  return plan_strip(frame, held);
+}
+
+std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
+                                                         std::int64_t stretch) const {
+  const Terrain& terrain = scenes_.terrain();
+  std::vector<bool> on_data;
+  const std::vector<Footprint> held = held_footprints(beam_index, stretch, on_data);
+  if (held.empty()) return nullptr;
+  const Footprint& middle = held[held.size() / 2];
+  auto stretch_scene = std::make_shared<StretchScene>(
+      StretchScene{LocalFrame(middle.ground), {}, {}, {}, stretch * shots_, std::move(on_data)});
+  const LocalFrame& frame = stretch_scene->frame;
+  const double reach_m = reach_from_middle_m(frame, held);
   if (reach_m > max_stretch_reach_m) return nullptr;
   if (shape_ == StretchShape::strip) {
     build_strip(*stretch_scene, held);
@@ -164,9 +196,9 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
 // The strip's rectangle, in the frame of its middle footprint: along the line from its first
 // footprint to its last, as long and wide as every footprint's own scene (its traced patch and
 // the margin about its centre), the roughness under each beam as a shot's own scene has it.
-void StretchScenes::build_strip(StretchScene& scene, const std::vector<Footprint>& held) const {
+StripPlan StretchScenes::plan_strip(const LocalFrame& frame,
+                                    const std::vector<Footprint>& held) const {
   const Terrain& terrain = scenes_.terrain();
-  const LocalFrame& frame = scene.frame;
   std::vector<Vec3> centres;
   for (const Footprint& footprint : held) centres.push_back(frame.to_local(footprint.ground));
   RegionStrip strip;
@@ -206,9 +238,14 @@ void StretchScenes::build_strip(StretchScene& scene, const std::vector<Footprint
     for (const double across : {strip.across0_m, strip.across1_m})
       half_size_m = std::max({half_size_m, std::abs(along * strip.axis_x - across * strip.axis_y),
                               std::abs(along * strip.axis_y + across * strip.axis_x)});
-  const Footprint& middle = held[held.size() / 2];
-  const FootprintFrame where = footprint_frame(terrain, lidar_, middle);
-  scene.built = scenes_.build(frame, where.orientation, half_size_m, strip, rough);
+  return {strip, half_size_m, std::move(rough)};
+}
+
+void StretchScenes::build_strip(StretchScene& scene, const std::vector<Footprint>& held) const {
+  const StripPlan plan = plan_strip(scene.frame, held);
+  const FootprintFrame where = footprint_frame(scenes_.terrain(), lidar_, held[held.size() / 2]);
+  scene.built =
+      scenes_.build(scene.frame, where.orientation, plan.half_size_m, plan.strip, plan.rough);
   finish(scene, held);
 }
 

@@ -73,6 +73,15 @@ struct StretchScene {
 // beam (waveform passes).
 enum class StretchShape { square, strip };
 
+// What a strip's scene is built over, in the frame of its middle footprint: the rectangle
+// holding each footprint's own scene, the square about the middle that holds the rectangle (its
+// ground is meshed over it and cut to the rectangle), and the roughness's square under each beam.
+struct StripPlan {
+  RegionStrip strip;
+  double half_size_m = 0.0;
+  std::vector<RoughSquare> rough;
+};
+
 class StretchScenes {
  public:
   // The builder, lidar and track outlive this. `margin_m`: how far beyond a shot's traced patch
@@ -87,13 +96,23 @@ class StretchScenes {
   // terrain's data (beam_on_terrain_data).
   std::shared_ptr<const StretchScene> find(const Footprint& footprint) const;
 
+  // What the strip `stretch` of the beam of index `beam_index` is built over (a strip-shaped
+  // stretch's), as its build plans it, building nothing; none where it shares no scene. For the
+  // memory estimate.
+  std::optional<StripPlan> plan_strip(int beam_index, std::int64_t stretch) const;
+
   std::int64_t shots() const { return shots_; }
   StretchShape shape() const { return shape_; }
+  // Stretches kept at once, the most recent (their scenes held while the run is near them).
+  std::size_t kept() const;
 
  private:
   struct Entry;
   std::shared_ptr<const StretchScene> find(int beam_index, std::int64_t stretch) const;
   std::shared_ptr<const StretchScene> build(int beam_index, std::int64_t stretch) const;
+  std::vector<Footprint> held_footprints(int beam_index, std::int64_t stretch,
+                                         std::vector<bool>& on_data) const;
+  StripPlan plan_strip(const LocalFrame& frame, const std::vector<Footprint>& held) const;
   void build_strip(StretchScene& scene, const std::vector<Footprint>& held) const;
   void finish(StretchScene& scene, const std::vector<Footprint>& held) const;
 

@@ -91,6 +91,9 @@ class VegetationSource {
   // (stretch_scenes.hpp); false for vegetation shaped by the footprint (a layer that follows its
   // mean ground) or resampled in its frame.
   virtual bool fixed_on_the_ground() const { return false; }
+  // Whether a region's strip (VegetationRegion::strip) bounds what grows, as crowns do; false for
+  // a source that grows the square holding it. For the memory estimate of a strip's scene.
+  virtual bool grows_within_strips() const { return false; }
 
   // Plants a file placed (a crowns file's crowns): where each stands and how far it reaches,
   // for the warning that they lie far from every footprint. Empty for vegetation that grows

@@ -8,10 +8,13 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include "pipeline/engine/inputs.hpp"
+#include "pipeline/engine/machine.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
+#include "pipeline/shot/forest_source.hpp"
 #include "pipeline/shot/stretch_scenes.hpp"
 
 namespace glaswave {
@@ -155,6 +158,59 @@ TEST(StripScene, OneSceneAStripThatDependsOnTheStripAlone) {
   const StretchScenes none(simulator->scenes(), simulator->lidar(), *apart, vegetation_margin_m,
                            strip_shots, StretchShape::strip);
   EXPECT_EQ(none.find(apart->footprint(0)), nullptr);
+}
+
+// The memory estimate's strips are the run's, as StretchScenes plans them: 24 shots make 3
+// strips of 8, all kept (one beam keeps 5); a strip's rectangle is as wide as a shot's scene and
+// 7 spacings (420 m) longer; its rough ground is the beams' squares on the 1 m lattice (3 m
+// correlation over 3 nodes), two triangles a square metre, the squares 60 m apart along 30
+// degrees overlapping only their neighbours; the forest is the Table 1 canopy's density of
+// crowns over the rectangle.
+TEST(StripScene, TheMemoryEstimateCountsTheStripsAsPlanned) {
+  const Config config = gedi_pass(24, 50);
+  const auto terrain = make_terrain(config.terrain);
+  const std::unique_ptr<Track> track = plan_track(config, *terrain);
+  const auto simulator = make_shot_simulator(config, *terrain);
+  EXPECT_FALSE(shared_scenes(*simulator, *track));  // before it follows the track
+  simulator->share_scenes_along(*track);
+  const std::optional<SharedScenes> shared = shared_scenes(*simulator, *track);
+  ASSERT_TRUE(shared);
+  EXPECT_EQ(shared->shots, 8);
+  EXPECT_EQ(shared->held, 3.0);
+  EXPECT_NEAR(shared->length_m - shared->width_m, 420.0, 0.5);
+  EXPECT_NEAR(shared->vegetation_side_m * shared->vegetation_side_m,
+              shared->length_m * shared->width_m, 1e-6 * shared->length_m * shared->width_m);
+
+  const std::optional<StripPlan> plan = simulator->stretches()->plan_strip(0, 0);
+  ASSERT_TRUE(plan);
+  ASSERT_EQ(plan->rough.size(), 8u);
+  double area_m2 = 0.0;
+  for (std::size_t k = 0; k < 8; ++k) {
+    const RoughSquare& a = plan->rough[k];
+    area_m2 += 4.0 * a.half_size_m * a.half_size_m;
+    if (k == 0) continue;
+    const RoughSquare& b = plan->rough[k - 1];
+    EXPECT_NEAR(std::hypot(a.x_m - b.x_m, a.y_m - b.y_m), 60.0, 0.1);
+    ASSERT_LT(a.half_size_m + b.half_size_m, 2.0 * 60.0 * std::cos(std::numbers::pi / 6.0));
+    area_m2 -= std::max(0.0, a.half_size_m + b.half_size_m - std::abs(a.x_m - b.x_m)) *
+               std::max(0.0, a.half_size_m + b.half_size_m - std::abs(a.y_m - b.y_m));
+  }
+  // The plane's own mesh is 2 x 2 cells over the square: at most 8 triangles more.
+  EXPECT_GE(shared->ground_triangles, 2.0 * area_m2 - 1e-6);
+  EXPECT_LE(shared->ground_triangles, 2.0 * area_m2 + 8.0);
+
+  const RunMemory strips = estimate_run_memory(config, &*shared);
+  const RunMemory own = estimate_run_memory(config);
+  const CanopySettings& canopy = *config.canopy;
+  const double crowns_m2 = -std::log(1.0 - canopy.cover) /
+                           (std::numbers::pi * canopy.crown_radius_m * canopy.crown_radius_m);
+  const double strip_bytes = crowns_m2 * shared->length_m * shared->width_m * forest_tree_bytes +
+                             shared->ground_triangles * ground_triangle_bytes;
+  EXPECT_NEAR(strips.bytes,
+              program_resident_bytes + 3.0 * strip_bytes + own.threads * own.waveform_bytes,
+              1e-9 * strips.bytes);
+  EXPECT_NEAR(own.bytes - program_resident_bytes,
+              own.threads * (own.scene_bytes + own.waveform_bytes), 1e-9 * own.bytes);
 }
 
 }  // namespace
