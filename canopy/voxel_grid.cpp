@@ -689,7 +689,7 @@ VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
     std::string reply;
     {
       std::lock_guard lock(impl_->mutex);
-      impl_->reader->send(request.text());
+      impl_->reader->send(request.text(), voxels * sizeof(float));
       reply = impl_->reader->receive();
     }
     try {
@@ -749,6 +749,7 @@ VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
 int voxel_reader_main(int argc, char** argv) {
   const int channel = take_reply_channel();
   if (argc != 2 || channel < 0) return 2;
+  bound_request_cpu(argv[1]);
   std::unique_ptr<VoxelGridFile> grid;
   MessageOut opened;
   const auto refuse = [&](MessageOut& out, const std::exception& e) {
@@ -779,6 +780,8 @@ int voxel_reader_main(int argc, char** argv) {
       MessageIn in(request);
       const auto i0 = in.get<std::int32_t>(), ni = in.get<std::int32_t>();
       const auto j0 = in.get<std::int32_t>(), nj = in.get<std::int32_t>();
+      bound_request_cpu(argv[1], std::uint64_t(std::max(ni, 0)) * std::max(nj, 0) *
+                                     std::max(grid->shape().nz, 0) * sizeof(float));
       const VoxelBlock block = grid->columns(i0, ni, j0, nj);
       reply.put('S');
       reply.put_bytes(block.pad.data(), block.pad.size() * sizeof(float));

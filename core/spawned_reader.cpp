@@ -4,13 +4,18 @@
 #include <dlfcn.h>
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
+#include <sys/time.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
 #include <mutex>
 #include <stdexcept>
 #include <system_error>
@@ -37,6 +42,37 @@ class SpawnActions {
   bool ok_ = false;
 };
 
+// SIGXCPU at its default, ending the program, and no signal blocked: a caller ignoring or
+// blocking it would hand that on through exec, and a reader spinning inside HDF5 would spin on.
+class SpawnAttributes {
+ public:
+  SpawnAttributes() {
+    if (posix_spawnattr_init(&attributes_) != 0) return;
+    made_ = true;
+    sigset_t defaults, none;
+    ok_ =
+        sigemptyset(&defaults) == 0 && sigaddset(&defaults, SIGXCPU) == 0 &&
+        sigemptyset(&none) == 0 && posix_spawnattr_setsigdefault(&attributes_, &defaults) == 0 &&
+        posix_spawnattr_setsigmask(&attributes_, &none) == 0 &&
+        posix_spawnattr_setflags(&attributes_, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK) == 0;
+  }
+  ~SpawnAttributes() {
+    if (made_) posix_spawnattr_destroy(&attributes_);
+  }
+  bool ok() const { return ok_; }
+  const posix_spawnattr_t* get() const { return &attributes_; }
+
+ private:
+  posix_spawnattr_t attributes_;
+  bool made_ = false, ok_ = false;
+};
+
+std::uint64_t file_bytes(const char* file) {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(file, error);
+  return error ? 0 : size;
+}
+
 // Reads `size` bytes whole; false at the end of input or an error first.
 bool read_whole(int fd, void* out, std::size_t size) {
   auto* at = static_cast<char*>(out);
@@ -54,7 +90,22 @@ bool read_whole(int fd, void* out, std::size_t size) {
 // granule's shots, with room to spare. A longer length is a reader gone wrong.
 constexpr std::uint64_t kLongestMessage = std::uint64_t{1} << 36;
 
+double seconds(const timeval& t) { return static_cast<double>(t.tv_sec) + t.tv_usec * 1e-6; }
+
 }  // namespace
+
+double reader_cpu_budget_s(std::uint64_t bytes) {
+  // Measured (glaswave-read-voxels, 2000 x 2000 x 30 grids of random PAD, 458 MiB of floats):
+  // opening takes 0.1 s; a block of 64 x 64 columns 0.02 s, 2.5 s where each layer is one chunk
+  // (371 MiB file: every chunk inflated for every block); the whole grid in one window 1.9 s
+  // (uncompressed, 458 MiB), 4.5 s (zlib, 385 MiB), 3.6 s (zeros, 1 MiB). glaswave-read-granule:
+  // the limit's 5 million shots (267 MiB answered) 2.3 s (539 MiB), 2.9 s (gzip, 365 MiB), 2.5 s
+  // (gzip of one position, 0.8 MB). So at most 9.4 ms of CPU a MiB read and answered, against
+  // 62.5 ms here (6.6 times), and 0.1 s to open against 1 s; a fuzz input of a few kB is ended
+  // after 1 s (3.3 s of CPU took over 10 s of wall at a load of 7 on 2 cores: libFuzzer times out).
+  constexpr double kBaseCpuS = 1.0, kBytesPerCpuS = 16.0 * (1 << 20);
+  return kBaseCpuS + static_cast<double>(bytes) / kBytesPerCpuS;
+}
 
 std::filesystem::path find_reader_program(const std::string& name,
                                           const std::vector<std::filesystem::path>& also) {
@@ -81,7 +132,12 @@ std::filesystem::path find_reader_program(const std::string& name,
 SpawnedReader::SpawnedReader(const std::filesystem::path& program,
                              const std::vector<std::string>& arguments, std::string file,
                              std::string what, std::string hello)
-    : program_(program), file_(std::move(file)), what_(std::move(what)), hello_(std::move(hello)) {
+    : program_(program),
+      file_(std::move(file)),
+      what_(std::move(what)),
+      hello_(std::move(hello)),
+      file_bytes_(file_bytes(file_.c_str())),
+      request_cpu_s_(reader_cpu_budget_s(file_bytes_)) {
   const std::string cannot = "cannot read " + what_ + ": ";
   // Both ends close on exec: another thread's child never holds the reader's end open.
   int ends[2] = {-1, -1};
@@ -89,10 +145,11 @@ SpawnedReader::SpawnedReader(const std::filesystem::path& program,
     throw run_error(file_, cannot + "no socket to its reader (" + std::strerror(errno) + ")");
   socket_ = ends[0];
   SpawnActions actions;
+  const SpawnAttributes attributes;
   // Nothing else of the caller's goes with it: a file another thread has open through HDF5 holds
   // HDF5's flock, and a reader holding a copy kept the lock after that thread closed the file,
   // so that opening it again failed ("NetCDF: HDF error" on the shots.nc of another thread's run).
-  if (!actions.ok() ||
+  if (!actions.ok() || !attributes.ok() ||
       posix_spawn_file_actions_adddup2(actions.get(), ends[1], STDIN_FILENO) != 0 ||
       posix_spawn_file_actions_adddup2(actions.get(), ends[1], STDOUT_FILENO) != 0 ||
       posix_spawn_file_actions_addclosefrom_np(actions.get(), STDERR_FILENO + 1) != 0) {
@@ -111,7 +168,7 @@ SpawnedReader::SpawnedReader(const std::filesystem::path& program,
   int error = 0;
   {
     const std::lock_guard lock(netcdf_library_mutex());
-    error = posix_spawn(&child_, argv[0], actions.get(), nullptr, argv.data(), environ);
+    error = posix_spawn(&child_, argv[0], actions.get(), attributes.get(), argv.data(), environ);
   }
   ::close(ends[1]);
   if (error != 0) {
@@ -146,7 +203,13 @@ void SpawnedReader::wait() {
   // A caller ignoring SIGCHLD has its children reaped unasked (ECHILD): the messages alone decide.
   if (waited < 0 || !failure_.empty()) return;
   const std::string refused = "HDF5 failed reading " + what_ + " (a corrupt file): it is refused";
-  if (WIFSIGNALED(status))
+  if (WIFSIGNALED(status) && WTERMSIG(status) == SIGXCPU) {
+    char budget[32];
+    std::snprintf(budget, sizeof budget, "%.3g", request_cpu_s_);
+    failure_ = "reading " + what_ + " took its reader program, " + program_.filename().string() +
+               ", more than " + budget +
+               " s of CPU on one request (the file may be corrupt): it is refused";
+  } else if (WIFSIGNALED(status))
     failure_ = refused + " (its reader, " + program_.string() + ", ended by signal " +
                std::to_string(WTERMSIG(status)) + ")";
   else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
@@ -164,8 +227,9 @@ void SpawnedReader::ended(const std::string& why) {
   throw input_error(file_, failure_);
 }
 
-void SpawnedReader::send(std::string_view message) {
+void SpawnedReader::send(std::string_view message, std::uint64_t answer_bytes) {
   if (!failure_.empty() || socket_ < 0) ended("its reader has ended");
+  request_cpu_s_ = reader_cpu_budget_s(file_bytes_ + answer_bytes);
   const std::uint64_t size = message.size();
   std::string bytes(reinterpret_cast<const char*>(&size), sizeof size);
   bytes += message;
@@ -223,6 +287,22 @@ int take_reply_channel() {
   const int channel = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, STDERR_FILENO + 1);
   if (channel >= 0) ::dup2(STDERR_FILENO, STDOUT_FILENO);
   return channel;
+}
+
+void bound_request_cpu(const char* file, std::uint64_t answer_bytes) {
+  const double budget_s = reader_cpu_budget_s(file_bytes(file) + answer_bytes);
+  rusage used{};
+  rlimit limit{};
+  if (::getrusage(RUSAGE_SELF, &used) != 0 || ::getrlimit(RLIMIT_CPU, &limit) != 0) return;
+  // Whole seconds, rounded up: the request has its budget at least.
+  auto soft =
+      static_cast<rlim_t>(std::ceil(seconds(used.ru_utime) + seconds(used.ru_stime) + budget_s));
+  // Raised to the hard limit at most; a second short of it, since at the hard limit the kernel
+  // sends SIGKILL, which would not say why.
+  if (limit.rlim_max != RLIM_INFINITY)
+    soft = std::min(soft, limit.rlim_max - std::min<rlim_t>(limit.rlim_max, 1));
+  limit.rlim_cur = soft;
+  ::setrlimit(RLIMIT_CPU, &limit);
 }
 
 bool read_message(int fd, std::string& message) {

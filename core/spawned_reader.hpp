@@ -9,6 +9,11 @@
 // length, then the bytes); the program's first message begins with its hello (its name and the
 // number of its messages' layout), so that a reader of another glaswave (an older install found
 // first) is named, not misread.
+//
+// Each request a reader answers (opening its file is the first) has a budget of CPU, which both
+// ends work out from the bytes it reads and answers (reader_cpu_budget_s): HDF5 1.10.8 spins for
+// ever on some corrupt files (voxel_fuzzer found one), and a reader past its budget is ended by
+// the kernel (RLIMIT_CPU's SIGXCPU), the file refused saying so.
 #pragma once
 
 #include <sys/types.h>
@@ -31,10 +36,15 @@ namespace glaswave {
 std::filesystem::path find_reader_program(const std::string& name,
                                           const std::vector<std::filesystem::path>& also);
 
+// The CPU one request of a reader program may use, seconds, for a file and answer of `bytes`
+// together: what no legitimate file needs (spawned_reader.cpp gives the measurements), and short
+// of libFuzzer's 10 s for a fuzz input of a few kB.
+double reader_cpu_budget_s(std::uint64_t bytes);
+
 class SpawnedReader {
  public:
-  // Starts `program` with `arguments` for `file` (named in errors), which is `what` ("the
-  // granule"). A run error when it cannot be started.
+  // Starts `program` with `arguments` for `file` (named in errors; its size is in each request's
+  // CPU budget), which is `what` ("the granule"). A run error when it cannot be started.
   SpawnedReader(const std::filesystem::path& program, const std::vector<std::string>& arguments,
                 std::string file, std::string what, std::string hello);
   // Closes the program's input (it ends there) and waits for it.
@@ -42,9 +52,11 @@ class SpawnedReader {
   SpawnedReader(const SpawnedReader&) = delete;
   SpawnedReader& operator=(const SpawnedReader&) = delete;
 
-  void send(std::string_view message);
+  // A request whose answer may be `answer_bytes` long (beyond the file's size, in its budget).
+  void send(std::string_view message, std::uint64_t answer_bytes = 0);
   // The program's next message (the first without its hello). An input error naming the file
-  // when the program ended without it (a crash: the signal is said), and from then on.
+  // when the program ended without it (a crash: the signal is said; past its CPU budget: the
+  // budget), and from then on.
   std::string receive();
   // Waits for a program that has said all: an input error when it crashed or failed after all.
   void finish();
@@ -56,6 +68,8 @@ class SpawnedReader {
 
   std::filesystem::path program_;
   std::string file_, what_, hello_;
+  std::uint64_t file_bytes_ = 0;
+  double request_cpu_s_ = 0.0;  // the budget of the request in flight
   int socket_ = -1;
   pid_t child_ = -1;
   bool greeted_ = false;
@@ -70,6 +84,9 @@ bool write_hello(int fd, std::string_view hello);
 // started; -1 when it cannot be had), standard output then pointed at standard error, so that a
 // library printing to standard output cannot break a reply.
 int take_reply_channel();
+// In a reader program, before each request: its CPU bounded to what it has used so far plus
+// reader_cpu_budget_s of `file`'s size and `answer_bytes` (past it, SIGXCPU ends it).
+void bound_request_cpu(const char* file, std::uint64_t answer_bytes = 0);
 bool read_message(int fd, std::string& message);
 bool write_message(int fd, std::string_view message);
 

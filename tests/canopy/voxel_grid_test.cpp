@@ -11,7 +11,9 @@
 #include <gtest/gtest.h>
 #include <netcdf.h>
 #include <ogr_srs_api.h>
+#include <sys/resource.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -434,6 +436,42 @@ TEST(VoxelGrid, TheFuzzRegressionsAreRefusedAsInputErrorsNamingTheFile) {
     ++refused;
   }
   EXPECT_GE(refused, 3);
+}
+
+// A corrupt NetCDF-4 grid on which HDF5 1.10.8 spins for ever (voxel_fuzzer, seed 1, in a
+// fresh-clone CI run: 6 min of CPU before it was killed): its reader is ended at its CPU budget,
+// 1 s for a file of 10,702 bytes (1 s + 10,702 B / 16 MiB per s, rounded as said: "1"), and the
+// grid refused saying so: after 1 s of the reader's CPU (this process's children's, which the
+// kernel gives), less than 3 budgets of it, and within 60 s of wall time (10.5 s at a load of 9 on
+// 2 cores; the hang was 6 min).
+TEST(VoxelGrid, AGridOnWhichHdf5SpinsIsRefusedAtItsReadersCpuBudget) {
+  test_support::ScratchDir dir;
+  std::ifstream in(std::filesystem::path(GLASWAVE_SOURCE_DIR) /
+                       "tests/fuzz/corpus/voxel/regression-netcdf4-hdf5-spins",
+                   std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_EQ(bytes.size(), 10703u);  // the first byte picks NetCDF
+  const auto file = dir.path() / "spins.nc";
+  std::ofstream(file, std::ios::binary) << bytes.substr(1);
+  const auto children_cpu_s = [] {
+    rusage used{};
+    ::getrusage(RUSAGE_CHILDREN, &used);
+    return used.ru_utime.tv_sec + used.ru_stime.tv_sec +
+           (used.ru_utime.tv_usec + used.ru_stime.tv_usec) * 1e-6;
+  };
+  const double cpu_before_s = children_cpu_s();
+  const auto start = std::chrono::steady_clock::now();
+  const std::string error = refusal(file);
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double reader_cpu_s = children_cpu_s() - cpu_before_s;
+  EXPECT_EQ(error, file.string() +
+                       ": reading the voxel grid took its reader program, glaswave-read-voxels, "
+                       "more than 1 s of CPU on one request (the file may be corrupt): it is "
+                       "refused");
+  EXPECT_GE(reader_cpu_s, 1.0);
+  EXPECT_LT(reader_cpu_s, 3.0);
+  EXPECT_LT(wall_s, 60.0);
 }
 
 // A classic NetCDF header's declared sizes are checked against the file before nc_open (which

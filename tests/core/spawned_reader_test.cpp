@@ -1,13 +1,17 @@
 // The reader programs' machinery (core/spawned_reader.hpp) with programs of the system standing in
 // for a reader: /bin/sh scripts that crash, exit, say another hello, or echo the caller's
 // messages back as a reader would. Each outcome is checked against what the script was told to do.
+// A reader's CPU bound (bound_request_cpu) is checked in a forked process that spins, against the
+// CPU the kernel says it used.
 #include "core/spawned_reader.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -46,6 +50,68 @@ TEST(SpawnedReader, AReaderEndedByASignalRefusesTheFileNamingItAndTheSignal) {
   EXPECT_NE(text.find("ended by signal 11"), std::string::npos) << text;
   // And from then on, without waiting again.
   EXPECT_EQ(error_of([&] { reader.send("more"); }).second, text);
+}
+
+// Past its CPU budget the kernel ends a reader with SIGXCPU: the error says so in words, with the
+// budget of a file of no bytes (FILE.h5 does not exist), 1 s. A caller that ignores and blocks
+// SIGXCPU does not hand that on: the script's own SIGXCPU still ends it.
+TEST(SpawnedReader, AReaderPastItsCpuBudgetRefusesTheFileSayingSo) {
+  struct sigaction ignore {
+  }, was{};
+  ignore.sa_handler = SIG_IGN;
+  ASSERT_EQ(::sigaction(SIGXCPU, &ignore, &was), 0);
+  sigset_t xcpu, mask;
+  sigemptyset(&xcpu);
+  sigaddset(&xcpu, SIGXCPU);
+  ASSERT_EQ(::pthread_sigmask(SIG_BLOCK, &xcpu, &mask), 0);
+  SpawnedReader reader = shell("kill -XCPU $$; printf 'test-reader 1\\n'");
+  ::pthread_sigmask(SIG_SETMASK, &mask, nullptr);
+  ::sigaction(SIGXCPU, &was, nullptr);
+  const auto [kind, text] = error_of([&] { reader.receive(); });
+  EXPECT_EQ(kind, ErrorKind::input);
+  EXPECT_EQ(text,
+            "FILE.h5: reading the test file took its reader program, sh, more than 1 s of CPU on "
+            "one request (the file may be corrupt): it is refused");
+}
+
+// A request's CPU: what the process has used before it plus its budget, in whole seconds rounded
+// up. A forked child (its CPU counted from 0) spins 0.5 s, is bounded for a file of no bytes (1 s
+// budget: the limit at 2 s), spins 1 s more, is bounded again (the limit raised to 1.5 + 1 = 2.5,
+// rounded up: 3 s), then spins: SIGXCPU ends it at 3 s of CPU (2 s had the limit not been
+// raised). The kernel counts the limit in CPU sampled at its ticks, which on a loaded virtual
+// machine lags the exact CPU wait4 gives (by half, at a load of 9 on 2 cores): not before 3 s,
+// and by the kernel, not the alarm.
+TEST(SpawnedReader, ARequestPastItsCpuBudgetIsEndedByTheKernel) {
+  const auto seconds = [](const rusage& used) {
+    return used.ru_utime.tv_sec + used.ru_stime.tv_sec +
+           (used.ru_utime.tv_usec + used.ru_stime.tv_usec) * 1e-6;
+  };
+  // Spinning in user mode, the clock read every million steps: a loop of system calls went on
+  // past its limit (the kernel's sampled CPU missing most of it).
+  const auto spin = [&](double cpu_s) {
+    rusage used{};
+    volatile double sink = 0.0;
+    while (::getrusage(RUSAGE_SELF, &used) == 0 && seconds(used) < cpu_s)
+      for (int step = 0; step < 1000000; ++step) sink = sink + 1.0;
+  };
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::alarm(60);  // a bound that failed ends the child all the same (SIGALRM)
+    spin(0.5);
+    bound_request_cpu("/nonexistent/file");
+    spin(1.5);
+    bound_request_cpu("/nonexistent/file");
+    spin(1e9);
+    ::_exit(0);
+  }
+  int status = 0;
+  rusage used{};
+  ASSERT_EQ(::wait4(child, &status, 0, &used), child);
+  ASSERT_TRUE(WIFSIGNALED(status)) << status;
+  EXPECT_EQ(WTERMSIG(status), SIGXCPU);
+  EXPECT_GE(seconds(used), 3.0);
+  EXPECT_LT(seconds(used), 10.0);
 }
 
 TEST(SpawnedReader, AReaderThatFailsAfterItsReplyRefusesTheFileWhenFinished) {

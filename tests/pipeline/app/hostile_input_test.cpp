@@ -74,11 +74,13 @@ class HostileInput : public ::testing::Test {
 };
 
 // Issue 42: voxel grids fuzzing found, which crashed the process (HDF5 1.10.8 reading 16 MB past a
-// heap buffer on a corrupt NetCDF-4 grid) or asked nc_open for 9 GB (a 23-byte classic NetCDF
-// declaring 1.1e9 dimensions): check and run refuse each with one line naming the file, exit 3.
+// heap buffer on a corrupt NetCDF-4 grid), asked nc_open for 9 GB (a 23-byte classic NetCDF
+// declaring 1.1e9 dimensions) or held it for ever (HDF5 spinning on a corrupt NetCDF-4 grid, its
+// reader ended at its CPU budget): check and run refuse each with one line naming the file, exit 3.
 TEST_F(HostileInput, CorruptVoxelGridsAreRefusedNamingTheFile) {
   for (const std::string name :
-       {"regression-netcdf4-hdf5-global-heap", "regression-netcdf3-declares-9-gb"}) {
+       {"regression-netcdf4-hdf5-global-heap", "regression-netcdf3-declares-9-gb",
+        "regression-netcdf4-hdf5-spins"}) {
     // The fuzz input's first byte picks the format; the rest is the file.
     std::ifstream in(fs::path(GLASWAVE_SOURCE_DIR) / "tests/fuzz/corpus/voxel" / name,
                      std::ios::binary);
