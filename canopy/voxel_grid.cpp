@@ -689,7 +689,7 @@ VoxelBlock VoxelGridFile::columns(int i0, int ni, int j0, int nj) const {
     std::string reply;
     {
       std::lock_guard lock(impl_->mutex);
-      impl_->reader->send(request.text(), voxels * sizeof(float));
+      impl_->reader->send(request.text());
       reply = impl_->reader->receive();
     }
     try {

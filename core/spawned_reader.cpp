@@ -90,9 +90,14 @@ bool read_whole(int fd, void* out, std::size_t size) {
 // granule's shots, with room to spare. A longer length is a reader gone wrong.
 constexpr std::uint64_t kLongestMessage = std::uint64_t{1} << 36;
 
-double seconds(const timeval& t) { return static_cast<double>(t.tv_sec) + t.tv_usec * 1e-6; }
-
 }  // namespace
+
+double cpu_seconds(const rusage& used) {
+  const auto seconds = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6;
+  };
+  return seconds(used.ru_utime) + seconds(used.ru_stime);
+}
 
 double reader_cpu_budget_s(std::uint64_t bytes) {
   // Measured (glaswave-read-voxels, 2000 x 2000 x 30 grids of random PAD, 458 MiB of floats):
@@ -103,8 +108,7 @@ double reader_cpu_budget_s(std::uint64_t bytes) {
   // (gzip of one position, 0.8 MB). So at most 9.4 ms of CPU a MiB read and answered, against
   // 62.5 ms here (6.6 times), and 0.1 s to open against 1 s; a fuzz input of a few kB is ended
   // after 1 s (3.3 s of CPU took over 10 s of wall at a load of 7 on 2 cores: libFuzzer times out).
-  constexpr double kBaseCpuS = 1.0, kBytesPerCpuS = 16.0 * (1 << 20);
-  return kBaseCpuS + static_cast<double>(bytes) / kBytesPerCpuS;
+  return kReaderBaseCpuS + static_cast<double>(bytes) / kReaderBytesPerCpuS;
 }
 
 std::filesystem::path find_reader_program(const std::string& name,
@@ -132,12 +136,7 @@ std::filesystem::path find_reader_program(const std::string& name,
 SpawnedReader::SpawnedReader(const std::filesystem::path& program,
                              const std::vector<std::string>& arguments, std::string file,
                              std::string what, std::string hello)
-    : program_(program),
-      file_(std::move(file)),
-      what_(std::move(what)),
-      hello_(std::move(hello)),
-      file_bytes_(file_bytes(file_.c_str())),
-      request_cpu_s_(reader_cpu_budget_s(file_bytes_)) {
+    : program_(program), file_(std::move(file)), what_(std::move(what)), hello_(std::move(hello)) {
   const std::string cannot = "cannot read " + what_ + ": ";
   // Both ends close on exec: another thread's child never holds the reader's end open.
   int ends[2] = {-1, -1};
@@ -196,19 +195,24 @@ void SpawnedReader::hang_up() {
 void SpawnedReader::wait() {
   if (child_ < 0) return;
   int status = 0;
+  rusage used{};
   pid_t waited = -1;
-  while ((waited = ::waitpid(child_, &status, 0)) < 0 && errno == EINTR) {
+  while ((waited = ::wait4(child_, &status, 0, &used)) < 0 && errno == EINTR) {
   }
   child_ = -1;
   // A caller ignoring SIGCHLD has its children reaped unasked (ECHILD): the messages alone decide.
   if (waited < 0 || !failure_.empty()) return;
   const std::string refused = "HDF5 failed reading " + what_ + " (a corrupt file): it is refused";
   if (WIFSIGNALED(status) && WTERMSIG(status) == SIGXCPU) {
-    char budget[32];
-    std::snprintf(budget, sizeof budget, "%.3g", request_cpu_s_);
+    // The rule, not one number: the program alone knows what a request asked it to answer.
+    char budget[160];
+    std::snprintf(budget, sizeof budget,
+                  "(%g s, and 1 s for each %g MiB of the file and of its answer; %.1f s of CPU "
+                  "in all)",
+                  kReaderBaseCpuS, kReaderBytesPerCpuS / (1 << 20), cpu_seconds(used));
     failure_ = "reading " + what_ + " took its reader program, " + program_.filename().string() +
-               ", more than " + budget +
-               " s of CPU on one request (the file may be corrupt): it is refused";
+               ", past its CPU budget on one request " + budget +
+               ", so the file may be corrupt: it is refused";
   } else if (WIFSIGNALED(status))
     failure_ = refused + " (its reader, " + program_.string() + ", ended by signal " +
                std::to_string(WTERMSIG(status)) + ")";
@@ -227,9 +231,8 @@ void SpawnedReader::ended(const std::string& why) {
   throw input_error(file_, failure_);
 }
 
-void SpawnedReader::send(std::string_view message, std::uint64_t answer_bytes) {
+void SpawnedReader::send(std::string_view message) {
   if (!failure_.empty() || socket_ < 0) ended("its reader has ended");
-  request_cpu_s_ = reader_cpu_budget_s(file_bytes_ + answer_bytes);
   const std::uint64_t size = message.size();
   std::string bytes(reinterpret_cast<const char*>(&size), sizeof size);
   bytes += message;
@@ -295,8 +298,7 @@ void bound_request_cpu(const char* file, std::uint64_t answer_bytes) {
   rlimit limit{};
   if (::getrusage(RUSAGE_SELF, &used) != 0 || ::getrlimit(RLIMIT_CPU, &limit) != 0) return;
   // Whole seconds, rounded up: the request has its budget at least.
-  auto soft =
-      static_cast<rlim_t>(std::ceil(seconds(used.ru_utime) + seconds(used.ru_stime) + budget_s));
+  auto soft = static_cast<rlim_t>(std::ceil(cpu_seconds(used) + budget_s));
   // Raised to the hard limit at most; a second short of it, since at the hard limit the kernel
   // sends SIGKILL, which would not say why.
   if (limit.rlim_max != RLIM_INFINITY)

@@ -16,6 +16,7 @@
 // the kernel (RLIMIT_CPU's SIGXCPU), the file refused saying so.
 #pragma once
 
+#include <sys/resource.h>
 #include <sys/types.h>
 
 #include <cstdint>
@@ -37,14 +38,19 @@ std::filesystem::path find_reader_program(const std::string& name,
                                           const std::vector<std::filesystem::path>& also);
 
 // The CPU one request of a reader program may use, seconds, for a file and answer of `bytes`
-// together: what no legitimate file needs (spawned_reader.cpp gives the measurements), and short
-// of libFuzzer's 10 s for a fuzz input of a few kB.
+// together: kReaderBaseCpuS and a second for each kReaderBytesPerCpuS, what no legitimate file
+// needs (spawned_reader.cpp gives the measurements), and short of libFuzzer's 10 s for a fuzz
+// input of a few kB.
+inline constexpr double kReaderBaseCpuS = 1.0;
+inline constexpr double kReaderBytesPerCpuS = 16.0 * (1 << 20);
 double reader_cpu_budget_s(std::uint64_t bytes);
+// The CPU (user and system) that getrusage or wait4 counted, seconds.
+double cpu_seconds(const rusage& used);
 
 class SpawnedReader {
  public:
-  // Starts `program` with `arguments` for `file` (named in errors; its size is in each request's
-  // CPU budget), which is `what` ("the granule"). A run error when it cannot be started.
+  // Starts `program` with `arguments` for `file` (named in errors), which is `what` ("the
+  // granule"). A run error when it cannot be started.
   SpawnedReader(const std::filesystem::path& program, const std::vector<std::string>& arguments,
                 std::string file, std::string what, std::string hello);
   // Closes the program's input (it ends there) and waits for it.
@@ -52,11 +58,12 @@ class SpawnedReader {
   SpawnedReader(const SpawnedReader&) = delete;
   SpawnedReader& operator=(const SpawnedReader&) = delete;
 
-  // A request whose answer may be `answer_bytes` long (beyond the file's size, in its budget).
-  void send(std::string_view message, std::uint64_t answer_bytes = 0);
+  // A request to the program.
+  void send(std::string_view message);
   // The program's next message (the first without its hello). An input error naming the file
   // when the program ended without it (a crash: the signal is said; past its CPU budget: the
-  // budget), and from then on.
+  // budget's rule and the CPU it used, since only the program knows what it was asked to read),
+  // and from then on.
   std::string receive();
   // Waits for a program that has said all: an input error when it crashed or failed after all.
   void finish();
@@ -68,8 +75,6 @@ class SpawnedReader {
 
   std::filesystem::path program_;
   std::string file_, what_, hello_;
-  std::uint64_t file_bytes_ = 0;
-  double request_cpu_s_ = 0.0;  // the budget of the request in flight
   int socket_ = -1;
   pid_t child_ = -1;
   bool greeted_ = false;
