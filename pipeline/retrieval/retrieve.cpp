@@ -465,11 +465,13 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   const std::filesystem::path l2b_granule = (out_dir.empty() ? "." : out_dir) / "gedi_l2b.h5";
   if (want_l2b_granule && std::filesystem::exists(l2b_granule))
     throw config_error(l2b_granule.string(), "exists already: give another --out");
+  const int cores = tbb::this_task_arena::max_concurrency();
+  tbb::task_arena arena(request.threads > 0 ? std::min(request.threads, cores) : cores);
   std::optional<ForwardTable> table;
   std::optional<RtInversion> rt;
   if (want_rt) {
     table = read_table(*request.table);
-    rt.emplace(*table, request.rt);
+    arena.execute([&] { rt.emplace(*table, request.rt); });  // its calibration on --threads
     rt->check_compatible(input.band_names, input.bin_ns, input.pulse_sigma_ns,
                          request.table->string());
   }
@@ -480,8 +482,6 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   std::atomic<std::int64_t> done{0};
   std::mutex progress_mutex;
   const auto started = std::chrono::steady_clock::now();
-  const int cores = tbb::this_task_arena::max_concurrency();
-  tbb::task_arena arena(request.threads > 0 ? std::min(request.threads, cores) : cores);
   arena.execute([&] {
     tbb::parallel_for(std::int64_t{0}, shots, [&](std::int64_t i) {
       results[i] =

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <memory>
 #include <numeric>
 
 #include "core/error.hpp"
@@ -16,6 +18,14 @@ namespace glaswave {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Two doubles as one SSE2 register (GCC's and Clang's vector extension): fit_terms's sums.
+using Pair = double __attribute__((vector_size(16)));
+Pair load_pair(const double* p) {
+  Pair v;
+  std::memcpy(&v, p, sizeof v);  // unaligned
+  return v;
+}
 
 RtStatistic no_statistic() { return {kNaN, kNaN, kNaN, kNaN}; }
 
@@ -199,9 +209,21 @@ RtInversion::Fit RtInversion::fit(const RtPreparedShot& shot, std::size_t entry,
   return f;
 }
 
+RtInversion::Fit RtInversion::fit_as_searched(const RtPreparedShot& shot, std::size_t entry,
+                                              int shift) const {
+  std::vector<EntryBand> bands;
+  for (std::size_t k = 0; k < table_.bands(); ++k)
+    bands.push_back(
+        {emulated_[entry][k].data(), slope_[entry][k].data(), curvature_[entry][k].data()});
+  EntryTerms terms;
+  entry_terms(shot.noise2, entry, bands.data(), terms);
+  return fit_terms(shot, shot_terms(shot), terms, shift);
+}
+
 // Over R: chi2 = sum m^2 w_out + sum over the entry's support of [(m - T)^2 w - m^2 w_out],
 // w = 1 / (n^2 + u); with T(j - delta) = T - delta T', chi2(delta) = A + 2 delta B + delta^2 C,
-// minimised over delta in [-1/2, 1/2].
+// minimised over delta in [-1/2, 1/2]. The reference: search uses fit_terms, the same sums
+// regrouped.
 RtInversion::Fit RtInversion::fit_calibrated(const RtPreparedShot& shot, std::size_t entry,
                                              int shift, const EntryBand* bands) const {
   double a = shot.outside, bsum = 0.0, c = 0.0, cf = 0.0, cg = 0.0, ch = 0.0;
@@ -247,8 +269,131 @@ RtInversion::Fit RtInversion::fit_calibrated(const RtPreparedShot& shot, std::si
     cg += sg;
     ch += sh;
   }
-  // chi2(delta) = A + 2 B delta + (C - F) delta^2 - G delta^3 + H delta^4 / 4 (T~'s second order
-  // expansion, T'' the bins' second difference): Newton from the first order's minimum.
+  return profile_delta(a, bsum, c, cf, cg, ch, log_det(shot.noise2, entry));
+}
+
+RtInversion::ShotTerms RtInversion::shot_terms(const RtPreparedShot& shot) const {
+  ShotTerms terms;
+  for (const std::vector<double>& m : shot.measured) {
+    std::vector<double> m2_m(2 * m.size()), prefix(m.size() + 1, 0.0);
+    for (std::size_t b = 0; b < m.size(); ++b) {
+      m2_m[2 * b] = m[b] * m[b];
+      m2_m[2 * b + 1] = m[b];
+      prefix[b + 1] = prefix[b] + m2_m[2 * b];
+    }
+    terms.m2_m.push_back(std::move(m2_m));
+    terms.prefix_m2.push_back(std::move(prefix));
+  }
+  return terms;
+}
+
+void RtInversion::entry_terms(const std::vector<double>& noise2, std::size_t entry,
+                              const EntryBand* bands, EntryTerms& terms) const {
+  terms.bands.resize(noise2.size());
+  for (std::size_t k = 0; k < noise2.size(); ++k) {
+    EntryTerms::Band& b = terms.bands[k];
+    b.begin = static_cast<long long>(support_begin_[entry][k]);
+    b.end = std::max(b.begin, static_cast<long long>(support_end_[entry][k]));
+    const std::size_t n = b.n();
+    b.t = bands[k].t + b.begin;
+    b.slope = bands[k].slope + b.begin;
+    b.curvature = bands[k].curvature + b.begin;
+    b.data = std::make_unique_for_overwrite<double[]>(4 * n);
+    double* x = b.data.get();
+    const double n2 = noise2[k];
+    const double* u = signal_var_[entry][k].data() + b.begin;
+    const double* inv = inv_signal_var_[entry][k].data() + b.begin;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double w = n2 > 0.0 ? 1.0 / (n2 + u[i]) : inv[i];
+      x[4 * i] = w;
+      x[4 * i + 1] = b.t[i] * w;
+      x[4 * i + 2] = b.slope[i] * w;
+      x[4 * i + 3] = b.curvature[i] * w;
+    }
+    entry_sums(b, 0, n, b.total);
+  }
+  terms.log_det = log_det(noise2, entry);
+}
+
+void RtInversion::entry_sums(const EntryTerms::Band& b, std::size_t i0, std::size_t i1,
+                             double sums[6]) {
+  const double *t = b.t, *d = b.slope, *e2 = b.curvature, *x = b.data.get();
+  // Two lanes a sum (the bins i0 + even and i0 + odd), fixed as fit_terms's are.
+  Pair q[6] = {};
+  const auto add = [&](std::size_t i, std::size_t lane) {
+    const double tw = x[4 * i + 1], dw = x[4 * i + 2], ew = x[4 * i + 3];
+    const double products[6] = {t[i] * tw, t[i] * dw, t[i] * ew, d[i] * dw, d[i] * ew, e2[i] * ew};
+    for (int r = 0; r < 6; ++r) q[r][lane] += products[r];
+  };
+  std::size_t i = i0;
+  for (; i + 2 <= i1; i += 2) {
+    add(i, 0);
+    add(i + 1, 1);
+  }
+  if (i < i1) add(i, 0);
+  for (int r = 0; r < 6; ++r) sums[r] = q[r][0] + q[r][1];
+}
+
+// fit_calibrated's sums regrouped, r = m - T~ over the bins j of the support within R:
+// sum r^2 w - m^2 w_out = sum m^2 w - 2 sum m T~w + sum T~^2 w - w_out sum m^2, and the slope's
+// and curvature's alike; what holds m is correlated here, the rest is the entry's own sums.
+RtInversion::Fit RtInversion::fit_terms(const RtPreparedShot& shot, const ShotTerms& shot_terms,
+                                        const EntryTerms& terms, int shift) const {
+  double a = shot.outside, bsum = 0.0, c = 0.0, cf = 0.0, cg = 0.0, ch = 0.0;
+  for (std::size_t k = 0; k < terms.bands.size(); ++k) {
+    const EntryTerms::Band& b = terms.bands[k];
+    const long long j0 =
+        std::max<long long>(static_cast<long long>(shot.region_begin) - shift, b.begin);
+    const long long j1 =
+        std::min<long long>(static_cast<long long>(shot.region_end) - shift, b.end);
+    if (j0 >= j1) continue;
+    const std::size_t i0 = static_cast<std::size_t>(j0 - b.begin);
+    const std::size_t i1 = static_cast<std::size_t>(j1 - b.begin);
+    // Per bin: (m^2, m) . (w, T~ w) and (m, m) . (T~' w, T~'' w), in four lanes a sum (lane l
+    // the bins i = l mod 4, in order), fixed by the code rather than by the vector width the
+    // compiler picks, so that the bits are the same on every x86-64.
+    const double* mm = shot_terms.m2_m[k].data() + 2 * (j0 + shift);
+    const double* x = b.data.get() + 4 * i0;
+    Pair q01[4] = {}, q23[4] = {};
+    const std::size_t n = i1 - i0;
+    std::size_t i = 0;
+    for (; i + 4 <= n; i += 4) {
+      for (std::size_t l = 0; l < 4; ++l) {
+        const double* at = x + 4 * (i + l);
+        const double m = mm[2 * (i + l) + 1];
+        q01[l] += load_pair(mm + 2 * (i + l)) * load_pair(at);
+        q23[l] += Pair{m, m} * load_pair(at + 2);
+      }
+    }
+    for (; i < n; ++i) {
+      const double m = mm[2 * i + 1];
+      q01[0] += load_pair(mm + 2 * i) * load_pair(x + 4 * i);
+      q23[0] += Pair{m, m} * load_pair(x + 4 * i + 2);
+    }
+    const Pair s01 = (q01[0] + q01[1]) + (q01[2] + q01[3]);
+    const Pair s23 = (q23[0] + q23[1]) + (q23[2] + q23[3]);
+    const double sum[4] = {s01[0], s01[1], s23[0], s23[1]};
+    double part[6];
+    const double* over = b.total;
+    if (i0 > 0 || i1 < b.n()) {  // R cuts the support: the waveform's ends
+      entry_sums(b, i0, i1, part);
+      over = part;
+    }
+    const std::vector<double>& pm2 = shot_terms.prefix_m2[k];
+    a += sum[0] - 2.0 * sum[1] + over[0] - shot.w_out[k] * (pm2[j1 + shift] - pm2[j0 + shift]);
+    bsum += sum[2] - over[1];
+    c += over[3];
+    cf += sum[3] - over[2];
+    cg += over[4];
+    ch += over[5];
+  }
+  return profile_delta(a, bsum, c, cf, cg, ch, terms.log_det);
+}
+
+// chi2(delta) = A + 2 B delta + (C - F) delta^2 - G delta^3 + H delta^4 / 4 (T~'s second order
+// expansion, T'' the bins' second difference): Newton from the first order's minimum.
+RtInversion::Fit RtInversion::profile_delta(double a, double bsum, double c, double cf, double cg,
+                                            double ch, double log_det) {
   const auto chi2_at = [&](double x) {
     return a + x * (2.0 * bsum + x * ((c - cf) + x * (-cg + 0.25 * x * ch)));
   };
@@ -262,13 +407,14 @@ RtInversion::Fit RtInversion::fit_calibrated(const RtPreparedShot& shot, std::si
   }
   f.delta = x;
   f.chi2 = chi2_at(x);
-  f.log_det = log_det(shot, entry);
+  f.log_det = log_det;
   return f;
 }
 
 std::vector<RtInversion::Cell> RtInversion::search(
     const RtPreparedShot& p, std::int64_t excluded,
-    const std::vector<const EntryBand*>& override_bands, bool* at_edge) const {
+    const std::vector<const EntryBand*>& override_bands, bool* at_edge,
+    const std::vector<EntryTerms>* shared) const {
   const std::size_t entries = table_.entries(), bands = table_.bands();
   const double tau = tempering_;
   std::vector<EntryBand> scratch(bands);
@@ -278,8 +424,21 @@ std::vector<RtInversion::Cell> RtInversion::search(
       scratch[k] = {emulated_[e][k].data(), slope_[e][k].data(), curvature_[e][k].data()};
     return scratch.data();
   };
+  // Each entry's terms: shared, or built at its first cell and kept for the shifts that follow.
+  const ShotTerms shot_sums = shot_terms(p);
+  std::vector<const EntryTerms*> terms(entries, nullptr);
+  std::vector<std::unique_ptr<EntryTerms>> own(entries);
   const auto cell = [&](std::size_t e, int s) {
-    const Fit f = fit_calibrated(p, e, s, bands_of(e));
+    if (!terms[e]) {
+      if (shared && (override_bands.empty() || !override_bands[e])) {
+        terms[e] = &(*shared)[e];
+      } else {
+        own[e] = std::make_unique<EntryTerms>();
+        entry_terms(p.noise2, e, bands_of(e), *own[e]);
+        terms[e] = own[e].get();
+      }
+    }
+    const Fit f = fit_terms(p, shot_sums, *terms[e], s);
     return Cell{static_cast<std::uint32_t>(e), s, -(f.chi2 + f.log_det) / (2.0 * tau), f.chi2,
                 f.delta};
   };

@@ -195,6 +195,10 @@ class RtInversion {
     double chi2 = 0.0, scale = 1.0, delta = 0.0, log_det = 0.0;
   };
   Fit fit(const RtPreparedShot& shot, std::size_t entry, int shift) const;
+  // calibrated: fit's chi2 as the search sums it (fit_terms: its sums regrouped into the shot's
+  // correlations with the entry's weights and the entry's own totals), where fit sums it bin by
+  // bin: the reference the tests hold this to.
+  Fit fit_as_searched(const RtPreparedShot& shot, std::size_t entry, int shift) const;
 
   RtResult invert(const RtShot& shot) const;
 
@@ -247,12 +251,53 @@ class RtInversion {
   RtPreparedShot prepare_window(const RtShot& shot, int centre, int half) const;
   Fit fit_calibrated(const RtPreparedShot& shot, std::size_t entry, int shift,
                      const EntryBand* bands) const;
-  double log_det(const RtPreparedShot& shot, std::size_t entry) const;
+  // fit_calibrated's terms of one entry for one shot's detector noise, kept for every shift the
+  // search tries (16 an entry on average, up to a few hundred): per band over the entry's
+  // support, the weights w = 1 / V and their products with the emulated waveform, its slope and
+  // curvature, which the shot is correlated with, and the sums that do not hold the shot; and
+  // sum log V.
+  struct EntryTerms {
+    struct Band {
+      long long begin = 0, end = 0;  // the entry's support, n = end - begin bins
+      const double *t = nullptr, *slope = nullptr, *curvature = nullptr;  // from its support
+      // Per bin of the support, interleaved (one stream for the kernel to read): w, T~ w, T~' w,
+      // T~'' w (4 n values, not zeroed).
+      std::unique_ptr<double[]> data;
+      // Over the whole support (the range at nearly every shift): T~^2 w, T~ T~' w, T~ T~'' w,
+      // T~'^2 w, T~' T~'' w, T~''^2 w.
+      double total[6] = {};
+      std::size_t n() const { return static_cast<std::size_t>(end - begin); }
+    };
+    std::vector<Band> bands;
+    double log_det = 0.0;
+  };
+  // The six sums of Band::total over the support's bins [i0, i1).
+  static void entry_sums(const EntryTerms::Band& band, std::size_t i0, std::size_t i1,
+                         double sums[6]);
+  // The shot's m^2 and m per bin, interleaved, and the prefix sums of m^2, per band: the other
+  // half of the correlations.
+  struct ShotTerms {
+    std::vector<std::vector<double>> m2_m, prefix_m2;
+  };
+  ShotTerms shot_terms(const RtPreparedShot& shot) const;
+  // Entry `entry`'s terms for a shot of detector noise variances `noise2` (per band).
+  void entry_terms(const std::vector<double>& noise2, std::size_t entry, const EntryBand* bands,
+                   EntryTerms& terms) const;
+  // fit_calibrated from the terms: the same chi2 to rounding (its sums regrouped), its per-bin
+  // work two pairs of products instead of a division and a dozen operations.
+  Fit fit_terms(const RtPreparedShot& shot, const ShotTerms& shot_terms, const EntryTerms& terms,
+                int shift) const;
+  // The fit from its sums over the bins: chi2 profiled over the sub-bin offset delta.
+  static Fit profile_delta(double a, double bsum, double c, double cf, double cg, double ch,
+                           double log_det);
+  double log_det(const std::vector<double>& noise2, std::size_t entry) const;
   // The cells searched (calibrated); `excluded` an entry left out (the calibration's), `override`
-  // bands per entry where non-null.
+  // bands per entry where non-null; `shared` (where non-null) every entry's terms for this
+  // shot's noise, used where an entry has no override (the calibration's shots, all without
+  // detector noise, share them).
   std::vector<Cell> search(const RtPreparedShot& shot, std::int64_t excluded,
-                           const std::vector<const EntryBand*>& override_bands,
-                           bool* at_edge) const;
+                           const std::vector<const EntryBand*>& override_bands, bool* at_edge,
+                           const std::vector<EntryTerms>* shared = nullptr) const;
   RtResult summarise(const RtPreparedShot& shot, const std::vector<Cell>& cells,
                      bool at_edge) const;
 

@@ -122,8 +122,6 @@ std::unique_ptr<RtInversion::Projection> RtInversion::build_projection(
   q.slope_norm2.resize(entries);
   q.scale.resize(entries);
   q.log_det.resize(entries);
-  RtPreparedShot level;
-  level.noise2 = noise2;
   for (std::size_t e = 0; e < entries; ++e) {
     transformed(e, y.data(), dy.data());
     y -= mean;
@@ -138,7 +136,7 @@ std::unique_ptr<RtInversion::Projection> RtInversion::build_projection(
         var_linear_[0] * std::max(half, signal_floor_W_[0]) + var_quadratic_[0] * half * half;
     const double rho = measured_factor_ + leverage_[e] * per_entry;
     q.scale[e] = (noise2[0] + rho_ref * v) / std::max(noise2[0] + rho * v, 1e-300);
-    q.log_det[e] = log_det(level, e);
+    q.log_det[e] = log_det(noise2, e);
   }
   return out;
 }

@@ -2,6 +2,8 @@
 // the entries' order by each variable and place in the design, and for the calibrated likelihood
 // the local linear emulator, the noise model v(T), the variances and their log-determinants, and
 // the tempering tau calibrated on the table's own first shots (rt_inversion.hpp says how).
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -294,11 +296,11 @@ void RtInversion::build_variances() {
   }
 }
 
-double RtInversion::log_det(const RtPreparedShot& shot, std::size_t entry) const {
+double RtInversion::log_det(const std::vector<double>& noise2, std::size_t entry) const {
   double sum = 0.0;
-  for (std::size_t b = 0; b < shot.noise2.size(); ++b) {
+  for (std::size_t b = 0; b < noise2.size(); ++b) {
     const std::vector<double>& grid = log_det_grid_[entry][b];
-    const double n2 = shot.noise2[b];
+    const double n2 = noise2[b];
     if (!(n2 > 0.0)) {
       sum += grid[0];
       continue;
@@ -398,9 +400,20 @@ void RtInversion::calibrate_tempering() {
   // Start from the correlation's own count: a Gaussian pulse of sigma bins correlates the
   // bins' noise as exp(-d^2 / 4 sigma^2), whose sum over lags is 2 sqrt(pi) sigma.
   tempering_ = std::max(1.0, 2.0 * std::sqrt(std::numbers::pi) * t.pulse_sigma_ns / t.bin_ns);
+  // Every entry's terms for shots without detector noise, shared by the cases' searches.
+  const std::vector<double> no_noise(bands, 0.0);
+  std::vector<EntryTerms> shared(entries);
+  std::vector<EntryBand> own_bands(bands);
+  for (std::size_t e = 0; e < entries; ++e) {
+    for (std::size_t k = 0; k < bands; ++k)
+      own_bands[k] = {emulated_[e][k].data(), slope_[e][k].data(), curvature_[e][k].data()};
+    entry_terms(no_noise, e, own_bands.data(), shared[e]);
+  }
   for (int round = 0; round < 6; ++round) {
-    std::vector<double> z2;
-    for (const Case& c : cases) {
+    // The cases in parallel (the caller's arena: --threads), each its own z^2, sorted together.
+    std::vector<std::vector<double>> z2_of(cases.size());
+    tbb::parallel_for(std::size_t{0}, cases.size(), [&](std::size_t i) {
+      const Case& c = cases[i];
       RtShot shot;
       for (const auto& w : c.waveform) shot.waveform.emplace_back(w);
       shot.axis = {t.bin_ns, t.height_m.front(), t.height_m.back()};
@@ -408,7 +421,7 @@ void RtInversion::calibrate_tempering() {
       shot.noise_sd_W.assign(bands, 0.0);
       shot.ground_guess_m = 0.0;
       const RtPreparedShot p = prepare_window(shot, 0, 3);
-      if (!p.usable) continue;
+      if (!p.usable) return;
       std::vector<std::vector<EntryBand>> views(c.user_ids.size(), std::vector<EntryBand>(bands));
       std::vector<const EntryBand*> override(entries, nullptr);
       for (std::size_t u = 0; u < c.user_ids.size(); ++u) {
@@ -419,8 +432,8 @@ void RtInversion::calibrate_tempering() {
       }
       bool edge = false;
       const std::vector<Cell> cells =
-          search(p, static_cast<std::int64_t>(c.entry), override, &edge);
-      if (cells.empty()) continue;
+          search(p, static_cast<std::int64_t>(c.entry), override, &edge, &shared);
+      if (cells.empty()) return;
       double top = -std::numeric_limits<double>::infinity();
       for (const Cell& cell : cells) top = std::max(top, cell.log_likelihood);
       std::vector<double> weight(entries, 0.0);
@@ -437,9 +450,11 @@ void RtInversion::calibrate_tempering() {
         const double sd = std::sqrt(s2 / sw);
         // A posterior narrower than the design's spacing cannot say how wrong it is.
         const double z = (t.parameter_values[c.entry][q] - mean) / std::max(sd, 1e-12);
-        z2.push_back(z * z);
+        z2_of[i].push_back(z * z);
       }
-    }
+    });
+    std::vector<double> z2;
+    for (const std::vector<double>& z : z2_of) z2.insert(z2.end(), z.begin(), z.end());
     if (z2.size() < 5) break;
     std::sort(z2.begin(), z2.end());
     const double ratio = z2[z2.size() * 9 / 10] / kP90Chi2One;

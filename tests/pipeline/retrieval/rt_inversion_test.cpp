@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "pipeline/config/config.hpp"
@@ -210,6 +211,46 @@ TEST_F(LayerTable, EntriesFollowTheClosedForm) {
   EXPECT_NEAR(ratio / std::exp(-(t.pai_true[high] - t.pai_true[low]) / 2.0), 1.0, 0.1);
   EXPECT_GT(t.mc_relative_sd, 0.0);
   EXPECT_LT(t.mc_relative_sd, 0.2);
+}
+
+// The search's chi2 (the calibrated likelihood's sums regrouped: the shot correlated with each
+// entry's weights, the rest the entry's own totals) against the bin-by-bin sum (a second
+// method), for every entry at every shift of a wide window, whose outer shifts cut the entries'
+// support at the waveform's ends, with and without detector noise: equal to the rounding of
+// sums of the size of sum m^2 w over R (`outside`, the chi2 of the shot against no signal).
+TEST_F(LayerTable, TheSearchsRegroupedSumsAreTheBinByBinChiSquared) {
+  const RtInversion rt(*table_, RtSettings{});
+  json document = layer_configuration();
+  document["canopy"]["pai"] = 2.7;
+  const ShotRecord record = held_out(document, 1, 4242).front();
+  for (double noise_fraction : {0.0, 0.01}) {
+    RtShot shot = measured(record);
+    const std::vector<double>& w = record.rx_waveform_W[0];
+    shot.noise_sd_W[0] = noise_fraction * *std::max_element(w.begin(), w.end());
+    const RtPreparedShot p = rt.prepare(shot);
+    ASSERT_TRUE(p.usable);
+    int cut = 0, compared = 0;
+    double worst = 0.0;
+    const int bins = static_cast<int>(table_->height_m.size());
+    for (std::size_t e = 0; e < table_->entries(); ++e) {
+      for (int s = p.first_shift - bins; s <= p.last_shift + bins; ++s) {
+        const RtInversion::Fit reference = rt.fit(p, e, s), searched = rt.fit_as_searched(p, e, s);
+        const double scale = std::abs(reference.chi2) + p.outside;
+        worst = std::max(worst, std::abs(searched.chi2 - reference.chi2) / scale);
+        ASSERT_NEAR(searched.chi2, reference.chi2, 1e-12 * scale)
+            << "entry " << e << " shift " << s;
+        ASSERT_NEAR(searched.delta, reference.delta, 1e-9) << "entry " << e << " shift " << s;
+        ASSERT_EQ(searched.log_det, reference.log_det);
+        cut += s < p.first_shift || s > p.last_shift;
+        ++compared;
+      }
+    }
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", worst);
+    RecordProperty(noise_fraction > 0.0 ? "worst_relative_noisy" : "worst_relative", text);
+    EXPECT_GT(cut, 0);
+    EXPECT_GT(compared, 1000);
+  }
 }
 
 // Held-out layers (another seed, another place, the ground 100 m up): the posterior mean PAI
