@@ -12,7 +12,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -20,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/cpu_time.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -117,9 +117,10 @@ TEST_F(Check, RefusesExactlyWhatRunRefuses) {
 }
 
 // A pass of 10^9 shots (the most a track may have) is checked in seconds: check locates 10^6
-// footprints evenly spread over it, and says so (issue 42: it located every one, an hour).
+// footprints evenly spread over it, and says so (issue 42: it located every one, an hour). 3.3 s
+// of CPU measured; bounded in CPU, which a loaded machine does not stretch as it does wall time.
 TEST_F(Check, APassOfTheMostShotsIsCheckedBySample) {
-  const auto started = std::chrono::steady_clock::now();
+  const double cpu_before_s = test_support::cpu_used_s();
   const CommandOutcome check =
       run_glaswave("check " + write_config({{"track", {{"shots", 1000000000}}}}));
   EXPECT_EQ(check.status, 0) << check.output;
@@ -127,7 +128,7 @@ TEST_F(Check, APassOfTheMostShotsIsCheckedBySample) {
                               "located, evenly spread)"),
             std::string::npos)
       << check.output;
-  EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(60));
+  EXPECT_LT(test_support::cpu_used_s() - cpu_before_s, 60.0);
   const CommandOutcome small = run_glaswave("check " + write_config({{"track", {{"shots", 3}}}}));
   EXPECT_NE(small.output.find("3 shots, 0 off the terrain\n"), std::string::npos) << small.output;
 }
@@ -348,9 +349,10 @@ TEST_F(Check, MemoryEstimateIsWithinTwiceTheMeasuredPeak) {
     const double estimate_mib = unit == "GiB" ? estimate * 1024.0 : estimate;
     ASSERT_EQ(unit.substr(1), "iB") << check.output;
     // The strips' scenes counted where the shots share them.
-    if (name == "GEDI strips")
+    if (name == "GEDI strips") {
       EXPECT_NE(check.output.find("5 x a strip's scene of 8 shots"), std::string::npos)
           << check.output;
+    }
     // The run in a process of its own, its peak resident memory as the kernel counted it.
     const std::string out = (dir_ / ("out-" + std::to_string(k))).string();
     const pid_t pid = fork();
