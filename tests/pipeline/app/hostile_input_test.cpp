@@ -25,6 +25,23 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace test_support;
 
+// Under AddressSanitizer (./scripts/test --sanitize) the voxel grid's reader program, sanitized
+// too, reports HDF5 1.10.8's own overread of a corrupt global heap (H5HG_read, inside libhdf5:
+// tests/fuzz/known/README.md) on the standard error it shares with glaswave, before it ends and
+// glaswave refuses the grid; a release build's reader ends of it without a word. That report, and
+// no other, is taken off the start of the output.
+std::string without_readers_hdf5_report(std::string output) {
+#if defined(__SANITIZE_ADDRESS__)
+  const std::string end = "==ABORTING\n";
+  for (std::size_t at = output.find(end);
+       output.rfind("=====", 0) == 0 && at != std::string::npos &&
+       output.substr(0, at).find(" in H5HG_read ") != std::string::npos;
+       at = output.find(end))
+    output.erase(0, at + end.size());
+#endif
+  return output;
+}
+
 class HostileInput : public ::testing::Test {
  protected:
   json base() const { return one_glas_shot(); }
@@ -59,7 +76,8 @@ class HostileInput : public ::testing::Test {
     const CommandOutcome check = run_glaswave("check " + config + " " + options);
     const CommandOutcome run =
         run_glaswave("run " + config + " --quiet --out " + out().string() + " " + options);
-    for (const CommandOutcome& outcome : {check, run}) {
+    for (CommandOutcome outcome : {check, run}) {
+      outcome.output = without_readers_hdf5_report(outcome.output);
       EXPECT_EQ(outcome.status, status) << message << ": " << outcome.output;
       EXPECT_EQ(outcome.output.rfind("glaswave: error: " + message, 0), 0u) << outcome.output;
       EXPECT_EQ(std::count(outcome.output.begin(), outcome.output.end(), '\n'), 1)
