@@ -172,11 +172,7 @@ double RtInversion::ground_elevation_m(const RtPreparedShot& shot, int shift) co
 
 RtInversion::Fit RtInversion::fit(const RtPreparedShot& shot, std::size_t entry, int shift) const {
   if (settings_.likelihood == RtLikelihood::calibrated) {
-    std::vector<EntryBand> bands;
-    for (std::size_t k = 0; k < table_.bands(); ++k)
-      bands.push_back(
-          {emulated_[entry][k].data(), slope_[entry][k].data(), curvature_[entry][k].data()});
-    return fit_calibrated(shot, entry, shift, bands.data());
+    return fit_calibrated(shot, entry, shift, own_bands(entry).data());
   }
   // Per band, over R: sum (m - a T)^2 = M2 - 2 a C + a^2 TT, where the table's bin j meets the
   // measured bin j + shift; T is 0 beyond the table's bins.
@@ -209,14 +205,18 @@ RtInversion::Fit RtInversion::fit(const RtPreparedShot& shot, std::size_t entry,
   return f;
 }
 
-RtInversion::Fit RtInversion::fit_as_searched(const RtPreparedShot& shot, std::size_t entry,
-                                              int shift) const {
+std::vector<RtInversion::EntryBand> RtInversion::own_bands(std::size_t entry) const {
   std::vector<EntryBand> bands;
   for (std::size_t k = 0; k < table_.bands(); ++k)
     bands.push_back(
         {emulated_[entry][k].data(), slope_[entry][k].data(), curvature_[entry][k].data()});
+  return bands;
+}
+
+RtInversion::Fit RtInversion::fit_as_searched(const RtPreparedShot& shot, std::size_t entry,
+                                              int shift) const {
   EntryTerms terms;
-  entry_terms(shot.noise2, entry, bands.data(), terms);
+  entry_terms(shot.noise2, entry, own_bands(entry).data(), terms);
   return fit_terms(shot, shot_terms(shot), terms, shift);
 }
 
@@ -415,13 +415,12 @@ std::vector<RtInversion::Cell> RtInversion::search(
     const RtPreparedShot& p, std::int64_t excluded,
     const std::vector<const EntryBand*>& override_bands, bool* at_edge,
     const std::vector<EntryTerms>* shared) const {
-  const std::size_t entries = table_.entries(), bands = table_.bands();
+  const std::size_t entries = table_.entries();
   const double tau = tempering_;
-  std::vector<EntryBand> scratch(bands);
+  std::vector<EntryBand> scratch;
   const auto bands_of = [&](std::size_t e) -> const EntryBand* {
     if (!override_bands.empty() && override_bands[e]) return override_bands[e];
-    for (std::size_t k = 0; k < bands; ++k)
-      scratch[k] = {emulated_[e][k].data(), slope_[e][k].data(), curvature_[e][k].data()};
+    scratch = own_bands(e);
     return scratch.data();
   };
   // Each entry's terms: shared, or built at its first cell and kept for the shifts that follow.

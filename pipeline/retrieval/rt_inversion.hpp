@@ -225,6 +225,8 @@ class RtInversion {
     const double* slope;
     const double* curvature;
   };
+  // Entry e's own bands: its emulated T~, slope and curvature (no override).
+  std::vector<EntryBand> own_bands(std::size_t entry) const;
   // The transformed entries' principal components at one level of detector noise per band.
   struct Projection {
     std::size_t components = 0, width = 0;  // K, bands x bins

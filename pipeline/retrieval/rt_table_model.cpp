@@ -403,12 +403,8 @@ void RtInversion::calibrate_tempering() {
   // Every entry's terms for shots without detector noise, shared by the cases' searches.
   const std::vector<double> no_noise(bands, 0.0);
   std::vector<EntryTerms> shared(entries);
-  std::vector<EntryBand> own_bands(bands);
-  for (std::size_t e = 0; e < entries; ++e) {
-    for (std::size_t k = 0; k < bands; ++k)
-      own_bands[k] = {emulated_[e][k].data(), slope_[e][k].data(), curvature_[e][k].data()};
-    entry_terms(no_noise, e, own_bands.data(), shared[e]);
-  }
+  for (std::size_t e = 0; e < entries; ++e)
+    entry_terms(no_noise, e, own_bands(e).data(), shared[e]);
   for (int round = 0; round < 6; ++round) {
     // The cases in parallel (the caller's arena: --threads), each its own z^2, sorted together.
     std::vector<std::vector<double>> z2_of(cases.size());
