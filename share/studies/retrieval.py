@@ -444,6 +444,98 @@ def markdown_saturation(saturation):
     return "\n".join(lines) + "\n"
 
 
+# ---------------------------------------------------------------------------------------------
+# What a waveform can tell at all: forests of the table whose waveforms a shot cannot tell apart.
+
+
+def ray_amplitude(waveform, shot0, shots_per_entry):
+    """One ray's amplitude a, from the scatter of each entry's first shot about its other shots'
+    mean: a shot's Monte Carlo variance is a T (T the expected waveform), and S0 - S_rest has
+    variance a T (1 + 1 / (K - 1)), pooled over every entry and bin."""
+    w, s0 = np.asarray(waveform, float), np.asarray(shot0, float)
+    k = float(shots_per_entry)
+    rest = (k * w - s0) / (k - 1.0)
+    return float(np.sum((s0 - rest) ** 2) / ((1.0 + 1.0 / (k - 1.0)) * np.sum(w)))
+
+
+def alike_pairs(waveform, shot0, shots_per_entry, truths, fractions=(1.0, 0.5), quantile=0.9):
+    """Pairs of the table's entries whose mean waveforms differ by no more than two shots of one
+    forest do, and how far apart their truths lie.
+
+    A shot's noise is its rays' (variance a T, `ray_amplitude`, floored at one ray). Two shots of
+    one forest, an entry's first and the mean of its others, lie d_self = sum (S0 - S_rest)^2 /
+    ((1 + 1 / (K - 1)) a max(T, a)) apart; two entries' means d = sum (W_i - W_j)^2 / (a (max(W_i,
+    a) + max(W_j, a)) / K). Pairs with d at most `fraction` times d_self's `quantile` are as alike
+    as two shots of one forest at 1 / fraction times the table's rays (a fixed difference's d
+    grows with the rays; the means' own noise makes the rows past 1 undercount: at 4 times none
+    are left). `truths`: name -> [entry] values. Returns rows of the threshold, the pairs and
+    each truth's RMS difference over them: sqrt(2) times the sd of that truth among forests a
+    shot cannot tell apart, which is the RMSE an inversion that knew the forests' waveforms
+    exactly would still have."""
+    w, s0 = np.asarray(waveform, float), np.asarray(shot0, float)
+    k = float(shots_per_entry)
+    a = ray_amplitude(w, s0, k)
+    floor = np.maximum(w, a)
+    rest = (k * w - s0) / (k - 1.0)
+    d_self = np.sum((s0 - rest) ** 2 / ((1.0 + 1.0 / (k - 1.0)) * a * floor), axis=1)
+    threshold = float(np.quantile(d_self, quantile))
+    values = {name: np.asarray(v, float) for name, v in truths.items()}
+    distance = np.full((len(w), len(w)), np.inf)
+    for i in range(len(w)):
+        distance[i, i + 1:] = np.sum((w[i] - w[i + 1:]) ** 2 / (a * (floor[i] + floor[i + 1:]) / k),
+                                     axis=1)
+    rows = []
+    for fraction in fractions:
+        first, second = np.nonzero(distance <= threshold * fraction)
+        row = {"rays_factor": 1.0 / fraction, "threshold": threshold * fraction,
+               "pairs": int(first.size), "entries": int(len(w))}
+        for name, v in values.items():
+            d = v[first] - v[second]
+            d = d[np.isfinite(d)]
+            row[name] = float(np.sqrt(np.mean(d ** 2))) if d.size else math.nan
+        rows.append(row)
+    return {"ray_amplitude_W": a, "self_median": float(np.median(d_self)), "rows": rows}
+
+
+def table_alike_pairs(table_nc):
+    """alike_pairs of a table's first band, for its truths and its ground-return cover 1 - Eg/Eg0
+    (Eg0 fitted to the entries as fit_ground_energy does); None with one shot an entry."""
+    with netCDF4.Dataset(table_nc) as nc:
+        k = int(nc.getncattr("shots_per_entry"))
+        if k < 2 or "waveform_shot0" not in nc.variables:
+            return None
+        w = np.asarray(nc["waveform"][:, 0, :], float)
+        s0 = np.asarray(nc["waveform_shot0"][:, 0, :], float)
+        pai, cover = np.asarray(nc["pai_true"][:], float), np.asarray(nc["cover_true"][:], float)
+        height = np.asarray(nc["canopy_height_true"][:], float)
+        eg = np.asarray(nc["energy_ground"][:, 0], float)
+    eg0, _, _ = fit_ground_energy(pai, cover, eg)
+    return alike_pairs(w, s0, k, {"cover": cover, "pai": pai, "canopy_height": height,
+                                  "ground_return_cover": 1.0 - eg / eg0})
+
+
+def markdown_alike(alike):
+    lines = ["Pairs of different entries whose mean waveforms differ by no more than two shots "
+             "of one forest do (the 90th percentile of the entries' own two shots' distance), at "
+             "the table's rays and as if shots had twice as many; each truth's RMS difference "
+             "over the pairs over sqrt(2): its sd among forests a shot cannot tell apart, the "
+             "RMSE left to an inversion that knew every forest's waveform exactly. The "
+             "ground-return cover is 1 - Eg/Eg0.\n",
+             "| sensor | rays (x table's) | pairs | cover | PAI | canopy height (m) | "
+             "ground-return cover |", "|---|---|---|---|---|---|---|"]
+    for sensor, a in alike.items():
+        if a is None:
+            continue
+        for r in a["rows"]:
+            sd = {name: r[name] / math.sqrt(2.0) for name in
+                  ("cover", "pai", "canopy_height", "ground_return_cover")}
+            lines.append(f"| {sensor.upper()} | {r['rays_factor']:.0f} | {r['pairs']} of "
+                         f"{r['entries'] * (r['entries'] - 1) // 2} | {sd['cover']:.3f} | "
+                         f"{sd['pai']:.2f} | {sd['canopy_height']:.2f} | "
+                         f"{sd['ground_return_cover']:.3f} |")
+    return "\n".join(lines) + "\n"
+
+
 def concatenate(parts):
     keys = set.intersection(*(set(p) for p in parts))
     return {k: np.concatenate([p[k] for p in parts]) for k in keys}
@@ -668,7 +760,7 @@ def main():
     runs = Runs(args.glaswave, args.out, args.threads)
     started = time.monotonic()
     sensors = [s for s in SENSORS if size["stands"][s] > 0]
-    parts, speeds, tables, saturation = [], {}, {}, {}
+    parts, speeds, tables, saturation, alike = [], {}, {}, {}, {}
     for sensor in sensors:
         table = runs.table(table_document(sensor, size), f"{sensor} table")
         with netCDF4.Dataset(table) as nc:
@@ -686,6 +778,7 @@ def main():
             saturation[sensor] = saturation_rows(part, sensor, float(nc.getncattr("bin_ns")),
                                                  float(nc.getncattr("pulse_sigma_ns")),
                                                  size["rays"])
+        alike[sensor] = table_alike_pairs(table)
         parts.append(part)
         speeds[sensor] = {"shots": summary["shots"], "methods_wall_s": summary["wall_s"],
                           "shots_per_s": summary["shots_per_s"],
@@ -703,7 +796,8 @@ def main():
             "\n## By stratum (bias / RMSE, rt's 90 % coverage in brackets)\n\n" +
             markdown_strata(rows) +
             "\n## The ground return's change per unit PAI against the noise\n\n" +
-            markdown_saturation(saturation))
+            markdown_saturation(saturation) +
+            "\n## Forests a waveform cannot tell apart\n\n" + markdown_alike(alike))
     write_atomic(os.path.join(args.out, "retrieval_metrics.md"), text)
     plot_scatter(shots, sensors, os.path.join(args.out, "retrieval_scatter.png"))
     plot_slope(shots, sensors, os.path.join(args.out, "retrieval_slope.png"))
@@ -715,6 +809,7 @@ def main():
         "wall_s": time.monotonic() - started,
         "metrics": [r for r in rows if r["stratum"] == "all"],
         "saturation": saturation,
+        "alike_pairs": alike,
     }
     write_atomic(os.path.join(args.out, "summary.json"),
                  json.dumps(summary, indent=1, default=float) + "\n")

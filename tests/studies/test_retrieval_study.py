@@ -107,3 +107,28 @@ def test_saturation_pai_by_hand():
     assert retrieval.saturation_pai(1.0, 0.5, 0.5, 0.01) == pytest.approx(math.log(50.0))
     assert retrieval.saturation_pai(1.0, 0.5, 0.5, 0.01, 2.0) == pytest.approx(math.log(25.0))
     assert retrieval.saturation_pai(1.0, 0.5, 0.9, 1.0) == 0.0
+
+
+def test_alike_pairs_by_hand():
+    # Two shots an entry, two bins. Entries 0 and 1 have the same mean waveform; 2 and 3 each
+    # their own. Each first shot lies delta off its mean, so S0 - S_rest = 2 delta:
+    # a = sum (2 delta)^2 / ((1 + 1) sum W) = (4 + 4 + 100 + 100) / (2 * 208) = 0.5.
+    waveform = np.array([[4.0, 0.0], [4.0, 0.0], [100.0, 0.0], [0.0, 100.0]])
+    delta = np.array([[1.0, 0.0], [1.0, 0.0], [5.0, 0.0], [0.0, 5.0]])
+    shot0 = waveform + delta
+    assert retrieval.ray_amplitude(waveform, shot0, 2) == pytest.approx(0.5)
+    # d_self = (2 delta)^2 / (2 a max(W, a)) = 4 / 4 = 1 and 100 / 100 = 1: the threshold is 1.
+    # d(0, 1) = 0; d(0, 2) = 96^2 / (0.5 (4 + 100) / 2) = 354: only (0, 1) is alike, at both
+    # thresholds (1 and 0.5). Its covers differ by 0.3.
+    result = retrieval.alike_pairs(waveform, shot0, 2, {"cover": [0.2, 0.5, 0.9, 0.1]})
+    assert result["self_median"] == pytest.approx(1.0)
+    assert [r["pairs"] for r in result["rows"]] == [1, 1]
+    assert [r["threshold"] for r in result["rows"]] == pytest.approx([1.0, 0.5])
+    assert result["rows"][0]["cover"] == pytest.approx(0.3)
+    # Entry 1's mean moved 2 off entry 0's in the first bin: a = 208 / (2 * 210), the threshold
+    # 4 / (2 a 4) = 1.01 (entries 0, 2 and 3), d(0, 1) = 4 / (a (4 + 6) / 2) = 1.62: no pair.
+    waveform[1, 0] = 6.0
+    shot0 = waveform + delta
+    rows = retrieval.alike_pairs(waveform, shot0, 2, {"cover": [0.2, 0.5, 0.9, 0.1]})["rows"]
+    assert [r["pairs"] for r in rows] == [0, 0]
+    assert math.isnan(rows[0]["cover"])
