@@ -408,6 +408,13 @@ const ProductField kProductFields[] = {
      .units = "m",
      .long_name = "highest vegetation above the ground over the footprint (simulation truth)",
      .standard_name = "canopy_height"},
+    {.name = "pgap_true",
+     .type = S::float64,
+     .field = &R::pgap_true,
+     .source = F::truth,
+     .units = "1",
+     .long_name = "gap probability looking down vertically through the vegetation, weighted by "
+                  "the beam (simulation truth): one less GEDI L2B's canopy cover"},
     // The atmosphere's truth (PRODUCT.md section 12): only with an `atmosphere` section.
     {.name = "atmosphere_transmission",
      .type = S::float64,

@@ -84,6 +84,9 @@ struct ShotRecord {
   double cover_true = std::numeric_limits<double>::quiet_NaN();
   double pai_true = std::numeric_limits<double>::quiet_NaN();
   double canopy_height_true_m = std::numeric_limits<double>::quiet_NaN();
+  // The beam's part that vertical lines carry through the vegetation to the ground (1 on bare
+  // ground): the gap probability GEDI L2B's cover is one minus.
+  double pgap_true = std::numeric_limits<double>::quiet_NaN();
   // [band], with an `atmosphere` section only (else empty, and not written): the layers' two-way
   // transmission, the part of the return they scattered and its extra path (shot_transport.hpp).
   std::vector<double> atmosphere_transmission, atmosphere_scattered_fraction, atmosphere_delay_m;

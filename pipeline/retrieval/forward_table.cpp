@@ -91,7 +91,7 @@ struct EntryResult {
   std::vector<double> mc_sd_W;
   std::vector<std::vector<double>> shot0_W;  // [band][bin] the first shot, on the entry's axis
   std::vector<double> energy_canopy_J, energy_ground_J;
-  double pai = 0.0, cover = 0.0, height = 0.0;
+  double pai = 0.0, cover = 0.0, height = 0.0, pgap = 0.0;
   double off_nadir_deg = 0.0;
 };
 
@@ -130,6 +130,7 @@ EntryResult simulate_entry(const Config& config, std::int64_t shots_wanted,
     entry.pai += record.pai_true / shots;
     entry.cover += record.cover_true / shots;
     entry.height += record.canopy_height_true_m / shots;
+    entry.pgap += record.pgap_true / shots;
   }
   const std::size_t bins = entry.height_m.size();
   for (std::size_t band = 0; band < bands; ++band) {
@@ -294,6 +295,7 @@ ForwardTable build_table(const TableRequest& request, const TableProgress& progr
     table.pai_true.push_back(r.pai);
     table.cover_true.push_back(r.cover);
     table.canopy_height_true_m.push_back(r.height);
+    table.pgap_true.push_back(r.pgap);
     table.energy_canopy_J.push_back(r.energy_canopy_J);
     table.energy_ground_J.push_back(r.energy_ground_J);
     table.rhov_rhog.push_back(
@@ -396,6 +398,8 @@ void write_table(const ForwardTable& table, const std::filesystem::path& path,
   nc.define_variable("pai_true", NC_DOUBLE, {"entry"}, "1", "plant area index under the beam");
   nc.define_variable("cover_true", NC_DOUBLE, {"entry"}, "1", "canopy cover under the beam");
   nc.define_variable("canopy_height_true", NC_DOUBLE, {"entry"}, "m", "canopy height");
+  nc.define_variable("pgap_true", NC_DOUBLE, {"entry"}, "1",
+                     "gap probability looking down vertically, under the beam");
   nc.define_variable("rhov_rhog", NC_DOUBLE, {"entry"}, "1",
                      "canopy-to-ground reflectance ratio the forest implies (first band)");
   nc.end_define();
@@ -426,6 +430,7 @@ void write_table(const ForwardTable& table, const std::filesystem::path& path,
   nc.write("pai_true", table.pai_true);
   nc.write("cover_true", table.cover_true);
   nc.write("canopy_height_true", table.canopy_height_true_m);
+  nc.write("pgap_true", table.pgap_true);
   nc.write("rhov_rhog", table.rhov_rhog);
   nc.commit();
 }
@@ -505,6 +510,9 @@ ForwardTable read_table(const std::filesystem::path& path) {
   table.pai_true = per_entry("pai_true");
   table.cover_true = per_entry("cover_true");
   table.canopy_height_true_m = per_entry("canopy_height_true");
+  // Tables made before the gap probability was measured hold none: NaN, which rt reports.
+  table.pgap_true =
+      nc.has_variable("pgap_true") ? per_entry("pgap_true") : std::vector<double>(entries, kNaN);
   table.rhov_rhog = per_entry("rhov_rhog");
   const std::optional<std::string> keys = nc.text_attribute("", "parameters");
   if (!keys) fail("no attribute `parameters`");

@@ -50,6 +50,7 @@ struct ForwardTable {
   std::int64_t shots_per_entry = 1;
   std::int64_t rays_per_shot = 0;
   std::vector<double> pai_true, cover_true, canopy_height_true_m;  // [entry]
+  std::vector<double> pgap_true;  // [entry] the vertical gap probability (NaN in older tables)
   // [entry][band]: the energies of the returns last scattered by vegetation and by the ground (J).
   std::vector<std::vector<double>> energy_canopy_J, energy_ground_J;
   // [entry] the canopy-to-ground reflectance ratio the forest implies at the first band: the one

@@ -115,7 +115,8 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
                             off_nadir = per_shot("off_nadir_deg"), bin0 = per_shot("elev_bin0"),
                             lastbin = per_shot("elev_lastbin"), flag = per_shot("quality_flag"),
                             beam = per_shot("beam"), cover = per_shot("cover_true"),
-                            pai = per_shot("pai_true"), height = per_shot("canopy_height_true");
+                            pai = per_shot("pai_true"), height = per_shot("canopy_height_true"),
+                            pgap = per_shot("pgap_true");
   const std::vector<double> canopy = per_band("rx_energy_canopy"),
                             ground = per_band("rx_energy_ground");
   const std::vector<double> waveforms =
@@ -145,6 +146,7 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
     s.canopy_height_true_m = height[i];
     s.cover_true = cover[i];
     s.pai_true = pai[i];
+    s.pgap_true = pgap[i];
     s.ground_elevation_true_m = elev[i];
     s.rhov_rhog_true = implied_rhov_rhog(canopy[i * bands], ground[i * bands], cover[i]);
   }
@@ -167,7 +169,7 @@ struct ShotResults {
   GediL2bResult l2b = GediL2bResult::none({});
 };
 
-constexpr MethodEstimates kNone{kNaN, kNaN, kNaN, kNaN, kNaN};
+constexpr MethodEstimates kNone{kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
 
 ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
                           const std::vector<std::string>& methods, const RtInversion* rt) {
@@ -197,14 +199,15 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
   }
   r.l2b = l2b;
   if (r.estimates.count("gedi_l2a") && selected.has_ground)
-    r.estimates["gedi_l2a"] = {selected.rh_m[98], kNaN, kNaN, selected.elev_lowestmode_m, kNaN};
+    r.estimates["gedi_l2a"] = {selected.rh_m[98],          kNaN, kNaN,
+                               selected.elev_lowestmode_m, kNaN, kNaN};
   if (r.estimates.count("gedi_l2a") && l2a.groups[0].has_ground) {
     r.a1_rh98_m = l2a.groups[0].rh_m[98];
     r.a1_ground_m = l2a.groups[0].elev_lowestmode_m;
   }
   if (r.estimates.count("gedi_l2b") && l2b.algorithmrun_flag) {
-    r.estimates["gedi_l2b"] = {kNaN, l2b.cover, l2b.pai, selected.elev_lowestmode_m,
-                               l2b.rhov / l2b.rhog};
+    r.estimates["gedi_l2b"] = {
+        kNaN, l2b.cover, l2b.pai, selected.elev_lowestmode_m, l2b.rhov / l2b.rhog, l2b.pgap_theta};
     std::copy(l2b.pavd_z.begin(), l2b.pavd_z.end(), r.pavd_z.begin());
   }
   if (r.estimates.count("wi") && l2b.algorithmrun_flag) {
@@ -212,8 +215,8 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
     // when canopy and ground reflect alike (rhov/rhog = 1), and its PAI L2B's formula's.
     const double wi = waveform_index(l2b.rv, l2b.rg);
     const double cover = 0.5 * (1.0 + wi);
-    r.estimates["wi"] = {kNaN, cover, -std::log(1.0 - cover) * std::cos(zenith_rad) / 0.5, kNaN,
-                         1.0};
+    r.estimates["wi"] = {kNaN, cover, -std::log(1.0 - cover) * std::cos(zenith_rad) / 0.5,
+                         kNaN, 1.0,   1.0 - cover};
   }
   if (rt) {
     RtShot input;
@@ -229,15 +232,17 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
                            : selected.has_ground ? selected.elev_lowestmode_m
                                                  : kNaN;
     r.rt = rt->invert(input);
-    r.estimates["rt"] = {r.rt.canopy_height_m.mean, r.rt.cover.mean, r.rt.pai.mean,
-                         r.rt.ground_elevation_m.mean, r.rt.rhov_rhog.mean};
+    r.estimates["rt"] = {r.rt.canopy_height_m.mean,    r.rt.cover.mean,     r.rt.pai.mean,
+                         r.rt.ground_elevation_m.mean, r.rt.rhov_rhog.mean, r.rt.pgap.mean};
   }
   (void)pulse_sigma_ns;
   return r;
 }
 
-const char* const kVariables[] = {"canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog"};
-const char* const kUnits[] = {"m", "1", "1", "m", "1"};
+const char* const kVariables[] = {"canopy_height",    "cover",     "pai",
+                                  "ground_elevation", "rhov_rhog", "pgap"};
+const char* const kUnits[] = {"m", "1", "1", "m", "1", "1"};
+constexpr int kVariableCount = 6;
 
 double variable_of(const MethodEstimates& e, int v) {
   switch (v) {
@@ -249,8 +254,10 @@ double variable_of(const MethodEstimates& e, int v) {
       return e.pai;
     case 3:
       return e.ground_elevation_m;
-    default:
+    case 4:
       return e.rhov_rhog;
+    default:
+      return e.pgap;
   }
 }
 
@@ -264,8 +271,10 @@ RtStatistic statistic_of(const RtResult& r, int v) {
       return r.pai;
     case 3:
       return r.ground_elevation_m;
-    default:
+    case 4:
       return r.rhov_rhog;
+    default:
+      return r.pgap;
   }
 }
 
@@ -303,7 +312,7 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
                      "lower edge of the 5 m height bin above the ground");
   const std::string coordinates = "lat lon";
   for (const std::string& m : methods) {
-    for (int v = 0; v < 5; ++v) {
+    for (int v = 0; v < kVariableCount; ++v) {
       const std::string name = std::string(kVariables[v]) + "_" + m;
       nc.define_variable(name, NC_DOUBLE, {"shot"}, kUnits[v],
                          std::string(kVariables[v]) + " retrieved by " + m);
@@ -348,7 +357,7 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
                        "ground elevation of the rt best fit");
   }
   if (input.simulated) {
-    for (int v = 0; v < 5; ++v)
+    for (int v = 0; v < kVariableCount; ++v)
       nc.define_variable(std::string(kVariables[v]) + "_true", NC_DOUBLE, {"shot"}, kUnits[v],
                          std::string(kVariables[v]) + ": the simulation's truth");
   }
@@ -370,7 +379,7 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
   nc.write("height", heights);
   std::vector<double> column(shots);
   for (const std::string& m : methods) {
-    for (int v = 0; v < 5; ++v) {
+    for (int v = 0; v < kVariableCount; ++v) {
       for (std::size_t i = 0; i < shots; ++i)
         column[i] = variable_of(results[i].estimates.at(m), v);
       nc.write(std::string(kVariables[v]) + "_" + m, column);
@@ -415,11 +424,11 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
     nc.write("rt_best_ground_elevation", column);
   }
   if (input.simulated) {
-    for (int v = 0; v < 5; ++v) {
+    for (int v = 0; v < kVariableCount; ++v) {
       for (std::size_t i = 0; i < shots; ++i) {
         const MeasuredShot& s = input.shots[i];
-        const double values[] = {s.canopy_height_true_m, s.cover_true, s.pai_true,
-                                 s.ground_elevation_true_m, s.rhov_rhog_true};
+        const double values[] = {s.canopy_height_true_m,    s.cover_true,     s.pai_true,
+                                 s.ground_elevation_true_m, s.rhov_rhog_true, s.pgap_true};
         column[i] = values[v];
       }
       nc.write(std::string(kVariables[v]) + "_true", column);

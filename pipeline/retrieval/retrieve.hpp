@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -52,6 +53,7 @@ struct MeasuredShot {
   bool good = true;
   // Truth of simulated input (NaN otherwise).
   double canopy_height_true_m, cover_true, pai_true, ground_elevation_true_m, rhov_rhog_true;
+  double pgap_true = std::numeric_limits<double>::quiet_NaN();
   GediShotInfo gedi;  // GEDI L1B input's (present) and its L2A's
 };
 
@@ -74,6 +76,7 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
 // Each method's estimates of one shot: V per method, NaN where a method gives none.
 struct MethodEstimates {
   double canopy_height_m, cover, pai, ground_elevation_m, rhov_rhog;
+  double pgap;  // the vertical gap probability: L2B's Pgap, one less WI's cover, rt's
 };
 
 RetrieveSummary run_retrieval(const RetrieveRequest& request,

@@ -64,7 +64,8 @@ RtStatistic weighted_statistic(const std::vector<double>& values, const std::vec
 
 RtResult RtResult::none() {
   RtResult r;
-  r.canopy_height_m = r.cover = r.pai = r.ground_elevation_m = r.rhov_rhog = no_statistic();
+  r.canopy_height_m = r.cover = r.pai = r.ground_elevation_m = r.rhov_rhog = r.pgap =
+      no_statistic();
   r.chi2_min = r.dof = r.ground_guess_m = r.best_ground_elevation_m = kNaN;
   r.flag = rt_not_run;
   return r;
@@ -539,6 +540,12 @@ std::vector<RtInversion::Cell> RtInversion::search(
   return cells;
 }
 
+void RtInversion::entry_statistics(const std::vector<double>& entry_weight, RtResult& r) const {
+  RtStatistic* statistics[] = {&r.canopy_height_m, &r.cover, &r.pai, &r.rhov_rhog, &r.pgap};
+  for (std::size_t v = 0; v < truths_.size(); ++v)
+    *statistics[v] = weighted_statistic(*truths_[v], entry_weight, sorted_[v]);
+}
+
 RtResult RtInversion::summarise(const RtPreparedShot& p, const std::vector<Cell>& cells,
                                 bool at_edge) const {
   const std::size_t entries = table_.entries();
@@ -556,10 +563,7 @@ RtResult RtInversion::summarise(const RtPreparedShot& p, const std::vector<Cell>
     shift_delta[c.shift - p.first_shift] += w * c.delta;
   }
   RtResult r;
-  r.canopy_height_m = weighted_statistic(table_.canopy_height_true_m, entry_weight, sorted_[0]);
-  r.cover = weighted_statistic(table_.cover_true, entry_weight, sorted_[1]);
-  r.pai = weighted_statistic(table_.pai_true, entry_weight, sorted_[2]);
-  r.rhov_rhog = weighted_statistic(table_.rhov_rhog, entry_weight, sorted_[3]);
+  entry_statistics(entry_weight, r);
   std::vector<double> grounds(shifts);
   std::vector<std::uint32_t> order(shifts);
   for (int s = 0; s < shifts; ++s) {
@@ -634,10 +638,7 @@ RtResult RtInversion::invert(const RtShot& shot) const {
     }
   }
   RtResult r;
-  r.canopy_height_m = weighted_statistic(table_.canopy_height_true_m, entry_weight, sorted_[0]);
-  r.cover = weighted_statistic(table_.cover_true, entry_weight, sorted_[1]);
-  r.pai = weighted_statistic(table_.pai_true, entry_weight, sorted_[2]);
-  r.rhov_rhog = weighted_statistic(table_.rhov_rhog, entry_weight, sorted_[3]);
+  entry_statistics(entry_weight, r);
   std::vector<double> grounds(shifts);
   std::vector<std::uint32_t> order(shifts);
   for (int s = 0; s < shifts; ++s) {

@@ -149,6 +149,7 @@ struct RtStatistic {
 
 struct RtResult {
   RtStatistic canopy_height_m, cover, pai, ground_elevation_m, rhov_rhog;
+  RtStatistic pgap;  // the vertical gap probability (NaN from a table that holds none)
   double chi2_min = 0.0;
   double dof = 0.0;
   std::uint8_t flag = 0;
@@ -302,6 +303,8 @@ class RtInversion {
                            const std::vector<EntryTerms>* shared = nullptr) const;
   RtResult summarise(const RtPreparedShot& shot, const std::vector<Cell>& cells,
                      bool at_edge) const;
+  // The entries' truths' statistics under these weights, into r.
+  void entry_statistics(const std::vector<double>& entry_weight, RtResult& r) const;
 
   const ForwardTable& table_;
   RtSettings settings_;
@@ -310,7 +313,10 @@ class RtInversion {
   // prefix sums of T^2.
   std::vector<std::vector<std::size_t>> support_begin_, support_end_;
   std::vector<std::vector<std::vector<double>>> prefix_tt_;
-  // Entry indices sorted by each variable (height, cover, pai, rhov_rhog), for the quantiles.
+  // The entries' truths (height, cover, pai, rhov_rhog, pgap: the table's, or NaN where it
+  // holds none) and their indices sorted by each, for the quantiles.
+  std::vector<const std::vector<double>*> truths_;
+  std::vector<double> pgap_true_;
   std::vector<std::vector<std::uint32_t>> sorted_;
   // Per entry: whether it lies in the outer edge of a varied range, low or high, per parameter.
   std::vector<std::vector<std::uint8_t>> edge_;

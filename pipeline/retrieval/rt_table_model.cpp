@@ -59,9 +59,12 @@ RtInversion::RtInversion(const ForwardTable& table, const RtSettings& settings)
       for (std::size_t j = 0; j < bins; ++j) prefix[j + 1] = prefix[j] + t[j] * t[j];
     }
   }
-  const std::vector<const std::vector<double>*> variables = {
-      &table.canopy_height_true_m, &table.cover_true, &table.pai_true, &table.rhov_rhog};
-  for (const std::vector<double>* v : variables) {
+  pgap_true_ = table.pgap_true.size() == entries
+                   ? table.pgap_true
+                   : std::vector<double>(entries, std::numeric_limits<double>::quiet_NaN());
+  truths_ = {&table.canopy_height_true_m, &table.cover_true, &table.pai_true, &table.rhov_rhog,
+             &pgap_true_};
+  for (const std::vector<double>* v : truths_) {
     std::vector<std::uint32_t> order(entries);
     std::iota(order.begin(), order.end(), 0u);
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {

@@ -17,14 +17,15 @@ constexpr int half_nodes = 20;  // a footprint's grid: 41 x 41 lines out to 3 si
 
 // One vertical line down through the scene from above everything at (x_m, y_m).
 struct VerticalLine {
-  bool ground = false;      // it met the ground (else it is left out)
-  double plant_area = 0.0;  // m^2 m^-2 crossed
-  bool covered = false;     // it crossed foliage
-  double canopy_m = 0.0;    // its first foliage above the ground
+  bool ground = false;         // it met the ground (else it is left out)
+  double plant_area = 0.0;     // m^2 m^-2 crossed
+  double optical_depth = 0.0;  // G toward the zenith times the plant area, summed over foliage
+  bool covered = false;        // it crossed foliage
+  double canopy_m = 0.0;       // its first foliage above the ground
 };
 
-VerticalLine measure_line(const Scene& scene, double x_m, double y_m,
-                          std::vector<VolumeSpan>& spans) {
+VerticalLine measure_line(const Scene& scene, const std::vector<double>& nadir_projection,
+                          double x_m, double y_m, std::vector<VolumeSpan>& spans) {
   VerticalLine line;
   const Vec3 origin{x_m, y_m, scene.top_m() + 1.0};
   const Vec3 down{0.0, 0.0, -1.0};
@@ -34,7 +35,9 @@ VerticalLine measure_line(const Scene& scene, double x_m, double y_m,
   scene.volume_spans(origin, down, ground.distance_m, spans);
   double first_m = ground.distance_m;
   for (const VolumeSpan& span : spans) {
-    line.plant_area += span.area_density_m2_m3 * (span.end_m - span.start_m);
+    const double area = span.area_density_m2_m3 * (span.end_m - span.start_m);
+    line.plant_area += area;
+    line.optical_depth += nadir_projection.at(static_cast<std::size_t>(span.material)) * area;
     first_m = std::min(first_m, span.start_m);
   }
   line.covered = !spans.empty();
@@ -44,7 +47,7 @@ VerticalLine measure_line(const Scene& scene, double x_m, double y_m,
 
 // The beam-weighted sums of the lines a footprint weighs, `r_sq` from its centre.
 struct TruthSums {
-  VegetationTruth truth;
+  VegetationTruth truth{.gap_probability = 0.0};
   double weights = 0.0;
 
   void add(const VerticalLine& line, double r_sq, double sigma_m) {
@@ -56,6 +59,7 @@ struct TruthSums {
     weights += weight;
     truth.pai += weight * line.plant_area;
     truth.cover += line.covered ? weight : 0.0;
+    truth.gap_probability += weight * std::exp(-line.optical_depth);
     if (r_sq <= 4.0 * sigma_m * sigma_m)
       truth.canopy_height_m = std::max(truth.canopy_height_m, line.canopy_m);
   }
@@ -64,6 +68,9 @@ struct TruthSums {
     if (weights > 0.0) {
       mean.pai /= weights;
       mean.cover /= weights;
+      mean.gap_probability /= weights;
+    } else {
+      mean.gap_probability = 1.0;  // no line met the ground: nothing measured, as cover 0 says
     }
     return mean;
   }
@@ -71,7 +78,8 @@ struct TruthSums {
 
 }  // namespace
 
-VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot) {
+VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot,
+                                   const std::vector<double>& nadir_projection) {
   if (!scene.has_volumes()) return {};
   const double step_m = 3.0 * spot.sigma_m / half_nodes;
   std::vector<VolumeSpan> spans;
@@ -79,7 +87,8 @@ VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot) {
   for (int j = -half_nodes; j <= half_nodes; ++j) {
     for (int i = -half_nodes; i <= half_nodes; ++i) {
       const double x = i * step_m, y = j * step_m;
-      sums.add(measure_line(scene, spot.x_m + x, spot.y_m + y, spans), x * x + y * y, spot.sigma_m);
+      sums.add(measure_line(scene, nadir_projection, spot.x_m + x, spot.y_m + y, spans),
+               x * x + y * y, spot.sigma_m);
     }
   }
   return sums.mean();
@@ -95,7 +104,8 @@ struct TruthGrid::Tile {
   std::array<VerticalLine, kTile * kTile> lines;
 };
 
-TruthGrid::TruthGrid(const Scene& scene, double step_m) : scene_(scene), step_m_(step_m) {}
+TruthGrid::TruthGrid(const Scene& scene, double step_m, std::vector<double> nadir_projection)
+    : scene_(scene), step_m_(step_m), nadir_projection_(std::move(nadir_projection)) {}
 
 TruthGrid::~TruthGrid() = default;
 
@@ -121,9 +131,9 @@ void TruthGrid::tiles(std::int64_t ti0, std::int64_t ti1, std::int64_t tj0, std:
       std::vector<VolumeSpan> spans;
       for (int b = 0; b < Tile::kTile; ++b)
         for (int a = 0; a < Tile::kTile; ++a)
-          tile->lines[b * Tile::kTile + a] =
-              measure_line(scene_, static_cast<double>(ti * Tile::kTile + a) * step_m_,
-                           static_cast<double>(tj * Tile::kTile + b) * step_m_, spans);
+          tile->lines[b * Tile::kTile + a] = measure_line(
+              scene_, nadir_projection_, static_cast<double>(ti * Tile::kTile + a) * step_m_,
+              static_cast<double>(tj * Tile::kTile + b) * step_m_, spans);
       tile->measured.store(true, std::memory_order_release);
     }
 }
@@ -227,6 +237,7 @@ VegetationTruth measure_facets(const Scene& scene, const BeamSpot& spot) {
     }
   }
   if (weights > 0.0) truth.cover /= weights;
+  truth.gap_probability = 1.0 - truth.cover;
   return truth;
 }
 

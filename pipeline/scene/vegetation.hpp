@@ -27,9 +27,16 @@ struct VegetationTruth {
   double cover = 0.0;            // part of the beam's light falling on a crown's shadow from above
   double pai = 0.0;              // plant area crossed by a vertical line, beam-weighted mean
   double canopy_height_m = 0.0;  // highest foliage above the ground within 2 sigma of the centre
+  // Part of the beam's light that a vertical line passes through the vegetation to the ground
+  // (exp of its optical depth, G toward the zenith times the plant area crossed): the gap
+  // probability GEDI L2B's cover is one minus.
+  double gap_probability = 1.0;
 };
 
-VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot);
+// Along vertical lines; `nadir_projection[m]` is the foliage of material m's G toward the
+// zenith (its leaves' projected area), for the gap probability.
+VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot,
+                                   const std::vector<double>& nadir_projection);
 
 // measure_vegetation's vertical lines on one grid of the scene's frame (nodes at multiples of
 // step_m east and north), each measured once, by the first footprint that weighs it, and shared
@@ -39,7 +46,8 @@ VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot);
 // quadratures of the same integral on grids shifted by under a step. Thread-safe.
 class TruthGrid {
  public:
-  TruthGrid(const Scene& scene, double step_m);  // the scene outlives the grid
+  // The scene outlives the grid; nadir_projection as measure_vegetation's.
+  TruthGrid(const Scene& scene, double step_m, std::vector<double> nadir_projection);
   ~TruthGrid();
   VegetationTruth measure(const BeamSpot& spot) const;
 
@@ -51,12 +59,14 @@ class TruthGrid {
 
   const Scene& scene_;
   double step_m_;
+  std::vector<double> nadir_projection_;
   mutable std::mutex mutex_;
   mutable std::map<std::pair<std::int64_t, std::int64_t>, std::unique_ptr<Tile>> tiles_;
 };
 
 // The same for facet trees: cover and height along the vertical lines (a line covered where the
-// first surface it meets is a facet), and the plant area as the facets' one-sided area under
+// first surface it meets is a facet; an opaque facet leaves no gap: the gap probability is one
+// less the cover), and the plant area as the facets' one-sided area under
 // the beam's weight, over the weight's integral 2 pi sigma^2 (each model's area gathered on its
 // area cells).
 VegetationTruth measure_facets(const Scene& scene, const BeamSpot& spot);

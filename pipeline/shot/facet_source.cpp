@@ -99,7 +99,8 @@ RegionVegetation FacetSource::grow(const VegetationRegion& region) const {
   return grown;
 }
 
-VegetationTruth FacetSource::truth(const Scene& scene, const BeamSpot& spot) const {
+VegetationTruth FacetSource::truth(const Scene& scene, const BeamSpot& spot,
+                                   const std::vector<double>& /*nadir_projection*/) const {
   return measure_facets(scene, spot);
 }
 

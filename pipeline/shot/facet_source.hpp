@@ -37,7 +37,8 @@ class FacetSource : public VegetationSource {
   RegionVegetation grow(const VegetationRegion& region) const override;
 
   // Cover and height along vertical lines, the plant area from the facets' own area.
-  VegetationTruth truth(const Scene& scene, const BeamSpot& spot) const override;
+  VegetationTruth truth(const Scene& scene, const BeamSpot& spot,
+                        const std::vector<double>& nadir_projection) const override;
 
   std::vector<Placed> placed() const override;
   bool fixed_on_the_ground() const override { return true; }  // trees placed on the Earth

@@ -10,6 +10,7 @@
 #include "footprints/terrain_intersection.hpp"
 #include "pipeline/products/product_fields.hpp"
 #include "pipeline/shot/footprint_geometry.hpp"
+#include "pipeline/transport/scattering.hpp"
 
 namespace glaswave {
 
@@ -181,11 +182,15 @@ void ShotSimulator::trace(ShotRecord& record, const Footprint& footprint, const 
   // The truth over the footprint, beside the estimates: what the beam really fell on.
   const BeamSpot spot{shot.centre_m[0], shot.centre_m[1],
                       footprint.range_m * lidar_.beam_sigma_rad()};
-  const VegetationTruth truth = shot.stretch && shot.stretch->truth
-                                    ? shot.stretch->truth->measure(spot)
-                                : vegetation_ ? vegetation_->truth(scene, spot)
-                                              : measure_vegetation(scene, spot);
+  const auto own_truth = [&] {
+    const std::vector<double> nadir = nadir_projection(shot.built().optics);
+    return vegetation_ ? vegetation_->truth(scene, spot, nadir)
+                       : measure_vegetation(scene, spot, nadir);
+  };
+  const VegetationTruth truth =
+      shot.stretch && shot.stretch->truth ? shot.stretch->truth->measure(spot) : own_truth();
   record.cover_true = truth.cover;
+  record.pgap_true = truth.gap_probability;
   record.pai_true = truth.pai;
   record.canopy_height_true_m = truth.canopy_height_m;
   if (outline_read())

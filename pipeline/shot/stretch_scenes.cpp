@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "pipeline/shot/footprint_geometry.hpp"
+#include "pipeline/transport/scattering.hpp"
 
 namespace glaswave {
 
@@ -257,7 +258,8 @@ void StretchScenes::finish(StretchScene& scene, const std::vector<Footprint>& he
   const Footprint& middle = held[held.size() / 2];
   if (!vegetation || vegetation->measured_on_volumes())
     scene.truth = std::make_unique<TruthGrid>(*scene.built.scene,
-                                              0.15 * middle.range_m * lidar_.beam_sigma_rad());
+                                              0.15 * middle.range_m * lidar_.beam_sigma_rad(),
+                                              nadir_projection(scene.built.optics));
 }
 
 }  // namespace glaswave

@@ -17,8 +17,9 @@ VegetationKind kind_of(const std::string& name) {
 
 }  // namespace
 
-VegetationTruth VegetationSource::truth(const Scene& scene, const BeamSpot& spot) const {
-  return measure_vegetation(scene, spot);
+VegetationTruth VegetationSource::truth(const Scene& scene, const BeamSpot& spot,
+                                        const std::vector<double>& nadir_projection) const {
+  return measure_vegetation(scene, spot, nadir_projection);
 }
 
 std::unique_ptr<VegetationSource> make_vegetation_source(const VegetationSettings& settings) {

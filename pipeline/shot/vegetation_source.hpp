@@ -78,10 +78,12 @@ class VegetationSource {
   // What grows in the region. Thread-safe: every thread of a run asks at once.
   virtual RegionVegetation grow(const VegetationRegion& region) const = 0;
 
-  // The truth over a footprint (cover, PAI, canopy height along vertical lines under the beam,
-  // a Gaussian about the spot's centre). By default measured on the scene's turbid volumes; a
-  // source of surfaces (leaf facets) says what its facets make.
-  virtual VegetationTruth truth(const Scene& scene, const BeamSpot& spot) const;
+  // The truth over a footprint (cover, PAI, canopy height, gap probability along vertical lines
+  // under the beam, a Gaussian about the spot's centre; nadir_projection as measure_vegetation's).
+  // By default measured on the scene's turbid volumes; a source of surfaces (leaf facets) says
+  // what its facets make.
+  virtual VegetationTruth truth(const Scene& scene, const BeamSpot& spot,
+                                const std::vector<double>& nadir_projection) const;
   // Whether truth() is measure_vegetation's, which shots sharing a scene measure on one grid
   // (TruthGrid); false for a source that says its own.
   virtual bool measured_on_volumes() const { return true; }

@@ -118,4 +118,11 @@ void project_foliage(const SceneOptics& optics, double cos_zenith,
   }
 }
 
+std::vector<double> nadir_projection(const SceneOptics& optics) {
+  std::vector<double> projection;
+  for (const Foliage& foliage : optics.foliage)
+    projection.push_back(foliage.leaf_angles ? foliage.leaf_angles->projection(1.0) : 0.0);
+  return projection;
+}
+
 }  // namespace glaswave

@@ -40,6 +40,9 @@ struct SceneOptics {
 // projection (one value a foliage). Thousands of stands share a few leaf angle tables (one
 // object each): one lookup a table.
 void project_foliage(const SceneOptics& optics, double cos_zenith, std::vector<double>& projection);
+// Each foliage's G toward the zenith (0 for a material of no leaf angles: facets, bark), for the
+// truth's gap probability (pipeline/scene/vegetation.hpp).
+std::vector<double> nadir_projection(const SceneOptics& optics);
 
 // Embree's float geometry needs a path leaving a surface to start a little off it.
 constexpr double surface_offset_m = 1e-4;

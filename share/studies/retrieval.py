@@ -45,8 +45,12 @@ RETRIEVE_METHODS = ["gedi_l2a", "gedi_l2b", "wi", "rt"]
 # gedi_l2a_a1: L2A's default group alone (retrieval.nc's canopy_height_gedi_l2a_a1 and
 # ground_elevation_gedi_l2a_a1), beside the selected group's gedi_l2a.
 METHODS = ["gedi_l2a", "gedi_l2a_a1", "gedi_l2b", "wi", "rt"]
-VARIABLES = ["canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog"]
-UNITS = {"canopy_height": "m", "cover": "", "pai": "", "ground_elevation": "m", "rhov_rhog": ""}
+# pgap: the vertical gap probability over the footprint, the part of the beam that reaches the
+# ground between and through the crowns; GEDI L2B's cover is one less it (its Pgap), where
+# `cover` is the crowns' cover.
+VARIABLES = ["canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog", "pgap"]
+UNITS = {"canopy_height": "m", "cover": "", "pai": "", "ground_elevation": "m", "rhov_rhog": "",
+         "pgap": ""}
 COLOURS = {"gedi_l2a": "tab:orange", "gedi_l2a_a1": "tab:purple", "gedi_l2b": "tab:blue",
            "wi": "tab:green", "rt": "tab:red"}
 SLOPE_CLASSES_DEG = [(0.0, 10.0), (10.0, 20.0), (20.0, 30.0)]
@@ -498,8 +502,9 @@ def alike_pairs(waveform, shot0, shots_per_entry, truths, fractions=(1.0, 0.5), 
 
 
 def table_alike_pairs(table_nc):
-    """alike_pairs of a table's first band, for its truths and its ground-return cover 1 - Eg/Eg0
-    (Eg0 fitted to the entries as fit_ground_energy does); None with one shot an entry."""
+    """alike_pairs of a table's first band, for its truths (pgap NaN in a table without it) and
+    its ground-return cover 1 - Eg/Eg0 (Eg0 fitted to the entries as fit_ground_energy does);
+    None with one shot an entry."""
     with netCDF4.Dataset(table_nc) as nc:
         k = int(nc.getncattr("shots_per_entry"))
         if k < 2 or "waveform_shot0" not in nc.variables:
@@ -509,9 +514,11 @@ def table_alike_pairs(table_nc):
         pai, cover = np.asarray(nc["pai_true"][:], float), np.asarray(nc["cover_true"][:], float)
         height = np.asarray(nc["canopy_height_true"][:], float)
         eg = np.asarray(nc["energy_ground"][:, 0], float)
+        pgap = (np.asarray(nc["pgap_true"][:], float) if "pgap_true" in nc.variables
+                else np.full(len(pai), np.nan))
     eg0, _, _ = fit_ground_energy(pai, cover, eg)
     return alike_pairs(w, s0, k, {"cover": cover, "pai": pai, "canopy_height": height,
-                                  "ground_return_cover": 1.0 - eg / eg0})
+                                  "pgap": pgap, "ground_return_cover": 1.0 - eg / eg0})
 
 
 def markdown_alike(alike):
@@ -521,17 +528,17 @@ def markdown_alike(alike):
              "over the pairs over sqrt(2): its sd among forests a shot cannot tell apart, the "
              "RMSE left to an inversion that knew every forest's waveform exactly. The "
              "ground-return cover is 1 - Eg/Eg0.\n",
-             "| sensor | rays (x table's) | pairs | cover | PAI | canopy height (m) | "
-             "ground-return cover |", "|---|---|---|---|---|---|---|"]
+             "| sensor | rays (x table's) | pairs | cover | PAI | canopy height (m) | Pgap | "
+             "ground-return cover |", "|---|---|---|---|---|---|---|---|"]
     for sensor, a in alike.items():
         if a is None:
             continue
         for r in a["rows"]:
             sd = {name: r[name] / math.sqrt(2.0) for name in
-                  ("cover", "pai", "canopy_height", "ground_return_cover")}
+                  ("cover", "pai", "canopy_height", "pgap", "ground_return_cover")}
             lines.append(f"| {sensor.upper()} | {r['rays_factor']:.0f} | {r['pairs']} of "
                          f"{r['entries'] * (r['entries'] - 1) // 2} | {sd['cover']:.3f} | "
-                         f"{sd['pai']:.2f} | {sd['canopy_height']:.2f} | "
+                         f"{sd['pai']:.2f} | {sd['canopy_height']:.2f} | {sd['pgap']:.3f} | "
                          f"{sd['ground_return_cover']:.3f} |")
     return "\n".join(lines) + "\n"
 
@@ -592,9 +599,9 @@ def write_metrics_csv(path, rows):
 def write_shots_csv(path, shots):
     names = ["sensor", "stand", "shot_number", "crown_shape", "in_table_ranges", "truth_in_table",
              "slope_deg", "rt_flag"]
-    names += [f"{v}_true" for v in VARIABLES]
+    names += [f"{v}_true" for v in VARIABLES if f"{v}_true" in shots]
     names += [f"{v}_{m}" for m in METHODS for v in VARIABLES if f"{v}_{m}" in shots]
-    names += [f"{v}_rt_{p}" for v in VARIABLES for p in ("p05", "p95")]
+    names += [f"{v}_rt_{p}" for v in VARIABLES for p in ("p05", "p95") if f"{v}_rt_{p}" in shots]
     temporary = path + ".part"
     with open(temporary, "w", newline="") as f:
         writer = csv.writer(f, lineterminator="\n")
@@ -629,7 +636,7 @@ def markdown(rows, stratum="all"):
     return "\n".join(lines) + "\n"
 
 
-def markdown_strata(rows, variables=("canopy_height", "cover", "pai", "ground_elevation")):
+def markdown_strata(rows, variables=("canopy_height", "cover", "pai", "ground_elevation", "pgap")):
     """RMSE (and rt's coverage) by stratum: where each method fails."""
     strata = []
     for row in rows:
@@ -665,7 +672,8 @@ def markdown_strata(rows, variables=("canopy_height", "cover", "pai", "ground_el
 
 
 def plot_scatter(shots, sensors, path):
-    variables = ["canopy_height", "cover", "pai", "ground_elevation"]
+    variables = [v for v in ("canopy_height", "cover", "pai", "ground_elevation", "pgap")
+                 if f"{v}_true" in shots]
     figure, axes = plt.subplots(len(sensors), len(variables),
                                 figsize=(4.0 * len(variables), 3.8 * len(sensors)), squeeze=False)
     for r, sensor in enumerate(sensors):
@@ -691,7 +699,7 @@ def plot_scatter(shots, sensors, path):
                 ax.set_ylim(-15, 15)
             else:
                 ax.plot([low, high], [low, high], "k-", lw=0.8)
-                if variable == "cover":
+                if variable in ("cover", "pgap"):
                     ax.set_ylim(-0.05, 1.05)
                 if variable == "pai":
                     ax.set_ylim(-0.2, 12)
@@ -705,7 +713,8 @@ def plot_scatter(shots, sensors, path):
 
 
 def plot_slope(shots, sensors, path):
-    variables = ["canopy_height", "cover", "pai", "ground_elevation"]
+    variables = [v for v in ("canopy_height", "cover", "pai", "ground_elevation", "pgap")
+                 if f"{v}_true" in shots]
     edges = np.arange(0.0, 30.1, 5.0)
     centres = 0.5 * (edges[1:] + edges[:-1])
     figure, axes = plt.subplots(len(sensors), len(variables),

@@ -59,6 +59,10 @@ TEST(TurbidLayer, SingleScatteringMatchesClosedForms) {
     // The footprint's truth: a layer covers everything with its PAI, 10 m tall.
     EXPECT_NEAR(shot.record.cover_true, 1.0, 1e-12);
     EXPECT_NEAR(shot.record.pai_true, L, 1e-6);
+    // A vertical line's gap probability through spherical leaves (G = 1/2): e^-L/2, with G as
+    // the transport's leaf-angle table gives it (within 2e-4 of 1/2: LeafAngles' test), so to
+    // L e^-L/2 2e-4 = 1.3e-4.
+    EXPECT_NEAR(shot.record.pgap_true, std::exp(-0.5 * L), 1.5e-4);
     // 1 cm: the slab is flat in the shot's frame, the ground curves away by d^2 / 2R (3 mm at
     // the footprint's 3 sigma, 200 m).
     EXPECT_NEAR(shot.record.canopy_height_true_m, 10.0, 0.01);

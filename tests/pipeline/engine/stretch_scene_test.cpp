@@ -56,6 +56,7 @@ TEST(StretchScene, TracesWhatEachShotsOwnSceneDoes) {
     height.push_back(b.canopy_height_true_m - a.canopy_height_true_m);
     EXPECT_NEAR(b.cover_true, a.cover_true, 0.02) << footprint.shot_number;
     EXPECT_NEAR(b.pai_true, a.pai_true, 0.02) << footprint.shot_number;
+    EXPECT_NEAR(b.pgap_true, a.pgap_true, 0.02) << footprint.shot_number;
     EXPECT_NEAR(b.canopy_height_true_m, a.canopy_height_true_m, 0.3) << footprint.shot_number;
     // The sun interpolated along the stretch against ERFA at the shot (its error against SPA:
     // 0.001 deg).
@@ -155,6 +156,7 @@ TEST(StretchScene, GranulesAloneComputeWhatTheyReadTheSameBits) {
     EXPECT_EQ(b.solar_elevation_deg, a.solar_elevation_deg);
     EXPECT_EQ(b.cover_true, a.cover_true);
     EXPECT_EQ(b.pai_true, a.pai_true);
+    EXPECT_EQ(b.pgap_true, a.pgap_true);
     EXPECT_EQ(b.canopy_height_true_m, a.canopy_height_true_m);
     EXPECT_FALSE(a.rx_waveform_W.empty());
     EXPECT_TRUE(b.rx_waveform_W.empty());

@@ -119,6 +119,7 @@ ShotRecord make_record(int record, int orders) {
     shot.rh_m.push_back(rh);
   }
   shot.cover_true = 0.7 - 0.1 * record;
+  shot.pgap_true = 0.4 + 0.1 * record;
   shot.pai_true = 3.0 + record;
   shot.canopy_height_true_m = 30.0 + record;
   return shot;
@@ -146,7 +147,7 @@ ShotRecord make_flagged_record(int record) {
   for (auto field : {&ShotRecord::gauss_amp_W, &ShotRecord::gauss_center_m,
                      &ShotRecord::gauss_sigma_ns, &ShotRecord::gauss_area_J, &ShotRecord::rh_m})
     (shot.*field).clear();
-  shot.cover_true = shot.pai_true = shot.canopy_height_true_m = std::nan("");
+  shot.cover_true = shot.pai_true = shot.canopy_height_true_m = shot.pgap_true = std::nan("");
   return shot;
 }
 
@@ -338,6 +339,7 @@ TEST_F(NetcdfWriterTest, EveryVariableHasUnitsAndLongName) {
                                           "cover_true",
                                           "pai_true",
                                           "canopy_height_true",
+                                          "pgap_true",
                                           "order"};
   int nvars = 0;
   ASSERT_EQ(nc_inq_nvars(nc.id(), &nvars), NC_NOERR);
@@ -405,7 +407,8 @@ TEST_F(NetcdfWriterTest, EveryVariableOfTheProductContractIsThere) {
       {"rh", {"shot", "band", "percentile"}},
       {"cover_true", {"shot"}},
       {"pai_true", {"shot"}},
-      {"canopy_height_true", {"shot"}}};
+      {"canopy_height_true", {"shot"}},
+      {"pgap_true", {"shot"}}};
   for (const auto& [name, dims] : contract) {
     ASSERT_TRUE(nc.has_var(name)) << name;
     EXPECT_EQ(nc.dims_of(name), dims) << name;
@@ -682,7 +685,7 @@ TEST_F(NetcdfWriterTest, WaveformMetricsComeBackWithTheirUnits) {
       {"gauss_center_m", "m"},  {"gauss_sigma_ns", "ns"},   {"gauss_area", "J"},
       {"ground_elev_est", "m"}, {"canopy_height_est", "m"}, {"rh", "m"},
       {"cover_true", "1"},      {"pai_true", "1"},          {"canopy_height_true", "m"},
-      {"percentile", "percent"}};
+      {"pgap_true", "1"},       {"percentile", "percent"}};
   for (const auto& [name, unit] : units) {
     EXPECT_EQ(nc.text(name, "units"), unit) << name;
     EXPECT_FALSE(nc.text(name, "long_name").empty()) << name;
@@ -694,7 +697,7 @@ TEST_F(NetcdfWriterTest, WaveformMetricsComeBackWithTheirUnits) {
     EXPECT_EQ(nc.dims_of(name), (std::vector<std::string>{"shot", "band", "gaussian"})) << name;
   EXPECT_EQ(nc.dims_of("rh"), (std::vector<std::string>{"shot", "band", "percentile"}));
   EXPECT_EQ(nc.dims_of("percentile"), (std::vector<std::string>{"percentile"}));
-  for (const char* name : {"cover_true", "pai_true", "canopy_height_true"})
+  for (const char* name : {"cover_true", "pai_true", "canopy_height_true", "pgap_true"})
     EXPECT_EQ(nc.dims_of(name), (std::vector<std::string>{"shot"})) << name;
   EXPECT_EQ(nc.type_of("n_peaks"), NC_INT);
   EXPECT_EQ(nc.type_of("rh"), NC_FLOAT);
@@ -734,7 +737,8 @@ TEST_F(NetcdfWriterTest, WaveformMetricsComeBackWithTheirUnits) {
   const std::map<std::string, double ShotRecord::*> truth = {
       {"cover_true", &ShotRecord::cover_true},
       {"pai_true", &ShotRecord::pai_true},
-      {"canopy_height_true", &ShotRecord::canopy_height_true_m}};
+      {"canopy_height_true", &ShotRecord::canopy_height_true_m},
+      {"pgap_true", &ShotRecord::pgap_true}};
   const auto n_peaks = nc.doubles("n_peaks");
   const auto rh = nc.doubles("rh");
   for (int record : {0, 2}) {

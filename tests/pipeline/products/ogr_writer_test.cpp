@@ -95,6 +95,7 @@ ShotRecord make_record(int record) {
   shot.cover_true = 0.65;
   shot.pai_true = 3.0;
   shot.canopy_height_true_m = 31.0 + record;
+  shot.pgap_true = 0.45;
   shot.footprint_lonlat = octagon(shot.lon_deg, shot.lat_deg);
   return shot;
 }
@@ -114,7 +115,7 @@ ShotRecord make_flagged_record(int record) {
     (shot.*field).clear();
   shot.n_peaks.clear();
   shot.rh_m.clear();
-  shot.cover_true = shot.pai_true = shot.canopy_height_true_m = std::nan("");
+  shot.cover_true = shot.pai_true = shot.canopy_height_true_m = shot.pgap_true = std::nan("");
   shot.footprint_lonlat.clear();
   return shot;
 }
@@ -195,7 +196,8 @@ TEST_F(OgrWriterTest, OgrReadsItWithoutWarnings) {
       "time",         "lat",        "lon",        "elev",
       "sc_lat",       "sc_lon",     "sc_alt",     "off_nadir_deg",
       "range_m",      "slope_deg",  "aspect_deg", "elev_bin0",
-      "elev_lastbin", "cover_true", "pai_true",   "canopy_height_true"};
+      "elev_lastbin", "cover_true", "pai_true",   "canopy_height_true",
+      "pgap_true"};
   std::vector<std::string> integers = {"shot_number", "quality_flag"};
   // Every band's values, each under its name suffixed with the band's.
   for (const char* band : {"_532", "_1064"}) {
@@ -220,7 +222,7 @@ TEST_F(OgrWriterTest, OgrReadsItWithoutWarnings) {
   // No unsuffixed per-band value: a reader cannot mistake one band's for another's.
   for (const char* name : {"reflectance", "energy_tr", "rh98", "n_peaks"})
     EXPECT_LT(definition->GetFieldIndex(name), 0) << name;
-  EXPECT_EQ(definition->GetFieldCount(), 22 + 2 * 19);
+  EXPECT_EQ(definition->GetFieldCount(), 23 + 2 * 19);
 
   // Features come in record order although they were written 2, 1, 0.
   ASSERT_EQ(features.size(), 3u);
@@ -282,6 +284,7 @@ TEST_F(OgrWriterTest, OgrReadsItWithoutWarnings) {
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("cover_true"), expected.cover_true);
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("pai_true"), expected.pai_true);
     EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("canopy_height_true"), expected.canopy_height_true_m);
+    EXPECT_DOUBLE_EQ(feature.GetFieldAsDouble("pgap_true"), expected.pgap_true);
   }
 
   // The flagged shot: no geometry, no metrics, its position still there.
@@ -324,8 +327,8 @@ TEST_F(OgrWriterTest, PropertiesAreTheContracts) {
       "ground_elev_est_532 ground_elev_est_1064 canopy_height_est_532 canopy_height_est_1064 "
       "rh25_532 rh50_532 rh75_532 rh98_532 rh100_532 rh25_1064 rh50_1064 rh75_1064 rh98_1064 "
       "rh100_1064 "
-      "cover_true pai_true canopy_height_true");
-  ASSERT_EQ(expected.size(), 22u + 2 * 19u);
+      "cover_true pai_true canopy_height_true pgap_true");
+  ASSERT_EQ(expected.size(), 23u + 2 * 19u);
   for (const auto& feature : document.at("features")) {
     std::vector<std::string> names;
     for (const auto& [name, value] : feature.at("properties").items()) names.push_back(name);

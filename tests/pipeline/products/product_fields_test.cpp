@@ -86,8 +86,8 @@ std::set<std::string> words(const std::string& text) {
 
 // Which variables of shots.nc have a band dimension, typed from PRODUCT.md section 4's table
 // (its dims column), the atmosphere's truth of section 12 ("per band"), and the granule and sun
-// fields added since (per shot). A row whose member changes shape, or a new row, has to agree
-// with the contract written here.
+// fields and the truth's gap probability added since (per shot). A row whose member changes shape,
+// or a new row, has to agree with the contract written here.
 TEST(ProductFields, PerBandFieldsAreThoseOfProductMdsTable) {
   const std::set<std::string> per_band = words(
       "rx_waveform rx_waveform_canopy rx_waveform_ground rx_waveform_order rx_energy "
@@ -98,7 +98,7 @@ TEST(ProductFields, PerBandFieldsAreThoseOfProductMdsTable) {
   const std::set<std::string> per_shot = words(
       "shot shot_number quality_flag quality_reason time lat lon elev sc_lat sc_lon sc_alt "
       "off_nadir_deg range_m slope_deg aspect_deg elev_bin0 elev_lastbin cover_true pai_true "
-      "canopy_height_true beam degrade_flag solar_elevation solar_azimuth");
+      "canopy_height_true pgap_true beam degrade_flag solar_elevation solar_azimuth");
   std::size_t fixed = 0;
   for (const ProductField& field : product_fields()) {
     if (field.ragged()) continue;  // the photon lists: their own test above

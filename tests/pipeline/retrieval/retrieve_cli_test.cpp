@@ -113,9 +113,9 @@ TEST_F(RetrieveCli, RetrieveWritesEveryMethodBesideTheTruth) {
   ASSERT_EQ(nc_open((out / "retrieval.nc").c_str(), NC_NOWRITE, &nc), NC_NOERR);
   for (const char* name : {"shot_number", "beam", "lat", "lon"}) read_variable(nc, name, 4);
   for (const char* method : {"gedi_l2a", "gedi_l2b", "wi", "rt"})
-    for (const char* v : {"canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog"})
+    for (const char* v : {"canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog", "pgap"})
       read_variable(nc, (std::string(v) + "_" + method).c_str(), 4);
-  for (const char* v : {"canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog"})
+  for (const char* v : {"canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog", "pgap"})
     for (const char* part : {"_rt_sd", "_rt_p05", "_rt_p95", "_true"})
       read_variable(nc, (std::string(v) + part).c_str(), 4);
   read_variable(nc, "rt_flag", 4);
@@ -127,12 +127,25 @@ TEST_F(RetrieveCli, RetrieveWritesEveryMethodBesideTheTruth) {
   const std::vector<double> ground = read_variable(nc, "ground_elevation_rt", 4);
   const std::vector<double> ground_true = read_variable(nc, "ground_elevation_true", 4);
   const std::vector<double> l2a_ground = read_variable(nc, "ground_elevation_gedi_l2a", 4);
+  const std::vector<double> pgap_true = read_variable(nc, "pgap_true", 4);
+  const std::vector<double> pgap = read_variable(nc, "pgap_rt", 4);
+  const std::vector<double> l2b_pgap = read_variable(nc, "pgap_gedi_l2b", 4);
+  const std::vector<double> l2b_cover = read_variable(nc, "cover_gedi_l2b", 4);
+  const std::vector<double> wi_pgap = read_variable(nc, "pgap_wi", 4);
+  const std::vector<double> wi_cover = read_variable(nc, "cover_wi", 4);
   for (int i = 0; i < 4; ++i) {
     EXPECT_NEAR(pai_true[i], 2.6, 0.05);
     EXPECT_NEAR(pai[i], pai_true[i], 0.6);  // 24 entries of 1000 rays
     EXPECT_LE(p05[i], pai[i] + 1e-3);       // a posterior on one entry: equal but for rounding
     EXPECT_GE(p95[i], pai[i] - 1e-3);
     EXPECT_NEAR(ground[i], ground_true[i], 0.3);
+    // The layer's gap probability e^-PAI/2 (G = 1/2, to the leaf-angle table's 2e-4); rt's
+    // within the PAI's 0.6 carried through its slope, 0.5 e^-(2.6 - 0.6)/2 0.6 = 0.11; L2B's and
+    // WI's one less their covers.
+    EXPECT_NEAR(pgap_true[i], std::exp(-0.5 * pai_true[i]), 1.5e-4);
+    EXPECT_NEAR(pgap[i], pgap_true[i], 0.11);
+    if (std::isfinite(l2b_cover[i])) EXPECT_NEAR(l2b_pgap[i], 1.0 - l2b_cover[i], 1e-15);
+    if (std::isfinite(wi_cover[i])) EXPECT_NEAR(wi_pgap[i], 1.0 - wi_cover[i], 1e-15);
     // L2A's selected group may take the lone far-scattered rays 20 m below for the ground
     // (a5's 2 sigma on a noise-free waveform): not checked here.
     (void)l2a_ground;

@@ -267,6 +267,12 @@ TEST_F(LayerTable, RetrievesHeldOutLayersAndBareGround) {
       EXPECT_NEAR(r.pai.mean, record.pai_true, 0.35) << "PAI " << pai;
       EXPECT_NEAR(r.ground_elevation_m.mean, record.elev_m, 0.15) << "PAI " << pai;
       EXPECT_NEAR(r.canopy_height_m.mean, record.canopy_height_true_m, 0.5);
+      // The gap probability: the truth is the closed form e^-PAI/2 (G = 1/2, to the leaf-angle
+      // table's 2e-4), and the PAI's 0.35 carried through its slope at the steepest within it.
+      EXPECT_NEAR(record.pgap_true, std::exp(-0.5 * record.pai_true), 1.5e-4);
+      EXPECT_NEAR(r.pgap.mean, record.pgap_true,
+                  0.5 * std::exp(-0.5 * (record.pai_true - 0.35)) * 0.35)
+          << "PAI " << pai;
       covered += r.pai.p05 <= record.pai_true && record.pai_true <= r.pai.p95;
       ++cases;
     }
@@ -280,6 +286,7 @@ TEST_F(LayerTable, RetrievesHeldOutLayersAndBareGround) {
     const RtResult r = rt.invert(measured(record));
     EXPECT_NEAR(r.ground_elevation_m.mean, record.elev_m, 0.15);
     EXPECT_LT(r.pai.mean, 0.3);
+    EXPECT_GT(r.pgap.mean, std::exp(-0.5 * 0.3));
   }
 }
 

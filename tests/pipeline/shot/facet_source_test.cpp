@@ -174,9 +174,12 @@ TEST(FacetSource, TruthWeighsATurnedScaledTreeWhereItStands) {
   const RayDevice device;
   const Scene scene(device, GroundMesh{}, grown.geometry);
   const double sigma_m = 10.0;
-  const VegetationTruth truth = source->truth(scene, {13.0, 1.0, sigma_m});
+  const VegetationTruth truth = source->truth(scene, {13.0, 1.0, sigma_m}, {});
   const double expected = std::exp(-0.905) / (2.0 * std::numbers::pi * sigma_m * sigma_m);
   EXPECT_NEAR(truth.pai / expected, 1.0, 0.005) << truth.pai;
+  // An opaque facet leaves no gap where it covers.
+  EXPECT_GT(truth.cover, 0.0);
+  EXPECT_DOUBLE_EQ(truth.gap_probability, 1.0 - truth.cover);
 }
 
 // A floating instance (the trees file's z_m): one disc leaf model, a horizontal disc of radius

@@ -103,7 +103,9 @@ TEST(VegetationSource, RegistersOnceByKind) {
   EXPECT_THROW(make_vegetation_source(settings), Error);
 }
 
-// Along every vertical line the voxel holds 0.5 m2/m3 over 10 m: PAI 5, cover 1, height 15 m
+// Along every vertical line the voxel holds 0.5 m2/m3 over 10 m: PAI 5, cover 1, gap probability
+// e^-5/2 (spherical leaves, G = 1/2 to the 2e-4 of the leaf-angle table: 5 e^-5/2 2e-4 = 8e-5),
+// height 15 m
 // (above a ground at constant height over the curved ellipsoid, which falls 4 mm below the
 // frame's plane 230 m out: hence 1 cm).
 TEST(VegetationSource, OneVoxelTruthAndReturns) {
@@ -111,6 +113,7 @@ TEST(VegetationSource, OneVoxelTruthAndReturns) {
   ASSERT_EQ(record.quality_flag, quality_good);
   EXPECT_NEAR(record.pai_true, 5.0, 1e-6);
   EXPECT_NEAR(record.cover_true, 1.0, 1e-12);
+  EXPECT_NEAR(record.pgap_true, std::exp(-2.5), 1e-4);
   EXPECT_NEAR(record.canopy_height_true_m, 15.0, 1e-2);
   EXPECT_GT(record.rx_energy_canopy_J[0], 0.0);
 }
@@ -128,6 +131,7 @@ TEST(VegetationSource, PlateOfTwoMaterialsPerTriangle) {
   EXPECT_NEAR(plate.centroid_m[0] - ground.centroid_m[0], 10.0, 0.1);
   EXPECT_EQ(plate.rx_energy_ground_J[0], 0.0);
   EXPECT_EQ(plate.pai_true, 0.0);  // no volumes: the default truth sees none
+  EXPECT_EQ(plate.pgap_true, 1.0);
 }
 
 }  // namespace
