@@ -66,7 +66,8 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
       "  glaswave retrieve out/pass/shots.nc --table gedi_table.nc --out out/pass-retrieval\n"
       "  glaswave retrieve GEDI01_B_...h5 GEDI02_A_...h5 --out gedi-retrieval\n"
       "Writes DIR/retrieval.nc: per shot and method, canopy_height, cover, pai, "
-      "ground_elevation and rhov_rhog, rt's posterior sd and 5-95 % bounds and rt_flag, and the "
+      "ground_elevation, rhov_rhog and pgap, rt's posterior sd and 5-95 % bounds and rt_flag, "
+      "and the "
       "truth of simulated input; for GEDI L1B input also DIR/gedi_l2b.h5 in GEDI02_B's layout. "
       "Exit status as `run`. Manual: docs/retrieval.md.");
   retrieve_
