@@ -103,8 +103,11 @@ struct RtSettings {
   double prefilter_margin_log_likelihood = 10.0;
   // projected: the most entries given the exact likelihood (0: all). Beyond it, the design's
   // first of those the components cannot rule out: a Halton design's prefix is a coarser design
-  // of the same region, so that a dense table's posterior costs what a coarser one's does.
-  int max_exact_entries = 192;
+  // of the same region, so that a dense table's posterior costs what a coarser one's does. On
+  // the retrieval study's reduced run (a 1500-entry table whose tempered posteriors keep some
+  // 600 entries) 384 costs 1.5 times 192's CPU a shot and takes canopy height's RMSE from 3.25 to
+  // 3.10 m (every entry: 2.91 m, at 4.5 times), docs/retrieval.md.
+  int max_exact_entries = 384;
   // projected: tables of fewer entries are searched exactly (two_stage): there the exact
   // likelihood of every entry costs less than the components' setup, about a second.
   int projection_min_entries = 1000;
@@ -239,12 +242,16 @@ class RtInversion {
     std::vector<double> coords, slope_coords;   // entries x K
     std::vector<double> residual, slope_norm2;  // |r_e|, |c'_e|^2 per entry
     std::vector<double> scale, log_det;         // chi2 scale rho_ref / rho_e, sum log V
+    // Per entry and band, the prefix sums over the bins of (g(0) - y_e)^2, y_e the transformed
+    // entry ((bins + 1) a band): what a window's bins beyond the shot's add to the distance
+    // when the shot is taken there as 0 (no signal), which the exact chi2 does not count.
+    std::vector<double> beyond_prefix;
     double transform(std::size_t band, double x) const;
   };
   const Projection& projection(const RtPreparedShot& shot) const;
   std::unique_ptr<Projection> build_projection(const std::vector<double>& noise2) const;
   // The entries whose projected bounds leave them within reach of the best at `shift` (all
-  // entries, `ok` false, where the table's window at that shift leaves the shot's bins).
+  // entries, `ok` false, where the table's window at that shift holds none of the shot's bins).
   std::vector<std::size_t> prefilter(const RtPreparedShot& shot, int shift, std::int64_t excluded,
                                      bool* ok) const;
   void build_emulator();

@@ -122,8 +122,16 @@ std::unique_ptr<RtInversion::Projection> RtInversion::build_projection(
   q.slope_norm2.resize(entries);
   q.scale.resize(entries);
   q.log_det.resize(entries);
+  q.beyond_prefix.resize(entries * bands * (bins + 1));
   for (std::size_t e = 0; e < entries; ++e) {
     transformed(e, y.data(), dy.data());
+    for (std::size_t k = 0; k < bands; ++k) {
+      const double g0 = q.transform(k, 0.0);
+      double* prefix = q.beyond_prefix.data() + (e * bands + k) * (bins + 1);
+      prefix[0] = 0.0;
+      for (std::size_t j = 0; j < bins; ++j)
+        prefix[j + 1] = prefix[j] + (g0 - y[k * bins + j]) * (g0 - y[k * bins + j]);
+    }
     y -= mean;
     const Eigen::VectorXd ce = basis.transpose() * y, de = basis.transpose() * dy;
     std::copy(ce.data(), ce.data() + components, q.coords.begin() + e * components);
@@ -145,19 +153,28 @@ std::vector<std::size_t> RtInversion::prefilter(const RtPreparedShot& p, int shi
                                                 std::int64_t excluded, bool* ok) const {
   const std::size_t entries = table_.entries(), bins = table_.height_m.size();
   const long long n = static_cast<long long>(p.measured[0].size());
-  *ok = shift >= 0 && shift + static_cast<long long>(bins) <= n;
+  // The window's bins [first, last) hold the shot's; those beyond it (a window overhanging the
+  // shot's end, as a table reaching far below the ground does) are taken as no signal, and what
+  // they add to each entry's distance is taken off its bounds: the exact chi2 counts the shot's
+  // bins only.
+  const long long first = std::clamp<long long>(-shift, 0, static_cast<long long>(bins));
+  const long long last = std::clamp<long long>(n - shift, 0, static_cast<long long>(bins));
+  *ok = first < last;
   if (!*ok) return {};
   const Projection& q = projection(p);
-  const std::size_t components = q.components;
+  const std::size_t components = q.components, bands = p.measured.size();
   std::vector<double> y(q.width);
   double y2 = 0.0;
-  for (std::size_t k = 0; k < p.measured.size(); ++k) {
+  for (std::size_t k = 0; k < bands; ++k) {
+    const double g0 = q.transform(k, 0.0);
     for (std::size_t j = 0; j < bins; ++j) {
       const std::size_t i = k * bins + j;
-      y[i] = q.transform(k, p.measured[k][j + shift]) - q.mean[i];
+      const long long at = static_cast<long long>(j);
+      y[i] = (at >= first && at < last ? q.transform(k, p.measured[k][j + shift]) : g0) - q.mean[i];
       y2 += y[i] * y[i];
     }
   }
+  const bool overhangs = first > 0 || last < static_cast<long long>(bins);
   std::vector<double> cm(components, 0.0);
   double c2 = 0.0;
   for (std::size_t c = 0; c < components; ++c) {
@@ -185,9 +202,17 @@ std::vector<std::size_t> RtInversion::prefilter(const RtPreparedShot& p, int shi
     const double delta = cc > 0.0 ? std::clamp(-b / cc, -0.5, 0.5) : 0.0;
     const double d = a + delta * (2.0 * b + delta * cc);
     const double re = q.residual[e];
-    lower[e] = q.scale[e] * (d + (rm - re) * (rm - re)) + q.log_det[e];
+    double beyond = 0.0;
+    if (overhangs) {
+      for (std::size_t k = 0; k < bands; ++k) {
+        const double* prefix = q.beyond_prefix.data() + (e * bands + k) * (bins + 1);
+        beyond += prefix[first] + (prefix[bins] - prefix[last]);
+      }
+    }
+    lower[e] = q.scale[e] * (d + (rm - re) * (rm - re) - beyond) + q.log_det[e];
     if (static_cast<std::int64_t>(e) != excluded)
-      best_upper = std::min(best_upper, q.scale[e] * (d + (rm + re) * (rm + re)) + q.log_det[e]);
+      best_upper =
+          std::min(best_upper, q.scale[e] * (d + (rm + re) * (rm + re) - beyond) + q.log_det[e]);
   }
   const double reach =
       best_upper + 2.0 * tempering_ *
