@@ -430,7 +430,8 @@ void write_table(const ForwardTable& table, const std::filesystem::path& path,
   nc.write("pai_true", table.pai_true);
   nc.write("cover_true", table.cover_true);
   nc.write("canopy_height_true", table.canopy_height_true_m);
-  nc.write("pgap_true", table.pgap_true);
+  // A table made in memory without its gap probabilities leaves the fill, NaN.
+  if (table.pgap_true.size() == entries) nc.write("pgap_true", table.pgap_true);
   nc.write("rhov_rhog", table.rhov_rhog);
   nc.commit();
 }

@@ -17,11 +17,11 @@ constexpr int half_nodes = 20;  // a footprint's grid: 41 x 41 lines out to 3 si
 
 // One vertical line down through the scene from above everything at (x_m, y_m).
 struct VerticalLine {
-  bool ground = false;         // it met the ground (else it is left out)
-  double plant_area = 0.0;     // m^2 m^-2 crossed
-  double optical_depth = 0.0;  // G toward the zenith times the plant area, summed over foliage
-  bool covered = false;        // it crossed foliage
-  double canopy_m = 0.0;       // its first foliage above the ground
+  bool ground = false;      // it met the ground (else it is left out)
+  double plant_area = 0.0;  // m^2 m^-2 crossed
+  double gap = 1.0;         // exp(-G toward the zenith times the plant area, summed over foliage)
+  bool covered = false;     // it crossed foliage
+  double canopy_m = 0.0;    // its first foliage above the ground
 };
 
 VerticalLine measure_line(const Scene& scene, const std::vector<double>& nadir_projection,
@@ -33,13 +33,15 @@ VerticalLine measure_line(const Scene& scene, const std::vector<double>& nadir_p
   if (ground.kind == SurfaceKind::none) return line;
   line.ground = true;
   scene.volume_spans(origin, down, ground.distance_m, spans);
-  double first_m = ground.distance_m;
+  double first_m = ground.distance_m, optical_depth = 0.0;
   for (const VolumeSpan& span : spans) {
     const double area = span.area_density_m2_m3 * (span.end_m - span.start_m);
     line.plant_area += area;
-    line.optical_depth += nadir_projection.at(static_cast<std::size_t>(span.material)) * area;
+    optical_depth += nadir_projection.at(static_cast<std::size_t>(span.material)) * area;
     first_m = std::min(first_m, span.start_m);
   }
+  // Once a line: TruthGrid's lines serve every footprint that weighs them.
+  if (!spans.empty()) line.gap = std::exp(-optical_depth);
   line.covered = !spans.empty();
   line.canopy_m = ground.distance_m - first_m;
   return line;
@@ -59,7 +61,7 @@ struct TruthSums {
     weights += weight;
     truth.pai += weight * line.plant_area;
     truth.cover += line.covered ? weight : 0.0;
-    truth.gap_probability += weight * std::exp(-line.optical_depth);
+    truth.gap_probability += weight * line.gap;
     if (r_sq <= 4.0 * sigma_m * sigma_m)
       truth.canopy_height_m = std::max(truth.canopy_height_m, line.canopy_m);
   }
