@@ -144,8 +144,12 @@ TEST_F(RetrieveCli, RetrieveWritesEveryMethodBesideTheTruth) {
     // WI's one less their covers.
     EXPECT_NEAR(pgap_true[i], std::exp(-0.5 * pai_true[i]), 1.5e-4);
     EXPECT_NEAR(pgap[i], pgap_true[i], 0.11);
-    if (std::isfinite(l2b_cover[i])) EXPECT_NEAR(l2b_pgap[i], 1.0 - l2b_cover[i], 1e-15);
-    if (std::isfinite(wi_cover[i])) EXPECT_NEAR(wi_pgap[i], 1.0 - wi_cover[i], 1e-15);
+    if (std::isfinite(l2b_cover[i])) {
+      EXPECT_NEAR(l2b_pgap[i], 1.0 - l2b_cover[i], 1e-15);
+    }
+    if (std::isfinite(wi_cover[i])) {
+      EXPECT_NEAR(wi_pgap[i], 1.0 - wi_cover[i], 1e-15);
+    }
     // L2A's selected group may take the lone far-scattered rays 20 m below for the ground
     // (a5's 2 sigma on a noise-free waveform): not checked here.
     (void)l2a_ground;
