@@ -54,8 +54,9 @@
 // identical), at a fraction of the cost for tables of 10^4 entries. Where more than
 // max_exact_entries stay within reach (a dense table, a wide posterior), only the design's
 // first of them are: the posterior of a coarser design over the same region. Tables of fewer
-// than projection_min_entries, and shots whose waveform the table's window overhangs at the
-// found ground, are searched exactly.
+// than projection_min_entries are searched exactly. Where the table's window at the found ground
+// overhangs the shot's waveform, its bins beyond the shot are taken as no signal and their share
+// of each entry's distance is taken off both bounds (the exact chi2 counts the shot's bins).
 //
 // Posterior. Uniform over the table's entries (the design is the prior) and over the ground:
 // w(e, s) ∝ exp(l(e, s)). Each variable's mean, sd, 5 % and 95 % come from the entries'
