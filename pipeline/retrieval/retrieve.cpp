@@ -15,6 +15,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <utility>
 
 #include "core/error.hpp"
 #include "pipeline/products/canopy_indices.hpp"
@@ -239,44 +240,29 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
   return r;
 }
 
-const char* const kVariables[] = {"canopy_height",    "cover",     "pai",
-                                  "ground_elevation", "rhov_rhog", "pgap"};
-const char* const kUnits[] = {"m", "1", "1", "m", "1", "1"};
-constexpr int kVariableCount = 6;
-
-double variable_of(const MethodEstimates& e, int v) {
-  switch (v) {
-    case 0:
-      return e.canopy_height_m;
-    case 1:
-      return e.cover;
-    case 2:
-      return e.pai;
-    case 3:
-      return e.ground_elevation_m;
-    case 4:
-      return e.rhov_rhog;
-    default:
-      return e.pgap;
-  }
-}
-
-RtStatistic statistic_of(const RtResult& r, int v) {
-  switch (v) {
-    case 0:
-      return r.canopy_height_m;
-    case 1:
-      return r.cover;
-    case 2:
-      return r.pai;
-    case 3:
-      return r.ground_elevation_m;
-    case 4:
-      return r.rhov_rhog;
-    default:
-      return r.pgap;
-  }
-}
+// retrieval.nc's variables, in its order: each one's name and unit, and where a method's
+// estimate, rt's posterior and the simulation's truth keep it. One row a variable.
+struct RetrievedVariable {
+  const char* name;
+  const char* units;
+  double MethodEstimates::*estimate;
+  RtStatistic RtResult::*posterior;
+  double MeasuredShot::*truth;
+};
+constexpr RetrievedVariable kVariables[] = {
+    {"canopy_height", "m", &MethodEstimates::canopy_height_m, &RtResult::canopy_height_m,
+     &MeasuredShot::canopy_height_true_m},
+    {"cover", "1", &MethodEstimates::cover, &RtResult::cover, &MeasuredShot::cover_true},
+    {"pai", "1", &MethodEstimates::pai, &RtResult::pai, &MeasuredShot::pai_true},
+    {"ground_elevation", "m", &MethodEstimates::ground_elevation_m, &RtResult::ground_elevation_m,
+     &MeasuredShot::ground_elevation_true_m},
+    {"rhov_rhog", "1", &MethodEstimates::rhov_rhog, &RtResult::rhov_rhog,
+     &MeasuredShot::rhov_rhog_true},
+    {"pgap", "1", &MethodEstimates::pgap, &RtResult::pgap, &MeasuredShot::pgap_true},
+};
+// rt's posterior beside its mean: each part's suffix and where RtStatistic keeps it.
+constexpr std::pair<const char*, double RtStatistic::*> kPosteriorParts[] = {
+    {"_rt_sd", &RtStatistic::sd}, {"_rt_p05", &RtStatistic::p05}, {"_rt_p95", &RtStatistic::p95}};
 
 void write_product(const std::filesystem::path& path, const MeasuredShots& input,
                    const std::vector<ShotResults>& results, const std::vector<std::string>& methods,
@@ -312,16 +298,16 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
                      "lower edge of the 5 m height bin above the ground");
   const std::string coordinates = "lat lon";
   for (const std::string& m : methods) {
-    for (int v = 0; v < kVariableCount; ++v) {
-      const std::string name = std::string(kVariables[v]) + "_" + m;
-      nc.define_variable(name, NC_DOUBLE, {"shot"}, kUnits[v],
-                         std::string(kVariables[v]) + " retrieved by " + m);
+    for (const RetrievedVariable& v : kVariables) {
+      const std::string name = std::string(v.name) + "_" + m;
+      nc.define_variable(name, NC_DOUBLE, {"shot"}, v.units,
+                         std::string(v.name) + " retrieved by " + m);
       nc.put_text(name, "coordinates", coordinates);
       if (m != "rt") continue;
-      for (const char* suffix : {"_rt_sd", "_rt_p05", "_rt_p95"}) {
-        const std::string extra = std::string(kVariables[v]) + suffix;
-        nc.define_variable(extra, NC_DOUBLE, {"shot"}, kUnits[v],
-                           std::string(kVariables[v]) + " posterior " + (suffix + 4));
+      for (const auto& [suffix, part] : kPosteriorParts) {
+        const std::string extra = std::string(v.name) + suffix;
+        nc.define_variable(extra, NC_DOUBLE, {"shot"}, v.units,
+                           std::string(v.name) + " posterior " + (suffix + 4));
         nc.put_text(extra, "coordinates", coordinates);
       }
     }
@@ -357,9 +343,9 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
                        "ground elevation of the rt best fit");
   }
   if (input.simulated) {
-    for (int v = 0; v < kVariableCount; ++v)
-      nc.define_variable(std::string(kVariables[v]) + "_true", NC_DOUBLE, {"shot"}, kUnits[v],
-                         std::string(kVariables[v]) + ": the simulation's truth");
+    for (const RetrievedVariable& v : kVariables)
+      nc.define_variable(std::string(v.name) + "_true", NC_DOUBLE, {"shot"}, v.units,
+                         std::string(v.name) + ": the simulation's truth");
   }
   nc.end_define();
   std::vector<std::int64_t> numbers(shots);
@@ -379,20 +365,13 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
   nc.write("height", heights);
   std::vector<double> column(shots);
   for (const std::string& m : methods) {
-    for (int v = 0; v < kVariableCount; ++v) {
-      for (std::size_t i = 0; i < shots; ++i)
-        column[i] = variable_of(results[i].estimates.at(m), v);
-      nc.write(std::string(kVariables[v]) + "_" + m, column);
+    for (const RetrievedVariable& v : kVariables) {
+      for (std::size_t i = 0; i < shots; ++i) column[i] = results[i].estimates.at(m).*v.estimate;
+      nc.write(std::string(v.name) + "_" + m, column);
       if (m != "rt") continue;
-      for (int part = 0; part < 3; ++part) {
-        for (std::size_t i = 0; i < shots; ++i) {
-          const RtStatistic s = statistic_of(results[i].rt, v);
-          column[i] = part == 0 ? s.sd : part == 1 ? s.p05 : s.p95;
-        }
-        nc.write(std::string(kVariables[v]) + (part == 0   ? "_rt_sd"
-                                               : part == 1 ? "_rt_p05"
-                                                           : "_rt_p95"),
-                 column);
+      for (const auto& [suffix, part] : kPosteriorParts) {
+        for (std::size_t i = 0; i < shots; ++i) column[i] = (results[i].rt.*v.posterior).*part;
+        nc.write(std::string(v.name) + suffix, column);
       }
     }
   }
@@ -424,14 +403,9 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
     nc.write("rt_best_ground_elevation", column);
   }
   if (input.simulated) {
-    for (int v = 0; v < kVariableCount; ++v) {
-      for (std::size_t i = 0; i < shots; ++i) {
-        const MeasuredShot& s = input.shots[i];
-        const double values[] = {s.canopy_height_true_m,    s.cover_true,     s.pai_true,
-                                 s.ground_elevation_true_m, s.rhov_rhog_true, s.pgap_true};
-        column[i] = values[v];
-      }
-      nc.write(std::string(kVariables[v]) + "_true", column);
+    for (const RetrievedVariable& v : kVariables) {
+      for (std::size_t i = 0; i < shots; ++i) column[i] = input.shots[i].*v.truth;
+      nc.write(std::string(v.name) + "_true", column);
     }
   }
   nc.commit();

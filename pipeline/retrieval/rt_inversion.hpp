@@ -106,8 +106,8 @@ struct RtSettings {
   // first of those the components cannot rule out: a Halton design's prefix is a coarser design
   // of the same region, so that a dense table's posterior costs what a coarser one's does. On
   // the retrieval study's reduced run (a 1500-entry table whose tempered posteriors keep some
-  // 600 entries) 384 costs 1.5 times 192's CPU a shot and takes canopy height's RMSE from 3.25 to
-  // 3.10 m (every entry: 2.91 m, at 4.5 times), docs/retrieval.md.
+  // 600 entries) 384 costs 1.4 times 192's CPU a shot and takes canopy height's RMSE from 3.25 to
+  // 3.10 m (every entry: 2.91 m, at 4.4 times), docs/retrieval.md.
   int max_exact_entries = 384;
   // projected: tables of fewer entries are searched exactly (two_stage): there the exact
   // likelihood of every entry costs less than the components' setup, about a second.
@@ -239,7 +239,8 @@ class RtInversion {
     // floor and above the top.
     std::vector<std::vector<double>> g;
     std::vector<double> floor, top, slope_low, slope_high;
-    std::vector<double> mean, basis;            // width; width x K (column k contiguous)
+    std::vector<double> no_signal;    // per band g(0): where the shot has no bin, no signal
+    std::vector<double> mean, basis;  // width; width x K (column k contiguous)
     std::vector<double> coords, slope_coords;   // entries x K
     std::vector<double> residual, slope_norm2;  // |r_e|, |c'_e|^2 per entry
     std::vector<double> scale, log_det;         // chi2 scale rho_ref / rho_e, sum log V
@@ -311,7 +312,8 @@ class RtInversion {
                            const std::vector<EntryTerms>* shared = nullptr) const;
   RtResult summarise(const RtPreparedShot& shot, const std::vector<Cell>& cells,
                      bool at_edge) const;
-  // The entries' truths' statistics under these weights, into r.
+  // The entries' truths' statistics under these weights, into r (truths_' order: height, cover,
+  // pai, rhov_rhog, pgap).
   void entry_statistics(const std::vector<double>& entry_weight, RtResult& r) const;
 
   const ForwardTable& table_;

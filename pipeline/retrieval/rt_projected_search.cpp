@@ -80,6 +80,7 @@ std::unique_ptr<RtInversion::Projection> RtInversion::build_projection(
     q.top.push_back(high);
     q.slope_low.push_back(inv_sd(low));
     q.slope_high.push_back(inv_sd(high));
+    q.no_signal.push_back(q.transform(k, 0.0));
   }
   const std::size_t width = bands * bins;
   q.width = width;
@@ -126,7 +127,7 @@ std::unique_ptr<RtInversion::Projection> RtInversion::build_projection(
   for (std::size_t e = 0; e < entries; ++e) {
     transformed(e, y.data(), dy.data());
     for (std::size_t k = 0; k < bands; ++k) {
-      const double g0 = q.transform(k, 0.0);
+      const double g0 = q.no_signal[k];
       double* prefix = q.beyond_prefix.data() + (e * bands + k) * (bins + 1);
       prefix[0] = 0.0;
       for (std::size_t j = 0; j < bins; ++j)
@@ -166,7 +167,7 @@ std::vector<std::size_t> RtInversion::prefilter(const RtPreparedShot& p, int shi
   std::vector<double> y(q.width);
   double y2 = 0.0;
   for (std::size_t k = 0; k < bands; ++k) {
-    const double g0 = q.transform(k, 0.0);
+    const double g0 = q.no_signal[k];
     for (std::size_t j = 0; j < bins; ++j) {
       const std::size_t i = k * bins + j;
       const long long at = static_cast<long long>(j);
