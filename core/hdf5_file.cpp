@@ -377,6 +377,30 @@ bool Hdf5Reader::read(const std::string& path, std::vector<T>& values) const {
          H5Dread(set.get(), Type<T>::memory(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) >= 0;
 }
 
+bool Hdf5Reader::read_attribute(const std::string& object, const std::string& name,
+                                std::size_t most, std::vector<double>& values,
+                                std::vector<std::uint64_t>& dims) const {
+  const hid_t file = impl_->file.get();
+  if ((object != "/" && !has(object)) ||
+      H5Aexists_by_name(file, object.c_str(), name.c_str(), H5P_DEFAULT) <= 0)
+    return false;
+  const Handle attr(H5Aopen_by_name(file, object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+                    H5Aclose);
+  if (!attr.valid()) return false;
+  const Handle type(H5Aget_type(attr.get()), H5Tclose);
+  const H5T_class_t type_class = type.valid() ? H5Tget_class(type.get()) : H5T_NO_CLASS;
+  if (type_class != H5T_INTEGER && type_class != H5T_FLOAT) return false;
+  const Handle space(H5Aget_space(attr.get()), H5Sclose);
+  const int rank = space.valid() ? H5Sget_simple_extent_ndims(space.get()) : -1;
+  const hssize_t count = space.valid() ? H5Sget_simple_extent_npoints(space.get()) : -1;
+  if (rank < 0 || count < 0 || static_cast<std::uint64_t>(count) > most) return false;
+  std::vector<hsize_t> extent(static_cast<std::size_t>(rank));
+  if (rank > 0) H5Sget_simple_extent_dims(space.get(), extent.data(), nullptr);
+  dims.assign(extent.begin(), extent.end());
+  values.assign(static_cast<std::size_t>(count), 0.0);
+  return count == 0 || H5Aread(attr.get(), H5T_NATIVE_DOUBLE, values.data()) >= 0;
+}
+
 template bool Hdf5Reader::read(const std::string&, std::vector<double>&) const;
 template bool Hdf5Reader::read(const std::string&, std::vector<std::int64_t>&) const;
 template bool Hdf5Reader::read(const std::string&, std::vector<std::uint64_t>&) const;

@@ -95,6 +95,11 @@ class Hdf5Reader {
   // fails (a truncated or corrupt file). The caller has checked its size with shape().
   template <typename T>
   bool read(const std::string& path, std::vector<T>& values) const;
+  // A numeric attribute of `object` ("/" for the file's own) converted to double, C-order over
+  // `dims`; false when it is absent, not numeric, holds more than `most` values or cannot be
+  // read.
+  bool read_attribute(const std::string& object, const std::string& name, std::size_t most,
+                      std::vector<double>& values, std::vector<std::uint64_t>& dims) const;
 
  private:
   struct Impl;

@@ -2,6 +2,7 @@
 #include "pipeline/app/retrieval_cli.hpp"
 
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -37,6 +38,18 @@ int threads_of(const std::string& text) {
   return static_cast<int>(*value);
 }
 
+// --counts-per-watt: a positive finite number, all of the text.
+std::optional<double> counts_per_watt_of(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  double value = 0.0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || !(value > 0.0) ||
+      !std::isfinite(value))
+    throw config_error("--counts-per-watt",
+                       "must be a positive number of counts per watt, got " + quoted_excerpt(text));
+  return value;
+}
+
 }  // namespace
 
 RetrievalCommands::RetrievalCommands(CLI::App& app) {
@@ -65,6 +78,7 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
       "Example:\n"
       "  glaswave retrieve out/pass/shots.nc --table gedi_table.nc --out out/pass-retrieval\n"
       "  glaswave retrieve GEDI01_B_...h5 GEDI02_A_...h5 --out gedi-retrieval\n"
+      "  glaswave retrieve GLAH01_...H5 GLAH14_...H5 --out glas-retrieval\n"
       "Writes DIR/retrieval.nc: per shot and method, canopy_height, cover, pai, "
       "ground_elevation, rhov_rhog and pgap, rt's posterior sd and 5-95 % bounds and rt_flag, "
       "and the "
@@ -72,8 +86,9 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
       "Exit status as `run`. Manual: docs/retrieval.md.");
   retrieve_
       ->add_option("INPUT", inputs,
-                   "glaswave's shots.nc, or a GEDI L1B granule (GEDI01_B or gedi_l1b.h5) with "
-                   "its L2A beside it when given; the kind read from the layout")
+                   "glaswave's shots.nc, a GEDI L1B granule (GEDI01_B or gedi_l1b.h5) with "
+                   "its L2A beside it when given, or a GLAS GLAH01 granule with its GLAH14; the "
+                   "kind read from the layout")
       ->type_name("INPUT")
       ->required();
   retrieve_->add_option("--out", out, "output directory (default: the first input's)")
@@ -92,6 +107,12 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
                    "that get the exact likelihood), two_stage (the exact likelihood of every "
                    "entry) or direct (every entry at every bin about L2A's ground)")
       ->type_name("NAME");
+  retrieve_
+      ->add_option("--counts-per-watt", counts_per_watt,
+                   "a granule's digitiser counts per watt of received power, which rt needs to "
+                   "compare its waveforms with the table's: glaswave's granules carry it, a real "
+                   "granule does not")
+      ->type_name("X");
   retrieve_->add_option("--threads", threads_text, "threads; 0 (the default) uses every core")
       ->type_name("N");
   retrieve_->add_flag("--quiet", quiet, "no progress bar");
@@ -160,6 +181,7 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
   else if (!rt_search.empty() && rt_search != "projected")
     throw config_error("--rt-search",
                        "expected projected, two_stage or direct, got " + quoted_excerpt(rt_search));
+  request.counts_per_W = counts_per_watt_of(counts_per_watt);
   request.threads = threads_of(threads_text);
   request.command_line = command_line;
   const RetrieveSummary summary = run_retrieval(request, progress(quiet || json, "shots"));

@@ -93,6 +93,7 @@ void GediGranuleWriter::keep(std::int64_t index, const ShotRecord& r) {
   s.cover = r.cover_true;
   s.pai = r.pai_true;
   s.height = r.canopy_height_true_m;
+  s.pgap = r.pgap_true;
   s.energy_canopy_J = at(r.rx_energy_canopy_J);
   s.energy_ground_J = at(r.rx_energy_ground_J);
   const double per_W = info().counts_per_W;
@@ -130,6 +131,13 @@ void GediGranuleWriter::write_file(Hdf5Writer& file) {
         "scattered by vegetation and by the ground, indexed as the beam's rxwaveform "
         "(rx_sample_start_index, rx_sample_count). Outside the beams because rGEDI's "
         "clipLevel1B takes any beam dataset of rxwaveform's length for rxwaveform itself");
+  if (level_ == GediLevel::l1b)
+    write_dataset(file, std::string(kWaveformTruthGroup) + "/counts_per_watt",
+                  std::vector<double>{info().counts_per_W},
+                  {"counts W-1",
+                   "The simulated digitiser's counts per watt of received power: rxwaveform and "
+                   "its noise are shots.nc's rx_waveform (W) times this. A real granule's scale "
+                   "is unknown (glaswave retrieve --counts-per-watt)"});
   for (const auto& [beam, shots] : beams) {
     const std::string group = gedi_beam_group(beam);
     described_group(file, group, beam < 4 ? "Coverage beam" : "Full power beam");
@@ -289,6 +297,8 @@ void write_footprint_truth(Hdf5Writer& f, const std::string& truth,
   write_dataset(f, truth + "canopy_height",
                 of<float>(shots, [](const Shot& s) { return or_fill(s.height); }),
                 {"meters", "Canopy height over the footprint, beam-weighted", kGediFill});
+  write_dataset(f, truth + "pgap", of<float>(shots, [](const Shot& s) { return or_fill(s.pgap); }),
+                {"1", "Vertical gap probability over the footprint, beam-weighted", kGediFill});
 }
 
 }  // namespace
@@ -303,7 +313,8 @@ void GediGranuleWriter::write_l1b_beam(Hdf5Writer& f, const std::string& g,
   described_group(
       f, g + "/glaswave_truth",
       "The simulation's truth, not a GEDI product field: the received energy last scattered by "
-      "vegetation and by the ground, and the footprint's cover, PAI and height (the waveform's "
+      "vegetation and by the ground, and the footprint's cover, PAI, height and gap probability "
+      "(the waveform's "
       "parts are in /glaswave_truth/BEAMxxxx)");
   const std::string parts = std::string(kWaveformTruthGroup) + "/" + g + "/";
   write_dataset(
@@ -415,7 +426,8 @@ void GediGranuleWriter::write_l2a_beam(Hdf5Writer& f, const std::string& g,
   const std::string truth = g + "/glaswave_truth/";
   described_group(
       f, g + "/glaswave_truth",
-      "The simulation's truth, not a GEDI product field: the footprint's cover, PAI and "
+      "The simulation's truth, not a GEDI product field: the footprint's cover, PAI, gap "
+      "probability and "
       "canopy height, beam-weighted");
   write_footprint_truth(f, truth, shots);
 }

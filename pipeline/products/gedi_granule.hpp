@@ -44,7 +44,7 @@ class GediGranuleWriter : public Hdf5GranuleWriter {
     double elev_lowest_return = 0;  // the signal's end
     double solar_elevation = 0, solar_azimuth = 0, elev_lowest = 0, elev_highest = 0;
     double sensitivity = 0, noise_mean = 0, noise_stddev = 0, rx_energy = 0;
-    double cover = 0, pai = 0, height = 0, energy_canopy_J = 0, energy_ground_J = 0;
+    double cover = 0, pai = 0, height = 0, pgap = 0, energy_canopy_J = 0, energy_ground_J = 0;
     std::vector<float> rx, rx_canopy, rx_ground, rh;
   };
   void keep(std::int64_t index, const ShotRecord& shot) override;

@@ -197,6 +197,7 @@ void GlasGranuleWriter::keep(std::int64_t index, const ShotRecord& r) {
   s.cover = r.cover_true;
   s.pai = r.pai_true;
   s.height = r.canopy_height_true_m;
+  s.pgap = r.pgap_true;
   keep_reader_fields(s, r);
   if (level_ == GlasLevel::glah01) {
     if (b < r.rx_waveform_W.size()) s.rx = to_counts(r.rx_waveform_W[b], per_W);
@@ -368,10 +369,9 @@ void write_glah14_offsets(Hdf5Writer& f, const std::string& d, const std::vector
 // GLAH14: the footprint's truth.
 template <typename Shot>
 void write_glah14_truth(Hdf5Writer& f, const std::string& d, const std::vector<Shot>& shots) {
-  described_group(
-      f, d + "glaswave_truth",
-      "The simulation's truth, not a GLAS product field: the footprint's cover, PAI and "
-      "canopy height, beam-weighted");
+  described_group(f, d + "glaswave_truth",
+                  "The simulation's truth, not a GLAS product field: the footprint's cover, PAI, "
+                  "canopy height and gap probability, beam-weighted");
   write_dataset(f, d + "glaswave_truth/cover",
                 of<double>(shots, [](const Shot& s) { return or_fill(s.cover); }),
                 {"1", "Crown cover over the footprint, beam-weighted", kGlasFill});
@@ -381,6 +381,9 @@ void write_glah14_truth(Hdf5Writer& f, const std::string& d, const std::vector<S
   write_dataset(f, d + "glaswave_truth/canopy_height",
                 of<double>(shots, [](const Shot& s) { return or_fill(s.height); }),
                 {"meters", "Canopy height over the footprint, beam-weighted", kGlasFill});
+  write_dataset(f, d + "glaswave_truth/pgap",
+                of<double>(shots, [](const Shot& s) { return or_fill(s.pgap); }),
+                {"1", "Vertical gap probability over the footprint, beam-weighted", kGlasFill});
 }
 
 // GLAH14's fields the GLAS readers open besides (carbonplan/trace's extract_GLAH14_data,
@@ -518,6 +521,11 @@ void GlasGranuleWriter::write_file(Hdf5Writer& f) {
     if (band_ < info().tx_waveform_W.size())
       tx = to_counts(info().tx_waveform_W[band_], info().counts_per_W);
     write_glah01(f, d, shots_, info().bin_time_ns.size(), tx);
+    write_dataset(f, d + "glaswave_truth/counts_per_watt", std::vector<double>{info().counts_per_W},
+                  {"counts W-1",
+                   "The simulated digitiser's counts per watt of received power: r_rng_wf and its "
+                   "noise are shots.nc's rx_waveform (W) times this. A real granule's scale is "
+                   "unknown (glaswave retrieve --counts-per-watt)"});
     write_glah01_reader_fields(f, d, shots_, info());
     return;
   }

@@ -43,7 +43,7 @@ class GlasGranuleWriter : public Hdf5GranuleWriter {
     double time = 0, lat = 0, lon = 0, elev = 0, dem = 0, delta_ellip = 0, reflectance_uc = 0;
     double begin_off = 0, end_off = 0;
     double amp[6], area[6], sigma[6], center_off[6];
-    double cover = 0, pai = 0, height = 0;
+    double cover = 0, pai = 0, height = 0, pgap = 0;
     std::vector<float> rx, rx_canopy, rx_ground;
     // What the missions' readers open besides (docs/granules.md): the range to the last gate
     // and the land range's offset from it, the waveform's skewness and smoothed peaks, its

@@ -13,6 +13,7 @@
 #include "core/hdf5_file.hpp"
 #include "core/netcdf_lock.hpp"
 #include "pipeline/retrieval/forward_table.hpp"
+#include "pipeline/retrieval/granule_file.hpp"
 
 namespace glaswave {
 namespace {
@@ -20,9 +21,6 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // GEDI's digitiser samples the received waveform every nanosecond (GEDI01_B dictionary).
 constexpr double kGediBinNs = 1.0;
-// deflate compresses at most 1032 to 1: a dataset declaring more values than that ratio allows
-// for the file's bytes is not stored in it, and is refused before anything is allocated.
-constexpr double kMostDeflateRatio = 1032.0;
 constexpr double kEarthRadius_m = 6371008.8;
 
 bool is_beam(const std::string& name) {
@@ -36,69 +34,15 @@ std::uint16_t beam_number(const std::string& group) {
   return beam;
 }
 
-// One granule open to read: every dataset checked (present, numeric, its shape) before it is
-// read, every refusal one line naming the file and the dataset.
-class Granule {
- public:
-  explicit Granule(const std::filesystem::path& file)
-      : reader_(file), place_(file.string()), bytes_(file_bytes(file)) {}
+// A GEDI granule's BEAMxxxx groups, in name order.
+std::vector<std::string> beams_of(const GranuleFile& granule) {
+  std::vector<std::string> out;
+  for (const std::string& name : granule.reader().children("/"))
+    if (is_beam(name) && granule.reader().is_group(name)) out.push_back(name);
+  return out;
+}
 
-  const Hdf5Reader& reader() const { return reader_; }
-  const std::string& place() const { return place_; }
-
-  std::vector<std::string> beams() const {
-    std::vector<std::string> out;
-    for (const std::string& name : reader_.children("/"))
-      if (is_beam(name) && reader_.is_group(name)) out.push_back(name);
-    return out;
-  }
-
-  [[noreturn]] void refuse(const std::string& dataset, const std::string& why) const {
-    throw input_error(place_, dataset + ": " + why);
-  }
-
-  // A one-dimensional numeric dataset of `count` values (any count when nullopt).
-  template <typename T>
-  std::vector<T> read(const std::string& dataset, std::optional<std::size_t> count) const {
-    const std::optional<Hdf5DatasetShape> shape = reader_.shape(dataset);
-    if (!shape) refuse(dataset, "missing (a GEDI L1B or L2A granule has it)");
-    if (!shape->numeric) refuse(dataset, "not numeric");
-    if (shape->dims.size() != 1) refuse(dataset, "not one-dimensional");
-    if (count && shape->dims[0] != *count)
-      refuse(dataset, std::to_string(shape->dims[0]) + " values where the beam has " +
-                          std::to_string(*count) + " shots");
-    if (static_cast<double>(shape->dims[0]) > kMostDeflateRatio * static_cast<double>(bytes_) + 1e6)
-      refuse(dataset, "declares " + std::to_string(shape->dims[0]) +
-                          " values, more than a file of " + std::to_string(bytes_) +
-                          " bytes can hold");
-    std::vector<T> values;
-    if (!reader_.read(dataset, values)) refuse(dataset, "cannot be read (a truncated file?)");
-    return values;
-  }
-
-  // As read(), NaN everywhere when the dataset is absent.
-  std::vector<double> optional(const std::string& dataset, std::size_t count) const {
-    if (!reader_.has(dataset)) return std::vector<double>(count, kNaN);
-    return read<double>(dataset, count);
-  }
-  // The first of `names` present (the names of one field in different product releases).
-  std::vector<double> first_of(const std::string& group, std::initializer_list<const char*> names,
-                               std::size_t count) const {
-    for (const char* name : names)
-      if (reader_.has(group + "/" + name)) return read<double>(group + "/" + name, count);
-    return std::vector<double>(count, kNaN);
-  }
-
- private:
-  static std::uintmax_t file_bytes(const std::filesystem::path& file) {
-    std::error_code error;
-    const std::uintmax_t bytes = std::filesystem::file_size(file, error);
-    return error ? 0 : bytes;
-  }
-  Hdf5Reader reader_;
-  std::string place_;
-  std::uintmax_t bytes_;
-};
+constexpr const char* kGediKind = "a GEDI L1B or L2A granule";
 
 // The beam's angle from the vertical: from L1B's local_beam_elevation (radians above the local
 // horizon) when given, else from the line between bin 0 and the last bin.
@@ -115,24 +59,31 @@ double zenith_rad(double local_beam_elevation, double lat0, double lon0, double 
 
 }  // namespace
 
-RetrieveInputKind retrieve_input_kind(const std::filesystem::path& file) {
+namespace {
+
+// Whether a beam of the file holds `dataset`.
+bool any_beam_has(const std::filesystem::path& file, const char* dataset) {
   std::lock_guard lock(netcdf_library_mutex());
-  if (!Hdf5Reader::is_hdf5(file)) return RetrieveInputKind::shots_nc;
-  const Granule granule(file);
-  bool l2a = false;
-  for (const std::string& beam : granule.beams()) {
-    if (granule.reader().has(beam + "/rxwaveform")) return RetrieveInputKind::gedi_l1b;
-    l2a = l2a || granule.reader().has(beam + "/elev_lowestmode");
-  }
-  return l2a ? RetrieveInputKind::gedi_l2a : RetrieveInputKind::shots_nc;
+  const GranuleFile granule(file, kGediKind);
+  for (const std::string& beam : beams_of(granule))
+    if (granule.reader().has(beam + "/" + dataset)) return true;
+  return false;
+}
+
+}  // namespace
+
+bool is_gedi_l1b(const std::filesystem::path& file) { return any_beam_has(file, "rxwaveform"); }
+
+bool is_gedi_l2a(const std::filesystem::path& file) {
+  return !is_gedi_l1b(file) && any_beam_has(file, "elev_lowestmode");
 }
 
 std::vector<std::pair<std::uint64_t, GediL2aShot>> read_gedi_l2a(
     const std::filesystem::path& file) {
   std::lock_guard lock(netcdf_library_mutex());
-  const Granule granule(file);
+  const GranuleFile granule(file, kGediKind);
   std::vector<std::pair<std::uint64_t, GediL2aShot>> shots;
-  for (const std::string& g : granule.beams()) {
+  for (const std::string& g : beams_of(granule)) {
     const std::vector<std::uint64_t> numbers =
         granule.read<std::uint64_t>(g + "/shot_number", std::nullopt);
     const std::size_t n = numbers.size();
@@ -162,17 +113,24 @@ MeasuredShots read_gedi_l1b(const std::filesystem::path& file,
                             const std::vector<std::pair<std::uint64_t, GediL2aShot>>& l2a,
                             std::optional<std::int64_t> first, std::optional<std::int64_t> last) {
   std::lock_guard lock(netcdf_library_mutex());
-  const Granule granule(file);
+  const GranuleFile granule(file, kGediKind);
   MeasuredShots out;
-  out.band_names = {"1064nm"};
+  out.band_names = {"1064"};  // as glaswave's gedi preset names its band, and so its tables
   out.bin_ns = kGediBinNs;
   out.pulse_sigma_ns = kNaN;
   out.simulated = false;
   out.gedi_l1b = true;
-  const std::vector<std::string> beams = granule.beams();
+  const std::vector<std::string> beams = beams_of(granule);
   if (beams.empty()) granule.refuse("/", "no BEAMxxxx group");
   for (const std::string& g : beams)
     out.simulated = out.simulated || granule.reader().is_group(g + "/glaswave_truth");
+  // glaswave's own granule says its digitiser's scale; a real granule's is unknown (NaN).
+  double counts_per_W = kNaN;
+  if (granule.reader().has("glaswave_truth/counts_per_watt")) {
+    counts_per_W = granule.read<double>("glaswave_truth/counts_per_watt", 1)[0];
+    if (!(counts_per_W > 0.0) || !std::isfinite(counts_per_W))
+      granule.refuse("glaswave_truth/counts_per_watt", "not a positive number");
+  }
   for (const std::string& g : beams) {
     const std::vector<std::uint64_t> numbers =
         granule.read<std::uint64_t>(g + "/shot_number", std::nullopt);
@@ -217,6 +175,7 @@ MeasuredShots read_gedi_l1b(const std::filesystem::path& file,
     const std::vector<double> cover = granule.optional(truth + "cover", n),
                               pai = granule.optional(truth + "pai", n),
                               height = granule.optional(truth + "canopy_height", n),
+                              pgap = granule.optional(truth + "pgap", n),
                               canopy = granule.optional(truth + "rx_energy_canopy", n),
                               ground = granule.optional(truth + "rx_energy_ground", n);
     const std::uint16_t group_beam = beam_number(g);
@@ -264,20 +223,15 @@ MeasuredShots read_gedi_l1b(const std::filesystem::path& file,
       s.waveform_W.emplace_back(from, from + static_cast<std::ptrdiff_t>(count[i]));
       s.noise_mean_W = {std::isfinite(noise_mean[i]) ? noise_mean[i] : 0.0};
       s.noise_sd_W = {std::isfinite(noise_sd[i]) && noise_sd[i] > 0.0 ? noise_sd[i] : 0.0};
+      s.counts_per_W = counts_per_W;
+      s.in_counts = true;
       s.good = count[i] >= 2 && std::isfinite(bin0[i]) && std::isfinite(lastbin[i]);
       for (double x : s.waveform_W.back()) s.good = s.good && std::isfinite(x);
-      // glaswave's granule of a run without a detector: its "noise" is the Monte Carlo's few
-      // rays before the signal (a sd of 1e-5 of the peak), which L2A's thresholds would take for
-      // a detector's and so find the ground among lone rays far below. Under 1e-3 of the peak
-      // (no detector is that quiet) it is none, as in shots.nc without a detector.
-      if (out.simulated && s.good) {
-        const std::vector<double>& w = s.waveform_W.back();
-        const double peak = *std::max_element(w.begin(), w.end()) - s.noise_mean_W[0];
-        if (s.noise_sd_W[0] < 1e-3 * peak) s.noise_mean_W[0] = s.noise_sd_W[0] = 0.0;
-      }
+      if (out.simulated && s.good) quiet_monte_carlo_noise(s);
       s.canopy_height_true_m = fill(height[i]);
       s.cover_true = fill(cover[i]);
       s.pai_true = fill(pai[i]);
+      s.pgap_true = fill(pgap[i]);
       s.ground_elevation_true_m = out.simulated ? fill(dem[i]) : kNaN;
       s.rhov_rhog_true = std::isfinite(canopy[i]) && std::isfinite(ground[i])
                              ? implied_rhov_rhog(fill(canopy[i]), fill(ground[i]), fill(cover[i]))
@@ -286,47 +240,6 @@ MeasuredShots read_gedi_l1b(const std::filesystem::path& file,
     }
   }
   return out;
-}
-
-MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inputs,
-                                   std::optional<std::int64_t> first,
-                                   std::optional<std::int64_t> last) {
-  std::vector<RetrieveInputKind> kinds;
-  std::vector<std::pair<std::uint64_t, GediL2aShot>> l2a;
-  for (const std::filesystem::path& file : inputs) {
-    kinds.push_back(retrieve_input_kind(file));
-    if (kinds.back() != RetrieveInputKind::gedi_l2a) continue;
-    auto more = read_gedi_l2a(file);
-    l2a.insert(l2a.end(), more.begin(), more.end());
-  }
-  std::sort(l2a.begin(), l2a.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  const bool any_l1b =
-      std::find(kinds.begin(), kinds.end(), RetrieveInputKind::gedi_l1b) != kinds.end();
-  MeasuredShots input;
-  bool empty = true;
-  for (std::size_t k = 0; k < inputs.size(); ++k) {
-    const std::filesystem::path& file = inputs[k];
-    if (kinds[k] == RetrieveInputKind::gedi_l2a) {
-      if (!any_l1b)
-        throw input_error(file.string(),
-                          "a GEDI L2A granule is read beside its L1B granule: give the L1B too");
-      continue;
-    }
-    MeasuredShots more = kinds[k] == RetrieveInputKind::gedi_l1b
-                             ? read_gedi_l1b(file, l2a, first, last)
-                             : read_shots(file, first, last);
-    if (empty) {
-      input = std::move(more);
-      empty = false;
-      continue;
-    }
-    if (more.band_names != input.band_names || more.bin_ns != input.bin_ns)
-      throw input_error(file.string(),
-                        "its bands or bins are not those of " + inputs.front().string());
-    input.simulated = input.simulated && more.simulated;
-    for (MeasuredShot& s : more.shots) input.shots.push_back(std::move(s));
-  }
-  return input;
 }
 
 L2aGroupResult gedi_l2a_choice(const L2aResult& result, const GediShotInfo& info, int& selected) {

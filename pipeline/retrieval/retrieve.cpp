@@ -23,6 +23,7 @@
 #include "pipeline/products/gedi_l2b_algorithm.hpp"
 #include "pipeline/retrieval/gedi_l1b_reader.hpp"
 #include "pipeline/retrieval/netcdf_file.hpp"
+#include "pipeline/retrieval/retrieve_inputs.hpp"
 
 namespace glaswave {
 
@@ -77,8 +78,9 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
   if (!config_text || !nc.has_variable("rx_waveform"))
     throw input_error(place,
                       "neither a glaswave shots.nc (no `config` attribute or `rx_waveform`) "
-                      "nor a GEDI L1B granule (no BEAMxxxx/rxwaveform); GLAH01 and ATL03 "
-                      "granules are not read yet");
+                      "nor a GEDI L1B granule (no BEAMxxxx/rxwaveform) nor a GLAH01 or GLAH14 "
+                      "granule (no Data_40HZ/Waveform/RecWaveform/r_rng_wf or "
+                      "Elevation_Surfaces/d_elev); ATL03 granules are not read yet");
   json config;
   try {
     config = json::parse(*config_text);
@@ -154,6 +156,12 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
   return out;
 }
 
+void quiet_monte_carlo_noise(MeasuredShot& shot) {
+  const std::vector<double>& w = shot.waveform_W.at(0);
+  const double peak = *std::max_element(w.begin(), w.end()) - shot.noise_mean_W.at(0);
+  if (shot.noise_sd_W[0] < 1e-3 * peak) shot.noise_mean_W[0] = shot.noise_sd_W[0] = 0.0;
+}
+
 namespace {
 
 struct ShotResults {
@@ -221,10 +229,20 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
   }
   if (rt) {
     RtShot input;
-    for (const auto& band : shot.waveform_W) input.waveform.emplace_back(band);
-    input.axis = shot.axis;
+    // A granule's counts on the table's scale, W.
+    std::vector<std::vector<double>> in_W;
     input.noise_mean_W = shot.noise_mean_W;
     input.noise_sd_W = shot.noise_sd_W;
+    if (shot.in_counts) {
+      in_W = shot.waveform_W;
+      for (std::vector<double>& band : in_W)
+        for (double& x : band) x /= shot.counts_per_W;
+      for (double& x : input.noise_mean_W) x /= shot.counts_per_W;
+      for (double& x : input.noise_sd_W) x /= shot.counts_per_W;
+    }
+    for (const auto& band : in_W.empty() ? shot.waveform_W : in_W)
+      input.waveform.emplace_back(band);
+    input.axis = shot.axis;
     // The first guess of the ground: L2A's default group a1 (6 sigma back threshold), not the
     // selected one, which takes the lowest mode any group finds: a5's 2 sigma reaches lone
     // multiply scattered rays far below the ground in a noise-free Monte Carlo waveform.
@@ -416,7 +434,7 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
 RetrieveSummary run_retrieval(const RetrieveRequest& request,
                               const std::function<void(std::int64_t, std::int64_t)>& progress) {
   if (request.inputs.empty())
-    throw config_error("INPUT", "give at least one shots.nc or GEDI L1B granule");
+    throw config_error("INPUT", "give at least one shots.nc, GEDI L1B or GLAH01 granule");
   std::vector<std::string> methods = request.methods;
   if (methods.empty()) {
     methods = {"gedi_l2a", "gedi_l2b", "wi"};
@@ -439,10 +457,15 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
     throw config_error(product.string(), "exists already: give another --out");
 
   MeasuredShots input = read_retrieve_inputs(request.inputs, request.first_shot, request.last_shot);
-  if (want_rt && input.gedi_l1b)
-    throw config_error("--methods",
-                       "rt reads glaswave's shots.nc: a GEDI L1B granule's counts "
-                       "are not on the table's scale");
+  for (MeasuredShot& s : input.shots) {
+    if (!s.in_counts) continue;
+    if (request.counts_per_W) s.counts_per_W = *request.counts_per_W;
+    if (want_rt && !std::isfinite(s.counts_per_W))
+      throw config_error(
+          "--counts-per-watt",
+          "rt compares waveforms in watts with its table's, and a real granule "
+          "does not say its digitiser's counts per watt: give it (docs/retrieval.md)");
+  }
   const bool want_l2b_granule =
       input.gedi_l1b && std::find(methods.begin(), methods.end(), "gedi_l2b") != methods.end();
   const std::filesystem::path l2b_granule = (out_dir.empty() ? "." : out_dir) / "gedi_l2b.h5";

@@ -1,9 +1,9 @@
 // `glaswave retrieve` (PRODUCT.md section 11): measured shots in, each method's estimates out,
 // side by side in DIR/retrieval.nc with the truth of simulated input. Reads glaswave's own
-// shots.nc and GEDI L1B granules with their L2A (gedi_l1b_reader.hpp), and writes
-// DIR/gedi_l2b.h5 for the latter (gedi_l2b_granule.hpp); the methods are GEDI L2A's six groups and
-// selected one (gedi_l2a), GEDI L2B (gedi_l2b), the seed's waveform index (wi) and the physically
-// based inversion over a forward table (rt).
+// shots.nc, GEDI L1B granules with their L2A and GLAH01 granules with their GLAH14
+// (retrieve_inputs.hpp), and writes DIR/gedi_l2b.h5 for GEDI L1B input (gedi_l2b_granule.hpp);
+// the methods are GEDI L2A's six groups and selected one (gedi_l2a), GEDI L2B (gedi_l2b), the
+// seed's waveform index (wi) and the physically based inversion over a forward table (rt).
 #pragma once
 
 #include <cstdint>
@@ -27,6 +27,7 @@ struct RetrieveRequest {
   std::optional<std::filesystem::path> table;         // needed by rt
   std::vector<std::string> methods;                   // empty: every method the input allows
   std::optional<std::int64_t> first_shot, last_shot;  // shot numbers [A, B)
+  std::optional<double> counts_per_W;                 // --counts-per-watt: granules' scale
   int threads = 0;                                    // 0: every core
   std::string command_line;
   RtSettings rt;
@@ -54,6 +55,10 @@ struct MeasuredShot {
   // Truth of simulated input (NaN otherwise).
   double canopy_height_true_m, cover_true, pai_true, ground_elevation_true_m, rhov_rhog_true;
   double pgap_true = std::numeric_limits<double>::quiet_NaN();
+  // The waveform's and its noise's units per watt: 1 for shots.nc (W); a granule's digitiser
+  // counts per watt (in_counts), NaN where the granule does not say (a real one).
+  double counts_per_W = 1.0;
+  bool in_counts = false;
   GediShotInfo gedi;  // GEDI L1B input's (present) and its L2A's
 };
 
@@ -72,6 +77,12 @@ struct MeasuredShots {
 // the file when it is not one.
 MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::int64_t> first,
                          std::optional<std::int64_t> last);
+
+// A simulated granule's shot without a detector: its "noise" is the Monte Carlo's few rays
+// before the signal (a sd of 1e-5 of the peak), which L2A's thresholds would take for a
+// detector's and so find the ground among lone rays far below. Under 1e-3 of the peak (no
+// detector is that quiet) it is set to none, as shots.nc without a detector has.
+void quiet_monte_carlo_noise(MeasuredShot& shot);
 
 // Each method's estimates of one shot: V per method, NaN where a method gives none.
 struct MethodEstimates {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <netcdf.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -68,9 +69,10 @@ class RetrieveCli : public ::testing::Test {
                      (dir_->path() / "table.nc").string() + " --quiet --threads 2");
     ASSERT_EQ(made.status, 0) << made.output;
     table_output_ = made.output;
-    const CommandOutcome run =
-        run_glaswave("run " + write(dir_->path() / "pass.json", layer(2.6, 40.0, 4)) +
-                     " --quiet --out " + (dir_->path() / "pass").string());
+    json pass = layer(2.6, 40.0, 4);
+    pass["output"]["gedi_l1b"] = true;
+    const CommandOutcome run = run_glaswave("run " + write(dir_->path() / "pass.json", pass) +
+                                            " --quiet --out " + (dir_->path() / "pass").string());
     ASSERT_EQ(run.status, 0) << run.output;
   }
   static void TearDownTestSuite() { dir_.reset(); }
@@ -193,6 +195,129 @@ TEST_F(RetrieveCli, PlotsAndTheBestFitAreWritten) {
     EXPECT_LT(a1_height[i], 15.0 + 3.0);
   }
   nc_close(nc);
+}
+
+// rt on the pass's GEDI L1B granule: its counts put on the table's scale by the granule's own
+// counts_per_watt give rt what shots.nc gives (float32 counts: to 1e-4), and the truth of the
+// layer (PAI 2.6, its gap probability e^-1.3) comes back with them. Told a scale twice the
+// granule's (--counts-per-watt), rt sees waveforms half as bright as any forest of its table
+// and flags every shot.
+TEST_F(RetrieveCli, RtReadsAGediGranuleOnItsDigitisersScale) {
+  const std::string table = " --table " + (dir_->path() / "table.nc").string();
+  const fs::path from_shots = dir_->path() / "l1b_shots", from_l1b = dir_->path() / "l1b_l1b",
+                 halved = dir_->path() / "l1b_halved";
+  ASSERT_EQ(run_glaswave("retrieve " + (dir_->path() / "pass" / "shots.nc").string() + table +
+                         " --methods rt --quiet --out " + from_shots.string())
+                .status,
+            0);
+  const std::string l1b = (dir_->path() / "pass" / "gedi_l1b.h5").string();
+  const CommandOutcome retrieved =
+      run_glaswave("retrieve " + l1b + table + " --methods rt --quiet --out " + from_l1b.string());
+  ASSERT_EQ(retrieved.status, 0) << retrieved.output;
+  const CommandOutcome told = run_glaswave("retrieve " + l1b + table +
+                                           " --methods rt --counts-per-watt 2e9 --quiet --json "
+                                           "--out " +
+                                           halved.string());
+  ASSERT_EQ(told.status, 0) << told.output;
+  EXPECT_EQ(json::parse(told.output)["rt_flagged"], 4);
+  int a = -1, b = -1;
+  ASSERT_EQ(nc_open((from_shots / "retrieval.nc").c_str(), NC_NOWRITE, &a), NC_NOERR);
+  ASSERT_EQ(nc_open((from_l1b / "retrieval.nc").c_str(), NC_NOWRITE, &b), NC_NOERR);
+  for (const char* name : {"pai_rt", "pgap_rt", "ground_elevation_rt", "pai_rt_sd"}) {
+    const std::vector<double> x = read_variable(a, name, 4), y = read_variable(b, name, 4);
+    for (int i = 0; i < 4; ++i) EXPECT_NEAR(y[i], x[i], 1e-4) << name << " " << i;
+  }
+  const std::vector<double> pai = read_variable(b, "pai_rt", 4);
+  const std::vector<double> pgap_true = read_variable(b, "pgap_true", 4);
+  const std::vector<double> flags = read_variable(b, "rt_flag", 4);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(pai[i], 2.6, 0.6);
+    EXPECT_NEAR(pgap_true[i], std::exp(-0.5 * 2.6), 1.5e-4);  // float32 in the granule
+    EXPECT_EQ(flags[i], 0.0);
+  }
+  nc_close(a);
+  nc_close(b);
+}
+
+// GLAS: a table of layers and a pass with a detector, written as shots.nc and as GLAH01 and
+// GLAH14. rt on the two granules (GLAH01 placed by its GLAH14: the last sample at d_elev +
+// d_ldRngOff) finds the ground 40 m up and the layer's PAI 2.6 as on shots.nc; the granules'
+// truth is the layer's. A GLAH01 without its GLAH14, or a GLAH14 alone, is refused in one line.
+TEST(RetrieveGlas, Glah01BesideItsGlah14GivesWhatItsShotsGive) {
+  const ScratchDir dir("glaswave_retrieve_glas");
+  const auto glas = [](json config) {
+    config["sensor"] = {{"preset", "glas"},
+                        {"bands",
+                         {{{"name", "1064"},
+                           {"wavelength_nm", 1064},
+                           {"pulse_energy_mJ", 72},
+                           {"atmos_transmission_roundtrip", 0.9}}}}};
+    config["track"]["altitude_m"] = 600000.0;
+    return config;
+  };
+  json table = glas(layer(2.0, 0.0, 2));
+  table["table"] = {{"vary", {{"canopy.pai", {0.0, 5.0}}}}, {"entries", 24}};
+  const fs::path table_file = dir.path() / "table.nc";
+  ASSERT_EQ(run_glaswave("table " + write(dir.path() / "table.json", table) + " --quiet --out " +
+                         table_file.string())
+                .status,
+            0);
+  json pass = glas(layer(2.6, 40.0, 4));
+  pass["detector"] = {{"enabled", true}, {"background_W", 2e-9}, {"noise_rms_W", 2e-9}};
+  pass["output"]["glah01"] = pass["output"]["glah14"] = true;
+  ASSERT_EQ(run_glaswave("run " + write(dir.path() / "pass.json", pass) + " --quiet --out " +
+                         (dir.path() / "pass").string())
+                .status,
+            0);
+  const std::string glah01 = (dir.path() / "pass" / "glah01.h5").string();
+  const std::string glah14 = (dir.path() / "pass" / "glah14.h5").string();
+  const std::string rt = " --methods rt --table " + table_file.string() + " --quiet --out ";
+  ASSERT_EQ(run_glaswave("retrieve " + (dir.path() / "pass" / "shots.nc").string() + rt +
+                         (dir.path() / "a").string())
+                .status,
+            0);
+  // The GLAH14 first: the kind from the layout, not the order.
+  const CommandOutcome granules =
+      run_glaswave("retrieve " + glah14 + " " + glah01 + rt + (dir.path() / "b").string());
+  ASSERT_EQ(granules.status, 0) << granules.output;
+  int a = -1, b = -1;
+  ASSERT_EQ(nc_open((dir.path() / "a" / "retrieval.nc").c_str(), NC_NOWRITE, &a), NC_NOERR);
+  ASSERT_EQ(nc_open((dir.path() / "b" / "retrieval.nc").c_str(), NC_NOWRITE, &b), NC_NOERR);
+  EXPECT_EQ(read_variable(b, "shot_number", 4), read_variable(a, "shot_number", 4));
+  // The granule's noise is taken before the signal, shots.nc's at the window's quieter end.
+  for (const char* name : {"pai_rt", "ground_elevation_rt", "lat", "lon"}) {
+    const std::vector<double> x = read_variable(a, name, 4), y = read_variable(b, name, 4);
+    for (int i = 0; i < 4; ++i) EXPECT_NEAR(y[i], x[i], 0.02) << name << " " << i;
+  }
+  // GLAH14's d_DEM_elv is shots.nc's terrain under the footprint.
+  const std::vector<double> terrain = read_variable(a, "ground_elevation_true", 4);
+  const std::vector<double> pai = read_variable(b, "pai_rt", 4);
+  const std::vector<double> ground = read_variable(b, "ground_elevation_rt", 4);
+  const std::vector<double> ground_true = read_variable(b, "ground_elevation_true", 4);
+  const std::vector<double> pai_true = read_variable(b, "pai_true", 4);
+  const std::vector<double> pgap_true = read_variable(b, "pgap_true", 4);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(pai[i], 2.6, 0.6);
+    EXPECT_NEAR(ground[i], 40.0, 0.3);
+    EXPECT_NEAR(ground_true[i], terrain[i], 1e-6);
+    EXPECT_NEAR(ground_true[i], 40.0, 1e-3);
+    EXPECT_NEAR(pai_true[i], 2.6, 0.05);
+    EXPECT_NEAR(pgap_true[i], std::exp(-0.5 * pai_true[i]), 1.5e-4);
+  }
+  nc_close(a);
+  nc_close(b);
+  const CommandOutcome alone =
+      run_glaswave("retrieve " + glah01 + " --quiet --out " + (dir.path() / "c").string());
+  EXPECT_EQ(alone.status, 3) << alone.output;
+  EXPECT_NE(alone.output.find("GLAH14"), std::string::npos) << alone.output;
+  const CommandOutcome placed_only =
+      run_glaswave("retrieve " + glah14 + " --quiet --out " + (dir.path() / "c").string());
+  EXPECT_EQ(placed_only.status, 3) << placed_only.output;
+  EXPECT_NE(placed_only.output.find("GLAH01"), std::string::npos) << placed_only.output;
+  for (const CommandOutcome* refused : {&alone, &placed_only})
+    EXPECT_EQ(std::count(refused->output.begin(), refused->output.end(), '\n'), 1)
+        << refused->output;
+  EXPECT_FALSE(fs::exists(dir.path() / "c" / "retrieval.nc"));
 }
 
 // A table of other bins or another pulse, a missing input, rt without a table: one line, status

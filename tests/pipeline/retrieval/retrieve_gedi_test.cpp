@@ -7,6 +7,7 @@
 #include <hdf5.h>
 #include <netcdf.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <mutex>
@@ -240,6 +241,20 @@ TEST(RetrieveGedi, RealLayoutL1bWithItsL2aGivesTheClosedForm) {
   ASSERT_EQ(cover_nc.size(), 3u);
   for (double c : cover_nc) EXPECT_NEAR(c, 0.5, 0.01);
   EXPECT_TRUE(nc_variable(nc, "cover_true").empty());
+  // rt compares watts with its table's: a real granule does not say its digitiser's counts per
+  // watt, so rt asks for them before it reads a table; a scale that is no positive number is
+  // refused too.
+  const std::string rt = "retrieve " + l1b.string() + " --methods rt --table " +
+                         (dir.path() / "table.nc").string() + " --quiet --out " +
+                         (dir.path() / "rt").string();
+  for (const std::string& line :
+       {rt, rt + " --counts-per-watt 0", rt + " --counts-per-watt 1e9x"}) {
+    const CommandOutcome refused = run_glaswave(line);
+    EXPECT_EQ(refused.status, 2) << refused.output;
+    EXPECT_NE(refused.output.find("--counts-per-watt"), std::string::npos) << refused.output;
+    EXPECT_EQ(std::count(refused.output.begin(), refused.output.end(), '\n'), 1) << refused.output;
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "rt" / "retrieval.nc"));
 }
 
 // Each defect refused with status 3, one line naming the file and the dataset, nothing written.

@@ -1,0 +1,33 @@
+// `glaswave retrieve`'s inputs (PRODUCT.md section 11): each file's kind read from its layout, not
+// its name, and every input read by its kind into the measured shots the methods take.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include "pipeline/retrieval/retrieve.hpp"
+
+namespace glaswave {
+
+enum class RetrieveInputKind {
+  shots_nc,  // glaswave's shots.nc (or anything else: read_shots says what it is not)
+  gedi_l1b,  // BEAMxxxx groups holding rxwaveform
+  gedi_l2a,  // BEAMxxxx groups holding elev_lowestmode and no rxwaveform
+  glah01,    // Data_40HZ/Waveform/RecWaveform/r_rng_wf
+  glah14,    // Data_40HZ/Elevation_Surfaces/d_elev and no r_rng_wf
+};
+
+// The kind of `file` from what it holds.
+RetrieveInputKind retrieve_input_kind(const std::filesystem::path& file);
+
+// Every input read by its kind: shots.nc files, GEDI L1B granules (each with the L2A granules
+// given, whose shots it matches) and GLAH01 granules (placed by the GLAH14 granules given), their
+// shots in the order given. An L2A without an L1B, a GLAH14 without a GLAH01 or a GLAH01 without
+// a GLAH14 is refused, as are inputs whose bands or bins differ.
+MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inputs,
+                                   std::optional<std::int64_t> first,
+                                   std::optional<std::int64_t> last);
+
+}  // namespace glaswave
