@@ -1,6 +1,7 @@
 // `glaswave table` and `glaswave retrieve`: their options, the summary they print.
 #include "pipeline/app/retrieval_cli.hpp"
 
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -48,6 +49,63 @@ std::optional<double> counts_per_watt_of(const std::string& text) {
     throw config_error("--counts-per-watt",
                        "must be a positive number of counts per watt, got " + quoted_excerpt(text));
   return value;
+}
+
+// The comma-separated parts of `text` (one empty part for an empty text).
+std::vector<std::string> comma_parts(const std::string& text) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', start);
+    parts.push_back(text.substr(start, comma == std::string::npos ? comma : comma - start));
+    if (comma == std::string::npos) return parts;
+    start = comma + 1;
+  }
+}
+
+// --beams: GEDI's group names (BEAM0101) or beam numbers (5).
+std::vector<int> beams_of(const std::string& text) {
+  std::vector<int> beams;
+  if (text.empty()) return beams;
+  const std::string usage = "expected beams as BEAM0101 or 5, comma-separated, got ";
+  for (const std::string& part : comma_parts(text)) {
+    int beam = 0;
+    if (part.size() == 8 && part.rfind("BEAM", 0) == 0 &&
+        part.find_first_not_of("01", 4) == std::string::npos) {
+      for (char c : part.substr(4)) beam = beam * 2 + (c == '1');
+    } else {
+      const std::optional<std::int64_t> number =
+          decimal(part, "--beams", usage + quoted_excerpt(part));
+      if (!number || *number > 65535) throw config_error("--beams", usage + quoted_excerpt(part));
+      beam = static_cast<int>(*number);
+    }
+    beams.push_back(beam);
+  }
+  return beams;
+}
+
+// --bbox W,S,E,N in degrees: longitudes in [-180, 180] (W > E crosses the antimeridian),
+// latitudes in [-90, 90] with S <= N.
+std::optional<std::array<double, 4>> bbox_of(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  const std::string usage =
+      "expected W,S,E,N in degrees (longitudes -180 to 180, latitudes -90 to 90, S <= N), got " +
+      quoted_excerpt(text);
+  const std::vector<std::string> parts = comma_parts(text);
+  if (parts.size() != 4) throw config_error("--bbox", usage);
+  std::array<double, 4> box{};
+  for (std::size_t i = 0; i < 4; ++i) {
+    const auto [end, error] =
+        std::from_chars(parts[i].data(), parts[i].data() + parts[i].size(), box[i]);
+    if (parts[i].empty() || error != std::errc() || end != parts[i].data() + parts[i].size() ||
+        !std::isfinite(box[i]))
+      throw config_error("--bbox", usage);
+  }
+  const auto [west, south, east, north] = box;
+  if (std::abs(west) > 180.0 || std::abs(east) > 180.0 || std::abs(south) > 90.0 ||
+      std::abs(north) > 90.0 || south > north)
+    throw config_error("--bbox", usage);
+  return box;
 }
 
 }  // namespace
@@ -101,6 +159,12 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
                    "one the input allows; rt with --table)")
       ->type_name("NAME,...");
   retrieve_->add_option("--shots", shots, "shot numbers A to B-1 only")->type_name("A:B");
+  retrieve_->add_option("--beams", beams, "these beams only (BEAM0101 or 5, comma-separated)")
+      ->type_name("B,...");
+  retrieve_
+      ->add_option("--bbox", bbox,
+                   "shots inside this box only, degrees (west > east crosses the antimeridian)")
+      ->type_name("W,S,E,N");
   retrieve_
       ->add_option("--rt-search", rt_search,
                    "rt's search: projected (the default: principal components pick the entries "
@@ -159,14 +223,7 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
   for (const std::string& input : inputs) request.inputs.emplace_back(input);
   request.out_dir = out;
   if (!table_file.empty()) request.table = table_file;
-  std::size_t start = 0;
-  while (!methods.empty() && start <= methods.size()) {
-    const std::size_t comma = methods.find(',', start);
-    request.methods.push_back(
-        methods.substr(start, comma == std::string::npos ? comma : comma - start));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
+  if (!methods.empty()) request.methods = comma_parts(methods);
   if (!shots.empty()) {
     const std::string usage = "expected A:B with shot numbers, got " + quoted_excerpt(shots);
     const auto colon = shots.find(':');
@@ -182,6 +239,8 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
     throw config_error("--rt-search",
                        "expected projected, two_stage or direct, got " + quoted_excerpt(rt_search));
   request.counts_per_W = counts_per_watt_of(counts_per_watt);
+  request.beams = beams_of(beams);
+  request.bbox_deg = bbox_of(bbox);
   request.threads = threads_of(threads_text);
   request.command_line = command_line;
   const RetrieveSummary summary = run_retrieval(request, progress(quiet || json, "shots"));

@@ -19,6 +19,7 @@
 
 #include "core/error.hpp"
 #include "pipeline/products/canopy_indices.hpp"
+#include "pipeline/products/gedi_granule.hpp"
 #include "pipeline/products/gedi_l2a_groups.hpp"
 #include "pipeline/products/gedi_l2b_algorithm.hpp"
 #include "pipeline/retrieval/gedi_l1b_reader.hpp"
@@ -163,6 +164,37 @@ void quiet_monte_carlo_noise(MeasuredShot& shot) {
 }
 
 namespace {
+
+// --beams and --bbox: the shots in the beams named (each of which some input must hold) and
+// inside the box (west > east crosses the antimeridian).
+void select_shots(MeasuredShots& input, const RetrieveRequest& request) {
+  if (!request.beams.empty()) {
+    std::vector<int> held;
+    for (const MeasuredShot& s : input.shots)
+      if (std::find(held.begin(), held.end(), s.beam) == held.end()) held.push_back(s.beam);
+    std::sort(held.begin(), held.end());
+    for (int beam : request.beams) {
+      if (std::find(held.begin(), held.end(), beam) != held.end()) continue;
+      std::string names;
+      for (int b : held)
+        names += (names.empty() ? "" : ", ") + gedi_beam_group(static_cast<std::uint16_t>(b));
+      throw config_error("--beams", gedi_beam_group(static_cast<std::uint16_t>(beam)) +
+                                        " is in none of the inputs, whose shots are in " +
+                                        (names.empty() ? std::string("no beam") : names));
+    }
+  }
+  const auto kept = [&](const MeasuredShot& s) {
+    if (!request.beams.empty() &&
+        std::find(request.beams.begin(), request.beams.end(), s.beam) == request.beams.end())
+      return false;
+    if (!request.bbox_deg) return true;
+    const auto [west, south, east, north] = *request.bbox_deg;
+    const bool in_lon = west <= east ? s.lon_deg >= west && s.lon_deg <= east
+                                     : s.lon_deg >= west || s.lon_deg <= east;
+    return in_lon && s.lat_deg >= south && s.lat_deg <= north;
+  };
+  std::erase_if(input.shots, [&](const MeasuredShot& s) { return !kept(s); });
+}
 
 struct ShotResults {
   std::map<std::string, MethodEstimates> estimates;
@@ -457,6 +489,7 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
     throw config_error(product.string(), "exists already: give another --out");
 
   MeasuredShots input = read_retrieve_inputs(request.inputs, request.first_shot, request.last_shot);
+  select_shots(input, request);
   for (MeasuredShot& s : input.shots) {
     if (!s.in_counts) continue;
     if (request.counts_per_W) s.counts_per_W = *request.counts_per_W;

@@ -6,6 +6,7 @@
 // seed's waveform index (wi) and the physically based inversion over a forward table (rt).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -27,6 +28,8 @@ struct RetrieveRequest {
   std::optional<std::filesystem::path> table;         // needed by rt
   std::vector<std::string> methods;                   // empty: every method the input allows
   std::optional<std::int64_t> first_shot, last_shot;  // shot numbers [A, B)
+  std::vector<int> beams;                             // --beams: beam numbers kept; empty: all
+  std::optional<std::array<double, 4>> bbox_deg;      // --bbox: west, south, east, north
   std::optional<double> counts_per_W;                 // --counts-per-watt: granules' scale
   int threads = 0;                                    // 0: every core
   std::string command_line;

@@ -239,6 +239,44 @@ TEST_F(RetrieveCli, RtReadsAGediGranuleOnItsDigitisersScale) {
   nc_close(b);
 }
 
+// --beams and --bbox keep the pass's shots (beam 5, BEAM0101; at latitudes 0, 0.001, 0.002 and
+// 0.003 on the prime meridian) in the beams and the box; a box whose west lies east of its east
+// crosses the antimeridian and so holds none of them. A beam no input holds, or a box that is no
+// box, is refused in one line.
+TEST_F(RetrieveCli, BeamsAndBoxSelectShots) {
+  const std::string l1b = (dir_->path() / "pass" / "gedi_l1b.h5").string();
+  const fs::path kept = dir_->path() / "kept", none = dir_->path() / "none";
+  ASSERT_EQ(run_glaswave("retrieve " + l1b +
+                         " --beams BEAM0101,5 --bbox -1,0.0015,1,1 --quiet "
+                         "--out " +
+                         kept.string())
+                .status,
+            0);
+  int nc = -1;
+  ASSERT_EQ(nc_open((kept / "retrieval.nc").c_str(), NC_NOWRITE, &nc), NC_NOERR);
+  EXPECT_EQ(read_variable(nc, "shot_number", 2), (std::vector<double>{2, 3}));
+  nc_close(nc);
+  const CommandOutcome across =
+      run_glaswave("retrieve " + l1b + " --bbox 1,-1,-1,1 --quiet --json --out " + none.string());
+  ASSERT_EQ(across.status, 0) << across.output;
+  EXPECT_EQ(json::parse(across.output)["shots"], 0);
+  const CommandOutcome beam = run_glaswave("retrieve " + l1b + " --beams BEAM0000 --quiet --out " +
+                                           (dir_->path() / "refused").string());
+  EXPECT_EQ(beam.status, 2) << beam.output;
+  EXPECT_NE(beam.output.find("BEAM0000 is in none of the inputs, whose shots are in BEAM0101"),
+            std::string::npos)
+      << beam.output;
+  for (const char* box : {"1,2,3", "0,1,2,-1", "0,0,181,1", "0,0,1,x"}) {
+    const CommandOutcome refused =
+        run_glaswave("retrieve " + l1b + " --bbox " + box + " --quiet --out " +
+                     (dir_->path() / "refused").string());
+    EXPECT_EQ(refused.status, 2) << box << ": " << refused.output;
+    EXPECT_NE(refused.output.find("--bbox"), std::string::npos) << refused.output;
+    EXPECT_EQ(std::count(refused.output.begin(), refused.output.end(), '\n'), 1) << refused.output;
+  }
+  EXPECT_FALSE(fs::exists(dir_->path() / "refused" / "retrieval.nc"));
+}
+
 // GLAS: a table of layers and a pass with a detector, written as shots.nc and as GLAH01 and
 // GLAH14. rt on the two granules (GLAH01 placed by its GLAH14: the last sample at d_elev +
 // d_ldRngOff) finds the ground 40 m up and the layer's PAI 2.6 as on shots.nc; the granules'
