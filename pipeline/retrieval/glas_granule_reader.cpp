@@ -20,8 +20,10 @@ constexpr double kHalfC_m_per_ns = 0.5 * 299792458.0 * 1e-9;  // range per ns of
 constexpr const char* kGlasKind = "a GLAS GLAH01 or GLAH14 granule";
 // A sample-location table larger than this is no GLAS table (544 samples a row, a few rows).
 constexpr std::size_t kMostTableValues = 1 << 20;
+// i_rec_wf_location_index's fill, GLAS's int8 127: the shot's samples have no times.
+constexpr double kNoRow = 127.0;
 
-// GLAS's fill for float64 (1.7976931348623157e308) and GLAH01's int8 fill (127) read as NaN.
+// GLAS's fill for float64 (1.7976931348623157e308) read as NaN.
 double unfilled(double value) { return std::abs(value) < 1e300 ? value : kNaN; }
 
 std::vector<std::int64_t> shot_numbers(const GranuleFile& granule, const std::string& d) {
@@ -156,22 +158,26 @@ MeasuredShots read_glah01(const std::filesystem::path& file, const Glah14Shots& 
     s.beam = 0;
     s.in_counts = true;
     s.counts_per_W = counts_per_W;
-    const double r = unfilled(row[i]);
-    if (!(r >= 1.0 && r <= static_cast<double>(table_rows)) || r != std::floor(r))
+    const double r = row[i];
+    const bool no_row = r == kNoRow;  // kept, with no estimates
+    if (!no_row && (!(r >= 1.0 && r <= static_cast<double>(table_rows)) || r != std::floor(r)))
       granule.refuse(d + "Waveform/RecWaveform/i_rec_wf_location_index",
-                     "shot " + std::to_string(number) + "'s row " + std::to_string(row[i]) +
+                     "shot " + std::to_string(number) + "'s row " + std::to_string(r) +
                          " is not one of the table's " + std::to_string(table_rows));
-    const std::size_t table_row = static_cast<std::size_t>(r) - 1;
-    const double step_ns = row_step_ns[table_row];
-    if (!std::isfinite(step_ns))
-      granule.refuse(table_name, "row " + std::to_string(table_row + 1) +
-                                     " spaces its samples unevenly (a compressed waveform), "
-                                     "which retrieve does not read");
-    if (!std::isfinite(out.bin_ns)) out.bin_ns = step_ns;
-    if (std::abs(step_ns - out.bin_ns) > 1e-6 * out.bin_ns)
-      granule.refuse(table_name, "its rows space samples by " + std::to_string(out.bin_ns) +
-                                     " and " + std::to_string(step_ns) +
-                                     " ns: retrieve reads one spacing a file");
+    double step_ns = out.bin_ns;
+    if (!no_row) {
+      const std::size_t table_row = static_cast<std::size_t>(r) - 1;
+      step_ns = row_step_ns[table_row];
+      if (!std::isfinite(step_ns))
+        granule.refuse(table_name, "row " + std::to_string(table_row + 1) +
+                                       " spaces its samples unevenly (a compressed waveform), "
+                                       "which retrieve does not read");
+      if (!std::isfinite(out.bin_ns)) out.bin_ns = step_ns;
+      if (std::abs(step_ns - out.bin_ns) > 1e-6 * out.bin_ns)
+        granule.refuse(table_name, "its rows space samples by " + std::to_string(out.bin_ns) +
+                                       " and " + std::to_string(step_ns) +
+                                       " ns: retrieve reads one spacing a file");
+    }
     const auto from = rx.begin() + static_cast<std::ptrdiff_t>(i * bins);
     s.waveform_W.emplace_back(from, from + static_cast<std::ptrdiff_t>(bins));
     s.noise_mean_W = {std::isfinite(unfilled(noise_mean[i])) ? noise_mean[i] : 0.0};
@@ -183,7 +189,7 @@ MeasuredShots read_glah01(const std::filesystem::path& file, const Glah14Shots& 
         match != glah14.shots.end() && match->first == number ? &match->second : nullptr;
     const double last_m = placed ? placed->elev_m + placed->land_offset_m : kNaN;
     s.axis = {step_ns, last_m + kHalfC_m_per_ns * step_ns * static_cast<double>(bins - 1), last_m};
-    s.good = std::isfinite(last_m);
+    s.good = !no_row && std::isfinite(last_m);
     for (double x : s.waveform_W.back()) s.good = s.good && std::isfinite(x);
     if (out.simulated && s.good) quiet_monte_carlo_noise(s);
     s.lat_deg = placed ? placed->lat_deg : kNaN;

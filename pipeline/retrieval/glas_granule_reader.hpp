@@ -43,7 +43,8 @@ Glah14Shots read_glah14(const std::filesystem::path& file);
 // land waveforms are; a compressed row is refused). The last sample lies at d_elev + d_ldRngOff,
 // each sample before it half a light-nanosecond higher: the beam is taken as vertical (within a
 // degree of nadir, as GLAS pointed, a sample 100 m from the centroid moves by at most 1.5 cm). A
-// shot GLAH14 lacks, or whose elevation is fill, is kept and not good.
+// shot GLAH14 lacks, whose elevation is fill or whose sample-location row is fill (127) is kept
+// and not good.
 MeasuredShots read_glah01(const std::filesystem::path& file, const Glah14Shots& glah14,
                           std::optional<std::int64_t> first, std::optional<std::int64_t> last);
 

@@ -52,6 +52,7 @@ struct GlasFiles {
   bool no_land_offset = false;   // GLAH14 without d_ldRngOff
   bool shot_count_41 = false;    // a shot numbered past a record's 40
   bool no_table = false;         // no ANCILLARY_DATA table
+  bool fill_rows = false;        // every shot's row index GLAS's fill, 127: no sample times
 };
 
 // Three shots: records 1000 (shots 1 and 2) and 1001 (shot 40), numbers 40000, 40001 and 40079;
@@ -81,7 +82,9 @@ void write_glas(const fs::path& glah01, const fs::path& glah14, const GlasFiles&
     f.write(d + "Waveform/Characteristics/d_4nsBgMean", std::vector<double>(n, 200.0));
     f.write(d + "Waveform/Characteristics/d_4nsBgSDEV", std::vector<double>(n, 2.0));
     f.write(d + "Waveform/RecWaveform/i_rec_wf_location_index",
-            std::vector<std::int8_t>(n, spec.compressed_row ? 2 : 1));
+            std::vector<std::int8_t>(n, spec.fill_rows        ? 127
+                                        : spec.compressed_row ? 2
+                                                              : 1));
     if (!spec.no_table) {
       // Row 1: 1 ns apart, ending at 0; row 2: 4 ns apart over the first samples (compressed).
       std::vector<double> table;
@@ -135,6 +138,17 @@ TEST(RetrieveGlas, RealLayoutGlah01BesideItsGlah14GivesTheClosedForm) {
   EXPECT_TRUE(std::isnan(ground[2]));
   // No truth in a real granule.
   EXPECT_TRUE(nc_variable(nc, "cover_true").empty());
+  // Shots whose sample-location row is fill have no sample times: kept, with no estimates.
+  GlasFiles rowless;
+  rowless.fill_rows = true;
+  write_glas(glah01, glah14, rowless);
+  const CommandOutcome kept = run_glaswave("retrieve " + glah01.string() + " " + glah14.string() +
+                                           " --quiet --out " + (dir.path() / "rowless").string());
+  ASSERT_EQ(kept.status, 0) << kept.output;
+  const std::vector<double> no_cover =
+      nc_variable(dir.path() / "rowless" / "retrieval.nc", "cover_gedi_l2b");
+  ASSERT_EQ(no_cover.size(), 3u);
+  for (double c : no_cover) EXPECT_TRUE(std::isnan(c));
 }
 
 // Each defect refused with status 3, one line naming the file and the dataset, nothing written.
