@@ -137,6 +137,7 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
       "  glaswave retrieve out/pass/shots.nc --table gedi_table.nc --out out/pass-retrieval\n"
       "  glaswave retrieve GEDI01_B_...h5 GEDI02_A_...h5 --out gedi-retrieval\n"
       "  glaswave retrieve GLAH01_...H5 GLAH14_...H5 --out glas-retrieval\n"
+      "  glaswave retrieve ATL08_...h5 --out icesat2-retrieval\n"
       "Writes DIR/retrieval.nc: per shot and method, canopy_height, cover, pai, "
       "ground_elevation, rhov_rhog and pgap, rt's posterior sd and 5-95 % bounds and rt_flag, "
       "and the "
@@ -145,8 +146,8 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
   retrieve_
       ->add_option("INPUT", inputs,
                    "glaswave's shots.nc, a GEDI L1B granule (GEDI01_B or gedi_l1b.h5) with "
-                   "its L2A beside it when given, or a GLAS GLAH01 granule with its GLAH14; the "
-                   "kind read from the layout")
+                   "its L2A beside it when given, a GLAS GLAH01 granule with its GLAH14, or an "
+                   "ICESat-2 ATL08 granule; the kind read from the layout")
       ->type_name("INPUT")
       ->required();
   retrieve_->add_option("--out", out, "output directory (default: the first input's)")
@@ -155,8 +156,9 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
       ->type_name("TABLE.nc");
   retrieve_
       ->add_option("--methods", methods,
-                   "methods, comma-separated, among gedi_l2a, gedi_l2b, wi, rt (default: every "
-                   "one the input allows; rt with --table)")
+                   "methods, comma-separated, among gedi_l2a, gedi_l2b, wi, rt for waveforms, "
+                   "atl08, photon_ratio for ATL08's segments (default: every one the input "
+                   "allows; rt with --table)")
       ->type_name("NAME,...");
   retrieve_->add_option("--shots", shots, "shot numbers A to B-1 only")->type_name("A:B");
   retrieve_->add_option("--beams", beams, "these beams only (BEAM0101 or 5, comma-separated)")

@@ -19,7 +19,7 @@ using namespace icesat2;
 namespace {
 
 struct SegmentTruth {
-  std::vector<float> h_te, h_canopy, cover, pai, lat, lon, dem_h, solar_elevation;
+  std::vector<float> h_te, h_canopy, cover, pai, pgap, lat, lon, dem_h, solar_elevation;
   std::vector<float> lat_20m, lon_20m;  // segments x 5: the shot nearest each 20 m's centre
   std::vector<double> time;
   std::vector<std::int32_t> id_beg, id_end;
@@ -29,12 +29,13 @@ struct SegmentTruth {
 // The simulation's place and truth at one segment: `middle` its shot nearest the centre (null
 // when it has none), `n` its shots and the sums of their truths.
 void add_segment_truth(SegmentTruth& t, const BeamShot* middle, double n, double h, double ch,
-                       double cv, double pai) {
+                       double cv, double pai, double pgap) {
   const auto mean = [&](double sum) { return n > 0.0 ? static_cast<float>(sum / n) : fill_float; };
   t.h_te.push_back(mean(h));
   t.h_canopy.push_back(mean(ch));
   t.cover.push_back(mean(cv));
   t.pai.push_back(mean(pai));
+  t.pgap.push_back(mean(pgap));
   t.lat.push_back(middle ? static_cast<float>(middle->lat_deg) : fill_float);
   t.lon.push_back(middle ? static_cast<float>(middle->lon_deg) : fill_float);
   t.time.push_back(middle ? middle->delta_time_s : fill_float);
@@ -67,7 +68,8 @@ SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t co
                            double segment_m) {
   SegmentTruth t;
   const std::int32_t last_id = segment_of(beam.shots.back().along_m);  // ATL03's last segment
-  std::vector<double> n(count, 0.0), h(count, 0.0), ch(count, 0.0), cv(count, 0.0), pai(count, 0.0);
+  std::vector<double> n(count, 0.0), h(count, 0.0), ch(count, 0.0), cv(count, 0.0), pai(count, 0.0),
+      pgap(count, 0.0);
   for (const BeamShot& s : beam.shots) {
     const std::size_t j = static_cast<std::size_t>(
         std::clamp(std::floor((s.along_m - first_m) / segment_m), 0.0, double(count - 1)));
@@ -76,11 +78,12 @@ SegmentTruth segment_truth(const BeamTrack& beam, double first_m, std::size_t co
     ch[j] += s.canopy_height_m;
     cv[j] += s.canopy_cover;
     pai[j] += s.pai;
+    pgap[j] += s.pgap;
   }
   const std::vector<std::size_t> middle = nearest_to_centres(beam, first_m, count, segment_m);
   for (std::size_t j = 0; j < count; ++j) {
     add_segment_truth(t, n[j] > 0.0 ? &beam.shots[middle[j]] : nullptr, n[j], h[j], ch[j], cv[j],
-                      pai[j]);
+                      pai[j], pgap[j]);
     const double start = first_m + static_cast<double>(j) * segment_m;
     t.id_beg.push_back(segment_of(start));
     // The last land segment ends at the ATL03 segment of the last shot: past it there is none
@@ -444,6 +447,9 @@ void write_segment_truth(Granule& g, const std::string& land, const SegmentTruth
             truth_meta("1", "Simulation truth: mean of the footprints' crown cover"), 0, true);
   g.dataset(h, "pai", t.pai, truth_meta("1", "Simulation truth: mean of the footprints' PAI"), 0,
             true);
+  g.dataset(h, "pgap", t.pgap,
+            truth_meta("1", "Simulation truth: mean of the footprints' vertical gap probability"),
+            0, true);
 }
 
 void write_land_segments(Granule& g, const std::string& beam_group, const BeamTrack& beam,

@@ -37,7 +37,7 @@ struct BeamShot {
   double lat_deg = 0.0, lon_deg = 0.0, delta_time_s = 0.0;
   double ground_h_m = 0.0;       // the terrain at the footprint centre
   double canopy_height_m = 0.0;  // the simulation's truth over the footprint
-  double canopy_cover = 0.0, pai = 0.0;
+  double canopy_cover = 0.0, pai = 0.0, pgap = 0.0;
   double background_rate_Hz = 0.0;   // the background photons' rate in the receiver (ATL03's
                                      // bckgrd_atlas/bckgrd_rate): measured by ATLAS, here known
   double solar_elevation_deg = 0.0;  // the sun above the footprint's horizon (NaN: unknown)
@@ -128,9 +128,8 @@ void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>
 // h_mean_canopy, h_mean_canopy_abs, h_min_canopy, h_median_canopy, h_max_canopy,
 // canopy_h_metrics (segments x 18), h_canopy_uncertainty, n_ca_photons, n_toc_photons}, the 20 m
 // sub-segments' latitude_20m, longitude_20m, terrain/{h_te_best_fit_20m, subset_te_flag} and
-// canopy/{h_canopy_20m, subset_can_flag} (segments x 5),
-// glaswave_truth/{h_te,
-// h_canopy, canopy_cover, pai}}; signal_photons/{classed_pc_flag, classed_pc_indx, ph_segment_id,
+// canopy/{h_canopy_20m, subset_can_flag} (segments x 5), glaswave_truth/{h_te, h_canopy,
+// canopy_cover, pai, pgap}}; signal_photons/{classed_pc_flag, classed_pc_indx, ph_segment_id,
 // ph_h, d_flag, delta_time}.
 void write_atl08(const std::filesystem::path& path, const std::vector<BeamTrack>& beams,
                  const std::vector<Atl08Classes>& classes, const Atl08Settings& settings,

@@ -77,6 +77,7 @@ void Icesat2Writer::write(std::int64_t index, const ShotRecord& shot) {
   kept.shot.canopy_height_m = shot.canopy_height_true_m;
   kept.shot.canopy_cover = shot.cover_true;
   kept.shot.pai = shot.pai_true;
+  kept.shot.pgap = shot.pgap_true;
   kept.shot.solar_elevation_deg = shot.solar_elevation_deg;
   kept.shot.solar_azimuth_deg = shot.solar_azimuth_deg;
   kept.shot.sc_lat_deg = shot.sc_lat_deg;

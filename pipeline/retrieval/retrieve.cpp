@@ -77,11 +77,13 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
   const std::string place = file.string();
   const std::optional<std::string> config_text = nc.text_attribute("", "config");
   if (!config_text || !nc.has_variable("rx_waveform"))
-    throw input_error(place,
-                      "neither a glaswave shots.nc (no `config` attribute or `rx_waveform`) "
-                      "nor a GEDI L1B granule (no BEAMxxxx/rxwaveform) nor a GLAH01 or GLAH14 "
-                      "granule (no Data_40HZ/Waveform/RecWaveform/r_rng_wf or "
-                      "Elevation_Surfaces/d_elev); ATL03 granules are not read yet");
+    throw input_error(
+        place,
+        "neither a glaswave shots.nc (no `config` attribute or `rx_waveform`) "
+        "nor a GEDI L1B granule (no BEAMxxxx/rxwaveform) nor a GLAH01 or GLAH14 "
+        "granule (no Data_40HZ/Waveform/RecWaveform/r_rng_wf or "
+        "Elevation_Surfaces/d_elev) nor an ATL08 granule (no gtXY/land_segments); ATL03 "
+        "granules are not read yet");
   json config;
   try {
     config = json::parse(*config_text);
@@ -218,6 +220,21 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
   r.pavd_z.fill(kNaN);
   r.rt = RtResult::none();
   for (const std::string& m : methods) r.estimates[m] = kNone;
+  if (shot.segment) {
+    const Atl08Segment& a = *shot.segment;
+    if (r.estimates.count("atl08"))
+      r.estimates["atl08"] = {a.h_canopy_m, kNaN, kNaN, a.h_te_best_fit_m, kNaN, kNaN};
+    // The ratio assumes canopy and ground reflect alike (rhov/rhog = 1); its PAI is L2B's formula
+    // at nadir (G = 1/2, no clumping), as WI's is.
+    const PhotonClassCounts& n = a.photons;
+    if (r.estimates.count("photon_ratio") && n.canopy + n.top_of_canopy + n.ground > 0) {
+      const double cover = photon_ratio_cover(n, 1.0).photon_ratio;
+      // No ground photon: no gap seen, and no PAI that the ratio can tell.
+      const double pai = cover < 1.0 ? -std::log(1.0 - cover) / 0.5 : kNaN;
+      r.estimates["photon_ratio"] = {kNaN, cover, pai, kNaN, 1.0, 1.0 - cover};
+    }
+    return r;
+  }
   if (!shot.good) return r;
   const std::vector<double>& w = shot.waveform_W[0];
   const double peak = *std::max_element(w.begin(), w.end()) - shot.noise_mean_W[0];
@@ -466,22 +483,18 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
 RetrieveSummary run_retrieval(const RetrieveRequest& request,
                               const std::function<void(std::int64_t, std::int64_t)>& progress) {
   if (request.inputs.empty())
-    throw config_error("INPUT", "give at least one shots.nc, GEDI L1B or GLAH01 granule");
-  std::vector<std::string> methods = request.methods;
-  if (methods.empty()) {
-    methods = {"gedi_l2a", "gedi_l2b", "wi"};
-    if (request.table) methods.push_back("rt");
-  }
-  for (const std::string& m : methods) {
-    if (std::find(kRetrievalMethods.begin(), kRetrievalMethods.end(), m) == kRetrievalMethods.end())
-      throw config_error("--methods",
-                         "unknown method \"" + m + "\": choose among gedi_l2a, gedi_l2b, wi, rt");
-    if (std::count(methods.begin(), methods.end(), m) > 1)
+    throw config_error("INPUT", "give at least one shots.nc, GEDI L1B, GLAH01 or ATL08 granule");
+  const auto named = [](const std::vector<std::string>& list, const std::string& m) {
+    return std::find(list.begin(), list.end(), m) != list.end();
+  };
+  for (const std::string& m : request.methods) {
+    if (!named(kWaveformMethods, m) && !named(kSegmentMethods, m))
+      throw config_error("--methods", "unknown method \"" + m +
+                                          "\": choose among gedi_l2a, gedi_l2b, wi, rt (waveforms) "
+                                          "or atl08, photon_ratio (ATL08's segments)");
+    if (std::count(request.methods.begin(), request.methods.end(), m) > 1)
       throw config_error("--methods", "\"" + m + "\" is given twice");
   }
-  const bool want_rt = std::find(methods.begin(), methods.end(), "rt") != methods.end();
-  if (want_rt && !request.table)
-    throw config_error("--methods", "rt needs --table TABLE.nc (made by `glaswave table`)");
   const std::filesystem::path out_dir =
       request.out_dir.empty() ? request.inputs.front().parent_path() : request.out_dir;
   const std::filesystem::path product = (out_dir.empty() ? "." : out_dir) / "retrieval.nc";
@@ -490,6 +503,27 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
 
   MeasuredShots input = read_retrieve_inputs(request.inputs, request.first_shot, request.last_shot);
   select_shots(input, request);
+  // Every method the input allows by default; a method of the other kind is refused.
+  const std::vector<std::string>& allowed = input.atl08 ? kSegmentMethods : kWaveformMethods;
+  std::vector<std::string> methods = request.methods;
+  if (methods.empty()) {
+    methods =
+        input.atl08 ? kSegmentMethods : std::vector<std::string>{"gedi_l2a", "gedi_l2b", "wi"};
+    if (!input.atl08 && request.table) methods.push_back("rt");
+  }
+  for (const std::string& m : methods)
+    if (!named(allowed, m))
+      throw config_error("--methods", input.atl08
+                                          ? "\"" + m +
+                                                "\" reads waveforms, and ATL08 gives land "
+                                                "segments: choose among atl08, photon_ratio"
+                                          : "\"" + m +
+                                                "\" reads ATL08's land segments, and the "
+                                                "input gives waveforms: choose among gedi_l2a, "
+                                                "gedi_l2b, wi, rt");
+  const bool want_rt = named(methods, "rt");
+  if (want_rt && !request.table)
+    throw config_error("--methods", "rt needs --table TABLE.nc (made by `glaswave table`)");
   for (MeasuredShot& s : input.shots) {
     if (!s.in_counts) continue;
     if (request.counts_per_W) s.counts_per_W = *request.counts_per_W;

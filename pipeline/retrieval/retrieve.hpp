@@ -15,12 +15,15 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/products/canopy_indices.hpp"
 #include "pipeline/retrieval/gedi_l2b_granule.hpp"
 #include "pipeline/retrieval/rt_inversion.hpp"
 
 namespace glaswave {
 
-inline const std::vector<std::string> kRetrievalMethods = {"gedi_l2a", "gedi_l2b", "wi", "rt"};
+// The methods of waveforms, and of ATL08's land segments.
+inline const std::vector<std::string> kWaveformMethods = {"gedi_l2a", "gedi_l2b", "wi", "rt"};
+inline const std::vector<std::string> kSegmentMethods = {"atl08", "photon_ratio"};
 
 struct RetrieveRequest {
   std::vector<std::filesystem::path> inputs;
@@ -45,6 +48,13 @@ struct RetrieveSummary {
   std::filesystem::path l2b_granule;  // DIR/gedi_l2b.h5 for GEDI L1B input, else empty
 };
 
+// An ICESat-2 ATL08 land segment, which atl08 input gives in place of a waveform: ATL08's own
+// canopy height (h_canopy, above the terrain) and best-fit terrain, and its photons by class.
+struct Atl08Segment {
+  double h_canopy_m, h_te_best_fit_m;
+  PhotonClassCounts photons;
+};
+
 // One measured shot as the methods read it: band 0 for the missions' algorithms, every band for
 // rt.
 struct MeasuredShot {
@@ -62,7 +72,8 @@ struct MeasuredShot {
   // counts per watt (in_counts), NaN where the granule does not say (a real one).
   double counts_per_W = 1.0;
   bool in_counts = false;
-  GediShotInfo gedi;  // GEDI L1B input's (present) and its L2A's
+  std::optional<Atl08Segment> segment;  // ATL08 input: a land segment, and no waveform
+  GediShotInfo gedi;                    // GEDI L1B input's (present) and its L2A's
 };
 
 struct MeasuredShots {
@@ -71,6 +82,7 @@ struct MeasuredShots {
   double pulse_sigma_ns = 0.0;
   bool simulated = true;
   bool gedi_l1b = false;  // read from a GEDI L1B granule: gedi_l2b.h5 is written
+  bool atl08 = false;     // ATL08's land segments: the methods atl08 and photon_ratio
   std::vector<MeasuredShot> shots;
 };
 

@@ -6,6 +6,7 @@
 #include "core/error.hpp"
 #include "core/hdf5_file.hpp"
 #include "core/netcdf_lock.hpp"
+#include "pipeline/retrieval/atl08_reader.hpp"
 #include "pipeline/retrieval/gedi_l1b_reader.hpp"
 #include "pipeline/retrieval/glas_granule_reader.hpp"
 
@@ -19,6 +20,7 @@ RetrieveInputKind retrieve_input_kind(const std::filesystem::path& file) {
     if (reader.has("Data_40HZ/Waveform/RecWaveform/r_rng_wf")) return RetrieveInputKind::glah01;
     if (reader.has("Data_40HZ/Elevation_Surfaces/d_elev")) return RetrieveInputKind::glah14;
   }
+  if (is_atl08(file)) return RetrieveInputKind::atl08;
   if (is_gedi_l1b(file)) return RetrieveInputKind::gedi_l1b;
   if (is_gedi_l2a(file)) return RetrieveInputKind::gedi_l2a;
   return RetrieveInputKind::shots_nc;
@@ -74,6 +76,9 @@ MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inp
                             "GLAH14 granule beside it");
         more = read_glah01(file, glah14, first, last);
         break;
+      case RetrieveInputKind::atl08:
+        more = read_atl08(file, first, last);
+        break;
       case RetrieveInputKind::gedi_l1b:
         more = read_gedi_l1b(file, l2a, first, last);
         break;
@@ -86,7 +91,9 @@ MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inp
       empty = false;
       continue;
     }
-    if (more.band_names != input.band_names || more.bin_ns != input.bin_ns)
+    if (more.atl08 != input.atl08)
+      throw input_error(file.string(), "ATL08's land segments and waveforms are retrieved apart");
+    if (!more.atl08 && (more.band_names != input.band_names || more.bin_ns != input.bin_ns))
       throw input_error(file.string(),
                         "its bands or bins are not those of " + inputs.front().string());
     input.simulated = input.simulated && more.simulated;

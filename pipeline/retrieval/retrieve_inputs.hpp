@@ -17,13 +17,15 @@ enum class RetrieveInputKind {
   gedi_l2a,  // BEAMxxxx groups holding elev_lowestmode and no rxwaveform
   glah01,    // Data_40HZ/Waveform/RecWaveform/r_rng_wf
   glah14,    // Data_40HZ/Elevation_Surfaces/d_elev and no r_rng_wf
+  atl08,     // gtXY/land_segments
 };
 
 // The kind of `file` from what it holds.
 RetrieveInputKind retrieve_input_kind(const std::filesystem::path& file);
 
 // Every input read by its kind: shots.nc files, GEDI L1B granules (each with the L2A granules
-// given, whose shots it matches) and GLAH01 granules (placed by the GLAH14 granules given), their
+// given, whose shots it matches), GLAH01 granules (placed by the GLAH14 granules given) and ATL08
+// granules (a record a land segment), their
 // shots in the order given. An L2A without an L1B, a GLAH14 without a GLAH01 or a GLAH01 without
 // a GLAH14 is refused, as are inputs whose bands or bins differ.
 MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inputs,

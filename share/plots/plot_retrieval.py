@@ -28,13 +28,17 @@ import matplotlib.pyplot as plt  # noqa: E402
 import netCDF4  # noqa: E402
 import numpy as np  # noqa: E402
 
-METHODS = ["gedi_l2a", "gedi_l2b", "wi", "rt"]
-COLOURS = {"gedi_l2a": "tab:orange", "gedi_l2b": "tab:blue", "wi": "tab:green", "rt": "tab:red"}
+METHODS = ["gedi_l2a", "gedi_l2b", "wi", "rt", "atl08", "photon_ratio"]
+COLOURS = {"gedi_l2a": "tab:orange", "gedi_l2b": "tab:blue", "wi": "tab:green", "rt": "tab:red",
+           "atl08": "tab:purple", "photon_ratio": "tab:brown"}
 VARIABLES = [("canopy_height", "canopy height (m)"), ("cover", "cover"), ("pai", "PAI"),
              ("ground_elevation", "ground elevation (m)")]
 # Real input's reference per variable: the mission's own algorithm.
 REFERENCE = {"canopy_height": "gedi_l2a", "cover": "gedi_l2b", "pai": "gedi_l2b",
              "ground_elevation": "gedi_l2a"}
+# ATL08 input's: ATL08's own heights and the photon ratio.
+REFERENCE_ATL08 = {"canopy_height": "atl08", "cover": "photon_ratio", "pai": "photon_ratio",
+                   "ground_elevation": "atl08"}
 MAX_FITS = 4
 NOISE_FRACTION = 0.15  # bins at each end for the noise level, as retrieve.cpp takes it
 
@@ -62,16 +66,17 @@ def read_retrieval(path):
 def plot_estimates(r, path):
     simulated = "pai_true" in r
     methods = [m for m in METHODS if f"cover_{m}" in r]
+    references = REFERENCE_ATL08 if "cover_photon_ratio" in r else REFERENCE
     fig, axes = plt.subplots(1, len(VARIABLES), figsize=(4.2 * len(VARIABLES), 4.0))
     for ax, (variable, label) in zip(axes, VARIABLES):
-        reference = f"{variable}_true" if simulated else f"{variable}_{REFERENCE[variable]}"
+        reference = f"{variable}_true" if simulated else f"{variable}_{references[variable]}"
         x = r.get(reference)
         drawn = False
         for m in methods:
             y = r.get(f"{variable}_{m}")
             if x is None or y is None or not np.isfinite(y).any():
                 continue
-            if not simulated and m == REFERENCE[variable]:
+            if not simulated and m == references[variable]:
                 continue  # itself against itself
             if variable == "ground_elevation":
                 y = y - x  # elevations span the terrain: the difference is what shows
@@ -89,7 +94,7 @@ def plot_estimates(r, path):
                 ax.plot([finite.min(), finite.max()], [finite.min(), finite.max()], "k-", lw=0.7)
         if variable == "ground_elevation":
             ax.axhline(0.0, color="k", lw=0.7)
-        source = "truth" if simulated else REFERENCE[variable]
+        source = "truth" if simulated else references[variable]
         ax.set_xlabel(f"{label}: {source}")
         ax.set_ylabel("estimate − " + source if variable == "ground_elevation" else "estimate")
         ax.set_title(label)
