@@ -33,8 +33,9 @@ RayDebug debug_ray(const Config& config, std::int64_t shot_number, std::int64_t 
   debug.ray = ray;
   debug.rays_per_shot = rays;
   for (const LidarBand& band : config.sensor.bands) debug.band_names.push_back(band.name);
-  std::optional<ShotWaveforms> waveforms = at_section(
-      "/terrain", [&] { return simulator->simulate_ray(track.footprint(first), ray, observer); });
+  std::optional<ShotWaveforms> waveforms = at_section("/terrain", [&, record = first] {
+    return simulator->simulate_ray(track.footprint(record), ray, observer);
+  });
   if (!waveforms)
     throw config_error("--debug-ray", "shot " + std::to_string(shot_number) +
                                           " is flagged: its beam does not fall on the terrain's "

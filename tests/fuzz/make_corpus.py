@@ -210,6 +210,91 @@ def granule_corpus():
     h5("broken-declared-1e11.h5", declared)
 
 
+def retrieval_corpus():
+    """Small granules of the kinds retrieve reads: GEDI L1B and L2A, GLAH01 and GLAH14 (shots
+    that match), ATL08, and an L1B cut short and one declaring 10^11 samples."""
+    import io
+    import h5py
+    import numpy as np
+
+    def h5(name, fill):
+        buffer = io.BytesIO()
+        with h5py.File(buffer, "w") as f:
+            fill(f)
+        data = buffer.getvalue()
+        write("retrieval", name, data)
+        return data
+
+    wave = 200.0 + 500.0 * np.exp(-0.5 * ((np.arange(24) - 16) / 2.0) ** 2)
+
+    def l1b(f, samples=None):
+        for beam in ("BEAM0000", "BEAM0101"):
+            g = f.create_group(beam)
+            g["shot_number"] = np.array([1, 2], "u8")
+            if samples is None:
+                g["rxwaveform"] = np.concatenate([wave, wave]).astype("f4")
+            else:
+                g.create_dataset("rxwaveform", shape=(samples,), dtype="f4", chunks=(1024,))
+            g["rx_sample_start_index"] = np.array([1, 25], "u8")
+            g["rx_sample_count"] = np.array([24, 24], "u2")
+            g["noise_mean_corrected"] = np.array([200.0, 200.0])
+            g["noise_stddev_corrected"] = np.array([2.0, 2.0])
+            g["geolocation/elevation_bin0"] = np.array([103.6, 103.6])
+            g["geolocation/elevation_lastbin"] = np.array([100.15, 100.15])
+            g["geolocation/latitude_bin0"] = np.array([1.0, 1.001])
+            g["geolocation/longitude_bin0"] = np.array([2.0, 2.0])
+            g["geolocation/degrade"] = np.array([0, 0], "i1")
+        f["glaswave_truth/counts_per_watt"] = np.array([1e9])
+
+    whole = h5("gedi_l1b.h5", l1b)
+    write("retrieval", "broken-gedi-l1b-truncated.h5", whole[: len(whole) // 2])
+    h5("broken-gedi-l1b-declared-1e11.h5", lambda f: l1b(f, 10**11))
+
+    def l2a(f):
+        g = f.create_group("BEAM0101")
+        g["shot_number"] = np.array([1, 2], "u8")
+        g["elev_lowestmode"] = np.array([100.5, 100.5], "f4")
+        g["elev_highestreturn"] = np.array([103.0, 103.0], "f4")
+        g["quality_flag"] = np.array([1, 0], "u1")
+        g["selected_algorithm"] = np.array([1, 2], "u1")
+    h5("gedi_l2a.h5", l2a)
+
+    def glah01(f):
+        d = f.create_group("Data_40HZ")
+        d["Time/i_rec_ndx"] = np.array([1000, 1000, 1001], "i4")
+        d["Time/i_shot_count"] = np.array([1, 2, 40], "i2")
+        d["Waveform/RecWaveform/r_rng_wf"] = np.tile(wave, (3, 1)).astype("f4")
+        d["Waveform/Characteristics/d_4nsBgMean"] = np.full(3, 200.0)
+        d["Waveform/Characteristics/d_4nsBgSDEV"] = np.full(3, 2.0)
+        d["Waveform/RecWaveform/i_rec_wf_location_index"] = np.array([1, 1, 127], "i1")
+        d["glaswave_truth/counts_per_watt"] = np.array([1e9])
+        a = f.create_group("ANCILLARY_DATA")
+        a.attrs["rec_wf_sample_location_table"] = (np.arange(24.0) - 23.0).reshape(1, 24)
+    h5("glah01.h5", glah01)
+
+    def glah14(f):
+        d = f.create_group("Data_40HZ")
+        d["Time/i_rec_ndx"] = np.array([1000, 1000], "i4")
+        d["Time/i_shot_count"] = np.array([1, 2], "i2")
+        d["Geolocation/d_lat"] = np.array([1.0, 1.001])
+        d["Geolocation/d_lon"] = np.array([358.0, 358.0])
+        d["Elevation_Surfaces/d_elev"] = np.array([101.0, 101.0])
+        d["Elevation_Offsets/d_ldRngOff"] = np.array([-1.0, 1.7976931348623157e308])
+    h5("glah14.h5", glah14)
+
+    def atl08(f):
+        land = f.create_group("gt1l/land_segments")
+        land["segment_id_beg"] = np.array([101, 106], "i4")
+        land["latitude"] = np.array([10.0, 10.001], "f4")
+        land["longitude"] = np.array([20.0, 20.0], "f4")
+        land["canopy/h_canopy"] = np.array([17.5, 3.4028235e38], "f4")
+        land["terrain/h_te_best_fit"] = np.array([250.25, 250.5], "f4")
+        land["canopy/n_ca_photons"] = np.array([30, 0], "i4")
+        land["canopy/n_toc_photons"] = np.array([10, 0], "i4")
+        land["terrain/n_te_photons"] = np.array([60, 5], "i4")
+    h5("atl08.h5", atl08)
+
+
 def gdal_pack(kind, value):
     import struct
     return struct.pack({gdal.GDT_Float32: "<f", gdal.GDT_Int16: "<h"}[kind], value)
@@ -382,6 +467,7 @@ if __name__ == "__main__":
     dem_corpus()
     las_corpus()
     granule_corpus()
+    retrieval_corpus()
     journal_corpus()
     mesh_corpus()
     voxel_corpus()
