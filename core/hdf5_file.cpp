@@ -357,8 +357,12 @@ std::optional<Hdf5DatasetShape> Hdf5Reader::shape(const std::string& path) const
   shape.dims.assign(dims.begin(), dims.end());
   Handle type(H5Dget_type(set.get()), H5Tclose);
   const H5T_class_t type_class = type.valid() ? H5Tget_class(type.get()) : H5T_NO_CLASS;
-  shape.integer = type_class == H5T_INTEGER;
-  shape.numeric = shape.integer || type_class == H5T_FLOAT;
+  // A corrupt header may declare a number of a billion bytes, which HDF5 would convert through a
+  // buffer of that size per value: numbers are at most 16 bytes (a long double).
+  const std::size_t type_bytes = type.valid() ? H5Tget_size(type.get()) : 0;
+  const bool sized = type_bytes >= 1 && type_bytes <= 16;
+  shape.integer = sized && type_class == H5T_INTEGER;
+  shape.numeric = shape.integer || (sized && type_class == H5T_FLOAT);
   shape.is_signed = shape.integer && H5Tget_sign(type.get()) == H5T_SGN_2;
   return shape;
 }
@@ -389,7 +393,9 @@ bool Hdf5Reader::read_attribute(const std::string& object, const std::string& na
   if (!attr.valid()) return false;
   const Handle type(H5Aget_type(attr.get()), H5Tclose);
   const H5T_class_t type_class = type.valid() ? H5Tget_class(type.get()) : H5T_NO_CLASS;
-  if (type_class != H5T_INTEGER && type_class != H5T_FLOAT) return false;
+  const std::size_t type_bytes = type.valid() ? H5Tget_size(type.get()) : 0;
+  if ((type_class != H5T_INTEGER && type_class != H5T_FLOAT) || type_bytes < 1 || type_bytes > 16)
+    return false;
   const Handle space(H5Aget_space(attr.get()), H5Sclose);
   const int rank = space.valid() ? H5Sget_simple_extent_ndims(space.get()) : -1;
   const hssize_t count = space.valid() ? H5Sget_simple_extent_npoints(space.get()) : -1;

@@ -4,6 +4,7 @@
 // one line naming the file and the dataset. glaswave's own granules: retrieve_cli_test.cpp.
 #include <gtest/gtest.h>
 #include <netcdf.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
@@ -188,6 +189,24 @@ TEST(RetrieveGlas, MalformedGranulesAreRefusedInOneLine) {
     EXPECT_EQ(std::count(refused.output.begin(), refused.output.end(), '\n'), 1) << refused.output;
     EXPECT_FALSE(fs::exists(out / "retrieval.nc")) << c.name;
   }
+}
+
+// A GLAH01 whose i_shot_count declares an integer of 1,951,616,514 bytes (found by fuzzing): HDF5
+// would convert each value through a buffer that size (1.95 GB of memory held, then "cannot be
+// read"). The one HDF5 layer takes no number of more than 16 bytes for numeric, so the file is
+// refused at once, without the memory.
+TEST(RetrieveGlas, ANumberOfTwoGigabytesIsRefusedUnread) {
+  const ScratchDir dir("glaswave_retrieve_glas_huge_type");
+  const fs::path corpus = fs::path(GLASWAVE_SOURCE_DIR) / "tests/fuzz/corpus/retrieval";
+  const CommandOutcome refused =
+      run_glaswave("retrieve " + (corpus / "regression-hdf5-type-of-2e9-bytes.h5").string() + " " +
+                   (corpus / "glah14.h5").string() + " --quiet --out " + dir.path().string());
+  EXPECT_EQ(refused.status, 3) << refused.output;
+  EXPECT_NE(refused.output.find("Data_40HZ/Time/i_shot_count: not numeric"), std::string::npos)
+      << refused.output;
+  rusage children{};
+  getrusage(RUSAGE_CHILDREN, &children);
+  EXPECT_LT(children.ru_maxrss, 500 * 1024) << "kB";  // the largest child's peak
 }
 
 }  // namespace
