@@ -123,10 +123,12 @@ class BuildWithCMake(build_py):
         os.makedirs(os.path.join(package, "bin"), exist_ok=True)
         shutil.copy2(os.path.join(CMAKE_BUILD, "pipeline", "glaswave"),
                      os.path.join(package, "bin", "glaswave"))
-        # The granule and NetCDF-4 voxel grid readers' own programs (footprints/granule.hpp,
-        # canopy/voxel_grid.hpp): the module and the program look for them in glaswave/bin/.
+        # The granule, NetCDF-4 voxel grid and retrieve input readers' own programs
+        # (footprints/granule.hpp, canopy/voxel_grid.hpp, pipeline/retrieval/retrieve_inputs.hpp):
+        # the module and the program look for them in glaswave/bin/.
         for folder, reader in (("footprints", "glaswave-read-granule"),
-                               ("canopy", "glaswave-read-voxels")):
+                               ("canopy", "glaswave-read-voxels"),
+                               ("pipeline", "glaswave-read-retrieval-input")):
             shutil.copy2(os.path.join(CMAKE_BUILD, folder, reader),
                          os.path.join(package, "bin", reader))
         share = os.path.join(package, "share", "glaswave")

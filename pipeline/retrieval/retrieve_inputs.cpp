@@ -1,11 +1,16 @@
 #include "pipeline/retrieval/retrieve_inputs.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <mutex>
+#include <stdexcept>
+#include <string_view>
 
 #include "core/error.hpp"
 #include "core/hdf5_file.hpp"
 #include "core/netcdf_lock.hpp"
+#include "core/spawned_reader.hpp"
 #include "pipeline/retrieval/atl08_reader.hpp"
 #include "pipeline/retrieval/gedi_l1b_reader.hpp"
 #include "pipeline/retrieval/glas_granule_reader.hpp"
@@ -26,6 +31,80 @@ RetrieveInputKind retrieve_input_kind(const std::filesystem::path& file) {
   return RetrieveInputKind::shots_nc;
 }
 
+namespace {
+
+// The reader program's reply: 'K' when the file was read whole, or 'E' and the error. The hello's
+// number changes with the reply's layout.
+constexpr std::string_view kHello = "glaswave-read-retrieval-input 1\n";
+
+// `file` read whole by its kind, as retrieve reads it: the reader program's work.
+void read_whole(const std::filesystem::path& file) {
+  switch (retrieve_input_kind(file)) {
+    case RetrieveInputKind::gedi_l1b:
+      read_gedi_l1b(file, {}, {}, {});
+      break;
+    case RetrieveInputKind::gedi_l2a:
+      read_gedi_l2a(file);
+      break;
+    case RetrieveInputKind::glah01:
+      read_glah01(file, {}, {}, {});
+      break;
+    case RetrieveInputKind::glah14:
+      read_glah14(file);
+      break;
+    case RetrieveInputKind::atl08:
+      read_atl08(file, {}, {});
+      break;
+    case RetrieveInputKind::shots_nc:
+      read_shots(file, {}, {});
+      break;
+  }
+}
+
+// `file` read first by the reader program: a file on which HDF5 or libnetcdf crashes, spins or
+// allocates without end ends that program (within its CPU budget), not glaswave, and is refused;
+// one the program read whole is then read here, where the same libraries do the same on it.
+void vet(const std::filesystem::path& file) {
+  const std::string path = file.string();
+  const std::filesystem::path program =
+      find_reader_program("glaswave-read-retrieval-input",
+                          {GLASWAVE_RETRIEVAL_READER_BUILT, GLASWAVE_RETRIEVAL_READER_INSTALLED});
+  if (program.empty())
+    throw run_error(path,
+                    "cannot read the input: the program glaswave-read-retrieval-input, which "
+                    "reads retrieve's inputs first, is missing from this installation (install "
+                    "it as `cmake --install` does, in PREFIX/libexec/glaswave/)");
+  SpawnedReader reader(program, {path}, path, "the input", std::string(kHello));
+  const std::string reply = reader.receive();
+  reader.finish();
+  try {
+    MessageIn in(reply);
+    if (in.get<char>() != 'K') throw in.get_error();
+  } catch (const std::length_error&) {
+    throw input_error(path, "the input's reader failed reading it (a corrupt file): it is refused");
+  }
+}
+
+}  // namespace
+
+int retrieval_input_reader_main(int argc, char** argv) {
+  const int channel = take_reply_channel();
+  if (argc != 2 || channel < 0) return 2;
+  bound_request_cpu(argv[1]);
+  MessageOut out;
+  try {
+    read_whole(argv[1]);
+    out.put('K');
+  } catch (const Error& e) {
+    out.put('E');
+    out.put_error(e);
+  } catch (const std::exception& e) {
+    out.put('E');
+    out.put_error(input_error(argv[1], std::string("cannot read the input: ") + e.what()));
+  }
+  return write_hello(channel, kHello) && write_message(channel, out.text()) ? 0 : 2;
+}
+
 MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inputs,
                                    std::optional<std::int64_t> first,
                                    std::optional<std::int64_t> last) {
@@ -35,6 +114,7 @@ MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inp
   Glah14Shots glah14;
   bool any_glah14 = false;
   for (const std::filesystem::path& file : inputs) {
+    vet(file);
     kinds.push_back(retrieve_input_kind(file));
     if (kinds.back() == RetrieveInputKind::gedi_l2a) {
       auto more = read_gedi_l2a(file);

@@ -23,13 +23,19 @@ enum class RetrieveInputKind {
 // The kind of `file` from what it holds.
 RetrieveInputKind retrieve_input_kind(const std::filesystem::path& file);
 
-// Every input read by its kind: shots.nc files, GEDI L1B granules (each with the L2A granules
-// given, whose shots it matches), GLAH01 granules (placed by the GLAH14 granules given) and ATL08
-// granules (a record a land segment), their
-// shots in the order given. An L2A without an L1B, a GLAH14 without a GLAH01 or a GLAH01 without
-// a GLAH14 is refused, as are inputs whose bands or bins differ.
+// Every input read first by the program glaswave-read-retrieval-input, in a process of its own
+// with a CPU budget (core/spawned_reader.hpp), so that a file on which HDF5 1.10.8 or libnetcdf
+// crashes, spins or allocates without end (fuzzing found a 10 kB GLAH01 on which HDF5 took 24 GB)
+// is refused, then read here by its kind: shots.nc files, GEDI L1B granules (each with the L2A
+// granules given, whose shots it matches), GLAH01 granules (placed by the GLAH14 granules given)
+// and ATL08 granules (a record a land segment), their shots in the order given. An L2A without an
+// L1B, a GLAH14 without a GLAH01 or a GLAH01 without a GLAH14 is refused, as are inputs whose bands
+// or bins differ.
 MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inputs,
                                    std::optional<std::int64_t> first,
                                    std::optional<std::int64_t> last);
+
+// The reader program's main: reads argv[1] whole by its kind and replies whether it could.
+int retrieval_input_reader_main(int argc, char** argv);
 
 }  // namespace glaswave

@@ -19,7 +19,8 @@ file(REMOVE_RECURSE ${WORK_DIR})
 run_step("install" ${CMAKE_COMMAND} --install ${BINARY_DIR} --prefix ${prefix})
 
 foreach(path bin/glaswave libexec/glaswave/glaswave-read-granule
-        libexec/glaswave/glaswave-read-voxels include/glaswave/glaswave.hpp include/glaswave/core/error.hpp
+        libexec/glaswave/glaswave-read-voxels libexec/glaswave/glaswave-read-retrieval-input
+        include/glaswave/glaswave.hpp include/glaswave/core/error.hpp
         include/glaswave/pipeline/engine/run.hpp ${LIBDIR}/libglaswave_engine.a
         ${LIBDIR}/cmake/glaswave/glaswaveConfig.cmake
         ${LIBDIR}/cmake/glaswave/glaswaveConfigVersion.cmake

@@ -19,10 +19,10 @@ venv="$work/venv"
 
 # The command, from the environment's bin/.
 [ -x "$venv/bin/glaswave" ] || { echo "no glaswave command in $venv/bin" >&2; exit 1; }
-# The granule and voxel grid readers' programs, beside the package's own program
+# The granule, voxel grid and retrieve input readers' programs, beside the package's own program
 # (footprints/granule.hpp, canopy/voxel_grid.hpp).
 package=$("$venv/bin/python" -c 'import glaswave, os; print(os.path.dirname(glaswave.__file__))')
-for reader in glaswave-read-granule glaswave-read-voxels; do
+for reader in glaswave-read-granule glaswave-read-voxels glaswave-read-retrieval-input; do
   [ -x "$package/bin/$reader" ] || { echo "no $package/bin/$reader in the package" >&2; exit 1; }
 done
 "$venv/bin/glaswave" --version | grep -qx "glaswave [0-9.]*"

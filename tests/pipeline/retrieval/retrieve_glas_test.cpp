@@ -209,5 +209,26 @@ TEST(RetrieveGlas, ANumberOfTwoGigabytesIsRefusedUnread) {
   EXPECT_LT(children.ru_maxrss, 500 * 1024) << "kB";  // the largest child's peak
 }
 
+// A GLAH01 on which HDF5 1.10.8 allocates without end (a group's local heap, found by fuzzing:
+// 24 GB and 95 s in glaswave's own process before): read first by glaswave-read-retrieval-input,
+// which the kernel ends at its CPU budget, it is refused in one line, its memory bounded by that
+// budget.
+TEST(RetrieveGlas, AGranuleOnWhichHdf5AllocatesWithoutEndIsRefusedAtTheReadersBudget) {
+  const ScratchDir dir("glaswave_retrieve_glas_endless");
+  const fs::path corpus = fs::path(GLASWAVE_SOURCE_DIR) / "tests/fuzz/corpus/retrieval";
+  const CommandOutcome refused = run_glaswave(
+      "retrieve " + (corpus / "regression-hdf5-local-heap-allocates-without-end.h5").string() +
+      " " + (corpus / "glah14.h5").string() + " --quiet --out " + dir.path().string());
+  EXPECT_EQ(refused.status, 3) << refused.output;
+  EXPECT_NE(refused.output.find("glaswave-read-retrieval-input, past its CPU budget"),
+            std::string::npos)
+      << refused.output;
+  EXPECT_EQ(std::count(refused.output.begin(), refused.output.end(), '\n'), 1) << refused.output;
+  rusage children{};
+  getrusage(RUSAGE_CHILDREN, &children);
+  EXPECT_LT(children.ru_maxrss, 4L * 1024 * 1024) << "kB";  // the reader's peak, of any child
+  EXPECT_FALSE(fs::exists(dir.path() / "retrieval.nc"));
+}
+
 }  // namespace
 }  // namespace glaswave
