@@ -1,7 +1,5 @@
 #include "pipeline/retrieval/retrieve_inputs.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <mutex>
 #include <stdexcept>
