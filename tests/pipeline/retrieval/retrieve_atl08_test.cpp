@@ -16,6 +16,7 @@
 #include "core/netcdf_lock.hpp"
 #include "tests/pipeline/atlas_pass.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/pipeline/retrieval/shot_variable.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace glaswave {
@@ -26,19 +27,7 @@ using test_support::run_glaswave;
 using test_support::ScratchDir;
 namespace fs = std::filesystem;
 
-std::vector<double> nc_variable(const fs::path& file, const char* name) {
-  int nc = -1, var = -1, dim = -1;
-  std::size_t length = 0;
-  std::vector<double> values;
-  if (nc_open(file.c_str(), NC_NOWRITE, &nc) != NC_NOERR) return values;
-  if (nc_inq_varid(nc, name, &var) == NC_NOERR && nc_inq_dimid(nc, "shot", &dim) == NC_NOERR &&
-      nc_inq_dimlen(nc, dim, &length) == NC_NOERR) {
-    values.resize(length);
-    nc_get_var_double(nc, var, values.data());
-  }
-  nc_close(nc);
-  return values;
-}
+const auto& nc_variable = test_support::shot_variable;
 
 std::size_t lines(const std::string& text) { return std::count(text.begin(), text.end(), '\n'); }
 

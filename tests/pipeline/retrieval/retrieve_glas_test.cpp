@@ -14,6 +14,7 @@
 #include "core/hdf5_file.hpp"
 #include "core/netcdf_lock.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
+#include "tests/pipeline/retrieval/shot_variable.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace glaswave {
@@ -24,20 +25,7 @@ using test_support::run_glaswave;
 using test_support::ScratchDir;
 namespace fs = std::filesystem;
 
-std::vector<double> nc_variable(const fs::path& file, const char* name) {
-  int nc = -1, var = -1;
-  std::vector<double> values;
-  if (nc_open(file.c_str(), NC_NOWRITE, &nc) != NC_NOERR) return values;
-  std::size_t length = 0;
-  int dim = -1;
-  if (nc_inq_varid(nc, name, &var) == NC_NOERR && nc_inq_dimid(nc, "shot", &dim) == NC_NOERR &&
-      nc_inq_dimlen(nc, dim, &length) == NC_NOERR) {
-    values.resize(length);
-    nc_get_var_double(nc, var, values.data());
-  }
-  nc_close(nc);
-  return values;
-}
+const auto& nc_variable = test_support::shot_variable;
 
 // GLAS's 544 samples 1 ns apart, each waveform 200 counts of noise mean under a canopy of area
 // 12000 (counts x samples) 150 samples above a ground of area 8000: L2B's Pgap = 1 - 12000 /
