@@ -39,15 +39,16 @@ int threads_of(const std::string& text) {
   return static_cast<int>(*value);
 }
 
-// --counts-per-watt: a positive finite number, all of the text.
-std::optional<double> counts_per_watt_of(const std::string& text) {
+// --counts-per-watt, --photons-per-joule: a positive finite number, all of the text.
+std::optional<double> scale_of(const std::string& text, const std::string& option,
+                               const std::string& unit) {
   if (text.empty()) return std::nullopt;
   double value = 0.0;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
   if (error != std::errc() || end != text.data() + text.size() || !(value > 0.0) ||
       !std::isfinite(value))
-    throw config_error("--counts-per-watt",
-                       "must be a positive number of counts per watt, got " + quoted_excerpt(text));
+    throw config_error(option,
+                       "must be a positive number of " + unit + ", got " + quoted_excerpt(text));
   return value;
 }
 
@@ -138,16 +139,19 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
       "  glaswave retrieve GEDI01_B_...h5 GEDI02_A_...h5 --out gedi-retrieval\n"
       "  glaswave retrieve GLAH01_...H5 GLAH14_...H5 --out glas-retrieval\n"
       "  glaswave retrieve ATL08_...h5 --out icesat2-retrieval\n"
+      "  glaswave retrieve atl03.h5 atl08.h5 --table atlas-table.nc --out icesat2-rt\n"
       "Writes DIR/retrieval.nc: per shot and method, canopy_height, cover, pai, "
       "ground_elevation, rhov_rhog and pgap, rt's posterior sd and 5-95 % bounds and rt_flag, "
       "and the "
       "truth of simulated input; for GEDI L1B input also DIR/gedi_l2b.h5 in GEDI02_B's layout. "
       "Exit status as `run`. Manual: docs/retrieval.md.");
   retrieve_
-      ->add_option("INPUT", inputs,
-                   "glaswave's shots.nc, a GEDI L1B granule (GEDI01_B or gedi_l1b.h5) with "
-                   "its L2A beside it when given, a GLAS GLAH01 granule with its GLAH14, or an "
-                   "ICESat-2 ATL08 granule; the kind read from the layout")
+      ->add_option(
+          "INPUT", inputs,
+          "glaswave's shots.nc, a GEDI L1B granule (GEDI01_B or gedi_l1b.h5) with "
+          "its L2A beside it when given, a GLAS GLAH01 granule with its GLAH14, or an "
+          "ICESat-2 ATL08 granule with its ATL03 beside it when given; the kind read from the "
+          "layout")
       ->type_name("INPUT")
       ->required();
   retrieve_->add_option("--out", out, "output directory (default: the first input's)")
@@ -157,8 +161,8 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
   retrieve_
       ->add_option("--methods", methods,
                    "methods, comma-separated, among gedi_l2a, gedi_l2b, wi, rt for waveforms, "
-                   "atl08, photon_ratio for ATL08's segments (default: every one the input "
-                   "allows; rt with --table)")
+                   "atl08, photon_ratio, rt for ATL08's segments (rt with ATL03's photons "
+                   "beside; default: every one the input allows; rt with --table)")
       ->type_name("NAME,...");
   retrieve_->add_option("--shots", shots, "shot numbers A to B-1 only")->type_name("A:B");
   retrieve_->add_option("--beams", beams, "these beams only (BEAM0101 or 5, comma-separated)")
@@ -178,6 +182,12 @@ RetrievalCommands::RetrievalCommands(CLI::App& app) {
                    "a granule's digitiser counts per watt of received power, which rt needs to "
                    "compare its waveforms with the table's: glaswave's granules carry it, a real "
                    "granule does not")
+      ->type_name("X");
+  retrieve_
+      ->add_option("--photons-per-joule", photons_per_joule,
+                   "an ATL03 granule's detected photons per joule of the table's return (its "
+                   "detection efficiency over a photon's energy, times the beam's share of the "
+                   "pulse), which rt needs: glaswave's ATL03 carries it, a real one does not")
       ->type_name("X");
   retrieve_->add_option("--threads", threads_text, "threads; 0 (the default) uses every core")
       ->type_name("N");
@@ -240,7 +250,8 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
   else if (!rt_search.empty() && rt_search != "projected")
     throw config_error("--rt-search",
                        "expected projected, two_stage or direct, got " + quoted_excerpt(rt_search));
-  request.counts_per_W = counts_per_watt_of(counts_per_watt);
+  request.counts_per_W = scale_of(counts_per_watt, "--counts-per-watt", "counts per watt");
+  request.photons_per_J = scale_of(photons_per_joule, "--photons-per-joule", "photons per joule");
   request.beams = beams_of(beams);
   request.bbox_deg = bbox_of(bbox);
   request.threads = threads_of(threads_text);

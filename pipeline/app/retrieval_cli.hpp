@@ -29,7 +29,7 @@ class RetrievalCommands {
   CLI::App* table_ = nullptr;
   CLI::App* retrieve_ = nullptr;
   std::string config_file, out, table_file, methods, shots, threads_text, rt_search,
-      counts_per_watt, beams, bbox;
+      counts_per_watt, photons_per_joule, beams, bbox;
   std::vector<std::string> overrides, inputs;
   bool quiet = false, json = false, plots = false;
 };

@@ -333,6 +333,14 @@ void write_atl03(const std::filesystem::path& path, const std::vector<BeamTrack>
     write_heights(g, beam_group.get(), beams[b], classes[b]);
     write_geolocation(g, beam_group.get(), beams[b]);
     write_background(g, beam_group.get(), beams[b]);
+    if (std::isfinite(beams[b].photons_per_J)) {
+      const Group truth = g.group(beam_group.get(), "glaswave_truth");
+      g.dataset(truth.get(), "photons_per_joule", std::vector<double>{beams[b].photons_per_J},
+                truth_meta("1/J",
+                           "Simulation truth: the photons this beam detects per joule of the "
+                           "return of the band's whole (strong beam's) pulse, its share of the "
+                           "pulse included: what rt on these photons scales its table by"));
+    }
   }
   g.finish();
 }

@@ -57,6 +57,8 @@ struct BeamTrack {
   int spot_number = 1;    // ATLAS's spot, 1-6
   double across_m = 0.0;  // its ground track right of the reference ground track's
   double pulse_energy_J = std::numeric_limits<double>::quiet_NaN();  // its transmitted pulse's
+  // Photons detected per joule of the band's whole pulse's return (NaN: not known, not written).
+  double photons_per_J = std::numeric_limits<double>::quiet_NaN();
   std::vector<BeamShot> shots;
   std::vector<BeamPhoton> photons;
 };
@@ -68,6 +70,7 @@ struct GranuleBeam {
   int spot_number = 3;
   double across_m = 0.0;  // its ground track right of the reference ground track's
   double pulse_energy_J = std::numeric_limits<double>::quiet_NaN();  // NaN: not known, fill
+  double photons_per_J = std::numeric_limits<double>::quiet_NaN();   // BeamTrack's
 };
 
 // ATL03's orbit_info/sc_orient: 0 backward, 1 forward (footprints/atlas_beams.hpp's

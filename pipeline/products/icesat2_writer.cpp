@@ -110,6 +110,7 @@ BeamTrack Icesat2Writer::gather_beam(const GranuleBeam& granule_beam) const {
   beam.spot_number = granule_beam.spot_number;
   beam.across_m = granule_beam.across_m;
   beam.pulse_energy_J = granule_beam.pulse_energy_J;
+  beam.photons_per_J = granule_beam.photons_per_J;
   const bool every_record = settings_.beams.size() == 1;
   std::vector<double> below;
   for (const auto& [index, kept] : kept_) {

@@ -15,9 +15,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr const char* kAtl08Kind = "an ICESat-2 ATL08 granule";
-// ATL08's ground tracks, in the order retrieval.nc numbers them (beam 1 to 6).
-constexpr std::array<const char*, 6> kTracks = {"gt1l", "gt1r", "gt2l", "gt2r", "gt3l", "gt3r"};
-
 // ATL08's fill for float32 (3.4028235e38) read as NaN.
 double unfilled(double value) { return std::abs(value) < 1e38 ? value : kNaN; }
 
@@ -26,7 +23,7 @@ double unfilled(double value) { return std::abs(value) < 1e38 ? value : kNaN; }
 bool is_atl08(const std::filesystem::path& file) {
   std::lock_guard lock(netcdf_library_mutex());
   const Hdf5Reader reader(file);
-  for (const char* track : kTracks)
+  for (const char* track : kAtlasTracks)
     if (reader.is_group(std::string(track) + "/land_segments")) return true;
   return false;
 }
@@ -41,11 +38,11 @@ MeasuredShots read_atl08(const std::filesystem::path& file, std::optional<std::i
   out.pulse_sigma_ns = kNaN;
   out.atl08 = true;
   out.simulated = false;
-  for (const char* track : kTracks)
+  for (const char* track : kAtlasTracks)
     out.simulated = out.simulated ||
                     granule.reader().is_group(std::string(track) + "/land_segments/glaswave_truth");
-  for (std::size_t b = 0; b < kTracks.size(); ++b) {
-    const std::string land = std::string(kTracks[b]) + "/land_segments/";
+  for (std::size_t b = 0; b < kAtlasTracks.size(); ++b) {
+    const std::string land = std::string(kAtlasTracks[b]) + "/land_segments/";
     if (!granule.reader().is_group(land)) continue;
     const std::vector<std::int64_t> ids =
         granule.read<std::int64_t>(land + "segment_id_beg", std::nullopt);
@@ -56,7 +53,9 @@ MeasuredShots read_atl08(const std::filesystem::path& file, std::optional<std::i
                               ground = granule.read<double>(land + "terrain/h_te_best_fit", n),
                               canopy = granule.read<double>(land + "canopy/n_ca_photons", n),
                               top = granule.read<double>(land + "canopy/n_toc_photons", n),
-                              terrain = granule.read<double>(land + "terrain/n_te_photons", n);
+                              terrain = granule.read<double>(land + "terrain/n_te_photons", n),
+                              id_end = granule.optional(land + "segment_id_end", n),
+                              slope = granule.optional(land + "terrain/terrain_slope", n);
     const std::string truth = land + "glaswave_truth/";
     const std::vector<double> cover_true = granule.optional(truth + "canopy_cover", n),
                               pai_true = granule.optional(truth + "pai", n),
@@ -73,9 +72,17 @@ MeasuredShots read_atl08(const std::filesystem::path& file, std::optional<std::i
       s.beam = static_cast<int>(b) + 1;
       s.lat_deg = unfilled(lat[i]);
       s.lon_deg = unfilled(lon[i]);
+      // Without segment_id_end, ATL08's five 20 m segments.
+      const double end = std::isfinite(id_end[i]) && id_end[i] >= static_cast<double>(ids[i]) &&
+                                 id_end[i] < static_cast<double>(ids[i]) + 1e6
+                             ? id_end[i]
+                             : static_cast<double>(ids[i] + 4);
+      const double rise = unfilled(slope[i]);
       s.segment = Atl08Segment{unfilled(height[i]),
                                unfilled(ground[i]),
-                               {count(terrain[i]), count(canopy[i]), count(top[i])}};
+                               {count(terrain[i]), count(canopy[i]), count(top[i])},
+                               static_cast<std::int64_t>(end),
+                               std::isfinite(rise) ? rise : 0.0};
       s.canopy_height_true_m = unfilled(height_true[i]);
       s.cover_true = unfilled(cover_true[i]);
       s.pai_true = unfilled(pai_true[i]);

@@ -82,8 +82,8 @@ MeasuredShots read_shots(const std::filesystem::path& file, std::optional<std::i
         "neither a glaswave shots.nc (no `config` attribute or `rx_waveform`) "
         "nor a GEDI L1B granule (no BEAMxxxx/rxwaveform) nor a GLAH01 or GLAH14 "
         "granule (no Data_40HZ/Waveform/RecWaveform/r_rng_wf or "
-        "Elevation_Surfaces/d_elev) nor an ATL08 granule (no gtXY/land_segments); ATL03 "
-        "granules are not read yet");
+        "Elevation_Surfaces/d_elev) nor an ATL08 or ATL03 granule (no gtXY/land_segments or "
+        "gtXY/heights/h_ph)");
   json config;
   try {
     config = json::parse(*config_text);
@@ -214,6 +214,11 @@ struct ShotResults {
 
 constexpr MethodEstimates kNone{kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
 
+MethodEstimates rt_estimates(const RtResult& rt) {
+  return {rt.canopy_height_m.mean,    rt.cover.mean,     rt.pai.mean,
+          rt.ground_elevation_m.mean, rt.rhov_rhog.mean, rt.pgap.mean};
+}
+
 ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
                           const std::vector<std::string>& methods, const RtInversion* rt) {
   ShotResults r;
@@ -232,6 +237,12 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
       // No ground photon: no gap seen, and no PAI that the ratio can tell.
       const double pai = cover < 1.0 ? -std::log(1.0 - cover) / 0.5 : kNaN;
       r.estimates["photon_ratio"] = {kNaN, cover, pai, kNaN, 1.0, 1.0 - cover};
+    }
+    if (rt && shot.photons) {
+      const PhotonSegment& p = *shot.photons;
+      r.rt = rt->invert_photons(
+          {p.heights_m, p.pulses, p.background_rate_Hz, p.photons_per_J, a.h_te_best_fit_m});
+      r.estimates["rt"] = rt_estimates(r.rt);
     }
     return r;
   }
@@ -300,8 +311,7 @@ ShotResults retrieve_shot(const MeasuredShot& shot, double pulse_sigma_ns,
                            : selected.has_ground ? selected.elev_lowestmode_m
                                                  : kNaN;
     r.rt = rt->invert(input);
-    r.estimates["rt"] = {r.rt.canopy_height_m.mean,    r.rt.cover.mean,     r.rt.pai.mean,
-                         r.rt.ground_elevation_m.mean, r.rt.rhov_rhog.mean, r.rt.pgap.mean};
+    r.estimates["rt"] = rt_estimates(r.rt);
   }
   (void)pulse_sigma_ns;
   return r;
@@ -483,7 +493,8 @@ void write_product(const std::filesystem::path& path, const MeasuredShots& input
 RetrieveSummary run_retrieval(const RetrieveRequest& request,
                               const std::function<void(std::int64_t, std::int64_t)>& progress) {
   if (request.inputs.empty())
-    throw config_error("INPUT", "give at least one shots.nc, GEDI L1B, GLAH01 or ATL08 granule");
+    throw config_error("INPUT",
+                       "give at least one shots.nc, GEDI L1B, GLAH01 or ATL08 (and ATL03) granule");
   const auto named = [](const std::vector<std::string>& list, const std::string& m) {
     return std::find(list.begin(), list.end(), m) != list.end();
   };
@@ -503,24 +514,31 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
 
   MeasuredShots input = read_retrieve_inputs(request.inputs, request.first_shot, request.last_shot);
   select_shots(input, request);
-  // Every method the input allows by default; a method of the other kind is refused.
-  const std::vector<std::string>& allowed = input.atl08 ? kSegmentMethods : kWaveformMethods;
+  // Every method the input allows by default; a method of the other kind is refused. rt reads
+  // ICESat-2's photons from ATL03, given beside ATL08.
+  std::vector<std::string> allowed = input.atl08 ? kSegmentMethods : kWaveformMethods;
+  if (input.atl03) allowed.push_back("rt");
   std::vector<std::string> methods = request.methods;
   if (methods.empty()) {
     methods =
         input.atl08 ? kSegmentMethods : std::vector<std::string>{"gedi_l2a", "gedi_l2b", "wi"};
-    if (!input.atl08 && request.table) methods.push_back("rt");
+    if (request.table && (!input.atl08 || input.atl03)) methods.push_back("rt");
   }
-  for (const std::string& m : methods)
-    if (!named(allowed, m))
-      throw config_error("--methods", input.atl08
-                                          ? "\"" + m +
-                                                "\" reads waveforms, and ATL08 gives land "
-                                                "segments: choose among atl08, photon_ratio"
-                                          : "\"" + m +
-                                                "\" reads ATL08's land segments, and the "
-                                                "input gives waveforms: choose among gedi_l2a, "
-                                                "gedi_l2b, wi, rt");
+  for (const std::string& m : methods) {
+    if (named(allowed, m)) continue;
+    if (input.atl08 && m == "rt")
+      throw config_error("--methods",
+                         "rt on ICESat-2 reads ATL03's photons: give the ATL03 granule beside "
+                         "the ATL08");
+    throw config_error("--methods", input.atl08
+                                        ? "\"" + m +
+                                              "\" reads waveforms, and ATL08 gives land "
+                                              "segments: choose among atl08, photon_ratio, rt"
+                                        : "\"" + m +
+                                              "\" reads ATL08's land segments, and the "
+                                              "input gives waveforms: choose among gedi_l2a, "
+                                              "gedi_l2b, wi, rt");
+  }
   const bool want_rt = named(methods, "rt");
   if (want_rt && !request.table)
     throw config_error("--methods", "rt needs --table TABLE.nc (made by `glaswave table`)");
@@ -532,6 +550,15 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
           "--counts-per-watt",
           "rt compares waveforms in watts with its table's, and a real granule "
           "does not say its digitiser's counts per watt: give it (docs/retrieval.md)");
+  }
+  for (MeasuredShot& s : input.shots) {
+    if (!s.photons) continue;
+    if (request.photons_per_J) s.photons->photons_per_J = *request.photons_per_J;
+    if (want_rt && !std::isfinite(s.photons->photons_per_J))
+      throw config_error("--photons-per-joule",
+                         "rt compares photons with its table's returns in watts, and a real ATL03 "
+                         "does not say how many photons a joule gives: give it "
+                         "(docs/retrieval.md)");
   }
   const bool want_l2b_granule =
       input.gedi_l1b && std::find(methods.begin(), methods.end(), "gedi_l2b") != methods.end();
@@ -545,8 +572,9 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   if (want_rt) {
     table = read_table(*request.table);
     arena.execute([&] { rt.emplace(*table, request.rt); });  // its calibration on --threads
-    rt->check_compatible(input.band_names, input.bin_ns, input.pulse_sigma_ns,
-                         request.table->string());
+    // Photons have no bins: a table's of any width counts them.
+    rt->check_compatible(input.band_names, input.atl03 ? table->bin_ns : input.bin_ns,
+                         input.pulse_sigma_ns, request.table->string());
   }
   std::filesystem::create_directories(out_dir.empty() ? "." : out_dir);
 

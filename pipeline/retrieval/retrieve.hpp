@@ -34,6 +34,7 @@ struct RetrieveRequest {
   std::vector<int> beams;                             // --beams: beam numbers kept; empty: all
   std::optional<std::array<double, 4>> bbox_deg;      // --bbox: west, south, east, north
   std::optional<double> counts_per_W;                 // --counts-per-watt: granules' scale
+  std::optional<double> photons_per_J;                // --photons-per-joule: ATL03's scale
   int threads = 0;                                    // 0: every core
   std::string command_line;
   RtSettings rt;
@@ -53,6 +54,20 @@ struct RetrieveSummary {
 struct Atl08Segment {
   double h_canopy_m, h_te_best_fit_m;
   PhotonClassCounts photons;
+  std::int64_t segment_id_end = 0;  // its last 20 m ATL03 segment (segment_id_beg the first)
+  double terrain_slope = 0.0;       // along track, rise over run (ATL08's; 0 where it has none)
+};
+
+// ATL03's photons over an ATL08 land segment (ATL03 given beside ATL08), what rt reads of
+// ICESat-2: their heights with the segment's along-track terrain slope taken out about the
+// middle of their span, the pulses fired over the segment, the background rate over its time
+// (ATL03's bckgrd_atlas) and the photons a joule of the table's return gives (glaswave's truth;
+// NaN in a real granule, which does not say).
+struct PhotonSegment {
+  std::vector<double> heights_m;
+  double pulses = 0.0;
+  double background_rate_Hz = 0.0;
+  double photons_per_J = std::numeric_limits<double>::quiet_NaN();
 };
 
 // One measured shot as the methods read it: band 0 for the missions' algorithms, every band for
@@ -72,8 +87,9 @@ struct MeasuredShot {
   // counts per watt (in_counts), NaN where the granule does not say (a real one).
   double counts_per_W = 1.0;
   bool in_counts = false;
-  std::optional<Atl08Segment> segment;  // ATL08 input: a land segment, and no waveform
-  GediShotInfo gedi;                    // GEDI L1B input's (present) and its L2A's
+  std::optional<Atl08Segment> segment;   // ATL08 input: a land segment, and no waveform
+  std::optional<PhotonSegment> photons;  // and ATL03's photons over it, when given beside
+  GediShotInfo gedi;                     // GEDI L1B input's (present) and its L2A's
 };
 
 struct MeasuredShots {
@@ -83,6 +99,7 @@ struct MeasuredShots {
   bool simulated = true;
   bool gedi_l1b = false;  // read from a GEDI L1B granule: gedi_l2b.h5 is written
   bool atl08 = false;     // ATL08's land segments: the methods atl08 and photon_ratio
+  bool atl03 = false;     // and ATL03's photons over them: rt too
   std::vector<MeasuredShot> shots;
 };
 

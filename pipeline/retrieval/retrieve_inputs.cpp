@@ -9,6 +9,7 @@
 #include "core/hdf5_file.hpp"
 #include "core/netcdf_lock.hpp"
 #include "core/spawned_reader.hpp"
+#include "pipeline/retrieval/atl03_reader.hpp"
 #include "pipeline/retrieval/atl08_reader.hpp"
 #include "pipeline/retrieval/gedi_l1b_reader.hpp"
 #include "pipeline/retrieval/glas_granule_reader.hpp"
@@ -24,6 +25,7 @@ RetrieveInputKind retrieve_input_kind(const std::filesystem::path& file) {
     if (reader.has("Data_40HZ/Elevation_Surfaces/d_elev")) return RetrieveInputKind::glah14;
   }
   if (is_atl08(file)) return RetrieveInputKind::atl08;
+  if (is_atl03(file)) return RetrieveInputKind::atl03;
   if (is_gedi_l1b(file)) return RetrieveInputKind::gedi_l1b;
   if (is_gedi_l2a(file)) return RetrieveInputKind::gedi_l2a;
   return RetrieveInputKind::shots_nc;
@@ -53,6 +55,11 @@ void read_whole(const std::filesystem::path& file) {
     case RetrieveInputKind::atl08:
       read_atl08(file, {}, {});
       break;
+    case RetrieveInputKind::atl03: {
+      MeasuredShots none;
+      attach_atl03(file, none);
+      break;
+    }
     case RetrieveInputKind::shots_nc:
       read_shots(file, {}, {});
       break;
@@ -157,6 +164,8 @@ MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inp
       case RetrieveInputKind::atl08:
         more = read_atl08(file, first, last);
         break;
+      case RetrieveInputKind::atl03:
+        continue;  // onto the ATL08's segments, below
       case RetrieveInputKind::gedi_l1b:
         more = read_gedi_l1b(file, l2a, first, last);
         break;
@@ -177,6 +186,22 @@ MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inp
     input.simulated = input.simulated && more.simulated;
     input.gedi_l1b = input.gedi_l1b || more.gedi_l1b;
     for (MeasuredShot& s : more.shots) input.shots.push_back(std::move(s));
+  }
+  // ATL03's photons onto the land segments of the one ATL08 given beside it: segment numbers
+  // are a granule's own, so that two pairs could not be told apart.
+  const auto atl03 = std::find(kinds.begin(), kinds.end(), RetrieveInputKind::atl03);
+  if (atl03 != kinds.end()) {
+    const std::filesystem::path& file = inputs[static_cast<std::size_t>(atl03 - kinds.begin())];
+    const auto count = [&](RetrieveInputKind kind) {
+      return std::count(kinds.begin(), kinds.end(), kind);
+    };
+    if (count(RetrieveInputKind::atl08) != 1)
+      throw input_error(file.string(),
+                        "an ATL03 granule is read beside the ATL08 granule of its land segments: "
+                        "give one ATL08 (and one ATL03) with it");
+    if (count(RetrieveInputKind::atl03) > 1)
+      throw input_error(file.string(), "one ATL03 granule is read beside one ATL08: give one pair");
+    attach_atl03(file, input);
   }
   return input;
 }

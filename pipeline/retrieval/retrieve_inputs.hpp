@@ -18,6 +18,7 @@ enum class RetrieveInputKind {
   glah01,    // Data_40HZ/Waveform/RecWaveform/r_rng_wf
   glah14,    // Data_40HZ/Elevation_Surfaces/d_elev and no r_rng_wf
   atl08,     // gtXY/land_segments
+  atl03,     // gtXY/heights/h_ph
 };
 
 // The kind of `file` from what it holds.
@@ -28,9 +29,10 @@ RetrieveInputKind retrieve_input_kind(const std::filesystem::path& file);
 // crashes, spins or allocates without end (fuzzing found a 10 kB GLAH01 on which HDF5 took 24 GB)
 // is refused, then read here by its kind: shots.nc files, GEDI L1B granules (each with the L2A
 // granules given, whose shots it matches), GLAH01 granules (placed by the GLAH14 granules given)
-// and ATL08 granules (a record a land segment), their shots in the order given. An L2A without an
-// L1B, a GLAH14 without a GLAH01 or a GLAH01 without a GLAH14 is refused, as are inputs whose bands
-// or bins differ.
+// and ATL08 granules (a record a land segment, with the photons of the one ATL03 granule given
+// beside one ATL08), their shots in the order given. An L2A without an L1B, a GLAH14 without a
+// GLAH01, a GLAH01 without a GLAH14 or an ATL03 without one ATL08 is refused, as are inputs whose
+// bands or bins differ.
 MeasuredShots read_retrieve_inputs(const std::vector<std::filesystem::path>& inputs,
                                    std::optional<std::int64_t> first,
                                    std::optional<std::int64_t> last);

@@ -29,9 +29,9 @@ Pair load_pair(const double* p) {
 
 RtStatistic no_statistic() { return {kNaN, kNaN, kNaN, kNaN}; }
 
-// Mean, sd and the 5 % and 95 % points of values weighted by w, the values visited in increasing
-// order (`order`); entries whose value is NaN are left out. A quantile is the first value at
-// which the cumulative weight reaches it.
+}  // namespace
+
+// A quantile is the first value at which the cumulative weight reaches it.
 RtStatistic weighted_statistic(const std::vector<double>& values, const std::vector<double>& w,
                                const std::vector<std::uint32_t>& order) {
   double total = 0.0, sum = 0.0, sum2 = 0.0;
@@ -59,8 +59,6 @@ RtStatistic weighted_statistic(const std::vector<double>& values, const std::vec
   if (std::isnan(s.p95)) s.p95 = s.p05;
   return s;
 }
-
-}  // namespace
 
 RtResult RtResult::none() {
   RtResult r;

@@ -70,6 +70,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -147,9 +148,23 @@ struct RtShot {
   double ground_guess_m = 0.0;
 };
 
+// One ICESat-2 land segment's photons (retrieve.hpp's PhotonSegment): their heights (m, the
+// along-track slope taken out), the pulses fired over them, the background rate and the photons a
+// joule of the table's return gives; a first guess of the ground (NaN: the photons' median).
+struct RtPhotonShot {
+  std::span<const double> heights_m;
+  double pulses = 0.0, background_rate_Hz = 0.0, photons_per_J = 0.0;
+  double ground_guess_m = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct RtStatistic {
   double mean = 0.0, sd = 0.0, p05 = 0.0, p95 = 0.0;
 };
+
+// Mean, sd and the 5 % and 95 % points of values weighted by w, visited in increasing order
+// (`order`); NaN values are left out.
+RtStatistic weighted_statistic(const std::vector<double>& values, const std::vector<double>& w,
+                               const std::vector<std::uint32_t>& order);
 
 struct RtResult {
   RtStatistic canopy_height_m, cover, pai, ground_elevation_m, rhov_rhog;
@@ -206,6 +221,13 @@ class RtInversion {
   Fit fit_as_searched(const RtPreparedShot& shot, std::size_t entry, int shift) const;
 
   RtResult invert(const RtShot& shot) const;
+  // A segment of photons against every entry at every ground within ground_search_m of the
+  // guess (rt_photon_search.cpp): Poisson's likelihood of the photons' histogram in bins of
+  // about kPhotonBin_m, the background included, each entry's expected photons its (emulated)
+  // waveform times the segment's pulses and photons per joule. chi2_min is the best fit's
+  // Poisson deviance in bins of about kFitBin_m, dof its expectation under the fit.
+  RtResult invert_photons(const RtPhotonShot& shot) const;
+  static constexpr double kPhotonBin_m = 0.15, kFitBin_m = 1.0;
 
   // The fitted noise model v(T) = a T + c T^2 per band (W^2), the floor of its signal, and tau.
   double variance_linear_W(std::size_t band) const { return var_linear_[band]; }

@@ -1,0 +1,198 @@
+// rt on ICESat-2's photons: a land segment's photon heights against every entry of the table
+// under Poisson's law, the background included (rt_inversion.hpp, invert_photons).
+//
+// The segment's photons are counted in bins of D (about kPhotonBin_m: whole table bins, m of
+// them) over the heights any entry can reach from a ground within ground_search_m of the guess.
+// Entry e placed with its ground at shift s expects in bin b
+//   mu_b = S_e[b - s] + B,  S_e[c] = N q tau sum_{j in c} T_e[j],  B = N r 2 D / c,
+// N the pulses, q the photons a joule gives, tau the table's bin, T_e its waveform (W; the
+// emulated one where the calibrated likelihood built it, which averages the entries' own Monte
+// Carlo noise), r the background rate. Poisson's log-likelihood of the counts k_b, less what no
+// entry changes, is
+//   l(e, s) = sum_c k_{c+s} log(1 + S_e[c] / B_e) - sum_c S_e[c] + K log B_e - n B_e,
+// K the photons and n the bins counted; B_e = max(B, 1e-4 of S_e's peak), a floor where a
+// segment has no background, so that a photon where an entry expects none does not rule it out
+// altogether (the entry's support ends at 1e-4 of its peak, as the waveform search's does).
+// The grounds tried lie a table bin apart: each of the m phases of the counts' bins, a table bin
+// lower than the last, has its shifts (the phases after the first for the entries the first
+// leaves within reach). Photons are independent: the posterior is untempered, w(e, s) ~ exp(l),
+// the design the prior.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "pipeline/retrieval/rt_inversion.hpp"
+
+namespace glaswave {
+namespace {
+
+// 2 (k ln(k / mu) - (k - mu)): Poisson's deviance of k counts expecting mu.
+double poisson_deviance(double k, double mu) {
+  return 2.0 * ((k > 0.0 ? k * std::log(k / mu) : 0.0) - (k - mu));
+}
+
+// Its mean over k ~ Poisson(mu): summed over k to 12 sd beyond mu, or 1 + 1 / (6 mu) (the
+// series' first terms) where mu is large.
+double expected_poisson_deviance(double mu) {
+  if (mu > 50.0) return 1.0 + 1.0 / (6.0 * mu);
+  double p = std::exp(-mu), sum = 0.0;
+  const int last = static_cast<int>(mu + 12.0 * std::sqrt(mu) + 12.0);
+  for (int k = 0; k <= last; ++k) {
+    sum += p * poisson_deviance(k, mu);
+    p *= mu / (k + 1);
+  }
+  return sum;
+}
+
+}  // namespace
+
+RtResult RtInversion::invert_photons(const RtPhotonShot& shot) const {
+  constexpr double c_m_per_s = 299792458.0;
+  const std::size_t entries = table_.entries(), bins = table_.height_m.size();
+  if (entries == 0 || bins < 2 || shot.heights_m.empty() || !(shot.pulses > 0.0) ||
+      !(shot.photons_per_J > 0.0) || !std::isfinite(shot.photons_per_J) ||
+      !(shot.background_rate_Hz >= 0.0))
+    return RtResult::none();
+  const double dz_table_m = table_.height_m[0] - table_.height_m[1];
+  const std::size_t per_bin =
+      static_cast<std::size_t>(std::max(1.0, std::round(kPhotonBin_m / dz_table_m)));
+  const double bin_m = static_cast<double>(per_bin) * dz_table_m;
+  const std::size_t coarse = (bins + per_bin - 1) / per_bin;
+  double guess = shot.ground_guess_m;
+  if (!std::isfinite(guess)) {
+    std::vector<double> h(shot.heights_m.begin(), shot.heights_m.end());
+    std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(h.size() / 2), h.end());
+    guess = h[h.size() / 2];
+  }
+  const int half = std::max(1, static_cast<int>(std::ceil(settings_.ground_search_m / bin_m)));
+  const int shifts = 2 * half + 1;
+  const std::size_t counted = static_cast<std::size_t>(2 * half) + coarse;
+  const int phases = static_cast<int>(per_bin);
+  // The top of the counts' bin 0 at phase 0: where the table's top bin's top lies with the
+  // ground at the guess, half the shifts higher. Phase p lowers the bins by p table bins, so that
+  // the grounds tried are the table's bins apart: ground(s, p) = top - (s per_bin + p) dz - h0 -
+  // dz / 2, the fine index s per_bin + p.
+  const double top_m = guess + table_.height_m[0] + 0.5 * dz_table_m + half * bin_m;
+  const auto counts = [&](int phase) {
+    std::vector<double> k(counted, 0.0);
+    const double top = top_m - phase * dz_table_m;
+    for (const double h : shot.heights_m) {
+      const double b = std::floor((top - h) / bin_m);
+      if (b >= 0.0 && b < static_cast<double>(counted)) k[static_cast<std::size_t>(b)] += 1.0;
+    }
+    return k;
+  };
+  // Every phase's likelihood over the same window, the union of their bins: its photons outside
+  // a phase's bins meet no entry's signal there, and count as background alone.
+  const double window_bins =
+      static_cast<double>(counted) + static_cast<double>(phases - 1) / phases;
+  double photons = 0.0;
+  for (const double h : shot.heights_m) photons += h <= top_m && h > top_m - window_bins * bin_m;
+  const double background = shot.pulses * shot.background_rate_Hz * 2.0 * bin_m / c_m_per_s;
+  const double per_W = shot.pulses * shot.photons_per_J * table_.bin_ns * 1e-9;
+  const int fine = shifts * phases;
+  const auto ground_of = [&](int f) {
+    return top_m - f * dz_table_m - table_.height_m[0] - 0.5 * dz_table_m;
+  };
+  const auto expected_of = [&](std::size_t e, std::vector<double>& expected) {
+    const std::vector<double>& t = emulated_.empty() ? table_.waveform_W[e][0] : emulated_[e][0];
+    std::fill(expected.begin(), expected.end(), 0.0);
+    for (std::size_t j = 0; j < bins; ++j) expected[j / per_bin] += std::max(0.0, t[j]) * per_W;
+  };
+
+  // Phase 0 for every entry; the other phases for the entries phase 0 leaves within reach of
+  // its best (the sub-bin placement moves every entry's likelihood alike, by up to a hundred
+  // where hundreds of ground photons lie within a pulse sigma).
+  std::vector<double> log_likelihood(entries * fine, -std::numeric_limits<double>::infinity());
+  std::vector<double> floor(entries), entry_best(entries);
+  std::vector<double> expected(coarse), gain(coarse), sums(shifts);
+  double best = -std::numeric_limits<double>::infinity();
+  std::size_t best_cell = 0;
+  std::vector<double> k;
+  for (int phase = 0; phase < phases; ++phase) {
+    k = counts(phase);
+    const double phase0_best = best;
+    for (std::size_t e = 0; e < entries; ++e) {
+      if (phase > 0 && entry_best[e] < phase0_best - settings_.prune_log_likelihood -
+                                           settings_.prefilter_margin_log_likelihood)
+        continue;
+      expected_of(e, expected);
+      const double peak = *std::max_element(expected.begin(), expected.end());
+      const double total = std::accumulate(expected.begin(), expected.end(), 0.0);
+      const double b = std::max({background, 1e-4 * peak, 1e-300});
+      floor[e] = b;
+      for (std::size_t c = 0; c < coarse; ++c) gain[c] = std::log1p(expected[c] / b);
+      const double constant = photons * std::log(b) - window_bins * b - total;
+      // Bin by bin of the entry's, every shift at once (a loop the compiler vectorises; an
+      // entry expects nothing in most of its bins, which are skipped).
+      std::fill(sums.begin(), sums.end(), 0.0);
+      for (std::size_t c = 0; c < coarse; ++c) {
+        const double g = gain[c];
+        if (g == 0.0) continue;
+        const double* kc = k.data() + c;
+        for (int s = 0; s < shifts; ++s) sums[s] += kc[s] * g;
+      }
+      for (int s = 0; s < shifts; ++s) {
+        const double l = sums[s] + constant;
+        const std::size_t cell = e * fine + static_cast<std::size_t>(s * phases + phase);
+        log_likelihood[cell] = l;
+        if (phase == 0) entry_best[e] = std::max(s == 0 ? l : entry_best[e], l);
+        if (l > best) {
+          best = l;
+          best_cell = cell;
+        }
+      }
+    }
+  }
+
+  std::vector<double> entry_weight(entries, 0.0), shift_weight(fine, 0.0);
+  for (std::size_t e = 0; e < entries; ++e)
+    for (int f = 0; f < fine; ++f) {
+      const double w = std::exp(log_likelihood[e * fine + f] - best);
+      entry_weight[e] += w;
+      shift_weight[f] += w;
+    }
+  RtResult r;
+  entry_statistics(entry_weight, r);
+  std::vector<double> grounds(fine);
+  std::vector<std::uint32_t> order(fine);
+  for (int f = 0; f < fine; ++f) {
+    grounds[f] = ground_of(f);
+    order[f] = static_cast<std::uint32_t>(fine - 1 - f);  // the last is the lowest
+  }
+  r.ground_elevation_m = weighted_statistic(grounds, shift_weight, order);
+  const std::size_t top_entry = best_cell / fine;
+  const int top_fine = static_cast<int>(best_cell % fine);
+  const int top_shift = top_fine / phases;
+  r.best_entry = static_cast<std::int64_t>(top_entry);
+  r.best_ground_elevation_m = ground_of(top_fine);
+  r.ground_guess_m = guess;
+  // The best fit's deviance in bins of about kFitBin_m, over its expectation under the fit:
+  // sparse counts' deviance is not chi-squared (a bin expecting 0.07 background photons adds 0.37
+  // on average), and wider bins let a wrong scale show (half the photons expected: 0.6 a photon).
+  k = counts(top_fine % phases);
+  expected_of(top_entry, expected);
+  const std::size_t per_fit_bin =
+      static_cast<std::size_t>(std::max(1.0, std::round(kFitBin_m / bin_m)));
+  double deviance = 0.0, expected_deviance = 0.0;
+  for (std::size_t from = 0; from < counted; from += per_fit_bin) {
+    double observed = 0.0, mu = 0.0;
+    for (std::size_t b = from; b < std::min(counted, from + per_fit_bin); ++b) {
+      const long long c = static_cast<long long>(b) - top_shift;
+      mu += (c >= 0 && c < static_cast<long long>(coarse) ? expected[c] : 0.0) + floor[top_entry];
+      observed += k[b];
+    }
+    deviance += poisson_deviance(observed, mu);
+    expected_deviance += expected_poisson_deviance(mu);
+  }
+  r.chi2_min = deviance;
+  r.dof = expected_deviance;
+  if (r.chi2_min / r.dof > settings_.chi2_dof_limit) r.flag |= rt_misfit;
+  if (posterior_at_table_edge(entry_weight)) r.flag |= rt_table_edge;
+  if (top_shift == 0 || top_shift == shifts - 1) r.flag |= rt_ground_search_edge;
+  if (std::abs(r.ground_elevation_m.mean - guess) > settings_.ground_offset_flag_m)
+    r.flag |= rt_ground_off_guess;
+  return r;
+}
+
+}  // namespace glaswave
