@@ -33,6 +33,7 @@ enum class RandomPurpose : std::uint64_t {
   beam_points = 0xb3a9501b01c0ffeeULL,   // the transport's scrambling of a shot's Sobol' points
   photons = 0x9407025c0a7e1a5eULL,       // photon counting: a shot's photon events by (beam, bin)
   table_design = 0x7ab1e5d0e5161c0dULL,  // `glaswave table`: the design's shift by (parameter)
+  photon_calibration = 0xca1b9407025c0a7eULL,  // rt on photons: a table entry's draws by (entry)
 };
 
 // Two signed indices (a 2-D grid's row and column, each within +-2^31) as one key.

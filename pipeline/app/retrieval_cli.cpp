@@ -272,6 +272,8 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
                         {"shots_per_s", rate},
                         {"product", summary.product.string()}};
     if (!summary.l2b_granule.empty()) j["l2b_granule"] = summary.l2b_granule.string();
+    if (std::isfinite(summary.rt_photon_tempering))
+      j["rt_photon_tempering"] = summary.rt_photon_tempering;
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf(
@@ -280,6 +282,9 @@ int RetrievalCommands::retrieve(const std::string& command_line, const ProgressF
         static_cast<long long>(summary.shots), names.c_str(), summary.wall_s, rate,
         static_cast<long long>(summary.rt_flagged), summary.product.c_str());
     if (!summary.l2b_granule.empty()) std::printf("glaswave: %s\n", summary.l2b_granule.c_str());
+    if (std::isfinite(summary.rt_photon_tempering))
+      std::printf("glaswave: rt's photon likelihood tempered by %.3g (calibrated on the table)\n",
+                  summary.rt_photon_tempering);
   }
   if (!plot_warning.empty()) std::fprintf(stderr, "glaswave: warning: %s\n", plot_warning.c_str());
   return 0;

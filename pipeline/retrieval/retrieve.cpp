@@ -214,6 +214,12 @@ struct ShotResults {
 
 constexpr MethodEstimates kNone{kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
 
+double median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2),
+                   values.end());
+  return values[values.size() / 2];
+}
+
 MethodEstimates rt_estimates(const RtResult& rt) {
   return {rt.canopy_height_m.mean,    rt.cover.mean,     rt.pai.mean,
           rt.ground_elevation_m.mean, rt.rhov_rhog.mean, rt.pgap.mean};
@@ -571,7 +577,24 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   std::optional<RtInversion> rt;
   if (want_rt) {
     table = read_table(*request.table);
-    arena.execute([&] { rt.emplace(*table, request.rt); });  // its calibration on --threads
+    RtSettings settings = request.rt;
+    // Photons have a tempering of their own (calibrate_photons, below): the waveforms' (20 s of
+    // CPU on 1500 entries) is not needed.
+    if (input.atl03 && settings.tempering == 0.0) settings.tempering = 1.0;
+    arena.execute([&] {  // its calibration on --threads
+      rt.emplace(*table, settings);
+      // The photons' tempering for the segments' median pulses, scale and background.
+      if (input.atl03) {
+        std::vector<double> pulses, per_J, rate;
+        for (const MeasuredShot& s : input.shots)
+          if (s.photons) {
+            pulses.push_back(s.photons->pulses);
+            per_J.push_back(s.photons->photons_per_J);
+            rate.push_back(s.photons->background_rate_Hz);
+          }
+        if (!pulses.empty()) rt->calibrate_photons(median(pulses), median(per_J), median(rate));
+      }
+    });
     // Photons have no bins: a table's of any width counts them.
     rt->check_compatible(input.band_names, input.atl03 ? table->bin_ns : input.bin_ns,
                          input.pulse_sigma_ns, request.table->string());
@@ -618,6 +641,7 @@ RetrieveSummary run_retrieval(const RetrieveRequest& request,
   summary.methods = methods;
   summary.product = product;
   for (const ShotResults& r : results) summary.rt_flagged += want_rt && r.rt.flag != 0;
+  if (rt && input.atl03) summary.rt_photon_tempering = rt->photon_tempering();
   return summary;
 }
 

@@ -47,6 +47,8 @@ struct RetrieveSummary {
   double wall_s = 0.0;          // the methods on the shots, reading and writing left out
   std::filesystem::path product;
   std::filesystem::path l2b_granule;  // DIR/gedi_l2b.h5 for GEDI L1B input, else empty
+  // rt on ATL03's photons: the tempering calibrated on the table (NaN otherwise).
+  double rt_photon_tempering = std::numeric_limits<double>::quiet_NaN();
 };
 
 // An ICESat-2 ATL08 land segment, which atl08 input gives in place of a waveform: ATL08's own

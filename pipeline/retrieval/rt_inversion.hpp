@@ -228,6 +228,13 @@ class RtInversion {
   // Poisson deviance in bins of about kFitBin_m, dof its expectation under the fit.
   RtResult invert_photons(const RtPhotonShot& shot) const;
   static constexpr double kPhotonBin_m = 0.15, kFitBin_m = 1.0;
+  // The photons' tempering, calibrated on the table as the waveforms' is, for segments of these
+  // pulses, photons per joule and background (rt_photon_search.cpp): entries' photons drawn
+  // from their own expectation are retrieved from the other entries, and tau (at least 1, where
+  // Poisson's law holds) scaled until the 90 % interval holds their parameters 90 % of the
+  // time. Until it is called, 1.
+  void calibrate_photons(double pulses, double photons_per_J, double background_rate_Hz);
+  double photon_tempering() const { return photon_tempering_; }
 
   // The fitted noise model v(T) = a T + c T^2 per band (W^2), the floor of its signal, and tau.
   double variance_linear_W(std::size_t band) const { return var_linear_[band]; }
@@ -278,6 +285,10 @@ class RtInversion {
   // entries, `ok` false, where the table's window at that shift holds none of the shot's bins).
   std::vector<std::size_t> prefilter(const RtPreparedShot& shot, int shift, std::int64_t excluded,
                                      bool* ok) const;
+  // (the entry's value of a varied range - the posterior's mean) / its sd under these weights
+  // (one an entry): the tempering calibrations' measure.
+  double standardised_error(const std::vector<double>& weight, std::size_t parameter,
+                            std::size_t entry) const;
   void build_emulator();
   void fit_noise_model();
   void build_variances();
@@ -334,6 +345,11 @@ class RtInversion {
                            const std::vector<EntryTerms>* shared = nullptr) const;
   RtResult summarise(const RtPreparedShot& shot, const std::vector<Cell>& cells,
                      bool at_edge) const;
+  // invert_photons with entry `excluded` left out, grounds within search_m of the guess, the
+  // log-likelihood divided by `tempering`; each entry's best log-likelihood (untempered) into
+  // `entry_best` when given.
+  RtResult search_photons(const RtPhotonShot& shot, std::int64_t excluded, double search_m,
+                          double tempering, std::vector<double>* entry_best) const;
   // The entries' truths' statistics under these weights, into r (truths_' order: height, cover,
   // pai, rhov_rhog, pgap).
   void entry_statistics(const std::vector<double>& entry_weight, RtResult& r) const;
@@ -363,6 +379,7 @@ class RtInversion {
   std::vector<double> var_linear_, var_quadratic_, signal_floor_W_, out_var_;
   double measured_factor_ = 1.0;  // r_m
   double tempering_ = 1.0;
+  double photon_tempering_ = 1.0;
   // The projections, one per quarter octave of each band's detector noise.
   mutable std::mutex projections_mutex_;
   mutable std::map<std::vector<int>, std::unique_ptr<const Projection>> projections_;

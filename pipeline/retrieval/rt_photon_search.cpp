@@ -15,12 +15,18 @@
 // altogether (the entry's support ends at 1e-4 of its peak, as the waveform search's does).
 // The grounds tried lie a table bin apart: each of the m phases of the counts' bins, a table bin
 // lower than the last, has its shifts (the phases after the first for the entries the first
-// leaves within reach). Photons are independent: the posterior is untempered, w(e, s) ~ exp(l),
-// the design the prior.
+// leaves within reach). The posterior is w(e, s) ~ exp(l / tau), the design the prior. Photons
+// are independent draws, but a segment's forest is none of the table's: tau is calibrated on
+// the table (calibrate_photons), as the waveforms' is.
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
+#include "core/random.hpp"
+#include "core/samplers.hpp"
 #include "pipeline/retrieval/rt_inversion.hpp"
 
 namespace glaswave {
@@ -47,6 +53,12 @@ double expected_poisson_deviance(double mu) {
 }  // namespace
 
 RtResult RtInversion::invert_photons(const RtPhotonShot& shot) const {
+  return search_photons(shot, -1, settings_.ground_search_m, photon_tempering_, nullptr);
+}
+
+RtResult RtInversion::search_photons(const RtPhotonShot& shot, std::int64_t excluded,
+                                     double search_m, double tempering,
+                                     std::vector<double>* entry_best_out) const {
   constexpr double c_m_per_s = 299792458.0;
   const std::size_t entries = table_.entries(), bins = table_.height_m.size();
   if (entries == 0 || bins < 2 || shot.heights_m.empty() || !(shot.pulses > 0.0) ||
@@ -64,7 +76,7 @@ RtResult RtInversion::invert_photons(const RtPhotonShot& shot) const {
     std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(h.size() / 2), h.end());
     guess = h[h.size() / 2];
   }
-  const int half = std::max(1, static_cast<int>(std::ceil(settings_.ground_search_m / bin_m)));
+  const int half = std::max(1, static_cast<int>(std::ceil(search_m / bin_m)));
   const int shifts = 2 * half + 1;
   const std::size_t counted = static_cast<std::size_t>(2 * half) + coarse;
   const int phases = static_cast<int>(per_bin);
@@ -104,7 +116,7 @@ RtResult RtInversion::invert_photons(const RtPhotonShot& shot) const {
   // its best (the sub-bin placement moves every entry's likelihood alike, by up to a hundred
   // where hundreds of ground photons lie within a pulse sigma).
   std::vector<double> log_likelihood(entries * fine, -std::numeric_limits<double>::infinity());
-  std::vector<double> floor(entries), entry_best(entries);
+  std::vector<double> floor(entries), entry_best(entries, -std::numeric_limits<double>::infinity());
   std::vector<double> expected(coarse), gain(coarse), sums(shifts);
   double best = -std::numeric_limits<double>::infinity();
   std::size_t best_cell = 0;
@@ -113,8 +125,10 @@ RtResult RtInversion::invert_photons(const RtPhotonShot& shot) const {
     k = counts(phase);
     const double phase0_best = best;
     for (std::size_t e = 0; e < entries; ++e) {
-      if (phase > 0 && entry_best[e] < phase0_best - settings_.prune_log_likelihood -
-                                           settings_.prefilter_margin_log_likelihood)
+      if (static_cast<std::int64_t>(e) == excluded) continue;
+      if (phase > 0 &&
+          entry_best[e] < phase0_best - tempering * (settings_.prune_log_likelihood +
+                                                     settings_.prefilter_margin_log_likelihood))
         continue;
       expected_of(e, expected);
       const double peak = *std::max_element(expected.begin(), expected.end());
@@ -136,7 +150,7 @@ RtResult RtInversion::invert_photons(const RtPhotonShot& shot) const {
         const double l = sums[s] + constant;
         const std::size_t cell = e * fine + static_cast<std::size_t>(s * phases + phase);
         log_likelihood[cell] = l;
-        if (phase == 0) entry_best[e] = std::max(s == 0 ? l : entry_best[e], l);
+        entry_best[e] = std::max(entry_best[e], l);
         if (l > best) {
           best = l;
           best_cell = cell;
@@ -145,13 +159,15 @@ RtResult RtInversion::invert_photons(const RtPhotonShot& shot) const {
     }
   }
 
+  if (!std::isfinite(best)) return RtResult::none();
   std::vector<double> entry_weight(entries, 0.0), shift_weight(fine, 0.0);
   for (std::size_t e = 0; e < entries; ++e)
     for (int f = 0; f < fine; ++f) {
-      const double w = std::exp(log_likelihood[e * fine + f] - best);
+      const double w = std::exp((log_likelihood[e * fine + f] - best) / tempering);
       entry_weight[e] += w;
       shift_weight[f] += w;
     }
+  if (entry_best_out) *entry_best_out = entry_best;
   RtResult r;
   entry_statistics(entry_weight, r);
   std::vector<double> grounds(fine);
@@ -193,6 +209,96 @@ RtResult RtInversion::invert_photons(const RtPhotonShot& shot) const {
   if (std::abs(r.ground_elevation_m.mean - guess) > settings_.ground_offset_flag_m)
     r.flag |= rt_ground_off_guess;
   return r;
+}
+
+// The cases: every entry inside the design's ranges (none in an outer edge_fraction), at most
+// kCases spread over the table. Case c's photons are drawn (keyed by the table's seed and the
+// entry) from its other shots' mean (its first shot left out, which the emulator of its
+// neighbours still holds: a little of the truth leaks), its ground at 0, the background over
+// the heights searched; it is retrieved from the other entries with grounds within 2 m. Each
+// case keeps every entry's best log-likelihood, from which the posterior's mean and sd of each
+// varied range follow for any tau (the shifts profiled, not summed: the grounds' spread is a
+// small part of an entry's weight); tau is the smallest at least 1 that brings the 90th
+// percentile of the squared standardised errors to a Gaussian's, 2.706.
+void RtInversion::calibrate_photons(double pulses, double photons_per_J,
+                                    double background_rate_Hz) {
+  constexpr std::size_t kCases = 100;
+  constexpr double kSearch_m = 2.0, kP90 = 2.705543454095404;
+  const ForwardTable& t = table_;
+  const std::size_t entries = t.entries(), bins = t.height_m.size();
+  photon_tempering_ = 1.0;
+  if (entries < 8 || bins < 2 || !(pulses > 0.0) || !(photons_per_J > 0.0)) return;
+  std::vector<std::size_t> ranges;
+  for (std::size_t q = 0; q < t.parameters.size(); ++q)
+    if (t.parameters[q].is_range() && t.parameters[q].high > t.parameters[q].low)
+      ranges.push_back(q);
+  if (ranges.empty()) return;
+  std::vector<std::size_t> cases;
+  for (std::size_t i = 0; i < std::min(kCases, entries); ++i) {
+    const std::size_t e = i * entries / std::min(kCases, entries);
+    bool inside = true;
+    for (std::size_t q = 0; q < t.parameters.size(); ++q) inside = inside && edge_[e][q] == 0;
+    if (inside) cases.push_back(e);
+  }
+  if (cases.size() < 5) return;
+  const double dz_m = t.height_m[0] - t.height_m[1];
+  const double per_W = pulses * photons_per_J * t.bin_ns * 1e-9;
+  const double k_shots = static_cast<double>(t.shots_per_entry);
+  std::vector<std::vector<double>> best_of(cases.size());
+  tbb::parallel_for(std::size_t{0}, cases.size(), [&](std::size_t i) {
+    const std::size_t e = cases[i];
+    RandomStream random(t.seed, e, 0, RandomPurpose::photon_calibration);
+    const bool apart = k_shots >= 2.0 && t.shot0_W.size() == entries && !t.shot0_W[e].empty();
+    std::vector<double> heights;
+    for (std::size_t j = 0; j < bins; ++j) {
+      const double mean_W =
+          apart ? (k_shots * t.waveform_W[e][0][j] - t.shot0_W[e][0][j]) / (k_shots - 1.0)
+                : t.waveform_W[e][0][j];
+      const double n = poisson(random, std::max(0.0, mean_W) * per_W);
+      for (double k = 0.0; k < n; k += 1.0)
+        heights.push_back(t.height_m[j] + (random.uniform() - 0.5) * dz_m);
+    }
+    const double low = t.height_m.back() - kSearch_m, high = t.height_m.front() + kSearch_m;
+    const double background =
+        poisson(random, pulses * background_rate_Hz * 2.0 * (high - low) / 299792458.0);
+    for (double k = 0.0; k < background; k += 1.0)
+      heights.push_back(low + random.uniform() * (high - low));
+    if (heights.empty()) return;
+    RtPhotonShot shot{heights, pulses, background_rate_Hz, photons_per_J, 0.0};
+    search_photons(shot, static_cast<std::int64_t>(e), kSearch_m, 1.0, &best_of[i]);
+  });
+  // The 90th percentile of z^2 over the cases and ranges at tau.
+  const auto q90 = [&](double tau) {
+    std::vector<double> z2;
+    std::vector<double> w(entries);
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      const std::vector<double>& l = best_of[i];
+      if (l.size() != entries) continue;
+      const double top = *std::max_element(l.begin(), l.end());
+      if (!std::isfinite(top)) continue;
+      for (std::size_t e = 0; e < entries; ++e)
+        w[e] = std::isfinite(l[e]) ? std::exp((l[e] - top) / tau) : 0.0;
+      for (std::size_t q : ranges) {
+        const double z = standardised_error(w, q, cases[i]);
+        z2.push_back(z * z);
+      }
+    }
+    if (z2.size() < 5) return 0.0;
+    std::sort(z2.begin(), z2.end());
+    return z2[z2.size() * 9 / 10];
+  };
+  if (q90(1.0) <= kP90) return;
+  // z^2 falls as tau widens the posterior: bisection in log tau over [1, 1e4].
+  double low = 1.0, high = 1e4;
+  if (q90(high) > kP90) {
+    photon_tempering_ = high;
+    return;
+  }
+  for (int round = 0; round < 40 && high / low > 1.01; ++round) {
+    const double mid = std::sqrt(low * high);
+    (q90(mid) > kP90 ? low : high) = mid;
+  }
+  photon_tempering_ = high;
 }
 
 }  // namespace glaswave

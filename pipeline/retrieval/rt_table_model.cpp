@@ -328,6 +328,21 @@ double RtInversion::log_det(const std::vector<double>& noise2, std::size_t entry
 // tau starts from the pulse's correlation length and is multiplied by p90(z^2) / 2.706 over the
 // varied ranges' z = (truth - mean) / sd (the 90 % interval the product states), up to 6 times,
 // the shots whose truth lies in the outer edge_fraction of a range left out.
+double RtInversion::standardised_error(const std::vector<double>& weight, std::size_t parameter,
+                                       std::size_t entry) const {
+  const ForwardTable& t = table_;
+  double sw = 0, s1 = 0, s2 = 0;
+  for (std::size_t e = 0; e < t.entries(); ++e) {
+    sw += weight[e];
+    s1 += weight[e] * t.parameter_values[e][parameter];
+  }
+  const double mean = s1 / sw;
+  for (std::size_t e = 0; e < t.entries(); ++e)
+    s2 += weight[e] * std::pow(t.parameter_values[e][parameter] - mean, 2);
+  // A posterior narrower than the design's spacing cannot say how wrong it is.
+  return (t.parameter_values[entry][parameter] - mean) / std::max(std::sqrt(s2 / sw), 1e-12);
+}
+
 void RtInversion::calibrate_tempering() {
   const ForwardTable& t = table_;
   const std::size_t entries = t.entries(), bands = t.bands(), bins = t.height_m.size();
@@ -438,17 +453,7 @@ void RtInversion::calibrate_tempering() {
       std::vector<double> weight(entries, 0.0);
       for (const Cell& cell : cells) weight[cell.entry] += std::exp(cell.log_likelihood - top);
       for (std::size_t q : ranges) {
-        double sw = 0, s1 = 0, s2 = 0;
-        for (std::size_t e = 0; e < entries; ++e) {
-          sw += weight[e];
-          s1 += weight[e] * t.parameter_values[e][q];
-        }
-        const double mean = s1 / sw;
-        for (std::size_t e = 0; e < entries; ++e)
-          s2 += weight[e] * std::pow(t.parameter_values[e][q] - mean, 2);
-        const double sd = std::sqrt(s2 / sw);
-        // A posterior narrower than the design's spacing cannot say how wrong it is.
-        const double z = (t.parameter_values[c.entry][q] - mean) / std::max(sd, 1e-12);
+        const double z = standardised_error(weight, q, c.entry);
         z2_of[i].push_back(z * z);
       }
     });

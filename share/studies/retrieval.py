@@ -2,14 +2,15 @@
 """How wrong is each retrieval method? `glaswave retrieve` on held-out forests (issue 37, item 5).
 
 Usage: retrieval.py --glaswave BINARY [--quick | --size full|reduced|quick] [--out DIR]
-                    [--threads N]
+                    [--threads N] [--sensors gedi,glas,icesat2]
 
-For GEDI and GLAS in turn: a forward table of crowned forests (`glaswave table`, ellipsoid crowns
+For GEDI, GLAS and ICESat-2 in turn: a forward table of crowned forests (`glaswave table`, ellipsoid crowns
 over the ranges in TABLE_VARY, slopes 0-30 deg), then stands the table did not see (their own
 seeds and elevations, crown bases and tops off the table's three, radii and PAI partly beyond its
 ranges, a fifth of them conical crowns, slopes to 30 deg in any aspect), each simulated as a pass
 with the detector on (`glaswave run`) and retrieved by every method (`glaswave retrieve
---methods gedi_l2a,gedi_l2b,wi,rt`). For every sensor, method and variable (canopy height,
+--methods gedi_l2a,gedi_l2b,wi,rt`; ICESat-2's ATL03 and ATL08 by atl08, photon_ratio and rt on
+the photons, one ATL08 segment a record). For every sensor, method and variable (canopy height,
 cover, PAI, ground elevation, rhov/rhog) against the products' truth: bias, RMSE and, for rt's
 posterior, the share of shots whose 5-95 % interval holds the truth, overall and by slope and
 crown class. Writes DIR/retrieval_metrics.csv and .md, retrieval_shots.csv (every shot),
@@ -42,9 +43,11 @@ sys.path.insert(0, HERE)
 from studies import apply_set, format_value, save_figure, write_atomic  # noqa: E402
 
 RETRIEVE_METHODS = ["gedi_l2a", "gedi_l2b", "wi", "rt"]
+# ICESat-2's: ATL08's own, the photon ratio, and rt on ATL03's photons.
+SEGMENT_METHODS = ["atl08", "photon_ratio", "rt"]
 # gedi_l2a_a1: L2A's default group alone (retrieval.nc's canopy_height_gedi_l2a_a1 and
 # ground_elevation_gedi_l2a_a1), beside the selected group's gedi_l2a.
-METHODS = ["gedi_l2a", "gedi_l2a_a1", "gedi_l2b", "wi", "rt"]
+METHODS = ["gedi_l2a", "gedi_l2a_a1", "gedi_l2b", "wi", "atl08", "photon_ratio", "rt"]
 # pgap: the vertical gap probability over the footprint, the part of the beam that reaches the
 # ground between and through the crowns; GEDI L2B's cover is one less it (its Pgap), where
 # `cover` is the crowns' cover.
@@ -52,7 +55,7 @@ VARIABLES = ["canopy_height", "cover", "pai", "ground_elevation", "rhov_rhog", "
 UNITS = {"canopy_height": "m", "cover": "", "pai": "", "ground_elevation": "m", "rhov_rhog": "",
          "pgap": ""}
 COLOURS = {"gedi_l2a": "tab:orange", "gedi_l2a_a1": "tab:purple", "gedi_l2b": "tab:blue",
-           "wi": "tab:green", "rt": "tab:red"}
+           "wi": "tab:green", "atl08": "tab:cyan", "photon_ratio": "tab:olive", "rt": "tab:red"}
 SLOPE_CLASSES_DEG = [(0.0, 10.0), (10.0, 20.0), (20.0, 30.0)]
 
 # The table's forests: every range a Halton coordinate, covering the held-out stands' own ranges
@@ -92,20 +95,32 @@ SENSORS = {
         "detector": {"enabled": True, "background_W": 2.0e-9, "noise_rms_W": 2.0e-9},
         "spacing_m": 172.0,
     },
+    # ATLAS's photons (its strong beam gt2l, the sun's background at 09:00 local time on the
+    # equinox: the sun 45 deg up), in ATL08's 100 m segments; the table holds the same sensor's
+    # expected waveforms (a waveform receiver), which rt turns into expected photons.
+    "icesat2": {
+        "sensor": {"preset": "atlas"},
+        "table_sensor": {"preset": "atlas", "receiver": "waveform"},
+        "spacing_m": 0.7,
+        "start_time": "2019-03-20T09:00:00Z",
+    },
 }
+ALTITUDE_M = {"gedi": 420000.0, "glas": 600000.0, "icesat2": 496000.0}
 
 SIZES = {
     # The table's cost is mostly each entry's scene (its crowns), not its rays.
-    "full": {"table_entries": {"gedi": 1500, "glas": 1000}, "table_rays": 1000,
-             "stands": {"gedi": 40, "glas": 30}, "shots": {"gedi": 50, "glas": 30},
-             "rays": 1000},
+    # ICESat-2: the GEDI stands, 428 ATLAS shots each (three ATL08 segments of 100 m).
+    "full": {"table_entries": {"gedi": 1500, "glas": 1000, "icesat2": 1500}, "table_rays": 1000,
+             "stands": {"gedi": 40, "glas": 30, "icesat2": 40},
+             "shots": {"gedi": 50, "glas": 30, "icesat2": 428}, "rays": 1000},
     # GEDI alone: the full study's table and stands (the same seeds, so the same forests), half
     # the shots each; about 2-3 minutes of CPU, for comparing a change before and after.
-    "reduced": {"table_entries": {"gedi": 1500, "glas": 1000}, "table_rays": 1000,
-                "stands": {"gedi": 40, "glas": 0}, "shots": {"gedi": 25, "glas": 30},
-                "rays": 1000},
-    "quick": {"table_entries": {"gedi": 96, "glas": 64}, "table_rays": 1000,
-              "stands": {"gedi": 3, "glas": 2}, "shots": {"gedi": 8, "glas": 6}, "rays": 1000},
+    "reduced": {"table_entries": {"gedi": 1500, "glas": 1000, "icesat2": 1500},
+                "table_rays": 1000, "stands": {"gedi": 40, "glas": 0, "icesat2": 0},
+                "shots": {"gedi": 25, "glas": 30, "icesat2": 428}, "rays": 1000},
+    "quick": {"table_entries": {"gedi": 96, "glas": 64, "icesat2": 64}, "table_rays": 1000,
+              "stands": {"gedi": 3, "glas": 2, "icesat2": 2},
+              "shots": {"gedi": 8, "glas": 6, "icesat2": 286}, "rays": 1000},
 }
 
 
@@ -172,9 +187,9 @@ def metrics(shots, method, variable, mask=None):
 
 def table_document(sensor, size):
     spec = SENSORS[sensor]
-    return {
+    document = {
         "seed": 37,
-        "sensor": spec["sensor"],
+        "sensor": spec.get("table_sensor", spec["sensor"]),
         "simulation": {"rays_per_shot": size["table_rays"]},
         "terrain": {"plane": {"origin_lat_deg": 0.0, "origin_lon_deg": 0.0, "elevation_m": 0.0},
                     "soil_reflectance": 0.3},
@@ -183,13 +198,22 @@ def table_document(sensor, size):
         # The entry's shots on one footprint, other rays: its waveform is that footprint's and
         # its truth the same footprint's, as a measured shot's is (two footprints 222 m apart
         # gave a mean of two forests' waveforms and truths, which no shot sees).
-        "track": {"type": "points", "altitude_m": 420000.0 if sensor == "gedi" else 600000.0,
+        "track": {"type": "points", "altitude_m": ALTITUDE_M[sensor],
                   "points": [{"lat_deg": 0.0, "lon_deg": 0.0},
                              {"lat_deg": 0.0, "lon_deg": 0.0}]},
         "output": {"footprints": False},
         "table": {"vary": TABLE_VARY, "values": TABLE_VALUES,
                   "entries": size["table_entries"][sensor]},
     }
+    if sensor == "icesat2":
+        # An ATL08 segment sums the photons of 143 footprints over 100 m of one forest: its
+        # entry is the mean of 16 footprints along 100 m (each on its own ground, its truths
+        # their means), where a waveform's is one footprint's.
+        document["track"] = {"type": "pass", "start_lat_deg": 0.0, "start_lon_deg": 0.0,
+                             "heading_deg": 0.0, "shots": 16, "spacing_m": 6.25,
+                             "altitude_m": ALTITUDE_M[sensor]}
+        document["table"]["shots_per_entry"] = 16
+    return document
 
 
 def held_out_stands(sensor, count):
@@ -197,7 +221,7 @@ def held_out_stands(sensor, count):
     crown bases anywhere in 2-16 m (the table's are three fixed layers), radii 1.5-7 m and PAI
     0.3-6 (beyond the table's 2-6 m and 0.3-5 in part), a fifth conical (the table's are
     ellipsoids), slope 0-30 deg in any aspect, the ground 0-800 m up."""
-    rng = np.random.default_rng(20260 + (0 if sensor == "gedi" else 1))
+    rng = np.random.default_rng(20260 + (1 if sensor == "glas" else 0))  # ICESat-2: GEDI's
     stands = []
     for i in range(count):
         base_low = float(rng.uniform(2.0, 14.0))
@@ -222,11 +246,15 @@ def stand_document(sensor, stand, size):
     document = table_document(sensor, size)
     del document["table"]
     document["simulation"]["rays_per_shot"] = size["rays"]
-    document["detector"] = spec["detector"]
+    document["sensor"] = spec["sensor"]
+    if "detector" in spec:
+        document["detector"] = spec["detector"]
     document["track"] = {"type": "pass", "start_lat_deg": 0.0, "start_lon_deg": 0.0,
                          "heading_deg": 0.0, "shots": size["shots"][sensor],
                          "spacing_m": spec["spacing_m"],
                          "altitude_m": document["track"]["altitude_m"]}
+    if "start_time" in spec:
+        document["track"]["start_time"] = spec["start_time"]
     for key, value in stand.items():
         if key == "seed":
             document["seed"] = value
@@ -293,19 +321,19 @@ class Runs:
             self._call("run", [stem + ".json", "--out", out], label)
         return os.path.join(out, "shots.nc")
 
-    def retrieve(self, shots_files, table_nc, label):
-        """DIR/retrieval.nc of every shots.nc retrieved at once (the table's emulator and its
+    def retrieve(self, shots_files, table_nc, label, methods=RETRIEVE_METHODS):
+        """DIR/retrieval.nc of every input retrieved at once (the table's emulator and its
         tempering are made once a command), and the command's JSON summary with its whole wall
         time (command_wall_s) beside the methods' (wall_s)."""
         key = {"shots": [os.path.relpath(f, self.dir) for f in shots_files],
-               "table": os.path.relpath(table_nc, self.dir), "methods": RETRIEVE_METHODS}
+               "table": os.path.relpath(table_nc, self.dir), "methods": methods}
         stem = self._stem("retrieve", key)
         out = stem + ".out"
         if not os.path.exists(os.path.join(out, "retrieve.json")):
             shutil.rmtree(out, ignore_errors=True)
             start = time.monotonic()
             text = self._call("retrieve", shots_files + ["--table", table_nc, "--out", out,
-                                                         "--methods", ",".join(RETRIEVE_METHODS),
+                                                         "--methods", ",".join(methods),
                                                          "--json"], label)
             summary = json.loads(text.strip().splitlines()[-1])
             summary["command_wall_s"] = time.monotonic() - start
@@ -346,6 +374,38 @@ def read_retrieval(path, shots_files, stands, sensor):
     columns["crown_shape"] = np.array([stands[i]["canopy.crown_shape"] for i in columns["stand"]])
     columns["in_table_ranges"] = np.array([in_table_ranges(stands[i]) for i in columns["stand"]])
     return columns
+
+
+def read_segments(runs, table, stands, size):
+    """ICESat-2: each stand's ATL03 and ATL08 retrieved (one pair a command: segment numbers
+    are a granule's own), every ATL08 segment a record, with its stand's index, slope and crown
+    shape; the summed speed of the commands."""
+    parts, speed = [], {"shots": 0, "wall_s": 0.0, "command_wall_s": 0.0, "command_cpu_s": 0.0}
+    for i, stand in enumerate(stands):
+        shots_nc = runs.run(stand_document("icesat2", stand, size), f"icesat2 stand {i}")
+        out = os.path.dirname(shots_nc)
+        product, summary = runs.retrieve([os.path.join(out, "atl03.h5"),
+                                          os.path.join(out, "atl08.h5")], table,
+                                         f"icesat2 stand {i}", SEGMENT_METHODS)
+        columns = {}
+        with netCDF4.Dataset(product) as nc:
+            for name, variable in nc.variables.items():
+                if variable.dimensions == ("shot",):
+                    columns[name] = np.ma.filled(variable[:].astype(float), np.nan)
+        n = len(columns["shot_number"])
+        columns["slope_deg"] = np.full(n, stand["terrain.plane.slope_deg"])
+        columns["energy_ground_J"] = columns["energy_canopy_J"] = np.full(n, np.nan)
+        columns["stand"] = np.full(n, i)
+        parts.append(columns)
+        for key in speed:
+            speed[key] += summary.get(key, math.nan)
+    shots = concatenate(parts)
+    n = len(shots["shot_number"])
+    shots["sensor"] = np.array(["icesat2"] * n)
+    shots["crown_shape"] = np.array([stands[i]["canopy.crown_shape"] for i in shots["stand"]])
+    shots["in_table_ranges"] = np.array([in_table_ranges(stands[i]) for i in shots["stand"]])
+    speed["shots_per_s"] = speed["shots"] / speed["wall_s"] if speed["wall_s"] > 0 else math.nan
+    return shots, speed
 
 
 def in_table_ranges(stand):
@@ -549,8 +609,12 @@ def markdown_alike(alike):
 
 
 def concatenate(parts):
-    keys = set.intersection(*(set(p) for p in parts))
-    return {k: np.concatenate([p[k] for p in parts]) for k in keys}
+    """The parts' columns end to end; a column some part lacks (another sensor's method) is NaN
+    in its rows."""
+    keys = set.union(*(set(p) for p in parts))
+    length = [len(p["shot_number"]) for p in parts]
+    return {k: np.concatenate([p[k] if k in p else np.full(n, np.nan)
+                               for p, n in zip(parts, length)]) for k in keys}
 
 
 def metric_rows(shots, sensors):
@@ -697,8 +761,9 @@ def plot_scatter(shots, sensors, path):
                 if estimate is None or not np.isfinite(estimate).any():
                     continue
                 y = estimate - truth if variable == "ground_elevation" else estimate
-                ax.scatter(truth, y, s=4, alpha=0.35, color=COLOURS[method], label=method,
-                           linewidths=0)
+                # ICESat-2's hundred segments drawn larger than the waveforms' thousands of shots.
+                ax.scatter(truth, y, s=4 if truth.size > 500 else 14, alpha=0.35,
+                           color=COLOURS[method], label=method, linewidths=0)
             if variable == "ground_elevation":
                 ax.axhline(0.0, color="k", lw=0.8)
                 ax.set_ylim(-15, 15)
@@ -711,8 +776,9 @@ def plot_scatter(shots, sensors, path):
             unit = UNITS[variable]
             ax.set_xlabel(f"true {variable}" + (f" ({unit})" if unit else ""))
             ax.set_title(f"{sensor.upper()}: {variable}")
-            if r == 0:
-                ax.legend(markerscale=3, fontsize=8)
+            # A legend on the first row, and on a row of other methods (ICESat-2's).
+            if (r == 0 or sensor == "icesat2") and ax.get_legend_handles_labels()[0]:
+                ax.legend(markerscale=3 if truth.size > 500 else 1.5, fontsize=8)
     figure.tight_layout()
     save_figure(figure, path)
 
@@ -767,6 +833,9 @@ def main():
                         help="the study's size (--quick is --size quick)")
     parser.add_argument("--out", default="out/studies/retrieval")
     parser.add_argument("--threads", type=int, default=0)
+    parser.add_argument("--sensors", default=None,
+                        help="comma-separated, among gedi, glas, icesat2 (default: every one the "
+                             "size has stands for)")
     args = parser.parse_args()
     size_name = args.size or ("quick" if args.quick else "full")
     size = SIZES[size_name]
@@ -774,6 +843,13 @@ def main():
     runs = Runs(args.glaswave, args.out, args.threads)
     started = time.monotonic()
     sensors = [s for s in SENSORS if size["stands"][s] > 0]
+    if args.sensors:
+        chosen = args.sensors.split(",")
+        unknown = [s for s in chosen if s not in SENSORS]
+        if unknown:
+            parser.error(f"--sensors: unknown {', '.join(unknown)}; choose among "
+                         f"{', '.join(SENSORS)}")
+        sensors = [s for s in sensors if s in chosen]
     parts, speeds, tables, saturation, alike = [], {}, {}, {}, {}
     for sensor in sensors:
         table = runs.table(table_document(sensor, size), f"{sensor} table")
@@ -782,16 +858,21 @@ def main():
                               "rays_per_shot": int(nc.getncattr("rays_per_shot")),
                               "shots_per_entry": int(nc.getncattr("shots_per_entry"))}
         stands = held_out_stands(sensor, size["stands"][sensor])
-        shots_files = [runs.run(stand_document(sensor, stand, size), f"{sensor} stand {i}")
-                       for i, stand in enumerate(stands)]
-        product, summary = runs.retrieve(shots_files, table, f"{sensor}: {len(stands)} stands")
-        part = read_retrieval(product, shots_files, stands, sensor)
+        if sensor == "icesat2":
+            part, summary = read_segments(runs, table, stands, size)
+        else:
+            shots_files = [runs.run(stand_document(sensor, stand, size), f"{sensor} stand {i}")
+                           for i, stand in enumerate(stands)]
+            product, summary = runs.retrieve(shots_files, table,
+                                             f"{sensor}: {len(stands)} stands")
+            part = read_retrieval(product, shots_files, stands, sensor)
         tables[sensor]["truth_ranges"] = table_truth_ranges(table)
         part["truth_in_table"] = truth_in_table(part, tables[sensor]["truth_ranges"])
-        with netCDF4.Dataset(table) as nc:
-            saturation[sensor] = saturation_rows(part, sensor, float(nc.getncattr("bin_ns")),
-                                                 float(nc.getncattr("pulse_sigma_ns")),
-                                                 size["rays"])
+        if sensor != "icesat2":  # a waveform's: its detector's noise against its ground return
+            with netCDF4.Dataset(table) as nc:
+                saturation[sensor] = saturation_rows(part, sensor, float(nc.getncattr("bin_ns")),
+                                                     float(nc.getncattr("pulse_sigma_ns")),
+                                                     size["rays"])
         alike[sensor] = table_alike_pairs(table)
         parts.append(part)
         speeds[sensor] = {"shots": summary["shots"], "methods_wall_s": summary["wall_s"],

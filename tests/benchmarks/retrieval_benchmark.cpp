@@ -32,6 +32,7 @@
 #include "pipeline/products/gedi_l2a_groups.hpp"
 #include "pipeline/retrieval/forward_table.hpp"
 #include "pipeline/retrieval/rt_inversion.hpp"
+#include "tests/pipeline/retrieval/layer_table.hpp"
 
 namespace {
 
@@ -41,25 +42,7 @@ using Clock = std::chrono::steady_clock;
 using namespace glaswave;
 
 json layer_configuration(int rays, int entries) {
-  return {
-      {"sensor", {{"preset", "gedi"}}},
-      {"simulation", {{"rays_per_shot", rays}}},
-      {"terrain",
-       {{"plane", {{"origin_lat_deg", 0.0}, {"origin_lon_deg", 0.0}}}, {"soil_reflectance", 0.3}}},
-      {"canopy",
-       {{"crown_shape", "layer"},
-        {"crown_base_m", {5.0, 5.0}},
-        {"crown_half_height_m", 5.0},
-        {"dbh_m", 0.0},
-        {"pai", 2.0},
-        {"cover", 1.0}}},
-      {"track",
-       {{"type", "points"},
-        {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}, {{"lat_deg", 0.001}, {"lon_deg", 0.0}}}},
-        {"altitude_m", 420000.0}}},
-      {"table",
-       {{"vary", {{"canopy.pai", {0.0, 5.0}}}}, {"entries", entries}, {"shots_per_entry", 2}}},
-  };
+  return test_support::layer_table_configuration({{"preset", "gedi"}}, 420000.0, rays, entries);
 }
 
 struct HeldOut {

@@ -212,7 +212,7 @@ def granule_corpus():
 
 def retrieval_corpus():
     """Small granules of the kinds retrieve reads: GEDI L1B and L2A, GLAH01 and GLAH14 (shots
-    that match), ATL08, and an L1B cut short and one declaring 10^11 samples."""
+    that match), ATL08, ATL03, and an L1B cut short and one declaring 10^11 samples."""
     import io
     import h5py
     import numpy as np
@@ -293,6 +293,22 @@ def retrieval_corpus():
         land["canopy/n_toc_photons"] = np.array([10, 0], "i4")
         land["terrain/n_te_photons"] = np.array([60, 5], "i4")
     h5("atl08.h5", atl08)
+
+    def atl03(f):
+        # gt1l's photons in 20 m segments 101-106 (the fuzzer's companion ATL08 holds 101-105).
+        g = f.create_group("gt1l")
+        g["heights/h_ph"] = np.array([250.0, 262.5, 251.0, 263.0, 249.5, 258.0, 252.0], "f4")
+        g["heights/dist_ph_along"] = np.array([1.0, 5.0, 2.0, 18.0, 0.5, 10.0, 19.5], "f4")
+        g["heights/delta_time"] = 1000.0 + 0.0014 * np.arange(7)
+        g["geolocation/segment_id"] = np.arange(101, 107, dtype="i4")
+        g["geolocation/segment_dist_x"] = 20.0 * np.arange(101, 107)
+        g["geolocation/ph_index_beg"] = np.array([1, 3, 5, 0, 7, 0], "i8")
+        g["geolocation/segment_ph_cnt"] = np.array([2, 2, 2, 0, 1, 0], "i4")
+        g["geolocation/delta_time"] = 1000.0 + 0.002857 * np.arange(6)
+        g["bckgrd_atlas/bckgrd_rate"] = np.array([1e6, 2e6], "f4")
+        g["bckgrd_atlas/delta_time"] = np.array([1000.0, 1000.005])
+        g["glaswave_truth/photons_per_joule"] = np.array([1.8e17])
+    h5("atl03.h5", atl03)
 
 
 def gdal_pack(kind, value):

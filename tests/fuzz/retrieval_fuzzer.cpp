@@ -1,7 +1,8 @@
 // Fuzzes `glaswave retrieve`'s inputs (pipeline/retrieval/retrieve_inputs.hpp): GEDI L1B and L2A,
-// GLAS GLAH01 and GLAH14 and ICESat-2 ATL08 HDF5 files, whole, cut and malformed, through
+// GLAS GLAH01 and GLAH14 and ICESat-2 ATL08 and ATL03 HDF5 files, whole, cut and malformed, through
 // read_retrieve_inputs as retrieve calls it: alone, and beside a fixed GLAH14 (so that a GLAH01 is
-// read, which is refused alone). Each input is read first by the program
+// read, which is refused alone) or, for an input naming h_ph, a fixed ATL08 (so that an ATL03's
+// photons are attached to its segment). Each input is read first by the program
 // glaswave-read-retrieval-input, where a crash, a spin or an endless allocation of HDF5 is a
 // refusal by design and libFuzzer's coverage does not reach; what that program read whole is then
 // read in this process, as retrieve reads it, and searched here. An input Error is a refusal;
@@ -15,6 +16,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/error.hpp"
@@ -41,6 +43,26 @@ std::filesystem::path companion_glah14() {
   return path;
 }
 
+// An ATL08 whose land segment (20 m segments 101-105, gt1l) the seeds' ATL03 photons fall in.
+std::filesystem::path companion_atl08() {
+  const std::filesystem::path path = glaswave::fuzz::scratch_dir() / "atl08.h5";
+  std::lock_guard lock(glaswave::netcdf_library_mutex());
+  glaswave::Hdf5Writer f(path);
+  const std::string land = "gt1l/land_segments/";
+  f.write(land + "segment_id_beg", std::vector<std::int32_t>{101});
+  f.write(land + "segment_id_end", std::vector<std::int32_t>{105});
+  f.write(land + "latitude", std::vector<float>{10.0f});
+  f.write(land + "longitude", std::vector<float>{20.0f});
+  f.write(land + "canopy/h_canopy", std::vector<float>{12.0f});
+  f.write(land + "terrain/h_te_best_fit", std::vector<float>{250.25f});
+  f.write(land + "terrain/terrain_slope", std::vector<float>{0.1f});
+  f.write(land + "canopy/n_ca_photons", std::vector<std::int32_t>{3});
+  f.write(land + "canopy/n_toc_photons", std::vector<std::int32_t>{1});
+  f.write(land + "terrain/n_te_photons", std::vector<std::int32_t>{4});
+  f.close();
+  return path;
+}
+
 void attempt(const std::vector<std::filesystem::path>& inputs) {
   try {
     glaswave::read_retrieve_inputs(inputs, std::nullopt, std::nullopt);
@@ -52,10 +74,13 @@ void attempt(const std::vector<std::filesystem::path>& inputs) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static const std::filesystem::path glah14 = companion_glah14();
+  static const std::filesystem::path glah14 = companion_glah14(), atl08 = companion_atl08();
   const auto file = glaswave::fuzz::write_input("granule.h5", data, size);
   attempt({file});
-  attempt({file, glah14});
+  // Its companion by the names its bytes hold (not by HDF5, which reads it first in the reader
+  // program): an ATL03 is read beside an ATL08, a GLAH01 beside a GLAH14.
+  const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+  attempt({file, bytes.find("h_ph") != std::string_view::npos ? atl08 : glah14});
   // No HDF5 file or object left open, on refusal too: what library_leaks.supp's HDF5 line would
   // otherwise hide.
   if (H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL) != 0) __builtin_trap();

@@ -13,6 +13,7 @@
 #include "pipeline/engine/inputs.hpp"
 #include "pipeline/products/gedi_l2a_groups.hpp"
 #include "pipeline/retrieval/forward_table.hpp"
+#include "tests/pipeline/retrieval/layer_table.hpp"
 
 namespace glaswave {
 namespace {
@@ -120,24 +121,7 @@ TEST(RtInversion, ExactMatchIsThePosterior) {
 // GEDI's pulse and bins over a plane, a turbid layer from 5 to 15 m (crown_shape "layer",
 // spherical leaves), soil 0.3, few rays: the table varies its PAI over [0, 5].
 json layer_configuration() {
-  return {
-      {"sensor", {{"preset", "gedi"}}},
-      {"simulation", {{"rays_per_shot", 2000}}},
-      {"terrain",
-       {{"plane", {{"origin_lat_deg", 0.0}, {"origin_lon_deg", 0.0}}}, {"soil_reflectance", 0.3}}},
-      {"canopy",
-       {{"crown_shape", "layer"},
-        {"crown_base_m", {5.0, 5.0}},
-        {"crown_half_height_m", 5.0},
-        {"dbh_m", 0.0},
-        {"pai", 2.0},
-        {"cover", 1.0}}},
-      {"track",
-       {{"type", "points"},
-        {"points", {{{"lat_deg", 0.0}, {"lon_deg", 0.0}}, {{"lat_deg", 0.001}, {"lon_deg", 0.0}}}},
-        {"altitude_m", 420000.0}}},
-      {"table", {{"vary", {{"canopy.pai", {0.0, 5.0}}}}, {"entries", 64}, {"shots_per_entry", 2}}},
-  };
+  return test_support::layer_table_configuration({{"preset", "gedi"}}, 420000.0, 2000, 64);
 }
 
 // Shots of another seed over a plane 100 m up, simulated as a run would.
