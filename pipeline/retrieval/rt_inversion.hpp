@@ -222,12 +222,14 @@ class RtInversion {
 
   RtResult invert(const RtShot& shot) const;
   // A segment of photons against every entry at every ground within ground_search_m of the
-  // guess (rt_photon_search.cpp): Poisson's likelihood of the photons' histogram in bins of
-  // about kPhotonBin_m, the background included, each entry's expected photons its (emulated)
-  // waveform times the segment's pulses and photons per joule. chi2_min is the best fit's
-  // Poisson deviance in bins of about kFitBin_m, dof its expectation under the fit.
+  // guess (the ground found first by the design's first 16 entries, every entry then within
+  // kFineSearch_m of it, widened while the window's edge holds posterior; rt_photon_search.cpp):
+  // Poisson's likelihood of the photons' histogram in bins of about kPhotonBin_m, the background
+  // included, each entry's expected photons its (emulated) waveform times the segment's pulses and
+  // photons per joule. chi2_min is the best fit's Poisson deviance in bins of about kFitBin_m, dof
+  // its expectation under the fit.
   RtResult invert_photons(const RtPhotonShot& shot) const;
-  static constexpr double kPhotonBin_m = 0.15, kFitBin_m = 1.0;
+  static constexpr double kPhotonBin_m = 0.15, kFitBin_m = 1.0, kFineSearch_m = 2.0;
   // The photons' tempering, calibrated on the table as the waveforms' is, for segments of these
   // pulses, photons per joule and background (rt_photon_search.cpp): entries' photons drawn
   // from their own expectation are retrieved from the other entries, and tau (at least 1, where

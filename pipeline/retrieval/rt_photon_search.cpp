@@ -111,62 +111,108 @@ RtResult RtInversion::search_photons(const RtPhotonShot& shot, std::int64_t excl
     std::fill(expected.begin(), expected.end(), 0.0);
     for (std::size_t j = 0; j < bins; ++j) expected[j / per_bin] += std::max(0.0, t[j]) * per_W;
   };
+  // Each entry's terms, made when first needed: its floor, its bins of signal with their
+  // log(1 + S / B) (most of an entry's bins expect nothing), and what no shift changes.
+  struct Terms {
+    std::vector<std::pair<std::uint32_t, double>> gain;
+    double floor = 0.0, constant = 0.0;
+  };
+  std::vector<Terms> terms(entries);
+  std::vector<char> made(entries, 0);
+  std::vector<double> expected(coarse);
+  const auto terms_of = [&](std::size_t e) -> const Terms& {
+    Terms& t = terms[e];
+    if (made[e]) return t;
+    made[e] = 1;
+    expected_of(e, expected);
+    const double peak = *std::max_element(expected.begin(), expected.end());
+    const double total = std::accumulate(expected.begin(), expected.end(), 0.0);
+    t.floor = std::max({background, 1e-4 * peak, 1e-300});
+    for (std::size_t c = 0; c < coarse; ++c)
+      if (expected[c] > 0.0)
+        t.gain.push_back({static_cast<std::uint32_t>(c), std::log1p(expected[c] / t.floor)});
+    t.constant = photons * std::log(t.floor) - window_bins * t.floor - total;
+    return t;
+  };
+  std::vector<std::vector<double>> k_of(phases);
+  for (int phase = 0; phase < phases; ++phase) k_of[phase] = counts(phase);
 
-  // Phase 0 for every entry; the other phases for the entries phase 0 leaves within reach of
-  // its best (the sub-bin placement moves every entry's likelihood alike, by up to a hundred
-  // where hundreds of ground photons lie within a pulse sigma).
-  std::vector<double> log_likelihood(entries * fine, -std::numeric_limits<double>::infinity());
-  std::vector<double> floor(entries), entry_best(entries, -std::numeric_limits<double>::infinity());
-  std::vector<double> expected(coarse), gain(coarse), sums(shifts);
+  std::vector<double> log_likelihood(entries * fine), entry_best(entries);
+  std::vector<double> sums(shifts);
   double best = -std::numeric_limits<double>::infinity();
   std::size_t best_cell = 0;
-  std::vector<double> k;
-  for (int phase = 0; phase < phases; ++phase) {
-    k = counts(phase);
-    const double phase0_best = best;
-    for (std::size_t e = 0; e < entries; ++e) {
-      if (static_cast<std::int64_t>(e) == excluded) continue;
-      if (phase > 0 &&
-          entry_best[e] < phase0_best - tempering * (settings_.prune_log_likelihood +
-                                                     settings_.prefilter_margin_log_likelihood))
-        continue;
-      expected_of(e, expected);
-      const double peak = *std::max_element(expected.begin(), expected.end());
-      const double total = std::accumulate(expected.begin(), expected.end(), 0.0);
-      const double b = std::max({background, 1e-4 * peak, 1e-300});
-      floor[e] = b;
-      for (std::size_t c = 0; c < coarse; ++c) gain[c] = std::log1p(expected[c] / b);
-      const double constant = photons * std::log(b) - window_bins * b - total;
-      // Bin by bin of the entry's, every shift at once (a loop the compiler vectorises; an
-      // entry expects nothing in most of its bins, which are skipped).
-      std::fill(sums.begin(), sums.end(), 0.0);
-      for (std::size_t c = 0; c < coarse; ++c) {
-        const double g = gain[c];
-        if (g == 0.0) continue;
-        const double* kc = k.data() + c;
-        for (int s = 0; s < shifts; ++s) sums[s] += kc[s] * g;
-      }
-      for (int s = 0; s < shifts; ++s) {
-        const double l = sums[s] + constant;
-        const std::size_t cell = e * fine + static_cast<std::size_t>(s * phases + phase);
-        log_likelihood[cell] = l;
-        entry_best[e] = std::max(entry_best[e], l);
-        if (l > best) {
-          best = l;
-          best_cell = cell;
-        }
+  // Entry e at phase `phase` and the shifts [lo, hi]: every shift at once, bin by bin of its
+  // signal (a loop the compiler vectorises).
+  const auto evaluate = [&](std::size_t e, int phase, int lo, int hi) {
+    const Terms& t = terms_of(e);
+    const std::vector<double>& k = k_of[phase];
+    std::fill(sums.begin() + lo, sums.begin() + hi + 1, 0.0);
+    for (const auto& [c, g] : t.gain) {
+      const double* kc = k.data() + c;
+      for (int s = lo; s <= hi; ++s) sums[s] += kc[s] * g;
+    }
+    for (int s = lo; s <= hi; ++s) {
+      const double l = sums[s] + t.constant;
+      const std::size_t cell = e * fine + static_cast<std::size_t>(s * phases + phase);
+      log_likelihood[cell] = l;
+      entry_best[e] = std::max(entry_best[e], l);
+      if (l > best) {
+        best = l;
+        best_cell = cell;
       }
     }
+  };
+  const auto searched = [&](std::size_t e) { return static_cast<std::int64_t>(e) != excluded; };
+  // The ground first from the design's first 16 entries (Halton's prefix covers the design) at
+  // every shift; then every entry within kFineSearch_m of it, widened while the window's edge
+  // holds more than 1e-3 of the posterior.
+  const int reach = std::max(1, static_cast<int>(std::ceil(kFineSearch_m / bin_m)));
+  int lo = 0, hi = shifts - 1;
+  if (shifts > 2 * reach + 1) {
+    std::fill(entry_best.begin(), entry_best.end(), -std::numeric_limits<double>::infinity());
+    for (std::size_t e = 0; e < std::min<std::size_t>(16, entries); ++e)
+      if (searched(e)) evaluate(e, 0, 0, shifts - 1);
+    if (!std::isfinite(best)) return RtResult::none();
+    const int centre = static_cast<int>(best_cell % fine) / phases;
+    lo = std::max(0, centre - reach);
+    hi = std::min(shifts - 1, centre + reach);
   }
-
-  if (!std::isfinite(best)) return RtResult::none();
-  std::vector<double> entry_weight(entries, 0.0), shift_weight(fine, 0.0);
-  for (std::size_t e = 0; e < entries; ++e)
-    for (int f = 0; f < fine; ++f) {
-      const double w = std::exp((log_likelihood[e * fine + f] - best) / tempering);
-      entry_weight[e] += w;
-      shift_weight[f] += w;
-    }
+  std::vector<double> entry_weight(entries), shift_weight(fine);
+  for (;;) {
+    // Phase 0 for every entry; the other phases for the entries phase 0 leaves within reach of
+    // its best (the sub-bin placement moves every entry's likelihood alike, by up to a hundred
+    // where hundreds of ground photons lie within a pulse sigma).
+    std::fill(log_likelihood.begin(), log_likelihood.end(),
+              -std::numeric_limits<double>::infinity());
+    std::fill(entry_best.begin(), entry_best.end(), -std::numeric_limits<double>::infinity());
+    best = -std::numeric_limits<double>::infinity();
+    for (std::size_t e = 0; e < entries; ++e)
+      if (searched(e)) evaluate(e, 0, lo, hi);
+    const double phase0_best = best;
+    const double reach_l =
+        tempering * (settings_.prune_log_likelihood + settings_.prefilter_margin_log_likelihood);
+    for (int phase = 1; phase < phases; ++phase)
+      for (std::size_t e = 0; e < entries; ++e)
+        if (searched(e) && entry_best[e] >= phase0_best - reach_l) evaluate(e, phase, lo, hi);
+    if (!std::isfinite(best)) return RtResult::none();
+    std::fill(entry_weight.begin(), entry_weight.end(), 0.0);
+    std::fill(shift_weight.begin(), shift_weight.end(), 0.0);
+    for (std::size_t e = 0; e < entries; ++e)
+      for (int f = lo * phases; f < (hi + 1) * phases; ++f) {
+        const double w = std::exp((log_likelihood[e * fine + f] - best) / tempering);
+        entry_weight[e] += w;
+        shift_weight[f] += w;
+      }
+    if (lo == 0 && hi == shifts - 1) break;
+    double total = 0.0, edge = 0.0;
+    for (int f = lo * phases; f < (hi + 1) * phases; ++f) total += shift_weight[f];
+    for (int p = 0; p < phases; ++p)
+      edge += (lo > 0 ? shift_weight[lo * phases + p] : 0.0) +
+              (hi < shifts - 1 ? shift_weight[hi * phases + p] : 0.0);
+    if (edge <= 1e-3 * total) break;
+    lo = std::max(0, lo - reach);
+    hi = std::min(shifts - 1, hi + reach);
+  }
   if (entry_best_out) *entry_best_out = entry_best;
   RtResult r;
   entry_statistics(entry_weight, r);
@@ -186,7 +232,7 @@ RtResult RtInversion::search_photons(const RtPhotonShot& shot, std::int64_t excl
   // The best fit's deviance in bins of about kFitBin_m, over its expectation under the fit:
   // sparse counts' deviance is not chi-squared (a bin expecting 0.07 background photons adds 0.37
   // on average), and wider bins let a wrong scale show (half the photons expected: 0.6 a photon).
-  k = counts(top_fine % phases);
+  const std::vector<double>& k = k_of[top_fine % phases];
   expected_of(top_entry, expected);
   const std::size_t per_fit_bin =
       static_cast<std::size_t>(std::max(1.0, std::round(kFitBin_m / bin_m)));
@@ -195,7 +241,8 @@ RtResult RtInversion::search_photons(const RtPhotonShot& shot, std::int64_t excl
     double observed = 0.0, mu = 0.0;
     for (std::size_t b = from; b < std::min(counted, from + per_fit_bin); ++b) {
       const long long c = static_cast<long long>(b) - top_shift;
-      mu += (c >= 0 && c < static_cast<long long>(coarse) ? expected[c] : 0.0) + floor[top_entry];
+      mu += (c >= 0 && c < static_cast<long long>(coarse) ? expected[c] : 0.0) +
+            terms[top_entry].floor;
       observed += k[b];
     }
     deviance += poisson_deviance(observed, mu);
