@@ -1,9 +1,11 @@
 // `glaswave retrieve` (PRODUCT.md section 11): measured shots in, each method's estimates out,
 // side by side in DIR/retrieval.nc with the truth of simulated input. Reads glaswave's own
-// shots.nc, GEDI L1B granules with their L2A and GLAH01 granules with their GLAH14
-// (retrieve_inputs.hpp), and writes DIR/gedi_l2b.h5 for GEDI L1B input (gedi_l2b_granule.hpp);
-// the methods are GEDI L2A's six groups and selected one (gedi_l2a), GEDI L2B (gedi_l2b), the
-// seed's waveform index (wi) and the physically based inversion over a forward table (rt).
+// shots.nc, GEDI L1B granules with their L2A, GLAH01 granules with their GLAH14 and ATL08
+// granules with their ATL03 (retrieve_inputs.hpp), and writes DIR/gedi_l2b.h5 for GEDI L1B input
+// (gedi_l2b_granule.hpp); the methods are GEDI L2A's six groups and selected one (gedi_l2a),
+// GEDI L2B (gedi_l2b), the seed's waveform index (wi), ATL08's own (atl08), the photon ratio
+// (photon_ratio) and the physically based inversion over a forward table (rt), on waveforms or
+// on ATL03's photons.
 #pragma once
 
 #include <array>
