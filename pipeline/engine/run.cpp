@@ -30,7 +30,7 @@
 #include "pipeline/products/product_writer.hpp"
 #include "pipeline/products/record_codec.hpp"
 #include "pipeline/shot/cloud_layers.hpp"
-#include "pipeline/transport/photon_counting.hpp"
+#include "pipeline/shot/photon_receiver.hpp"
 
 namespace glaswave {
 namespace {
@@ -386,10 +386,10 @@ Icesat2ProductSettings icesat2_product_settings(const Config& config) {
                               : config.sensor.bands.front().pulse_energy_mJ * 1e-3;
   // The photons a joule of the band's whole pulse's return gives the beam: what rt on ATL03
   // scales its table by (the receiver's efficiency over a photon's energy, and the beam's share).
-  const double photons_per_J = config.sensor.bands.empty()
-                                   ? std::nan("")
-                                   : config.sensor.photon_efficiency /
-                                         photon_energy_J(config.sensor.bands.front().wavelength_nm);
+  const double photons_per_J =
+      config.sensor.bands.empty()
+          ? std::nan("")
+          : detected_photons_per_J(config.sensor, config.sensor.bands.front().wavelength_nm);
   for (const AtlasBeam& beam : select_atlas_beams(config.sensor.beams, orientation))
     s.beams.push_back({beam.name, beam.strong, beam.spot_number, pass ? beam.across_m : 0.0,
                        strong_J * beam.energy_ratio, photons_per_J * beam.energy_ratio});

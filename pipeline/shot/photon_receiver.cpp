@@ -79,6 +79,10 @@ const PhotonCountingSettings& PhotonCountingReceiver::beam_settings(int beam) co
   return settings_.photons.front();
 }
 
+double detected_photons_per_J(const PhotonDetectorSettings& detector, double wavelength_nm) {
+  return detector.photon_efficiency / photon_energy_J(wavelength_nm);
+}
+
 double most_background_rate_Hz(const ReceiverSettings& settings, const PhotonCountingSettings& p) {
   if (p.background == BackgroundSource::none) return 0.0;
   if (p.background == BackgroundSource::rate) return p.background_rate_Hz;

@@ -20,6 +20,11 @@ namespace glaswave {
 // bounds a shot's background photons by it, before any shot.
 double most_background_rate_Hz(const ReceiverSettings& settings, const PhotonCountingSettings& p);
 
+// The photons the detector counts per joule of received light at `wavelength_nm`: its
+// efficiency over a photon's energy, as the receiver turns each bin's energy into photons (what
+// rt on ATL03 scales its table's watts by, the beam's share of the pulse aside).
+double detected_photons_per_J(const PhotonDetectorSettings& detector, double wavelength_nm);
+
 class PhotonCountingReceiver : public Receiver {
  public:
   explicit PhotonCountingReceiver(const ReceiverSettings& settings);

@@ -24,6 +24,7 @@
 #include "core/netcdf_lock.hpp"
 #include "pipeline/retrieval/retrieve_inputs.hpp"
 #include "tests/fuzz/fuzz_support.hpp"
+#include "tests/pipeline/retrieval/one_segment_atl08.hpp"
 
 namespace {
 
@@ -47,19 +48,7 @@ std::filesystem::path companion_glah14() {
 std::filesystem::path companion_atl08() {
   const std::filesystem::path path = glaswave::fuzz::scratch_dir() / "atl08.h5";
   std::lock_guard lock(glaswave::netcdf_library_mutex());
-  glaswave::Hdf5Writer f(path);
-  const std::string land = "gt1l/land_segments/";
-  f.write(land + "segment_id_beg", std::vector<std::int32_t>{101});
-  f.write(land + "segment_id_end", std::vector<std::int32_t>{105});
-  f.write(land + "latitude", std::vector<float>{10.0f});
-  f.write(land + "longitude", std::vector<float>{20.0f});
-  f.write(land + "canopy/h_canopy", std::vector<float>{12.0f});
-  f.write(land + "terrain/h_te_best_fit", std::vector<float>{250.25f});
-  f.write(land + "terrain/terrain_slope", std::vector<float>{0.1f});
-  f.write(land + "canopy/n_ca_photons", std::vector<std::int32_t>{3});
-  f.write(land + "canopy/n_toc_photons", std::vector<std::int32_t>{1});
-  f.write(land + "terrain/n_te_photons", std::vector<std::int32_t>{4});
-  f.close();
+  glaswave::test_support::write_one_segment_atl08(path);
   return path;
 }
 

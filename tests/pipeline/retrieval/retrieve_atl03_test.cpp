@@ -20,6 +20,7 @@
 #include "tests/pipeline/atlas_pass.hpp"
 #include "tests/pipeline/engine/engine_test_support.hpp"
 #include "tests/pipeline/retrieval/layer_table.hpp"
+#include "tests/pipeline/retrieval/one_segment_atl08.hpp"
 #include "tests/pipeline/retrieval/shot_variable.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -121,19 +122,7 @@ void write_real_layout(const fs::path& atl03, const fs::path& atl08) {
     f.write("gt1l/bckgrd_atlas/delta_time", std::vector<double>{1000.0, 1000.005, 1000.02});
     f.close();
   }
-  Hdf5Writer f(atl08);
-  const std::string land = "gt1l/land_segments/";
-  f.write(land + "segment_id_beg", std::vector<std::int32_t>{101});
-  f.write(land + "segment_id_end", std::vector<std::int32_t>{105});
-  f.write(land + "latitude", std::vector<float>{10.0f});
-  f.write(land + "longitude", std::vector<float>{20.0f});
-  f.write(land + "canopy/h_canopy", std::vector<float>{12.0f});
-  f.write(land + "terrain/h_te_best_fit", std::vector<float>{250.25f});
-  f.write(land + "terrain/terrain_slope", std::vector<float>{0.1f});
-  f.write(land + "canopy/n_ca_photons", std::vector<std::int32_t>{3});
-  f.write(land + "canopy/n_toc_photons", std::vector<std::int32_t>{1});
-  f.write(land + "terrain/n_te_photons", std::vector<std::int32_t>{4});
-  f.close();
+  test_support::write_one_segment_atl08(atl08);
 }
 
 // The segment gets segments 101-105's eight photons (106's left out), each at x = segment_dist_x
