@@ -58,6 +58,7 @@ class RandomStream {
 
  private:
   friend class RandomStreams;
+  friend class ShotStreams;
   static constexpr unsigned ray_bits = 32;  // 2^32 numbers a ray before streams could overlap
 
   // pcg32 with its state reachable, for RandomStreams' step.
@@ -66,6 +67,7 @@ class RandomStream {
     Engine(std::uint64_t state, std::uint64_t stream) : pcg32(state, stream) {}
     std::uint64_t state() const { return state_; }
     void set_state(std::uint64_t state) { state_ = state; }
+    std::uint64_t stream_increment() const { return increment(); }
   };
 
   explicit RandomStream(const Engine& engine) : engine_(engine) {}
@@ -120,6 +122,35 @@ class RandomStreams {
   bool have_last_ = false;
   std::uint64_t last_ray_ = 0;
   std::uint64_t step_mult_ = 0, step_plus_ = 0;
+};
+
+// The streams of one (seed, ray, purpose) for many shots (the roughness's lattice nodes, keyed
+// by node at the zone's ray), each the same bits as RandomStream(seed, shot, ray, purpose). The
+// constructor's advance to the ray takes up to 59 squarings a stream; for a fixed ray it is
+// one affine step of the shot's engine, A s + G inc (pcg's advance is linear in the state and
+// in the stream's increment), A and G found once here.
+class ShotStreams {
+ public:
+  ShotStreams(std::uint64_t seed, std::uint64_t ray, RandomPurpose purpose)
+      : key_(seed ^ static_cast<std::uint64_t>(purpose)) {
+    RandomStream::Engine probe(0, 0);  // stream 0: increment 1
+    probe.set_state(0);
+    probe.advance(ray << RandomStream::ray_bits);
+    plus_per_increment_ = probe.state();
+    probe.set_state(1);
+    probe.advance(ray << RandomStream::ray_bits);
+    mult_ = probe.state() - plus_per_increment_;
+  }
+
+  RandomStream at(std::uint64_t shot) const {
+    RandomStream::Engine engine = RandomStream::keyed(key_, shot);
+    engine.set_state(mult_ * engine.state() + plus_per_increment_ * engine.stream_increment());
+    return RandomStream(engine);
+  }
+
+ private:
+  std::uint64_t key_;
+  std::uint64_t mult_ = 0, plus_per_increment_ = 0;
 };
 
 // The transport's name for its ray streams.

@@ -36,42 +36,48 @@ struct Zone {
   }
 };
 
-// Standard normal white noise at a lattice node, a pure function of its arguments. The coarser
-// lattices (level > 0) have their own noise; the finest keeps the key it always had.
-double white_noise(std::uint64_t seed, const Zone& zone, int level, std::int64_t i,
-                   std::int64_t j) {
-  RandomStream random(seed, pair_key(i, j), zone.index() + 64 * static_cast<std::uint64_t>(level),
-                      RandomPurpose::roughness);
-  return standard_normal(random);
+// Standard normal white noise at the lattice nodes, each a pure function of (seed, zone, level,
+// node): node (i, j)'s stream is keyed by the node at the zone's ray. The coarser lattices
+// (level > 0) have their own noise; the finest keeps the key it always had.
+ShotStreams node_streams(std::uint64_t seed, const Zone& zone, int level) {
+  return ShotStreams(seed, zone.index() + 64 * static_cast<std::uint64_t>(level),
+                     RandomPurpose::roughness);
 }
 
 // The Gaussian-smoothed noise of the ni x nj lattice nodes from (i0, j0) (node (i0 + a, j0 + b)
 // at b * ni + a): white noise with a margin of half the kernel, convolved along each axis in turn.
+// Each sum runs over the taps in order (so its bits are fixed); the loops run along rows, where
+// they vectorise.
 std::vector<double> smoothed_noise(std::uint64_t seed, const Zone& zone, int level,
                                    const std::vector<double>& kernel, std::int64_t i0,
                                    std::int64_t j0, int ni, int nj) {
   const int half_taps = static_cast<int>(kernel.size() / 2);
   const int wi = ni + 2 * half_taps, wj = nj + 2 * half_taps;
+  const ShotStreams streams = node_streams(seed, zone, level);
   std::vector<double> noise(static_cast<std::size_t>(wi) * wj);
   for (int j = 0; j < wj; ++j)
-    for (int i = 0; i < wi; ++i)
-      noise[static_cast<std::size_t>(j) * wi + i] =
-          white_noise(seed, zone, level, i0 - half_taps + i, j0 - half_taps + j);
+    for (int i = 0; i < wi; ++i) {
+      RandomStream random = streams.at(pair_key(i0 - half_taps + i, j0 - half_taps + j));
+      noise[static_cast<std::size_t>(j) * wi + i] = standard_normal(random);
+    }
   std::vector<double> along_i(static_cast<std::size_t>(ni) * wj, 0.0);
-  for (int j = 0; j < wj; ++j)
-    for (int i = 0; i < ni; ++i) {
-      double sum = 0.0;
-      for (std::size_t k = 0; k < kernel.size(); ++k)
-        sum += kernel[k] * noise[static_cast<std::size_t>(j) * wi + i + k];
-      along_i[static_cast<std::size_t>(j) * ni + i] = sum;
+  for (int j = 0; j < wj; ++j) {
+    double* out = &along_i[static_cast<std::size_t>(j) * ni];
+    for (std::size_t k = 0; k < kernel.size(); ++k) {
+      const double tap = kernel[k];
+      const double* in = &noise[static_cast<std::size_t>(j) * wi + k];
+      for (int i = 0; i < ni; ++i) out[i] += tap * in[i];
     }
+  }
   std::vector<double> smoothed(static_cast<std::size_t>(ni) * nj, 0.0);
-  for (int j = 0; j < nj; ++j)
-    for (int i = 0; i < ni; ++i) {
-      double sum = 0.0;
-      for (std::size_t k = 0; k < kernel.size(); ++k) sum += kernel[k] * along_i[(j + k) * ni + i];
-      smoothed[static_cast<std::size_t>(j) * ni + i] = sum;
+  for (int j = 0; j < nj; ++j) {
+    double* out = &smoothed[static_cast<std::size_t>(j) * ni];
+    for (std::size_t k = 0; k < kernel.size(); ++k) {
+      const double tap = kernel[k];
+      const double* in = &along_i[(j + k) * ni];
+      for (int i = 0; i < ni; ++i) out[i] += tap * in[i];
     }
+  }
   return smoothed;
 }
 

@@ -106,5 +106,24 @@ TEST(RandomStreams, AreTheKeyedStreams) {
       }
 }
 
+// ShotStreams keys many shots at one ray with a step each: the same draws as RandomStream keyed
+// afresh, for rays from 0 to the top bits' and shots from 0 to 2^64 - 1.
+TEST(ShotStreams, AreTheKeyedStreams) {
+  const std::uint64_t rays[] = {0, 1, 11, 62 + 64 * 2, 65537, (1ull << 32) - 1};
+  const std::uint64_t shots[] = {0, 1, 2, 99, pair_key(-3, 7), pair_key(123456, -654321),
+                                 ~0ull};
+  for (const std::uint64_t seed : {0ull, 2009ull})
+    for (const RandomPurpose purpose : {RandomPurpose::transport, RandomPurpose::roughness})
+      for (const std::uint64_t ray : rays) {
+        const ShotStreams streams(seed, ray, purpose);
+        for (const std::uint64_t shot : shots) {
+          RandomStream stepped = streams.at(shot);
+          RandomStream keyed(seed, shot, ray, purpose);
+          for (int draw = 0; draw < 4; ++draw)
+            ASSERT_EQ(stepped.uniform(), keyed.uniform()) << seed << " " << shot << " " << ray;
+        }
+      }
+}
+
 }  // namespace
 }  // namespace glaswave
