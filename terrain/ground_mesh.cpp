@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -24,6 +25,74 @@ void triangulate_grid(int ni, int nj, const std::vector<std::uint32_t>& node_ver
         triangles.insert(triangles.end(), {a, d, c});
     }
   }
+}
+
+std::vector<std::uint32_t> GroundMesh::all_triangles() const {
+  std::vector<std::uint32_t> all = triangles;
+  for (const MeshGrid& grid : grids) triangulate_grid(grid.width, grid.height, grid.nodes, all);
+  return all;
+}
+
+void mesh_grid_cells(int ni, int nj, const std::vector<std::uint32_t>& node_vertex,
+                     const std::vector<char>& cell_in, GroundMesh& mesh) {
+  auto node = [&](int i, int j) { return node_vertex[static_cast<std::size_t>(j) * ni + i]; };
+  auto wanted = [&](int i, int j) {
+    return cell_in.empty() || cell_in[static_cast<std::size_t>(j) * (ni - 1) + i] != 0;
+  };
+  auto whole = [&](int i, int j) {
+    return wanted(i, j) && node(i, j) != no_vertex && node(i + 1, j) != no_vertex &&
+           node(i, j + 1) != no_vertex && node(i + 1, j + 1) != no_vertex;
+  };
+  // Rectangles of whole cells [i0, i1) x [j0, j): each row's runs, a run going on from the row
+  // below when it spans the same cells.
+  struct Open {
+    int i0, i1, j0;
+  };
+  std::vector<Open> open, still;
+  auto close = [&](const Open& r, int j1) {
+    MeshGrid grid;
+    grid.width = r.i1 - r.i0 + 1;
+    grid.height = j1 - r.j0 + 1;
+    grid.nodes.reserve(static_cast<std::size_t>(grid.width) * grid.height);
+    for (int j = r.j0; j <= j1; ++j)
+      for (int i = r.i0; i <= r.i1; ++i) grid.nodes.push_back(node(i, j));
+    mesh.grids.push_back(std::move(grid));
+  };
+  for (int j = 0; j < nj; ++j) {
+    std::vector<std::array<int, 2>> runs;
+    for (int i = 0; j + 1 < nj && i + 1 < ni;) {
+      if (!whole(i, j)) {
+        ++i;
+        continue;
+      }
+      const int i0 = i;
+      while (i + 1 < ni && whole(i, j)) ++i;
+      runs.push_back({i0, i});
+    }
+    still.clear();
+    for (const Open& r : open) {
+      const auto run = std::find(runs.begin(), runs.end(), std::array<int, 2>{r.i0, r.i1});
+      if (run == runs.end()) {
+        close(r, j);
+        continue;
+      }
+      still.push_back(r);
+      runs.erase(run);
+    }
+    for (const auto& run : runs) still.push_back({run[0], run[1], j});
+    open.swap(still);
+  }
+  // The cells wanted but not whole: the triangles that stand on three nodes.
+  for (int j = 0; j + 1 < nj; ++j)
+    for (int i = 0; i + 1 < ni; ++i) {
+      if (!wanted(i, j) || whole(i, j)) continue;
+      const std::uint32_t a = node(i, j), b = node(i + 1, j), c = node(i, j + 1),
+                          d = node(i + 1, j + 1);
+      if (a != no_vertex && b != no_vertex && d != no_vertex)
+        mesh.triangles.insert(mesh.triangles.end(), {a, b, d});
+      if (a != no_vertex && d != no_vertex && c != no_vertex)
+        mesh.triangles.insert(mesh.triangles.end(), {a, d, c});
+    }
 }
 
 GroundMesh build_ground_mesh(const Terrain& terrain, const LocalFrame& frame, double half_size_m,

@@ -13,11 +13,24 @@ namespace glaswave {
 
 class RoughnessField;  // terrain/roughness.hpp
 
+// A rectangle of a grid of nodes whose every cell is meshed (the roughness's lattice under the
+// beams): node (a, b), a < width, b < height, is vertex `nodes[b * width + a]`, and each cell is
+// cut as triangulate_grid cuts it. The ray tracer builds such a patch as a grid, far cheaper to
+// index than its triangles (pipeline/scene/).
+struct MeshGrid {
+  int width = 0, height = 0;  // nodes, each at least 2
+  std::vector<std::uint32_t> nodes;
+};
+
 struct GroundMesh {
   std::vector<float> vertices_m;         // x, y, z triples in the local frame
   std::vector<std::uint32_t> triangles;  // vertex index triples; none over missing data
-  double min_height_m = 0.0;             // of the vertices triangles use, in the local frame
+  std::vector<MeshGrid> grids;         // more of the surface, beside the triangles
+  double min_height_m = 0.0;             // of the vertices the surface uses, in the local frame
   double max_height_m = 0.0;
+
+  // The surface as triangles alone: `triangles`, then each grid's cells' two triangles.
+  std::vector<std::uint32_t> all_triangles() const;
 };
 
 // The one triangulation of a grid of heights (sampled terrains, DEMs, the roughness lattice):
@@ -32,6 +45,12 @@ inline constexpr std::uint32_t no_vertex = std::numeric_limits<std::uint32_t>::m
 // vertex removes only the triangles that touch it.
 void triangulate_grid(int ni, int nj, const std::vector<std::uint32_t>& node_vertex,
                       std::vector<std::uint32_t>& triangles);
+
+// The cells of a grid of ni x nj nodes (as above) for which `cell_in[j * (ni - 1) + i]` holds
+// (every cell when `cell_in` is empty), added to `mesh`: those whose four nodes have vertices as
+// MeshGrids (rectangles, merged row by row), the rest as triangulate_grid's triangles.
+void mesh_grid_cells(int ni, int nj, const std::vector<std::uint32_t>& node_vertex,
+                     const std::vector<char>& cell_in, GroundMesh& mesh);
 
 // The height at (fu, fv) in [0, 1]^2 of a cell on the triangle of the triangulation holding it,
 // `height(di, dj)` giving the height of node (i + di, j + dj); only the three nodes of that

@@ -396,23 +396,16 @@ void mesh_region(const GroundMesh& base, const LatticeRegion& region, const BoxU
         node_vertex[static_cast<std::size_t>(b) * fi + a] =
             add_vertex(mesh, x, y, *z + relief_at(a, b));
     }
-  if (boxes.boxes.size() == 1) {
-    triangulate_grid(fi, fj, node_vertex, mesh.triangles);
-    return;
+  // Over several boxes, the cells inside a box alone: two boxes a cell apart leave the cell
+  // between them to the base.
+  std::vector<char> cells;
+  if (boxes.boxes.size() > 1) {
+    cells.assign(static_cast<std::size_t>(fi - 1) * (fj - 1), 0);
+    for (int b = 0; b + 1 < fj; ++b)
+      for (int a = 0; a + 1 < fi; ++a)
+        cells[static_cast<std::size_t>(b) * (fi - 1) + a] = cell_in(a, b) ? 1 : 0;
   }
-  // triangulate_grid's triangles, of the cells inside a box alone: two boxes a cell apart leave
-  // the cell between them to the base.
-  for (int b = 0; b + 1 < fj; ++b)
-    for (int a = 0; a + 1 < fi; ++a) {
-      if (!cell_in(a, b)) continue;
-      const std::size_t n = static_cast<std::size_t>(b) * fi + a;
-      const std::uint32_t p = node_vertex[n], q = node_vertex[n + 1], s = node_vertex[n + fi],
-                          t = node_vertex[n + fi + 1];
-      if (p != no_vertex && q != no_vertex && t != no_vertex)
-        mesh.triangles.insert(mesh.triangles.end(), {p, q, t});
-      if (p != no_vertex && t != no_vertex && s != no_vertex)
-        mesh.triangles.insert(mesh.triangles.end(), {p, t, s});
-    }
+  mesh_grid_cells(fi, fj, node_vertex, cells, mesh);
 }
 
 // The base outside the boxes: each box's outline in the frame is a convex quadrilateral
@@ -632,11 +625,14 @@ GroundMesh RoughnessField::roughen(const GroundMesh& base, const LocalFrame& fra
   add_base_outside(base, region, boxes.boxes, mesh);
   mesh.min_height_m = std::numeric_limits<double>::infinity();
   mesh.max_height_m = -std::numeric_limits<double>::infinity();
-  for (std::uint32_t v : mesh.triangles) {
+  auto span = [&](std::uint32_t v) {
     mesh.min_height_m = std::min<double>(mesh.min_height_m, mesh.vertices_m[3 * v + 2]);
     mesh.max_height_m = std::max<double>(mesh.max_height_m, mesh.vertices_m[3 * v + 2]);
-  }
-  if (mesh.triangles.empty()) mesh.min_height_m = mesh.max_height_m = 0.0;
+  };
+  for (std::uint32_t v : mesh.triangles) span(v);
+  for (const MeshGrid& grid : mesh.grids)
+    for (std::uint32_t v : grid.nodes) span(v);
+  if (mesh.triangles.empty() && mesh.grids.empty()) mesh.min_height_m = mesh.max_height_m = 0.0;
   return mesh;
 }
 

@@ -15,8 +15,9 @@ namespace glaswave {
 namespace {
 
 constexpr unsigned ground_geometry = 0;
-// Trunks are geometry 1; facet tree k is instance geometry first_facet + k.
-constexpr unsigned first_facet = 2;
+// Trunks are geometry 1, the ground's grids 2; facet tree k is instance geometry first_facet + k.
+constexpr unsigned ground_grid_geometry = 2;
+constexpr unsigned first_facet = 3;
 // Ray masks: the ground's bit, and every other surface's; a ray for the ground alone skips the
 // trees at the instances' level.
 constexpr unsigned ground_mask = 1u, vegetation_mask = 2u;
@@ -41,6 +42,38 @@ void attach_mesh(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsig
   rtcSetGeometryMask(geometry, id == ground_geometry ? ground_mask : vegetation_mask);
   rtcCommitGeometry(geometry);
   rtcAttachGeometryByID(scene, geometry, id);
+  rtcReleaseGeometry(geometry);
+}
+
+// The mesh's grids as one Embree grid geometry: built over the grids' rectangles without a
+// triangle each, and intersected as the same triangles (Embree cuts a grid's cell (x, y) by the
+// diagonal from node (x + 1, y) to (x, y + 1), so each row is handed over right to left to keep
+// triangulate_grid's diagonal).
+void attach_grids(RTCDevice device, RTCScene scene, const GroundMesh& mesh) {
+  std::size_t nodes = 0;
+  for (const MeshGrid& grid : mesh.grids) nodes += grid.nodes.size();
+  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_GRID);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nodes));
+  auto* grids = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_GRID, 0, RTC_FORMAT_GRID, sizeof(RTCGrid), mesh.grids.size()));
+  check_device(device, "allocating the ground's grids");
+  unsigned first = 0;
+  for (std::size_t g = 0; g < mesh.grids.size(); ++g) {
+    const MeshGrid& grid = mesh.grids[g];
+    grids[g] = {first, static_cast<unsigned>(grid.width), static_cast<unsigned short>(grid.width),
+                static_cast<unsigned short>(grid.height)};
+    for (int b = 0; b < grid.height; ++b)
+      for (int a = grid.width - 1; a >= 0; --a) {
+        const std::uint32_t v = grid.nodes[static_cast<std::size_t>(b) * grid.width + a];
+        std::memcpy(vertices, &mesh.vertices_m[3 * std::size_t{v}], 3 * sizeof(float));
+        vertices += 3;
+      }
+    first += static_cast<unsigned>(grid.nodes.size());
+  }
+  rtcSetGeometryMask(geometry, ground_mask);
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometryByID(scene, geometry, ground_grid_geometry);
   rtcReleaseGeometry(geometry);
 }
 
@@ -159,6 +192,7 @@ Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation
       top_m_(ground.max_height_m) {
   check_device(device.handle(), "creating a scene");
   if (!ground.triangles.empty()) attach_mesh(device.handle(), surfaces_, ground, ground_geometry);
+  if (!ground.grids.empty()) attach_grids(device.handle(), surfaces_, ground);
   if (!vegetation.trunks.triangles.empty()) {
     attach_mesh(device.handle(), surfaces_, vegetation.trunks, ground_geometry + 1);
     top_m_ = std::max(top_m_, vegetation.trunks.max_height_m);
@@ -258,7 +292,9 @@ SurfaceHit Scene::nearest(const Vec3& origin, const Vec3& direction, double max_
     const auto& [c, s] = facet_turns_[tree];
     normal = {c * normal[0] + s * normal[1], -s * normal[0] + c * normal[1], normal[2]};
   } else {
-    hit.kind = query.hit.geomID == ground_geometry ? SurfaceKind::ground : SurfaceKind::trunk;
+    hit.kind = query.hit.geomID == ground_geometry || query.hit.geomID == ground_grid_geometry
+                   ? SurfaceKind::ground
+                   : SurfaceKind::trunk;
     if (hit.kind == SurfaceKind::trunk && query.hit.primID < trunk_materials_.size())
       hit.material = trunk_materials_[query.hit.primID];
   }
