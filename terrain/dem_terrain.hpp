@@ -23,7 +23,7 @@ class DemTerrain final : public Terrain {
  public:
   struct Options {
     std::size_t cache_bytes = std::size_t{128} << 20;  // tiles kept in memory, at most
-    int tile_pixels = 128;                             // tiles are this many pixels square
+    int tile_pixels = 64;                              // tiles are this many pixels square
   };
 
   // Opens the raster and checks it: a missing, unreadable, truncated or corrupt file, one

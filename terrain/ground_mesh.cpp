@@ -39,10 +39,17 @@ void mesh_grid_cells(int ni, int nj, const std::vector<std::uint32_t>& node_vert
   auto wanted = [&](int i, int j) {
     return cell_in.empty() || cell_in[static_cast<std::size_t>(j) * (ni - 1) + i] != 0;
   };
-  auto whole = [&](int i, int j) {
-    return wanted(i, j) && node(i, j) != no_vertex && node(i + 1, j) != no_vertex &&
-           node(i, j + 1) != no_vertex && node(i + 1, j + 1) != no_vertex;
-  };
+  // Each cell's kind, found once: 0 not wanted, 1 wanted with a node missing, 2 whole.
+  std::vector<char> kind(static_cast<std::size_t>(std::max(ni - 1, 0)) * std::max(nj - 1, 0), 0);
+  for (int j = 0; j + 1 < nj; ++j)
+    for (int i = 0; i + 1 < ni; ++i)
+      if (wanted(i, j))
+        kind[static_cast<std::size_t>(j) * (ni - 1) + i] =
+            node(i, j) != no_vertex && node(i + 1, j) != no_vertex &&
+                    node(i, j + 1) != no_vertex && node(i + 1, j + 1) != no_vertex
+                ? 2
+                : 1;
+  auto whole = [&](int i, int j) { return kind[static_cast<std::size_t>(j) * (ni - 1) + i] == 2; };
   // Rectangles of whole cells [i0, i1) x [j0, j): each row's runs, a run going on from the row
   // below when it spans the same cells.
   struct Open {
@@ -85,7 +92,7 @@ void mesh_grid_cells(int ni, int nj, const std::vector<std::uint32_t>& node_vert
   // The cells wanted but not whole: the triangles that stand on three nodes.
   for (int j = 0; j + 1 < nj; ++j)
     for (int i = 0; i + 1 < ni; ++i) {
-      if (!wanted(i, j) || whole(i, j)) continue;
+      if (kind[static_cast<std::size_t>(j) * (ni - 1) + i] != 1) continue;
       const std::uint32_t a = node(i, j), b = node(i + 1, j), c = node(i, j + 1),
                           d = node(i + 1, j + 1);
       if (a != no_vertex && b != no_vertex && d != no_vertex)

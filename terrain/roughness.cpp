@@ -379,6 +379,7 @@ void mesh_region(const GroundMesh& base, const LatticeRegion& region, const BoxU
   };
   const HeightIndex ground(base);
   std::vector<std::uint32_t> node_vertex(static_cast<std::size_t>(fi) * fj, no_vertex);
+  mesh.vertices_m.reserve(mesh.vertices_m.size() + 3 * node_vertex.size());
   // Whether fine node (a, b) lies in the union (its lattice neighbours do), and whether the
   // fine cell from it lies in one box.
   auto node_in = [&](int a, int b) {
@@ -424,16 +425,31 @@ void add_base_outside(const GroundMesh& base, const LatticeRegion& region,
     const auto& q = quad[(edge + 1) % 4];
     return (q[0] - p[0]) * (v.y - p[1]) - (q[1] - p[1]) * (v.x - p[0]);  // > 0 inside
   };
+  // Whether some edge of the quad has every vertex outside it.
+  auto disjoint = [&](const Quad& quad, const ClipVertex* polygon, std::size_t count) {
+    for (int edge = 0; edge < 4; ++edge) {
+      std::size_t outside = 0;
+      for (std::size_t k = 0; k < count; ++k) outside += side(quad, edge, polygon[k]) < 0.0 ? 1 : 0;
+      if (outside == count) return true;
+    }
+    return false;
+  };
   std::vector<std::vector<ClipVertex>> parts, next;
   for (std::size_t t = 0; t < base.triangles.size(); t += 3) {
-    std::vector<ClipVertex> triangle;
+    std::array<ClipVertex, 3> corners;
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t v = base.triangles[t + k];
-      triangle.push_back(
-          {base.vertices_m[3 * v], base.vertices_m[3 * v + 1], base.vertices_m[3 * v + 2]});
+      corners[k] = {base.vertices_m[3 * v], base.vertices_m[3 * v + 1], base.vertices_m[3 * v + 2]};
+    }
+    // Most of the base lies clear of every box: kept as it is, without the clipping's copies.
+    if (std::all_of(quads.begin(), quads.end(),
+                    [&](const Quad& quad) { return disjoint(quad, corners.data(), 3); })) {
+      mesh.triangles.insert(mesh.triangles.end(), base.triangles.begin() + t,
+                            base.triangles.begin() + t + 3);
+      continue;
     }
     bool whole = true;  // the triangle untouched so far: kept as the base has it
-    parts.assign(1, triangle);
+    parts.assign(1, std::vector<ClipVertex>(corners.begin(), corners.end()));
     for (const Quad& quad : quads) {
       next.clear();
       for (const std::vector<ClipVertex>& polygon : parts) {

@@ -98,7 +98,7 @@ VegetationTruth measure_vegetation(const Scene& scene, const BeamSpot& spot,
 
 // The lines of a tile of kTile x kTile nodes, measured by the first footprint that weighs one.
 struct TruthGrid::Tile {
-  static constexpr int kTile = 8;
+  static constexpr int kTile = 4;
   // Measured once, by the first footprint that weighs it (a flag and a lock rather than
   // std::call_once, whose every first call ends in a futex wake: a system call a tile).
   std::atomic<bool> measured{false};
