@@ -15,9 +15,10 @@ namespace glaswave {
 namespace {
 
 constexpr unsigned ground_geometry = 0;
-// Trunks are geometry 1, the ground's grids 2; facet tree k is instance geometry first_facet + k.
-constexpr unsigned ground_grid_geometry = 2;
-constexpr unsigned first_facet = 3;
+// Trunks' triangles are geometry 1, the ground's grids 2, the trunks' grids 3; facet tree k is
+// instance geometry first_facet + k.
+constexpr unsigned trunk_geometry = 1, ground_grid_geometry = 2, trunk_grid_geometry = 3;
+constexpr unsigned first_facet = 4;
 // Ray masks: the ground's bit, and every other surface's; a ray for the ground alone skips the
 // trees at the instances' level.
 constexpr unsigned ground_mask = 1u, vegetation_mask = 2u;
@@ -48,8 +49,8 @@ void attach_mesh(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsig
 // The mesh's grids as one Embree grid geometry: built over the grids' rectangles without a
 // triangle each, and intersected as the same triangles (Embree cuts a grid's cell (x, y) by the
 // diagonal from node (x + 1, y) to (x, y + 1), so each row is handed over right to left to keep
-// triangulate_grid's diagonal).
-void attach_grids(RTCDevice device, RTCScene scene, const GroundMesh& mesh) {
+// triangulate_grid's diagonal). A hit's primID is its grid's index.
+void attach_grids(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsigned id) {
   std::size_t nodes = 0;
   for (const MeshGrid& grid : mesh.grids) nodes += grid.nodes.size();
   RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_GRID);
@@ -71,9 +72,9 @@ void attach_grids(RTCDevice device, RTCScene scene, const GroundMesh& mesh) {
       }
     first += static_cast<unsigned>(grid.nodes.size());
   }
-  rtcSetGeometryMask(geometry, ground_mask);
+  rtcSetGeometryMask(geometry, id == ground_grid_geometry ? ground_mask : vegetation_mask);
   rtcCommitGeometry(geometry);
-  rtcAttachGeometryByID(scene, geometry, ground_grid_geometry);
+  rtcAttachGeometryByID(scene, geometry, id);
   rtcReleaseGeometry(geometry);
 }
 
@@ -192,11 +193,16 @@ Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation
       top_m_(ground.max_height_m) {
   check_device(device.handle(), "creating a scene");
   if (!ground.triangles.empty()) attach_mesh(device.handle(), surfaces_, ground, ground_geometry);
-  if (!ground.grids.empty()) attach_grids(device.handle(), surfaces_, ground);
-  if (!vegetation.trunks.triangles.empty()) {
-    attach_mesh(device.handle(), surfaces_, vegetation.trunks, ground_geometry + 1);
-    top_m_ = std::max(top_m_, vegetation.trunks.max_height_m);
-  }
+  if (!ground.grids.empty())
+    attach_grids(device.handle(), surfaces_, ground, ground_grid_geometry);
+  const GroundMesh& trunks = vegetation.trunks;
+  trunk_triangles_ = trunks.triangles.size() / 3;
+  if (!trunks.triangles.empty())
+    attach_mesh(device.handle(), surfaces_, trunks, trunk_geometry);
+  if (!trunks.grids.empty())
+    attach_grids(device.handle(), surfaces_, trunks, trunk_grid_geometry);
+  if (!trunks.triangles.empty() || !trunks.grids.empty())
+    top_m_ = std::max(top_m_, trunks.max_height_m);
   for (std::size_t k = 0; k < facets_.size(); ++k) {
     const FacetInstance& tree = facets_[k];
     facet_turns_.push_back({std::cos(tree.rotation_rad), std::sin(tree.rotation_rad)});
@@ -295,8 +301,11 @@ SurfaceHit Scene::nearest(const Vec3& origin, const Vec3& direction, double max_
     hit.kind = query.hit.geomID == ground_geometry || query.hit.geomID == ground_grid_geometry
                    ? SurfaceKind::ground
                    : SurfaceKind::trunk;
-    if (hit.kind == SurfaceKind::trunk && query.hit.primID < trunk_materials_.size())
-      hit.material = trunk_materials_[query.hit.primID];
+    const std::size_t trunk = query.hit.geomID == trunk_grid_geometry
+                                  ? trunk_triangles_ + query.hit.primID
+                                  : query.hit.primID;
+    if (hit.kind == SurfaceKind::trunk && trunk < trunk_materials_.size())
+      hit.material = trunk_materials_[trunk];
   }
   hit.distance_m = query.ray.tfar;
   normal = normalized(normal);

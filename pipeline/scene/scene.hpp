@@ -54,8 +54,8 @@ struct FacetInstance {
 // What grows on the ground of one shot.
 struct Vegetation {
   std::vector<Crown> crowns;
-  GroundMesh trunks;                 // bark-covered cylinders, triangulated
-  std::vector<int> trunk_materials;  // the material of each trunk triangle
+  GroundMesh trunks;  // bark: triangles and grids (ForestSource's cylinders, a grid each)
+  std::vector<int> trunk_materials;  // each trunk triangle's material, then each trunk grid's
   std::optional<TurbidLayer> layer;
   std::shared_ptr<const VoxelField> voxels;  // a voxel grid of plant area density, when given
   std::vector<FacetInstance> facets;
@@ -131,6 +131,7 @@ class Scene {
   std::vector<Crown> crowns_;
   std::vector<CrownCrossing> crossings_;  // one a crown, made once
   std::vector<int> trunk_materials_;
+  std::size_t trunk_triangles_ = 0;  // trunk_materials_' first entries
   std::optional<TurbidLayer> layer_;
   std::shared_ptr<const VoxelField> voxels_;
   std::vector<FacetInstance> facets_;

@@ -11,7 +11,9 @@ namespace {
 
 constexpr int trunk_sides = 8;
 
-// A vertical prism of `trunk_sides` faces from the ground to the crown base.
+// A vertical prism of `trunk_sides` faces from the ground to the crown base: a grid of
+// (trunk_sides + 1) x 2 nodes around it (the last column the first's vertices again), each face
+// the two triangles triangulate_grid makes of its cell; one material a trunk.
 void add_trunk(Vegetation& vegetation, const Vec3& foot, double top_m, double radius_m,
                int material) {
   GroundMesh& mesh = vegetation.trunks;
@@ -25,12 +27,14 @@ void add_trunk(Vegetation& vegetation, const Vec3& foot, double top_m, double ra
                              {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
     }
   }
-  for (std::uint32_t k = 0; k < trunk_sides; ++k) {
-    const std::uint32_t a = first + 2 * k, b = a + 1, c = first + 2 * ((k + 1) % trunk_sides),
-                        d = c + 1;
-    mesh.triangles.insert(mesh.triangles.end(), {a, c, d, a, d, b});
-    vegetation.trunk_materials.insert(vegetation.trunk_materials.end(), {material, material});
-  }
+  MeshGrid grid;
+  grid.width = trunk_sides + 1;
+  grid.height = 2;
+  for (std::uint32_t level = 0; level < 2; ++level)
+    for (int k = 0; k <= trunk_sides; ++k)
+      grid.nodes.push_back(first + 2 * static_cast<std::uint32_t>(k % trunk_sides) + level);
+  mesh.grids.push_back(std::move(grid));
+  vegetation.trunk_materials.push_back(material);
   mesh.max_height_m = std::max(mesh.max_height_m, top_m);
 }
 

@@ -6,8 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+#include <random>
 #include <set>
 
+#include "pipeline/scene/scene.hpp"
 #include "tests/pipeline/shot/shot_test_support.hpp"
 
 namespace glaswave {
@@ -53,6 +56,68 @@ TEST(ForestSource, RegionHoldsOnlyTheKindsItMeets) {
   // Kind 2's optics: f_green rho_leaf + f_bark rho_bark = 0.8 * 0.2 + 0.2 * 0.3.
   EXPECT_NEAR(grown.materials[0].reflectance[0], 0.22, 1e-15);
   EXPECT_EQ(grown.materials[0].leaf_angles, &source.forest().leaf_angles(2));
+}
+
+// Trunks are grids, a trunk each, of one material: rays meet them where they meet the grids'
+// triangles (each face cut as before), with their stand's bark. Two stands of two barks.
+TEST(ForestSource, TrunksAreGridsThatRaysMeetAsTheirTriangles) {
+  VegetationSettings settings;
+  CanopySettings& canopy = settings.canopy;
+  canopy.leaf_reflectance = {0.4};
+  canopy.leaf_transmittance = {0.4};
+  canopy.cover = 0.7;
+  canopy.crown_radius_m = 3.0;
+  canopy.dbh_m = 0.5;
+  settings.plane = PlaneSettings{kLat0, kLon0, 0.0, 0.0, 0.0};
+  canopy.bark_reflectance = {0.3};
+  canopy.stand_areas = {square_stand(canopy, kLat0, kLon0 - 0.005, 0.005, 0.4)};
+  canopy.bark_reflectance = {0.1};
+  canopy.stand_areas.push_back(square_stand(canopy, kLat0, kLon0 + 0.005, 0.005, 0.4));
+  const std::unique_ptr<Terrain> terrain = plane_terrain();
+  const LocalFrame frame(Geodetic{kLat0, kLon0, 0.0});
+  const RegionVegetation grown = ForestSource(settings).grow({*terrain, frame, 40.0, {}, 1});
+  const Vegetation& grids = grown.geometry;
+  ASSERT_GT(grids.trunks.grids.size(), 20u);
+  ASSERT_TRUE(grids.trunks.triangles.empty());
+  ASSERT_EQ(grids.trunk_materials.size(), grids.trunks.grids.size());
+  EXPECT_EQ(std::set<int>(grids.trunk_materials.begin(), grids.trunk_materials.end()).size(), 2u);
+  Vegetation triangles = grids;
+  triangles.trunks.triangles = grids.trunks.all_triangles();
+  triangles.trunks.grids.clear();
+  triangles.trunk_materials.clear();
+  for (int material : grids.trunk_materials) triangles.trunk_materials.resize(
+      triangles.trunk_materials.size() + 16, material);  // 8 faces, 2 triangles a face
+  ASSERT_EQ(triangles.trunk_materials.size(), triangles.trunks.triangles.size() / 3);
+
+  const RayDevice device;
+  const Scene on_grids(device, GroundMesh{}, grids), on_triangles(device, GroundMesh{}, triangles);
+  std::mt19937_64 bits(3);
+  std::uniform_real_distribution<double> turn(0.0, 2.0 * std::numbers::pi), aim(-0.3, 0.3);
+  int hits = 0;
+  double worst_m = 0.0, worst_normal = 0.0;
+  for (const MeshGrid& trunk : grids.trunks.grids) {
+    // The trunk's axis, from its first face's foot and top and the one opposite.
+    const float* foot = &grids.trunks.vertices_m[3 * std::size_t{trunk.nodes[0]}];
+    const float* opposite = &grids.trunks.vertices_m[3 * std::size_t{trunk.nodes[4]}];
+    const Vec3 axis{0.5 * (foot[0] + opposite[0]), 0.5 * (foot[1] + opposite[1]), foot[2] + 3.0};
+    for (int k = 0; k < 40; ++k) {
+      const double a = turn(bits);
+      const Vec3 origin = axis + Vec3{6.0 * std::cos(a), 6.0 * std::sin(a), 0.0};
+      const Vec3 direction = normalized(axis - origin + Vec3{aim(bits), aim(bits), aim(bits)});
+      const SurfaceHit g = on_grids.intersect(origin, direction, 20.0);
+      const SurfaceHit t = on_triangles.intersect(origin, direction, 20.0);
+      ASSERT_EQ(g.kind, t.kind);
+      if (g.kind == SurfaceKind::none) continue;
+      ASSERT_EQ(g.kind, SurfaceKind::trunk);
+      ASSERT_EQ(g.material, t.material);
+      ++hits;
+      worst_m = std::max(worst_m, std::abs(g.distance_m - t.distance_m));
+      worst_normal = std::max(worst_normal, norm(g.normal - t.normal));
+    }
+  }
+  EXPECT_GT(hits, 20 * static_cast<int>(grids.trunks.grids.size()));
+  EXPECT_LT(worst_m, 1e-5);
+  EXPECT_LT(worst_normal, 1e-5);
 }
 
 // Two stands side by side over the region, PAI 2 and 4 with the same optics: their crowns differ
