@@ -3,9 +3,10 @@
 // shots (with and without the waveform metrics, with the footprints as GPKG, with NetCDF alone),
 // one thread against every core, a raw Embree probe beside them, the share of each stage of a
 // shot, and the per-shot floor in HELIOS++'s shape (19 rays, flat and 20 degrees, 4,000 and 40,000
-// shots, one thread, NetCDF alone) against the rays' own cost. Every figure is measured in this one
-// run, so that the ratios hold on a shared machine whose absolute speed drifts. Not a test:
-// `--quick` is the short mode that ctest runs.
+// shots, one thread, NetCDF alone) against the rays' own cost, and a GEDI pass at 1000 rays over
+// the demo's forest on rough ground (shots sharing strips) against its rays' own cost. Every
+// figure is measured in this one run, so that the ratios hold on a shared machine whose absolute
+// speed drifts. Not a test: `--quick` is the short mode that ctest runs.
 #include <embree3/rtcore.h>
 #include <sys/resource.h>
 #include <tbb/parallel_for.h>
@@ -50,10 +51,12 @@ struct Sizes {
   std::int64_t probe_rays;      // raw Embree queries
   int floor_shots[2];           // the per-shot floor's runs (HELIOS++'s 4,000 and 40,000 pulses)
   int ray_shots;                // shots traced through one scene for the rays' own cost
+  int gedi_shots[2], gedi_rays;  // the GEDI pass over the demo's forest and rough ground
 };
 
-constexpr Sizes full_sizes{3, 40, 10000, 400, 1000, 10000, 8, 4000000, {4000, 40000}, 4000};
-constexpr Sizes quick_sizes{1, 2, 500, 20, 200, 200, 2, 100000, {100, 1000}, 200};
+constexpr Sizes full_sizes{3,  40,     10000,        400,  1000, 10000, 8,
+                           4000000, {4000, 40000}, 4000, {8, 64}, 1000};
+constexpr Sizes quick_sizes{1, 2, 500, 20, 200, 200, 2, 100000, {100, 1000}, 200, {8, 16}, 100};
 
 // A pass northward over a plane facing east (45 N, 7 E, 172 m between shots), so that every shot
 // meets the same ground, with the north2010 sensor.
@@ -76,6 +79,44 @@ glaswave::Config pass_config(int shots, int rays, int max_order, double slope_de
         {"heading_deg", 0.0},
         {"shots", shots},
         {"spacing_m", 172.0}}},
+  };
+  return glaswave::parse_config(document);
+}
+
+// A GEDI pass (the gedi preset's coverage beam, shots 60 m apart) over the demo's forest
+// (share/demo: PAI 3, cover 0.6, ellipsoid crowns) on a 15 degree plane with the demo's roughness
+// (0.2 m RMS, 3 m correlation): shots that share strips, each meshing the relief under its beam.
+glaswave::Config gedi_pass_config(int shots, int rays) {
+  nlohmann::json document = {
+      {"seed", 2005},
+      {"sensor", {{"preset", "gedi"}}},
+      {"simulation", {{"rays_per_shot", rays}, {"max_order", 8}}},
+      {"terrain",
+       {{"plane",
+         {{"origin_lat_deg", 34.3},
+          {"origin_lon_deg", -118.2},
+          {"slope_deg", 15.0},
+          {"aspect_deg", 60.0}}},
+        {"roughness", {{"rms_m", 0.2}, {"correlation_m", 3.0}}},
+        {"soil_reflectance", 0.25}}},
+      {"canopy",
+       {{"pai", 3.0},
+        {"lad", "spherical"},
+        {"cover", 0.6},
+        {"crown_shape", "ellipsoid"},
+        {"crown_radius_m", 6.0},
+        {"crown_half_height_m", 7.0},
+        {"crown_base_m", {8.0, 14.0}},
+        {"leaf_reflectance", 0.45},
+        {"leaf_transmittance", 0.45},
+        {"bark_reflectance", 0.35}}},
+      {"track",
+       {{"type", "pass"},
+        {"start_lat_deg", 34.3},
+        {"start_lon_deg", -118.2},
+        {"heading_deg", 10.0},
+        {"shots", shots},
+        {"spacing_m", 60.0}}},
   };
   return glaswave::parse_config(document);
 }
@@ -297,15 +338,48 @@ std::vector<double> print_floor(const Sizes& n) {
   return floor_figures;  // the marginal costs left out: noise can make a short run's negative
 }
 
+// The GEDI pass on one thread, NetCDF and GeoJSON: CPU a shot of each run and the marginal CPU
+// of a shot between the two runs (the run's start left out), against the rays' own cost (the
+// transport through one shot's scene, built once). Returns the figures.
+std::vector<double> print_gedi_pass(const Sizes& n) {
+  std::printf(
+      "GEDI pass, %d rays, the demo's forest on a rough 15 degree plane, shots 60 m apart, one "
+      "thread (CPU, ms a shot; the fastest of %d round%s):\n",
+      n.gedi_rays, n.rounds, n.rounds > 1 ? "s" : "");
+  std::printf("%8s %10s %10s %12s %10s %10s\n", "shots", "run ms", "rays ms", "run / rays",
+              "marginal", "/ rays");
+  double run_cpu_s[2] = {0.0, 0.0}, rays_s = 0.0;
+  for (int round = 0; round < n.rounds; ++round) {
+    for (int k = 0; k < 2; ++k) {
+      const double cpu_s = whole_run(gedi_pass_config(n.gedi_shots[k], n.gedi_rays), 1).cpu_seconds;
+      if (round == 0 || cpu_s < run_cpu_s[k]) run_cpu_s[k] = cpu_s;
+    }
+    const double r = rays_cpu_s_per_shot(gedi_pass_config(1, n.gedi_rays), n.gedi_shots[0]);
+    if (round == 0 || r < rays_s) rays_s = r;
+  }
+  const double marginal_s = (run_cpu_s[1] - run_cpu_s[0]) / (n.gedi_shots[1] - n.gedi_shots[0]);
+  std::vector<double> figures;
+  for (int k = 0; k < 2; ++k) {
+    const double per_shot_s = run_cpu_s[k] / n.gedi_shots[k];
+    std::printf("%8d %10.2f %10.2f %12.2f %10.2f %10.2f\n", n.gedi_shots[k], 1e3 * per_shot_s,
+                1e3 * rays_s, per_shot_s / rays_s, 1e3 * marginal_s, marginal_s / rays_s);
+    figures.push_back(per_shot_s / rays_s);
+  }
+  return figures;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false, floor_only = false;  // --floor: the per-shot floor's case alone
+  // --floor: the per-shot floor's case alone; --gedi: the GEDI pass alone.
+  bool quick = false, floor_only = false, gedi_only = false;
   for (int i = 1; i < argc; ++i) {
     quick = quick || std::strcmp(argv[i], "--quick") == 0;
     floor_only = floor_only || std::strcmp(argv[i], "--floor") == 0;
-    if (std::strcmp(argv[i], "--quick") != 0 && std::strcmp(argv[i], "--floor") != 0) {
-      std::fprintf(stderr, "usage: %s [--quick] [--floor]\n", argv[0]);
+    gedi_only = gedi_only || std::strcmp(argv[i], "--gedi") == 0;
+    if (std::strcmp(argv[i], "--quick") != 0 && std::strcmp(argv[i], "--floor") != 0 &&
+        std::strcmp(argv[i], "--gedi") != 0) {
+      std::fprintf(stderr, "usage: %s [--quick] [--floor] [--gedi]\n", argv[0]);
       return 2;
     }
   }
@@ -315,8 +389,10 @@ int main(int argc, char** argv) {
       if (!(std::isfinite(figure) && figure > 0.0)) return false;
     return true;
   };
-  if (floor_only) {
-    const bool all = measured(print_floor(n));
+  if (floor_only || gedi_only) {
+    bool all = true;
+    if (floor_only) all = measured(print_floor(n)) && all;
+    if (gedi_only) all = measured(print_gedi_pass(n)) && all;
     std::printf(all ? "every figure measured\n" : "a figure is missing\n");
     return all ? 0 : 1;
   }
@@ -390,9 +466,10 @@ int main(int argc, char** argv) {
   print_stages("19-ray shots", short_stages, 100 * n.stage_shots);
 
   const std::vector<double> floor_figures = print_floor(n);
+  const std::vector<double> gedi_figures = print_gedi_pass(n);
 
   // The short mode is a CI check that every figure came out.
-  if (!measured(floor_figures)) {
+  if (!measured(floor_figures) || !measured(gedi_figures)) {
     std::printf("a figure is missing\n");
     return 1;
   }
