@@ -45,8 +45,8 @@ void mesh_grid_cells(int ni, int nj, const std::vector<std::uint32_t>& node_vert
     for (int i = 0; i + 1 < ni; ++i)
       if (wanted(i, j))
         kind[static_cast<std::size_t>(j) * (ni - 1) + i] =
-            node(i, j) != no_vertex && node(i + 1, j) != no_vertex &&
-                    node(i, j + 1) != no_vertex && node(i + 1, j + 1) != no_vertex
+            node(i, j) != no_vertex && node(i + 1, j) != no_vertex && node(i, j + 1) != no_vertex &&
+                    node(i + 1, j + 1) != no_vertex
                 ? 2
                 : 1;
   auto whole = [&](int i, int j) { return kind[static_cast<std::size_t>(j) * (ni - 1) + i] == 2; };
@@ -73,13 +73,13 @@ void mesh_grid_cells(int ni, int nj, const std::vector<std::uint32_t>& node_vert
         continue;
       }
       const int i0 = i;
-      while (i + 1 < ni && whole(i, j)) ++i;
+      while (i + 1 < ni && whole(i, j) && i - i0 + 1 < max_grid_nodes) ++i;
       runs.push_back({i0, i});
     }
     still.clear();
     for (const Open& r : open) {
       const auto run = std::find(runs.begin(), runs.end(), std::array<int, 2>{r.i0, r.i1});
-      if (run == runs.end()) {
+      if (run == runs.end() || j - r.j0 + 1 == max_grid_nodes) {
         close(r, j);
         continue;
       }

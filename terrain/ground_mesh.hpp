@@ -14,18 +14,20 @@ namespace glaswave {
 class RoughnessField;  // terrain/roughness.hpp
 
 // A rectangle of a grid of nodes whose every cell is meshed (the roughness's lattice under the
-// beams): node (a, b), a < width, b < height, is vertex `nodes[b * width + a]`, and each cell is
-// cut as triangulate_grid cuts it. The ray tracer builds such a patch as a grid, far cheaper to
-// index than its triangles (pipeline/scene/).
+// beams, a trunk's faces): node (a, b), a < width, b < height, is vertex `nodes[b * width + a]`,
+// and each cell is cut as triangulate_grid cuts it. The ray tracer builds such a patch as a
+// grid, far cheaper to index than its triangles (pipeline/scene/).
 struct MeshGrid {
-  int width = 0, height = 0;  // nodes, each at least 2
+  int width = 0, height = 0;  // nodes, each from 2 to max_grid_nodes
   std::vector<std::uint32_t> nodes;
 };
+// Embree's limit on a grid's side.
+inline constexpr int max_grid_nodes = 32767;
 
 struct GroundMesh {
   std::vector<float> vertices_m;         // x, y, z triples in the local frame
   std::vector<std::uint32_t> triangles;  // vertex index triples; none over missing data
-  std::vector<MeshGrid> grids;         // more of the surface, beside the triangles
+  std::vector<MeshGrid> grids;           // more of the surface, beside the triangles
   double min_height_m = 0.0;             // of the vertices the surface uses, in the local frame
   double max_height_m = 0.0;
 

@@ -58,7 +58,7 @@ void attach_grids(RTCDevice device, RTCScene scene, const GroundMesh& mesh, unsi
       geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nodes));
   auto* grids = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(
       geometry, RTC_BUFFER_TYPE_GRID, 0, RTC_FORMAT_GRID, sizeof(RTCGrid), mesh.grids.size()));
-  check_device(device, "allocating the ground's grids");
+  check_device(device, "allocating a mesh's grids");
   unsigned first = 0;
   for (std::size_t g = 0; g < mesh.grids.size(); ++g) {
     const MeshGrid& grid = mesh.grids[g];
@@ -193,14 +193,11 @@ Scene::Scene(const RayDevice& device, const GroundMesh& ground, const Vegetation
       top_m_(ground.max_height_m) {
   check_device(device.handle(), "creating a scene");
   if (!ground.triangles.empty()) attach_mesh(device.handle(), surfaces_, ground, ground_geometry);
-  if (!ground.grids.empty())
-    attach_grids(device.handle(), surfaces_, ground, ground_grid_geometry);
+  if (!ground.grids.empty()) attach_grids(device.handle(), surfaces_, ground, ground_grid_geometry);
   const GroundMesh& trunks = vegetation.trunks;
   trunk_triangles_ = trunks.triangles.size() / 3;
-  if (!trunks.triangles.empty())
-    attach_mesh(device.handle(), surfaces_, trunks, trunk_geometry);
-  if (!trunks.grids.empty())
-    attach_grids(device.handle(), surfaces_, trunks, trunk_grid_geometry);
+  if (!trunks.triangles.empty()) attach_mesh(device.handle(), surfaces_, trunks, trunk_geometry);
+  if (!trunks.grids.empty()) attach_grids(device.handle(), surfaces_, trunks, trunk_grid_geometry);
   if (!trunks.triangles.empty() || !trunks.grids.empty())
     top_m_ = std::max(top_m_, trunks.max_height_m);
   for (std::size_t k = 0; k < facets_.size(); ++k) {

@@ -43,19 +43,19 @@ double seconds_since(Clock::time_point start) {
 
 // How much each case runs: the full benchmark, or the short mode that CI runs in seconds.
 struct Sizes {
-  int rounds;                   // every case run this many times, in turn; the fastest kept
-  int base_shots, base_rays;    // the seed's base case (north2010, Table 1 forest, order 8)
-  int slope_shots, slope_rays;  // bare ground, order 1, flat and 20 degrees
-  int short_shots;              // 19 rays a shot over flat bare ground
-  int stage_shots;              // shots timed stage by stage, one thread
-  std::int64_t probe_rays;      // raw Embree queries
-  int floor_shots[2];           // the per-shot floor's runs (HELIOS++'s 4,000 and 40,000 pulses)
-  int ray_shots;                // shots traced through one scene for the rays' own cost
+  int rounds;                    // every case run this many times, in turn; the fastest kept
+  int base_shots, base_rays;     // the seed's base case (north2010, Table 1 forest, order 8)
+  int slope_shots, slope_rays;   // bare ground, order 1, flat and 20 degrees
+  int short_shots;               // 19 rays a shot over flat bare ground
+  int stage_shots;               // shots timed stage by stage, one thread
+  std::int64_t probe_rays;       // raw Embree queries
+  int floor_shots[2];            // the per-shot floor's runs (HELIOS++'s 4,000 and 40,000 pulses)
+  int ray_shots;                 // shots traced through one scene for the rays' own cost
   int gedi_shots[2], gedi_rays;  // the GEDI pass over the demo's forest and rough ground
 };
 
-constexpr Sizes full_sizes{3,  40,     10000,        400,  1000, 10000, 8,
-                           4000000, {4000, 40000}, 4000, {8, 64}, 1000};
+constexpr Sizes full_sizes{3, 40,      10000,         400,  1000,    10000,
+                           8, 4000000, {4000, 40000}, 4000, {8, 64}, 1000};
 constexpr Sizes quick_sizes{1, 2, 500, 20, 200, 200, 2, 100000, {100, 1000}, 200, {8, 16}, 100};
 
 // A pass northward over a plane facing east (45 N, 7 E, 172 m between shots), so that every shot

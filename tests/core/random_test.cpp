@@ -110,8 +110,7 @@ TEST(RandomStreams, AreTheKeyedStreams) {
 // afresh, for rays from 0 to the top bits' and shots from 0 to 2^64 - 1.
 TEST(ShotStreams, AreTheKeyedStreams) {
   const std::uint64_t rays[] = {0, 1, 11, 62 + 64 * 2, 65537, (1ull << 32) - 1};
-  const std::uint64_t shots[] = {0, 1, 2, 99, pair_key(-3, 7), pair_key(123456, -654321),
-                                 ~0ull};
+  const std::uint64_t shots[] = {0, 1, 2, 99, pair_key(-3, 7), pair_key(123456, -654321), ~0ull};
   for (const std::uint64_t seed : {0ull, 2009ull})
     for (const RandomPurpose purpose : {RandomPurpose::transport, RandomPurpose::roughness})
       for (const std::uint64_t ray : rays) {

@@ -270,7 +270,8 @@ TEST(Roughness, AWideBeamGetsACoarserLatticeOrARefusal) {
   const PlaneTerrain plane({45.0, 7.0, 600.0, 0.0, 0.0});
   const LocalFrame frame({45.0, 7.0, 600.0});
   const RoughnessField field({0.45, 0.5}, 11);
-  const GroundMesh mesh = triangulated(build_ground_mesh(plane, frame, 130.0, 1.0e9, &field, 120.0));
+  const GroundMesh mesh =
+      triangulated(build_ground_mesh(plane, frame, 130.0, 1.0e9, &field, 120.0));
   // 240 m / 0.1667 m = 1440 nodes a side at L/3; 960 at L/2 (1.85 million triangles).
   const std::size_t triangles = mesh.triangles.size() / 3;
   EXPECT_GT(triangles, 2u * 950 * 950);

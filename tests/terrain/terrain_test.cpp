@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <GeographicLib/Geodesic.hpp>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -136,6 +138,56 @@ TEST(SurfaceOrientation, WeighsTheSurfaceByTheBeamsGaussian) {
   const double gradient = k_per_m2 * sigma_m * sigma_m * i4 / i2;  // 0.195
   EXPECT_NEAR(std::tan(fit.slope_deg * deg), gradient, 1e-3 * gradient);
   EXPECT_NEAR(fit.aspect_deg, 270.0, 0.05);  // rising eastward, it faces west
+}
+
+// The triangles of a list, each in its own vertex order, sorted: the surface, and which
+// diagonal cuts each cell, whatever order the list has them in.
+std::vector<std::array<std::uint32_t, 3>> triangle_set(const std::vector<std::uint32_t>& list) {
+  std::vector<std::array<std::uint32_t, 3>> set;
+  for (std::size_t t = 0; t < list.size(); t += 3)
+    set.push_back({list[t], list[t + 1], list[t + 2]});
+  std::sort(set.begin(), set.end());
+  return set;
+}
+
+// mesh_grid_cells hands over the wanted cells whose four nodes have vertices as grids and the
+// rest as triangles: together triangulate_grid's triangles of the wanted cells, the same vertex
+// order, no cell twice; a row longer than Embree's limit goes in several grids.
+TEST(MeshGridCells, AreTriangulateGridsTrianglesOfTheWantedCells) {
+  const int ni = 9, nj = 7;
+  std::vector<std::uint32_t> node_vertex(ni * nj);
+  for (std::size_t n = 0; n < node_vertex.size(); ++n)
+    node_vertex[n] = static_cast<std::uint32_t>(n);
+  node_vertex[3 * ni + 4] = no_vertex;  // a node without data
+  std::vector<char> cell_in((ni - 1) * (nj - 1), 1);
+  for (int i = 0; i < 3; ++i) cell_in[5 * (ni - 1) + i] = 0;  // cells not wanted
+  cell_in[0] = 0;
+  GroundMesh mesh;
+  mesh_grid_cells(ni, nj, node_vertex, cell_in, mesh);
+  EXPECT_GE(mesh.grids.size(), 2u);
+  // The cells about the missing node: a triangle each where it is off their diagonal.
+  EXPECT_EQ(mesh.triangles.size(), 6u);
+  std::vector<std::uint32_t> wanted;
+  std::vector<std::uint32_t> one_cell(4);
+  for (int j = 0; j + 1 < nj; ++j)
+    for (int i = 0; i + 1 < ni; ++i) {
+      if (!cell_in[j * (ni - 1) + i]) continue;
+      one_cell = {node_vertex[j * ni + i], node_vertex[j * ni + i + 1],
+                  node_vertex[(j + 1) * ni + i], node_vertex[(j + 1) * ni + i + 1]};
+      triangulate_grid(2, 2, one_cell, wanted);
+    }
+  EXPECT_EQ(triangle_set(mesh.all_triangles()), triangle_set(wanted));
+
+  const int long_ni = max_grid_nodes + 100;
+  std::vector<std::uint32_t> row(2 * static_cast<std::size_t>(long_ni));
+  for (std::size_t n = 0; n < row.size(); ++n) row[n] = static_cast<std::uint32_t>(n);
+  GroundMesh long_mesh;
+  mesh_grid_cells(long_ni, 2, row, {}, long_mesh);
+  ASSERT_EQ(long_mesh.grids.size(), 2u);
+  for (const MeshGrid& grid : long_mesh.grids) EXPECT_LE(grid.width, max_grid_nodes);
+  std::vector<std::uint32_t> all;
+  triangulate_grid(long_ni, 2, row, all);
+  EXPECT_EQ(triangle_set(long_mesh.all_triangles()), triangle_set(all));
 }
 
 }  // namespace

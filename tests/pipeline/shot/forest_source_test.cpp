@@ -85,8 +85,9 @@ TEST(ForestSource, TrunksAreGridsThatRaysMeetAsTheirTriangles) {
   triangles.trunks.triangles = grids.trunks.all_triangles();
   triangles.trunks.grids.clear();
   triangles.trunk_materials.clear();
-  for (int material : grids.trunk_materials) triangles.trunk_materials.resize(
-      triangles.trunk_materials.size() + 16, material);  // 8 faces, 2 triangles a face
+  for (int material : grids.trunk_materials)
+    triangles.trunk_materials.resize(triangles.trunk_materials.size() + 16,
+                                     material);  // 8 faces, 2 triangles a face
   ASSERT_EQ(triangles.trunk_materials.size(), triangles.trunks.triangles.size() / 3);
 
   const RayDevice device;
