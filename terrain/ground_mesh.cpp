@@ -17,20 +17,18 @@ void triangulate_grid(int ni, int nj, const std::vector<std::uint32_t>& node_ver
   for (int j = 0; j + 1 < nj; ++j) {
     for (int i = 0; i + 1 < ni; ++i) {
       const std::size_t n = static_cast<std::size_t>(j) * ni + i;
-      const std::uint32_t a = node_vertex[n], b = node_vertex[n + 1], c = node_vertex[n + ni],
-                          d = node_vertex[n + ni + 1];
-      if (a != no_vertex && b != no_vertex && d != no_vertex)
-        triangles.insert(triangles.end(), {a, b, d});
-      if (a != no_vertex && d != no_vertex && c != no_vertex)
-        triangles.insert(triangles.end(), {a, d, c});
+      triangulate_cell(node_vertex[n], node_vertex[n + 1], node_vertex[n + ni],
+                       node_vertex[n + ni + 1], triangles);
     }
   }
 }
 
-std::vector<std::uint32_t> GroundMesh::all_triangles() const {
-  std::vector<std::uint32_t> all = triangles;
-  for (const MeshGrid& grid : grids) triangulate_grid(grid.width, grid.height, grid.nodes, all);
-  return all;
+GroundMesh GroundMesh::triangulated() const {
+  GroundMesh mesh = *this;
+  mesh.grids.clear();
+  for (const MeshGrid& grid : grids)
+    triangulate_grid(grid.width, grid.height, grid.nodes, mesh.triangles);
+  return mesh;
 }
 
 void mesh_grid_cells(int ni, int nj, const std::vector<std::uint32_t>& node_vertex,
@@ -91,15 +89,10 @@ void mesh_grid_cells(int ni, int nj, const std::vector<std::uint32_t>& node_vert
   }
   // The cells wanted but not whole: the triangles that stand on three nodes.
   for (int j = 0; j + 1 < nj; ++j)
-    for (int i = 0; i + 1 < ni; ++i) {
-      if (kind[static_cast<std::size_t>(j) * (ni - 1) + i] != 1) continue;
-      const std::uint32_t a = node(i, j), b = node(i + 1, j), c = node(i, j + 1),
-                          d = node(i + 1, j + 1);
-      if (a != no_vertex && b != no_vertex && d != no_vertex)
-        mesh.triangles.insert(mesh.triangles.end(), {a, b, d});
-      if (a != no_vertex && d != no_vertex && c != no_vertex)
-        mesh.triangles.insert(mesh.triangles.end(), {a, d, c});
-    }
+    for (int i = 0; i + 1 < ni; ++i)
+      if (kind[static_cast<std::size_t>(j) * (ni - 1) + i] == 1)
+        triangulate_cell(node(i, j), node(i + 1, j), node(i, j + 1), node(i + 1, j + 1),
+                         mesh.triangles);
 }
 
 GroundMesh build_ground_mesh(const Terrain& terrain, const LocalFrame& frame, double half_size_m,

@@ -31,8 +31,8 @@ struct GroundMesh {
   double min_height_m = 0.0;             // of the vertices the surface uses, in the local frame
   double max_height_m = 0.0;
 
-  // The surface as triangles alone: `triangles`, then each grid's cells' two triangles.
-  std::vector<std::uint32_t> all_triangles() const;
+  // The same surface as triangles alone: `triangles`, then each grid's cells' two triangles.
+  GroundMesh triangulated() const;
 };
 
 // The one triangulation of a grid of heights (sampled terrains, DEMs, the roughness lattice):
@@ -41,6 +41,16 @@ struct GroundMesh {
 
 // A grid node without a vertex (no data there).
 inline constexpr std::uint32_t no_vertex = std::numeric_limits<std::uint32_t>::max();
+
+// Appends the triangles of one cell, a = (i, j), b = (i + 1, j), c = (i, j + 1), d = (i + 1, j +
+// 1), as above: each that stands on three vertices.
+inline void triangulate_cell(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d,
+                             std::vector<std::uint32_t>& triangles) {
+  if (a != no_vertex && b != no_vertex && d != no_vertex)
+    triangles.insert(triangles.end(), {a, b, d});
+  if (a != no_vertex && d != no_vertex && c != no_vertex)
+    triangles.insert(triangles.end(), {a, d, c});
+}
 
 // Appends the triangles of a grid of ni x nj nodes, node (i, j) being vertex
 // `node_vertex[j * ni + i]`. Each triangle stands on its own three nodes: a node without a

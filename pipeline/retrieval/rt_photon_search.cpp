@@ -115,15 +115,13 @@ RtResult RtInversion::search_photons(const RtPhotonShot& shot, std::int64_t excl
   // log(1 + S / B) (most of an entry's bins expect nothing), and what no shift changes.
   struct Terms {
     std::vector<std::pair<std::uint32_t, double>> gain;
-    double floor = 0.0, constant = 0.0;
+    double floor = 0.0, constant = 0.0;  // a floor of 0: not made yet (a made one is positive)
   };
   std::vector<Terms> terms(entries);
-  std::vector<char> made(entries, 0);
   std::vector<double> expected(coarse);
   const auto terms_of = [&](std::size_t e) -> const Terms& {
     Terms& t = terms[e];
-    if (made[e]) return t;
-    made[e] = 1;
+    if (t.floor > 0.0) return t;
     expected_of(e, expected);
     const double peak = *std::max_element(expected.begin(), expected.end());
     const double total = std::accumulate(expected.begin(), expected.end(), 0.0);

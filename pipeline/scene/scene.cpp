@@ -298,11 +298,12 @@ SurfaceHit Scene::nearest(const Vec3& origin, const Vec3& direction, double max_
     hit.kind = query.hit.geomID == ground_geometry || query.hit.geomID == ground_grid_geometry
                    ? SurfaceKind::ground
                    : SurfaceKind::trunk;
-    const std::size_t trunk = query.hit.geomID == trunk_grid_geometry
-                                  ? trunk_triangles_ + query.hit.primID
-                                  : query.hit.primID;
-    if (hit.kind == SurfaceKind::trunk && trunk < trunk_materials_.size())
-      hit.material = trunk_materials_[trunk];
+    if (hit.kind == SurfaceKind::trunk) {
+      const std::size_t trunk = query.hit.geomID == trunk_grid_geometry
+                                    ? trunk_triangles_ + query.hit.primID
+                                    : query.hit.primID;
+      if (trunk < trunk_materials_.size()) hit.material = trunk_materials_[trunk];
+    }
   }
   hit.distance_m = query.ray.tfar;
   normal = normalized(normal);

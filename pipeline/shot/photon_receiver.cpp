@@ -80,7 +80,7 @@ const PhotonCountingSettings& PhotonCountingReceiver::beam_settings(int beam) co
 }
 
 double detected_photons_per_J(const PhotonDetectorSettings& detector, double wavelength_nm) {
-  return detector.photon_efficiency / photon_energy_J(wavelength_nm);
+  return photons_per_J(detector.photon_efficiency, wavelength_nm);
 }
 
 double most_background_rate_Hz(const ReceiverSettings& settings, const PhotonCountingSettings& p) {

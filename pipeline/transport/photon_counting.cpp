@@ -102,9 +102,13 @@ double photon_energy_J(double wavelength_nm) {
   return planck_J_s * light_m_s / (wavelength_nm * 1e-9);
 }
 
+double photons_per_J(double efficiency, double wavelength_nm) {
+  return efficiency / photon_energy_J(wavelength_nm);
+}
+
 std::vector<double> expected_photons(std::span<const double> energy_J, double wavelength_nm,
                                      double efficiency) {
-  const double per_J = efficiency / photon_energy_J(wavelength_nm);
+  const double per_J = photons_per_J(efficiency, wavelength_nm);
   std::vector<double> photons(energy_J.size());
   std::transform(energy_J.begin(), energy_J.end(), photons.begin(),
                  [per_J](double e) { return std::max(e, 0.0) * per_J; });

@@ -18,6 +18,8 @@ namespace glaswave {
 
 // Energy of one photon, h c / lambda (CODATA 2018 exact constants), J.
 double photon_energy_J(double wavelength_nm);
+// The photons a detector of this efficiency counts per joule of light at `wavelength_nm`.
+double photons_per_J(double efficiency, double wavelength_nm);
 
 // The photons detected on average from the energy received in each bin: energy_J[bin] /
 // (h c / lambda) * efficiency, the efficiency being the receiver's optical throughput times the

@@ -91,13 +91,6 @@ TEST(Roughness, CorrelationFallsOverTheCorrelationLength) {
   EXPECT_NEAR(correlation(3.0 * correlation_m), 0.0, 0.05);
 }
 
-// The mesh with its grids as triangles, for the brute-force checks below.
-GroundMesh triangulated(GroundMesh mesh) {
-  mesh.triangles = mesh.all_triangles();
-  mesh.grids.clear();
-  return mesh;
-}
-
 // Brute force: the triangles of a mesh over a horizontal point, and the height of the first.
 struct Cover {
   int count = 0;
@@ -130,8 +123,8 @@ TEST(Roughness, MeshCarriesTheFieldWithoutGapsAndAgreesBetweenFootprints) {
   const Geodetic b_origin = a.to_geodetic({12.0, -7.0, 0.0});
   const LocalFrame b(
       {b_origin.lat_deg, b_origin.lon_deg, plane.height_m(b_origin.lat_deg, b_origin.lon_deg)});
-  const GroundMesh mesh_a = triangulated(build_ground_mesh(plane, a, 60.0, 1.0e9, &field, 30.0));
-  const GroundMesh mesh_b = triangulated(build_ground_mesh(plane, b, 60.0, 1.0e9, &field, 30.0));
+  const GroundMesh mesh_a = build_ground_mesh(plane, a, 60.0, 1.0e9, &field, 30.0).triangulated();
+  const GroundMesh mesh_b = build_ground_mesh(plane, b, 60.0, 1.0e9, &field, 30.0).triangulated();
   // About (2 x 30 / (2/3))^2 lattice nodes and twice as many triangles, plus the clipped base.
   EXPECT_GT(mesh_a.triangles.size() / 3, 2u * 85 * 85);
   EXPECT_LT(mesh_a.triangles.size() / 3, 2u * 100 * 100);
@@ -180,7 +173,7 @@ TEST(Roughness, SeveralSquaresCarryTheFieldWithoutGaps) {
   const GroundMesh base = build_ground_mesh(plane, frame, 60.0, 1.0e9);
   const std::vector<RoughSquare> squares = {
       {0.0, 0.0, 20.0}, {25.0, 18.0, 20.0}, {-40.0, 30.0, 10.0}, {-40.0, 8.0, 11.0}};
-  const GroundMesh mesh = triangulated(field.roughen(base, frame, squares, 1.0e9));
+  const GroundMesh mesh = field.roughen(base, frame, squares, 1.0e9).triangulated();
   // Depth of (x, y) inside the deepest square holding it (negative outside them all).
   auto depth = [&](double x, double y) {
     double deepest = -1e9;
@@ -217,8 +210,8 @@ TEST(Roughness, SeveralSquaresCarryTheFieldWithoutGaps) {
   EXPECT_LT(worst_field_m, 2e-3);
   EXPECT_LT(worst_outside_m, 2e-3);
 
-  const GroundMesh one = triangulated(field.roughen(base, frame, 30.0, 1.0e9));
-  const GroundMesh same = triangulated(field.roughen(base, frame, {{0.0, 0.0, 30.0}}, 1.0e9));
+  const GroundMesh one = field.roughen(base, frame, 30.0, 1.0e9).triangulated();
+  const GroundMesh same = field.roughen(base, frame, {{0.0, 0.0, 30.0}}, 1.0e9).triangulated();
   EXPECT_EQ(same.vertices_m, one.vertices_m);
   EXPECT_EQ(same.triangles, one.triangles);
 }
@@ -245,7 +238,7 @@ TEST(Roughness, KeepsTheReliefOfAFinerGround) {
   const Ridges ridges(frame);
   const RoughnessField field({0.001, 6.0}, 2);
   const GroundMesh mesh =
-      triangulated(build_ground_mesh(ridges, frame, 15.0, ridges.detail_m(), &field, 12.0));
+      build_ground_mesh(ridges, frame, 15.0, ridges.detail_m(), &field, 12.0).triangulated();
   ASSERT_FALSE(mesh.triangles.empty());
   double worst_m = 0.0;
   for (std::size_t t = 0; t < mesh.triangles.size(); t += 3) {
@@ -271,7 +264,7 @@ TEST(Roughness, AWideBeamGetsACoarserLatticeOrARefusal) {
   const LocalFrame frame({45.0, 7.0, 600.0});
   const RoughnessField field({0.45, 0.5}, 11);
   const GroundMesh mesh =
-      triangulated(build_ground_mesh(plane, frame, 130.0, 1.0e9, &field, 120.0));
+      build_ground_mesh(plane, frame, 130.0, 1.0e9, &field, 120.0).triangulated();
   // 240 m / 0.1667 m = 1440 nodes a side at L/3; 960 at L/2 (1.85 million triangles).
   const std::size_t triangles = mesh.triangles.size() / 3;
   EXPECT_GT(triangles, 2u * 950 * 950);

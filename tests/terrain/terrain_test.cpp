@@ -176,7 +176,7 @@ TEST(MeshGridCells, AreTriangulateGridsTrianglesOfTheWantedCells) {
                   node_vertex[(j + 1) * ni + i], node_vertex[(j + 1) * ni + i + 1]};
       triangulate_grid(2, 2, one_cell, wanted);
     }
-  EXPECT_EQ(triangle_set(mesh.all_triangles()), triangle_set(wanted));
+  EXPECT_EQ(triangle_set(mesh.triangulated().triangles), triangle_set(wanted));
 
   const int long_ni = max_grid_nodes + 100;
   std::vector<std::uint32_t> row(2 * static_cast<std::size_t>(long_ni));
@@ -187,7 +187,7 @@ TEST(MeshGridCells, AreTriangulateGridsTrianglesOfTheWantedCells) {
   for (const MeshGrid& grid : long_mesh.grids) EXPECT_LE(grid.width, max_grid_nodes);
   std::vector<std::uint32_t> all;
   triangulate_grid(long_ni, 2, row, all);
-  EXPECT_EQ(triangle_set(long_mesh.all_triangles()), triangle_set(all));
+  EXPECT_EQ(triangle_set(long_mesh.triangulated().triangles), triangle_set(all));
 }
 
 }  // namespace

@@ -24,9 +24,7 @@ TEST(GroundGrids, RaysMeetTheSameSurfaceAsOnTheGridsTriangles) {
   const GroundMesh mesh =
       field.roughen(base, frame, {{-12.0, 0.0, 10.0}, {0.0, 4.0, 10.0}, {20.0, -10.0, 6.0}}, 1.0e9);
   ASSERT_FALSE(mesh.grids.empty());
-  GroundMesh triangles = mesh;
-  triangles.triangles = mesh.all_triangles();
-  triangles.grids.clear();
+  const GroundMesh triangles = mesh.triangulated();
 
   const RayDevice device;
   const Scene on_grids(device, mesh), on_triangles(device, triangles);

@@ -58,9 +58,11 @@ TEST(ForestSource, RegionHoldsOnlyTheKindsItMeets) {
   EXPECT_EQ(grown.materials[0].leaf_angles, &source.forest().leaf_angles(2));
 }
 
-// Trunks are grids, a trunk each, of one material: rays meet them where they meet the grids'
-// triangles (each face cut as before), with their stand's bark. Two stands of two barks.
-TEST(ForestSource, TrunksAreGridsThatRaysMeetAsTheirTriangles) {
+// Trunks are grids, a trunk each, of one material: a ray aimed level at a stem's axis meets the
+// 8-sided prism under its crown where the prism's face at that bearing lies (the vertices on a
+// circle of dbh / 2, faces between them: r cos(pi/8) / cos(its angle from the face's normal) from
+// the axis), facing back along the ray, with the crown's material. Two stands of two barks.
+TEST(ForestSource, TrunksAreGridsThatRaysMeetAsPrismsUnderTheirCrowns) {
   VegetationSettings settings;
   CanopySettings& canopy = settings.canopy;
   canopy.leaf_reflectance = {0.4};
@@ -76,49 +78,52 @@ TEST(ForestSource, TrunksAreGridsThatRaysMeetAsTheirTriangles) {
   const std::unique_ptr<Terrain> terrain = plane_terrain();
   const LocalFrame frame(Geodetic{kLat0, kLon0, 0.0});
   const RegionVegetation grown = ForestSource(settings).grow({*terrain, frame, 40.0, {}, 1});
-  const Vegetation& grids = grown.geometry;
-  ASSERT_GT(grids.trunks.grids.size(), 20u);
-  ASSERT_TRUE(grids.trunks.triangles.empty());
-  ASSERT_EQ(grids.trunk_materials.size(), grids.trunks.grids.size());
-  EXPECT_EQ(std::set<int>(grids.trunk_materials.begin(), grids.trunk_materials.end()).size(), 2u);
-  Vegetation triangles = grids;
-  triangles.trunks.triangles = grids.trunks.all_triangles();
-  triangles.trunks.grids.clear();
-  triangles.trunk_materials.clear();
-  for (int material : grids.trunk_materials)
-    triangles.trunk_materials.resize(triangles.trunk_materials.size() + 16,
-                                     material);  // 8 faces, 2 triangles a face
-  ASSERT_EQ(triangles.trunk_materials.size(), triangles.trunks.triangles.size() / 3);
+  const Vegetation& vegetation = grown.geometry;
+  ASSERT_GT(vegetation.trunks.grids.size(), 20u);
+  ASSERT_TRUE(vegetation.trunks.triangles.empty());
+  ASSERT_EQ(vegetation.trunk_materials.size(), vegetation.trunks.grids.size());
+  EXPECT_EQ(
+      std::set<int>(vegetation.trunk_materials.begin(), vegetation.trunk_materials.end()).size(),
+      2u);
 
   const RayDevice device;
-  const Scene on_grids(device, GroundMesh{}, grids), on_triangles(device, GroundMesh{}, triangles);
+  const Scene scene(device, GroundMesh{}, vegetation);
+  const double radius_m = 0.5 * canopy.dbh_m, from_m = 0.6, sector = std::numbers::pi / 4.0;
   std::mt19937_64 bits(3);
-  std::uniform_real_distribution<double> turn(0.0, 2.0 * std::numbers::pi), aim(-0.3, 0.3);
-  int hits = 0;
+  std::uniform_real_distribution<double> turn(0.0, 2.0 * std::numbers::pi);
+  int stems = 0;
   double worst_m = 0.0, worst_normal = 0.0;
-  for (const MeshGrid& trunk : grids.trunks.grids) {
-    // The trunk's axis, from its first face's foot and top and the one opposite.
-    const float* foot = &grids.trunks.vertices_m[3 * std::size_t{trunk.nodes[0]}];
-    const float* opposite = &grids.trunks.vertices_m[3 * std::size_t{trunk.nodes[4]}];
-    const Vec3 axis{0.5 * (foot[0] + opposite[0]), 0.5 * (foot[1] + opposite[1]), foot[2] + 3.0};
-    for (int k = 0; k < 40; ++k) {
-      const double a = turn(bits);
-      const Vec3 origin = axis + Vec3{6.0 * std::cos(a), 6.0 * std::sin(a), 0.0};
-      const Vec3 direction = normalized(axis - origin + Vec3{aim(bits), aim(bits), aim(bits)});
-      const SurfaceHit g = on_grids.intersect(origin, direction, 20.0);
-      const SurfaceHit t = on_triangles.intersect(origin, direction, 20.0);
-      ASSERT_EQ(g.kind, t.kind);
-      if (g.kind == SurfaceKind::none) continue;
-      ASSERT_EQ(g.kind, SurfaceKind::trunk);
-      ASSERT_EQ(g.material, t.material);
-      ++hits;
-      worst_m = std::max(worst_m, std::abs(g.distance_m - t.distance_m));
-      worst_normal = std::max(worst_normal, norm(g.normal - t.normal));
+  std::set<int> materials;
+  for (const Crown& crown : vegetation.crowns) {
+    // Stems with no other within 1.5 m: a ray from 0.6 m meets its own first.
+    bool alone = true;
+    for (const Crown& other : vegetation.crowns)
+      if (&other != &crown &&
+          std::hypot(other.base_m[0] - crown.base_m[0], other.base_m[1] - crown.base_m[1]) < 1.5)
+        alone = false;
+    if (!alone) continue;
+    ++stems;
+    materials.insert(crown.material);
+    const Vec3 axis{crown.base_m[0], crown.base_m[1], crown.base_m[2] - 1.0};
+    for (int k = 0; k < 16; ++k) {
+      const double bearing = turn(bits);  // of the ray's origin from the axis, from east
+      const Vec3 origin = axis + Vec3{from_m * std::cos(bearing), from_m * std::sin(bearing), 0.0};
+      const SurfaceHit hit = scene.intersect(origin, normalized(axis - origin), 2.0);
+      ASSERT_EQ(hit.kind, SurfaceKind::trunk)
+          << "no trunk under the crown at " << axis[0] << ", " << axis[1];
+      EXPECT_EQ(hit.material, crown.material);
+      // The faces' normals point at pi/8 + k pi/4.
+      const double off_normal = std::remainder(bearing - sector / 2.0, sector);
+      const double face_m = radius_m * std::cos(sector / 2.0) / std::cos(off_normal);
+      worst_m = std::max(worst_m, std::abs(hit.distance_m - (from_m - face_m)));
+      const Vec3 facing{std::cos(bearing - off_normal), std::sin(bearing - off_normal), 0.0};
+      worst_normal = std::max(worst_normal, norm(hit.normal - facing));
     }
   }
-  EXPECT_GT(hits, 20 * static_cast<int>(grids.trunks.grids.size()));
-  EXPECT_LT(worst_m, 1e-5);
-  EXPECT_LT(worst_normal, 1e-5);
+  EXPECT_GT(stems, 10);
+  EXPECT_EQ(materials.size(), 2u);
+  EXPECT_LT(worst_m, 1e-4);  // float vertices tens of metres from the frame's origin
+  EXPECT_LT(worst_normal, 1e-4);
 }
 
 // Two stands side by side over the region, PAI 2 and 4 with the same optics: their crowns differ
