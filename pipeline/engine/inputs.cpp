@@ -35,8 +35,9 @@ ShotSettings shot_settings(const Config& config) {
   settings.roughness = config.terrain.roughness;
   // Photon counting's 10 kHz footprints overlap almost entirely: they share their stretch's scene.
   if (receiver.shares_scenes) settings.stretch_shots = stretch_shots;
-  // A waveform pass's footprints (GEDI's 60 m apart) share a strip's scene along the track.
-  else if (config.track.type == TrackType::pass)
+  // Waveform footprints close along their beam (GEDI's 60 m apart) share a strip's scene, on any
+  // track: a pass, an orbit, an ephemeris, a granule's beams, points in order.
+  else
     settings.strip_shots = strip_shots;
   return settings;
 }

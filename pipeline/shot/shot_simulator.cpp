@@ -87,16 +87,16 @@ void ShotSimulator::share_scenes_along(const Track& track) {
   if (settings_.strip_shots <= 0 ||
       (roughness.enabled() && scenes_.terrain().detail_m() < roughness.spacing_m()))
     return;
+  // A track of one shot (a point) has nothing to share: it keeps its own scene.
+  if (track.sequence_length() < 2) return;
   // Footprints too far apart for a strip (GLAS's 172 m) build their own scenes from the start,
   // in the run's small batches: its first two footprints tell.
-  if (track.sequence_length() >= 2) {
-    const Footprint a = track.locate_shot(0), b = track.locate_shot(1);
-    if (a.on_terrain && b.on_terrain) {
-      const Vec3 step = LocalFrame(a.ground).to_local(b.ground);
-      const double half_strip_m =
-          std::hypot(step[0], step[1]) * static_cast<double>(settings_.strip_shots / 2);
-      if (half_strip_m > max_stretch_reach_m) return;
-    }
+  const Footprint a = track.locate_shot(0), b = track.locate_shot(1);
+  if (a.on_terrain && b.on_terrain) {
+    const Vec3 step = LocalFrame(a.ground).to_local(b.ground);
+    const double half_strip_m =
+        std::hypot(step[0], step[1]) * static_cast<double>(settings_.strip_shots / 2);
+    if (half_strip_m > max_stretch_reach_m) return;
   }
   stretches_ = std::make_unique<StretchScenes>(scenes_, lidar_, track, margin_m,
                                                settings_.strip_shots, StretchShape::strip);

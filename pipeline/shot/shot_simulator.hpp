@@ -33,7 +33,8 @@ struct ShotSettings {
   // (stretch_scenes.hpp; the photon-counting receiver's 10 kHz); 0: each shot builds its own.
   std::int64_t stretch_shots = 0;
   // Consecutive shots of a beam that share one strip's scene once the simulator follows a track
-  // (stretch_scenes.hpp's strips: a waveform pass's); 0: none. stretch_shots comes first.
+  // (stretch_scenes.hpp's strips: a waveform receiver's, on any track); 0: none. stretch_shots
+  // comes first.
   std::int64_t strip_shots = 0;
   // Whether anything reads the record's fields that the ICESat-2 granules do not (the beam's
   // outline; the ground's slope and aspect, fitted under each beam): false (a photon-counting
@@ -79,7 +80,7 @@ class ShotSimulator {
   // simulator.
   void share_scenes_along(const Track& track);
   // Whether shots share a stretch's scene (photon counting's: shots of tenths of a millisecond,
-  // which the engine hands its threads in large batches), or a strip's (a waveform pass's:
+  // which the engine hands its threads in large batches), or a strip's (a waveform receiver's:
   // shots of milliseconds, in the usual small batches).
   bool shares_scenes() const { return stretches_ && stretches_->shape() == StretchShape::square; }
   bool shares_strips() const { return stretches_ && stretches_->shape() == StretchShape::strip; }

@@ -132,6 +132,18 @@ double reach_from_middle_m(const LocalFrame& frame, const std::vector<Footprint>
   return reach_m;
 }
 
+// Whether a strip's rectangle is smaller than its footprints' own scenes together: footprints
+// along a line (a pass's, an orbit's, 60 m apart: a quarter) share it; points scattered about
+// would share a larger scene than they build alone. A lone footprint's strip (a track's last)
+// is its own scene's size, and stays a strip.
+bool smaller_than_own_scenes(const StripPlan& plan, std::size_t footprints) {
+  if (footprints < 2) return true;
+  const RegionStrip& r = plan.strip;
+  const double own_m = 2.0 * plan.shot_reach_m;
+  return (r.along1_m - r.along0_m) * (r.across1_m - r.across0_m) <
+         static_cast<double>(footprints) * own_m * own_m;
+}
+
 }  // namespace
 
 // The stretch's footprints whose beams fall on the terrain's data; `on_data` says which of its
@@ -157,7 +169,9 @@ std::optional<StripPlan> StretchScenes::plan_strip(int beam_index, std::int64_t 
   if (held.empty()) return std::nullopt;
   const LocalFrame frame(held[held.size() / 2].ground);
   if (reach_from_middle_m(frame, held) > max_stretch_reach_m) return std::nullopt;
-  return plan_strip(frame, held);
+  StripPlan plan = plan_strip(frame, held);
+  if (!smaller_than_own_scenes(plan, held.size())) return std::nullopt;
+  return plan;
 }
 
 std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
@@ -173,7 +187,9 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
   const double reach_m = reach_from_middle_m(frame, held);
   if (reach_m > max_stretch_reach_m) return nullptr;
   if (shape_ == StretchShape::strip) {
-    build_strip(*stretch_scene, held);
+    const StripPlan plan = plan_strip(frame, held);
+    if (!smaller_than_own_scenes(plan, held.size())) return nullptr;
+    build_strip(*stretch_scene, held, plan);
     return stretch_scene;
   }
   // The patch a shot's rays land on changes only with the ground's slope under it: every 32nd
@@ -239,11 +255,11 @@ StripPlan StretchScenes::plan_strip(const LocalFrame& frame,
     for (const double across : {strip.across0_m, strip.across1_m})
       half_size_m = std::max({half_size_m, std::abs(along * strip.axis_x - across * strip.axis_y),
                               std::abs(along * strip.axis_y + across * strip.axis_x)});
-  return {strip, half_size_m, std::move(rough)};
+  return {strip, half_size_m, std::move(rough), reach_m};
 }
 
-void StretchScenes::build_strip(StretchScene& scene, const std::vector<Footprint>& held) const {
-  const StripPlan plan = plan_strip(scene.frame, held);
+void StretchScenes::build_strip(StretchScene& scene, const std::vector<Footprint>& held,
+                                const StripPlan& plan) const {
   const FootprintFrame where = footprint_frame(scenes_.terrain(), lidar_, held[held.size() / 2]);
   scene.built =
       scenes_.build(scene.frame, where.orientation, plan.half_size_m, plan.strip, plan.rough);

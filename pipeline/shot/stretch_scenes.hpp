@@ -80,6 +80,8 @@ struct StripPlan {
   RegionStrip strip;
   double half_size_m = 0.0;
   std::vector<RoughSquare> rough;
+  // How far the largest of the footprints' own scenes reaches from its centre.
+  double shot_reach_m = 0.0;
 };
 
 class StretchScenes {
@@ -97,8 +99,9 @@ class StretchScenes {
   std::shared_ptr<const StretchScene> find(const Footprint& footprint) const;
 
   // What the strip `stretch` of the beam of index `beam_index` is built over (a strip-shaped
-  // stretch's), as its build plans it, building nothing; none where it shares no scene. For the
-  // memory estimate.
+  // stretch's), as its build plans it, building nothing; none where it shares no scene (its
+  // footprints spread too far, or scattered so that its rectangle would outgrow their own scenes
+  // together). For the memory estimate.
   std::optional<StripPlan> plan_strip(int beam_index, std::int64_t stretch) const;
 
   std::int64_t shots() const { return shots_; }
@@ -113,7 +116,8 @@ class StretchScenes {
   std::vector<Footprint> held_footprints(int beam_index, std::int64_t stretch,
                                          std::vector<bool>& on_data) const;
   StripPlan plan_strip(const LocalFrame& frame, const std::vector<Footprint>& held) const;
-  void build_strip(StretchScene& scene, const std::vector<Footprint>& held) const;
+  void build_strip(StretchScene& scene, const std::vector<Footprint>& held,
+                   const StripPlan& plan) const;
   void finish(StretchScene& scene, const std::vector<Footprint>& held) const;
 
   const SceneBuilder& scenes_;
