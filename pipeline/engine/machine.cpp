@@ -205,14 +205,19 @@ std::optional<SharedScenes> shared_scenes(const ShotSimulator& simulator, const 
   if (!strips || strips->shape() != StretchShape::strip) return std::nullopt;
   SharedScenes shared;
   shared.shots = std::min(strips->shots(), track.sequence_length());
-  const std::int64_t per_beam = (track.sequence_length() + strips->shots() - 1) / strips->shots();
+  // The strips of the track's first, middle and last records: an orbit's time sequence runs
+  // mostly off the terrain, where no strip is built.
+  std::vector<std::int64_t> stretches;
+  for (const std::int64_t record : {std::int64_t{0}, track.size() / 2, track.size() - 1})
+    stretches.push_back(track.shot_number(record) / strips->shots());
+  const std::int64_t per_beam = stretches.back() - stretches.front() + 1;
   shared.held = static_cast<double>(std::min<std::int64_t>(
       static_cast<std::int64_t>(strips->kept()), per_beam * track.beams_per_shot()));
   // The largest of each beam's first, middle and last strips (a slope widens the patches).
   const VegetationSource* vegetation = simulator.vegetation();
   double largest_m2 = -1.0;
   for (int beam = 0; beam < static_cast<int>(track.beams_per_shot()); ++beam)
-    for (const std::int64_t stretch : {std::int64_t{0}, per_beam / 2, per_beam - 1}) {
+    for (const std::int64_t stretch : stretches) {
       const std::optional<StripPlan> plan = strips->plan_strip(beam, stretch);
       if (!plan) continue;
       const RegionStrip& r = plan->strip;

@@ -19,6 +19,7 @@
 #include "pipeline/shot/forest_source.hpp"
 #include "pipeline/shot/stretch_scenes.hpp"
 #include "terrain/local_frame.hpp"
+#include "tests/terrain/dem_fixture.hpp"
 
 namespace glaswave {
 namespace {
@@ -309,6 +310,42 @@ TEST(StripScene, TheMemoryEstimateCountsTheStripsAsPlanned) {
               1e-9 * strips.bytes);
   EXPECT_NEAR(own.bytes - program_resident_bytes,
               own.threads * (own.scene_bytes + own.waveform_bytes), 1e-9 * own.bytes);
+}
+
+// An orbit's time sequence runs mostly off a DEM: the estimate plans the strips where its
+// records are. 10 s of GEDI's orbit (1,210 shots at 121 a second) over a level DEM 0.02 degrees
+// square: 2.2 to 3.1 km of track, 37 to 52 shots on it, 5 to 7 strips of which 5 are kept at
+// once; each as a pass's, 7 spacings longer than it is wide. Planned at the sequence's first, middle and last strips (off the
+// DEM), the estimate found none and counted a scene a thread.
+TEST(StripScene, TheMemoryEstimatePlansAnOrbitsStripsWhereItsShotsAre) {
+  Config config = gedi_orbit(50);
+  const testing::TempFolder dir("glaswave_strip_orbit_dem_test");
+  testing::RasterSpec spec;
+  spec.crs = "EPSG:4326";
+  const double half_deg = 0.01, cell_deg = 0.0002;
+  spec.width = spec.height = static_cast<int>(std::lround(2.0 * half_deg / cell_deg));
+  spec.geotransform = {config.terrain.plane->origin_lon_deg - half_deg, cell_deg, 0.0,
+                       config.terrain.plane->origin_lat_deg + half_deg, 0.0,      -cell_deg};
+  testing::write_raster(dir / "level.tif", spec, [](int, int, int) { return 100.0; });
+  config.terrain.plane.reset();
+  config.terrain.dem = (dir / "level.tif").string();
+  config.track.start_time_s = 292.0;  // the DEM 8 s on, not in the middle
+  config.track.shots = 1210;
+  const auto terrain = make_terrain(config.terrain);
+  const std::unique_ptr<Track> track = plan_track(config, *terrain);
+  ASSERT_GE(track->size(), 37);
+  ASSERT_LE(track->size(), 52);
+  const auto simulator = make_shot_simulator(config, *terrain);
+  simulator->share_scenes_along(*track);
+  ASSERT_TRUE(simulator->shares_strips());
+  const std::optional<SharedScenes> shared = shared_scenes(*simulator, *track);
+  ASSERT_TRUE(shared);
+  EXPECT_EQ(shared->shots, 8);
+  EXPECT_EQ(shared->held, 5.0);
+  const Footprint a = track->footprint(0), b = track->footprint(1);
+  const Vec3 step = LocalFrame(a.ground).to_local(b.ground);
+  EXPECT_NEAR(std::hypot(step[0], step[1]), 60.0, 5.0);  // 57 m: the ground speed over 121 Hz
+  EXPECT_NEAR(shared->length_m - shared->width_m, 7.0 * std::hypot(step[0], step[1]), 1.0);
 }
 
 }  // namespace
