@@ -178,16 +178,20 @@ double union_area_m2(const std::vector<RoughSquare>& squares) {
 // The triangles of a strip's ground: the terrain's mesh over the square holding the rectangle
 // (cells of its detail, 2 to 4096 a side), the part within the rectangle kept, and the
 // roughness's lattice under the beams (the finest whose nodes over each square stay within the
-// limit, two triangles a cell).
-double strip_ground_triangles(const StripPlan& plan, const Terrain& terrain,
-                              const RoughnessField& roughness) {
+// limit, two triangles a cell), which Embree holds as grids.
+struct StripGround {
+  double terrain_triangles = 0.0, rough_triangles = 0.0;
+};
+StripGround strip_ground(const StripPlan& plan, const Terrain& terrain,
+                         const RoughnessField& roughness) {
   const double side_m = 2.0 * plan.half_size_m;
   const double cells =
       std::clamp(std::ceil(side_m / terrain.detail_m()), 2.0, static_cast<double>(4096));
   const RegionStrip& r = plan.strip;
   const double kept = (r.along1_m - r.along0_m) * (r.across1_m - r.across0_m) / (side_m * side_m);
-  double triangles = 2.0 * cells * cells * std::min(1.0, kept);
-  if (!roughness.enabled() || plan.rough.empty()) return triangles;
+  StripGround ground;
+  ground.terrain_triangles = 2.0 * cells * cells * std::min(1.0, kept);
+  if (!roughness.enabled() || plan.rough.empty()) return ground;
   double widest_m = 0.0;
   for (const RoughSquare& square : plan.rough) widest_m = std::max(widest_m, square.half_size_m);
   double spacing_m = 0.0;
@@ -195,7 +199,8 @@ double strip_ground_triangles(const StripPlan& plan, const Terrain& terrain,
     spacing_m = roughness.correlation_m() / nodes;
     if (2.0 * widest_m / spacing_m + 1.0 <= RoughnessField::max_nodes_a_side) break;
   }
-  return triangles + 2.0 * union_area_m2(plan.rough) / (spacing_m * spacing_m);
+  ground.rough_triangles = 2.0 * union_area_m2(plan.rough) / (spacing_m * spacing_m);
+  return ground;
 }
 
 }  // namespace
@@ -229,8 +234,10 @@ std::optional<SharedScenes> shared_scenes(const ShotSimulator& simulator, const 
       shared.vegetation_side_m = vegetation && !vegetation->grows_within_strips()
                                      ? 2.0 * plan->half_size_m
                                      : std::sqrt(area_m2);
-      shared.ground_triangles = strip_ground_triangles(*plan, simulator.scenes().terrain(),
-                                                       simulator.scenes().roughness());
+      const StripGround ground =
+          strip_ground(*plan, simulator.scenes().terrain(), simulator.scenes().roughness());
+      shared.ground_triangles = ground.terrain_triangles + ground.rough_triangles;
+      shared.rough_triangles = ground.rough_triangles;
     }
   if (largest_m2 < 0.0) return std::nullopt;
   return shared;
@@ -254,7 +261,8 @@ RunMemory estimate_run_memory(const Config& c, const SharedScenes* shared) {
   if (shared) {
     m.strips = *shared;
     m.scenes = shared->held;
-    m.ground_bytes = shared->ground_triangles * ground_triangle_bytes;
+    m.ground_bytes = (shared->ground_triangles - shared->rough_triangles) * ground_triangle_bytes +
+                     shared->rough_triangles * rough_triangle_bytes;
   }
   m.granule_bytes = icesat2_granule_bytes(c);
   m.program_bytes = program_resident_bytes;

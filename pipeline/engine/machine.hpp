@@ -44,6 +44,7 @@ struct SharedScenes {
   double vegetation_side_m = 0;   // a square of the ground its vegetation grows on: the rectangle's
                                   // area where the source keeps to it, else the square holding it
   double ground_triangles = 0.0;  // its ground: the terrain's mesh and the roughness's lattice
+  double rough_triangles = 0.0;   // ... of which the lattice's (two a cell of its grids)
 };
 // None where the simulator (after share_scenes_along) shares no strips.
 std::optional<SharedScenes> shared_scenes(const ShotSimulator& simulator, const Track& track);
@@ -53,6 +54,12 @@ std::optional<SharedScenes> shared_scenes(const ShotSimulator& simulator, const 
 // a GEDI pass's peak resident memory with roughness (0.2 m, 3 m) less without, over its 5 strips
 // kept of 70,000 triangles each: 113 bytes a triangle on one thread, 130 on two.
 inline constexpr double ground_triangle_bytes = 120.0;
+// What a triangle of the roughness's lattice takes, handed to Embree as grids (issue 39): its
+// node, Embree's grid and its hierarchy over 2 x 2 cells, the roughening's working copies.
+// Measured as above on the GEDI demo pass (its DEM and forest, 5 strips kept): 16 and 18 bytes a
+// triangle on one and two threads at 3 m correlation (71,000 a strip), 25 and 30 at 1.5 m
+// (284,000 a strip, the working copies larger).
+inline constexpr double rough_triangle_bytes = 32.0;
 
 struct RunMemory {
   double scene_half_size_m = 0.0;  // half the side of the ground patch a shot's rays can reach

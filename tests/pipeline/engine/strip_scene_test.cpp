@@ -295,16 +295,19 @@ TEST(StripScene, TheMemoryEstimateCountsTheStripsAsPlanned) {
                std::max(0.0, a.half_size_m + b.half_size_m - std::abs(a.y_m - b.y_m));
   }
   // The plane's own mesh is 2 x 2 cells over the square: at most 8 triangles more.
-  EXPECT_GE(shared->ground_triangles, 2.0 * area_m2 - 1e-6);
-  EXPECT_LE(shared->ground_triangles, 2.0 * area_m2 + 8.0);
+  EXPECT_NEAR(shared->rough_triangles, 2.0 * area_m2, 1e-6 * area_m2);
+  EXPECT_GE(shared->ground_triangles, shared->rough_triangles);
+  EXPECT_LE(shared->ground_triangles, shared->rough_triangles + 8.0);
 
   const RunMemory strips = estimate_run_memory(config, &*shared);
   const RunMemory own = estimate_run_memory(config);
   const CanopySettings& canopy = *config.canopy;
   const double crowns_m2 = -std::log(1.0 - canopy.cover) /
                            (std::numbers::pi * canopy.crown_radius_m * canopy.crown_radius_m);
-  const double strip_bytes = crowns_m2 * shared->length_m * shared->width_m * forest_tree_bytes +
-                             shared->ground_triangles * ground_triangle_bytes;
+  const double strip_bytes =
+      crowns_m2 * shared->length_m * shared->width_m * forest_tree_bytes +
+      (shared->ground_triangles - shared->rough_triangles) * ground_triangle_bytes +
+      shared->rough_triangles * rough_triangle_bytes;
   EXPECT_NEAR(strips.bytes,
               program_resident_bytes + 3.0 * strip_bytes + own.threads * own.waveform_bytes,
               1e-9 * strips.bytes);
@@ -315,8 +318,8 @@ TEST(StripScene, TheMemoryEstimateCountsTheStripsAsPlanned) {
 // An orbit's time sequence runs mostly off a DEM: the estimate plans the strips where its
 // records are. 10 s of GEDI's orbit (1,210 shots at 121 a second) over a level DEM 0.02 degrees
 // square: 2.2 to 3.1 km of track, 37 to 52 shots on it, 5 to 7 strips of which 5 are kept at
-// once; each as a pass's, 7 spacings longer than it is wide. Planned at the sequence's first, middle and last strips (off the
-// DEM), the estimate found none and counted a scene a thread.
+// once; each as a pass's, 7 spacings longer than it is wide. Planned at the sequence's first,
+// middle and last strips (off the DEM), the estimate found none and counted a scene a thread.
 TEST(StripScene, TheMemoryEstimatePlansAnOrbitsStripsWhereItsShotsAre) {
   Config config = gedi_orbit(50);
   const testing::TempFolder dir("glaswave_strip_orbit_dem_test");
