@@ -68,7 +68,7 @@ Config gedi_points(int rays) {
   return config;
 }
 
-// GEDI's orbit (420 km, 51.6 degrees; a beam's 121 shots a second, 60 m apart), its 24 shots
+// GEDI's orbit (420 km, 51.6 degrees; a beam's 121 shots a second, 57 m apart), its 24 shots
 // from 300 s after the epoch over a level rough plane anchored under the first.
 Config gedi_orbit(int rays) {
   OrbitElements elements;
