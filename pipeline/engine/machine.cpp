@@ -179,9 +179,6 @@ double union_area_m2(const std::vector<RoughSquare>& squares) {
 // (cells of its detail, 2 to 4096 a side), the part within the rectangle kept, and the
 // roughness's lattice under the beams (the finest whose nodes over each square stay within the
 // limit, two triangles a cell), which Embree holds as grids.
-struct StripGround {
-  double terrain_triangles = 0.0, rough_triangles = 0.0;
-};
 StripGround strip_ground(const StripPlan& plan, const Terrain& terrain,
                          const RoughnessField& roughness) {
   const double side_m = 2.0 * plan.half_size_m;
@@ -234,10 +231,8 @@ std::optional<SharedScenes> shared_scenes(const ShotSimulator& simulator, const 
       shared.vegetation_side_m = vegetation && !vegetation->grows_within_strips()
                                      ? 2.0 * plan->half_size_m
                                      : std::sqrt(area_m2);
-      const StripGround ground =
+      shared.ground =
           strip_ground(*plan, simulator.scenes().terrain(), simulator.scenes().roughness());
-      shared.ground_triangles = ground.terrain_triangles + ground.rough_triangles;
-      shared.rough_triangles = ground.rough_triangles;
     }
   if (largest_m2 < 0.0) return std::nullopt;
   return shared;
@@ -261,8 +256,8 @@ RunMemory estimate_run_memory(const Config& c, const SharedScenes* shared) {
   if (shared) {
     m.strips = *shared;
     m.scenes = shared->held;
-    m.ground_bytes = (shared->ground_triangles - shared->rough_triangles) * ground_triangle_bytes +
-                     shared->rough_triangles * rough_triangle_bytes;
+    m.ground_bytes = shared->ground.terrain_triangles * ground_triangle_bytes +
+                     shared->ground.rough_triangles * rough_triangle_bytes;
   }
   m.granule_bytes = icesat2_granule_bytes(c);
   m.program_bytes = program_resident_bytes;

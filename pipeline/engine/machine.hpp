@@ -36,15 +36,19 @@ inline constexpr double program_resident_bytes = 52.0 * 1048576.0;
 // The scenes a run's shots share along its track (stretch_scenes.hpp's strips: a waveform
 // pass's), as its simulator plans them once it follows the track: the memory estimate counts
 // these in place of a shot's own scene a thread.
+// A strip's ground: the terrain's mesh cut to it, and the roughness's lattice under its beams
+// (two triangles a cell of its grids).
+struct StripGround {
+  double terrain_triangles = 0.0, rough_triangles = 0.0;
+};
 struct SharedScenes {
-  std::int64_t shots = 0;         // a strip's shots
-  double held = 0.0;              // strips kept at once: StretchScenes::kept(), at most the track's
-  double length_m = 0.0;          // the largest planned strip's rectangle: along the track
-  double width_m = 0.0;           // ... and across it
-  double vegetation_side_m = 0;   // a square of the ground its vegetation grows on: the rectangle's
-                                  // area where the source keeps to it, else the square holding it
-  double ground_triangles = 0.0;  // its ground: the terrain's mesh and the roughness's lattice
-  double rough_triangles = 0.0;   // ... of which the lattice's (two a cell of its grids)
+  std::int64_t shots = 0;        // a strip's shots
+  double held = 0.0;             // strips kept at once: StretchScenes::kept(), at most the track's
+  double length_m = 0.0;         // the largest planned strip's rectangle: along the track
+  double width_m = 0.0;          // ... and across it
+  double vegetation_side_m = 0;  // a square of the ground its vegetation grows on: the rectangle's
+                                 // area where the source keeps to it, else the square holding it
+  StripGround ground;
 };
 // None where the simulator (after share_scenes_along) shares no strips.
 std::optional<SharedScenes> shared_scenes(const ShotSimulator& simulator, const Track& track);

@@ -169,9 +169,7 @@ std::optional<StripPlan> StretchScenes::plan_strip(int beam_index, std::int64_t 
   if (held.empty()) return std::nullopt;
   const LocalFrame frame(held[held.size() / 2].ground);
   if (reach_from_middle_m(frame, held) > max_stretch_reach_m) return std::nullopt;
-  StripPlan plan = plan_strip(frame, held);
-  if (!smaller_than_own_scenes(plan, held.size())) return std::nullopt;
-  return plan;
+  return plan_strip(frame, held);
 }
 
 std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
@@ -187,9 +185,9 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
   const double reach_m = reach_from_middle_m(frame, held);
   if (reach_m > max_stretch_reach_m) return nullptr;
   if (shape_ == StretchShape::strip) {
-    const StripPlan plan = plan_strip(frame, held);
-    if (!smaller_than_own_scenes(plan, held.size())) return nullptr;
-    build_strip(*stretch_scene, held, plan);
+    const std::optional<StripPlan> plan = plan_strip(frame, held);
+    if (!plan) return nullptr;
+    build_strip(*stretch_scene, held, *plan);
     return stretch_scene;
   }
   // The patch a shot's rays land on changes only with the ground's slope under it: every 32nd
@@ -212,9 +210,10 @@ std::shared_ptr<const StretchScene> StretchScenes::build(int beam_index,
 
 // The strip's rectangle, in the frame of its middle footprint: along the line from its first
 // footprint to its last, as long and wide as every footprint's own scene (its traced patch and
-// the margin about its centre), the roughness under each beam as a shot's own scene has it.
-StripPlan StretchScenes::plan_strip(const LocalFrame& frame,
-                                    const std::vector<Footprint>& held) const {
+// the margin about its centre), the roughness under each beam as a shot's own scene has it; none
+// where the rectangle is no smaller than the footprints' own scenes together.
+std::optional<StripPlan> StretchScenes::plan_strip(const LocalFrame& frame,
+                                                   const std::vector<Footprint>& held) const {
   const Terrain& terrain = scenes_.terrain();
   std::vector<Vec3> centres;
   for (const Footprint& footprint : held) centres.push_back(frame.to_local(footprint.ground));
@@ -255,7 +254,9 @@ StripPlan StretchScenes::plan_strip(const LocalFrame& frame,
     for (const double across : {strip.across0_m, strip.across1_m})
       half_size_m = std::max({half_size_m, std::abs(along * strip.axis_x - across * strip.axis_y),
                               std::abs(along * strip.axis_y + across * strip.axis_x)});
-  return {strip, half_size_m, std::move(rough), reach_m};
+  StripPlan plan{strip, half_size_m, std::move(rough), reach_m};
+  if (!smaller_than_own_scenes(plan, held.size())) return std::nullopt;
+  return plan;
 }
 
 void StretchScenes::build_strip(StretchScene& scene, const std::vector<Footprint>& held,

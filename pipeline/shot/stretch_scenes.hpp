@@ -115,7 +115,8 @@ class StretchScenes {
   std::shared_ptr<const StretchScene> build(int beam_index, std::int64_t stretch) const;
   std::vector<Footprint> held_footprints(int beam_index, std::int64_t stretch,
                                          std::vector<bool>& on_data) const;
-  StripPlan plan_strip(const LocalFrame& frame, const std::vector<Footprint>& held) const;
+  std::optional<StripPlan> plan_strip(const LocalFrame& frame,
+                                      const std::vector<Footprint>& held) const;
   void build_strip(StretchScene& scene, const std::vector<Footprint>& held,
                    const StripPlan& plan) const;
   void finish(StretchScene& scene, const std::vector<Footprint>& held) const;

@@ -295,19 +295,17 @@ TEST(StripScene, TheMemoryEstimateCountsTheStripsAsPlanned) {
                std::max(0.0, a.half_size_m + b.half_size_m - std::abs(a.y_m - b.y_m));
   }
   // The plane's own mesh is 2 x 2 cells over the square: at most 8 triangles more.
-  EXPECT_NEAR(shared->rough_triangles, 2.0 * area_m2, 1e-6 * area_m2);
-  EXPECT_GE(shared->ground_triangles, shared->rough_triangles);
-  EXPECT_LE(shared->ground_triangles, shared->rough_triangles + 8.0);
+  EXPECT_NEAR(shared->ground.rough_triangles, 2.0 * area_m2, 1e-6 * area_m2);
+  EXPECT_LE(shared->ground.terrain_triangles, 8.0);
 
   const RunMemory strips = estimate_run_memory(config, &*shared);
   const RunMemory own = estimate_run_memory(config);
   const CanopySettings& canopy = *config.canopy;
   const double crowns_m2 = -std::log(1.0 - canopy.cover) /
                            (std::numbers::pi * canopy.crown_radius_m * canopy.crown_radius_m);
-  const double strip_bytes =
-      crowns_m2 * shared->length_m * shared->width_m * forest_tree_bytes +
-      (shared->ground_triangles - shared->rough_triangles) * ground_triangle_bytes +
-      shared->rough_triangles * rough_triangle_bytes;
+  const double strip_bytes = crowns_m2 * shared->length_m * shared->width_m * forest_tree_bytes +
+                             shared->ground.terrain_triangles * ground_triangle_bytes +
+                             shared->ground.rough_triangles * rough_triangle_bytes;
   EXPECT_NEAR(strips.bytes,
               program_resident_bytes + 3.0 * strip_bytes + own.threads * own.waveform_bytes,
               1e-9 * strips.bytes);
